@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# Lucent set-up on Debian 12: install what is missing, build, then launch the app or run the tests.
+#   .ci/setup.sh run    install, build (Release), launch `lucent` on the default scene
+#   .ci/setup.sh test   install, build (ci preset), run the whole test suite with ctest
+# Idempotent: apt-get runs only when a package is missing; works as root or through sudo.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+mode=${1:-}
+case "$mode" in
+    run | test) ;;
+    *) echo "usage: .ci/setup.sh run|test" >&2; exit 2 ;;
+esac
+
+packages=(build-essential cmake ninja-build pkg-config ccache
+    qt6-base-dev qt6-base-dev-tools libqt6opengl6-dev qt6-charts-dev
+    libvtk9-dev libopenvdb-dev libopenvdb-tools libboost-iostreams-dev libopenmesh-dev libglm-dev
+    libtbb-dev libepoxy-dev libegl-dev libembree-dev libopenexr-dev libpng-dev nlohmann-json3-dev
+    libgtest-dev libgmock-dev libbenchmark-dev glslang-tools xvfb xauth)
+missing=()
+for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+    echo "lucent: installing ${#missing[@]} missing package(s): ${missing[*]}"
+    sudo=()
+    if [ "$(id -u)" -ne 0 ]; then
+        command -v sudo >/dev/null || { echo "lucent: need root or sudo to install packages" >&2; exit 1; }
+        sudo=(sudo)
+    fi
+    "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -q
+    "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+preset=release
+[ "$mode" = test ] && preset=ci
+cmake --preset "$preset"
+cmake --build --preset "$preset"
+
+if [ "$mode" = test ]; then
+    exec ctest --preset ci
+fi
+
+app=build/$preset/app/lucent
+if [ -z "${DISPLAY:-}" ] && [ -z "${WAYLAND_DISPLAY:-}" ]; then
+    echo "lucent: no display found, launching under xvfb-run"
+    exec xvfb-run -a -s "-screen 0 1600x1000x24" env QT_QPA_PLATFORM=xcb "$app" "${@:2}"
+fi
+exec "$app" "${@:2}"

@@ -1,0 +1,29 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief Resampling of the painted volume to a coarser grid (16³–128³) for the light
+/// propagation solver, preserving per-cell transmittance rather than just the mean σ.
+
+#include <lucent/material/MaterialVolume.h>
+
+#include <vector>
+
+namespace lucent {
+
+/// A dense coarse grid of material, SoA, x fastest. Same world box as the source volume.
+struct CoarseMaterial {
+    GridSpec spec;
+    std::vector<float> sigma_t[3];  ///< effective reduced extinction per channel, mm⁻¹
+    std::vector<float> sigma_s[3];  ///< effective reduced scattering per channel, mm⁻¹
+    std::vector<float> g[3];        ///< scattering-weighted mean asymmetry
+    std::vector<float> insideFraction;  ///< fraction of fine inside voxels in the cell, [0,1]
+    bool homogeneous = false;       ///< every inside cell identical (fast paths may skip reads)
+};
+
+/// Resamples `volume` to `resolution`³ cells over the same box. The effective σt of a coarse
+/// cell is chosen so that exp(−σt·Δx) equals the mean transmittance across the cell of its
+/// fine columns (averaged over the three axes); σs′ keeps the fine cells' albedo weighting.
+/// @throw ValueError if resolution is outside [1, volume.resolution()].
+CoarseMaterial resampleForPropagation(const MaterialVolume& volume, int resolution);
+
+}  // namespace lucent

@@ -1,0 +1,85 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief What a render needs: a mesh (rest pose), its painted material, lights and a camera.
+/// Loaded from / saved to the versioned JSON scene format (docs/file-formats.md) by
+/// lucent/scene/SceneFile.h.
+
+#include <lucent/core/Types.h>
+#include <lucent/material/MaterialVolume.h>
+#include <lucent/mesh/TriangleMesh.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace lucent {
+
+/// A light. Units: point/spot intensity in W/sr (per RGB channel); directional irradiance in
+/// W/mm² on a surface facing it; sphere light radiance in W/(mm²·sr).
+struct Light {
+    enum class Type { Point, Spot, Directional, Sphere } type = Type::Point;
+    Point3f position{0.f};          ///< point, spot, sphere centre (mm)
+    Vector3f direction{0.f, -1.f, 0.f}; ///< spot axis / directional: direction light travels (unit)
+    Rgb intensity{0.f};             ///< point/spot: W/sr; directional: W/mm²; sphere: W/(mm²·sr)
+    float spotOuterDeg = 30.f;      ///< spot: half-angle where intensity reaches 0
+    float spotInnerDeg = 25.f;      ///< spot: half-angle of full intensity
+    float radius = 0.f;             ///< sphere light radius (mm)
+
+    /// Intensity (W/sr) toward unit direction `towardSurface` (from the light), including the
+    /// spot falloff (smoothstep between outer and inner cones). Point/spot only.
+    [[nodiscard]] Rgb intensityToward(const Vector3f& towardSurface) const;
+};
+
+/// Pinhole (perspective) or orthographic camera.
+struct Camera {
+    Point3f position{0.f, 0.f, 60.f};
+    Point3f target{0.f};
+    Vector3f up{0.f, 1.f, 0.f};
+    bool orthographic = false;
+    float fovYDeg = 40.f;      ///< perspective: full vertical field of view
+    float orthoHeight = 40.f;  ///< orthographic: full view height in mm
+    int width = 256;
+    int height = 256;
+    float nearPlane = 0.1f;    ///< mm
+    float farPlane = 1e4f;     ///< mm
+
+    [[nodiscard]] Mat4f viewFromWorld() const;
+    [[nodiscard]] Mat4f clipFromView() const;  ///< OpenGL clip convention, depth in [-1, 1]
+    /// Primary ray through pixel coordinates (x, y) ∈ [0,w)×[0,h), (0,0) the top-left corner.
+    void generateRay(float px, float py, Point3f& origin, Vector3f& direction) const;
+};
+
+/// Procedural or file mesh description, kept so the scene can be saved again.
+struct MeshSource {
+    std::string file;          ///< path when loaded from a file (empty if procedural)
+    std::string procedural;    ///< "sphere", "box", "torus", "thin-thick" or empty
+    std::vector<float> params; ///< procedural parameters, see docs/file-formats.md
+    float scale = 1.f;         ///< file units → mm
+};
+
+/// Material description, kept so the scene can be saved again.
+struct MaterialSource {
+    std::string vdbFile;   ///< sidecar VDB path, if any
+    std::string preset;    ///< preset name, if any
+    bool uniform = false;  ///< uniform values given inline
+    MaterialSample value;  ///< the uniform value or the preset's value
+    int resolution = GridSpec::DEFAULT_RESOLUTION;
+};
+
+/// One object with its painted volume.
+struct SceneObject {
+    MeshSource meshSource;
+    TriangleMesh mesh;  ///< rest pose, mm
+    MaterialSource materialSource;
+    std::shared_ptr<MaterialVolume> material;
+};
+
+struct Scene {
+    std::vector<SceneObject> objects;  ///< one in the current format
+    std::vector<Light> lights;
+    Camera camera;
+    float eta = 1.3f;  ///< relative index of refraction of the object(s)
+};
+
+}  // namespace lucent
