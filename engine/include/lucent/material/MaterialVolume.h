@@ -24,9 +24,9 @@ namespace lucent {
 
 /// Placement and resolution of a cubic voxel grid.
 struct GridSpec {
-    Point3f origin{0.f};   ///< minimum corner, mm
-    float voxelSize = 1.f; ///< edge length h, mm
-    int resolution = 128;  ///< voxels per axis
+    Point3f origin{0.f};    ///< minimum corner, mm
+    float voxelSize = 1.f;  ///< edge length h, mm
+    int resolution = 128;   ///< voxels per axis
 
     static constexpr int MIN_RESOLUTION = 16;
     static constexpr int MAX_RESOLUTION = 256;
@@ -67,9 +67,9 @@ inline constexpr ChannelMask ALL_CHANNELS = 7;
 /// Brick-structured storage of σt, σs′, g (RGB each) for one object.
 class MaterialVolume {
 public:
-    static constexpr int BRICK = 8;                          ///< brick edge, voxels
+    static constexpr int BRICK = 8;  ///< brick edge, voxels
     static constexpr int BRICK_VOXELS = BRICK * BRICK * BRICK;
-    static constexpr int COMPONENTS = 9;                     ///< σt rgb, σs′ rgb, g rgb
+    static constexpr int COMPONENTS = 9;  ///< σt rgb, σs′ rgb, g rgb
 
     /// Component index inside a brick: SigmaT → 0..2, SigmaS → 3..5, G → 6..8.
     static constexpr int component(Channel ch, int rgb) {
@@ -78,18 +78,25 @@ public:
 
     MaterialVolume() = default;
     /// All inside voxels start at `base` (sanitised); the inside mask starts all-true.
+    /// @throw ValueError if spec.resolution is outside [1, 256], spec.voxelSize is not a
+    /// positive finite number (mm) or spec.origin is not finite.
     MaterialVolume(const GridSpec& spec, const MaterialSample& base);
 
     [[nodiscard]] const GridSpec& spec() const { return m_spec; }
     [[nodiscard]] int resolution() const { return m_spec.resolution; }
     [[nodiscard]] int bricksPerAxis() const { return m_bricksPerAxis; }
-    [[nodiscard]] int brickCount() const { return m_bricksPerAxis * m_bricksPerAxis * m_bricksPerAxis; }
+    [[nodiscard]] int brickCount() const {
+        return m_bricksPerAxis * m_bricksPerAxis * m_bricksPerAxis;
+    }
 
     //! @{ \name Per-object scalars
     [[nodiscard]] float eta() const { return m_eta; }
     /// @param eta relative index of refraction, [1, 3]. @throw ValueError otherwise.
     void setEta(float eta);
     [[nodiscard]] const MaterialSample& base() const { return m_base; }
+    /// Sets the base (sanitised): the value voxels get when they become inside, and the target
+    /// of BrushMode::ResetToBase. Painted voxels are unchanged (PaintSession::applyPreset also
+    /// repaints the interior).
     void setBase(const MaterialSample& base);
     //! @}
 
@@ -105,7 +112,9 @@ public:
     //! @}
 
     //! @{ \name Inside mask
-    [[nodiscard]] bool isInside(const Coord& c) const { return m_inside[m_spec.linearIndex(c)] != 0; }
+    [[nodiscard]] bool isInside(const Coord& c) const {
+        return m_inside[m_spec.linearIndex(c)] != 0;
+    }
     /// Replaces the mask (voxelCount() bytes, x fastest, nonzero = inside); outside voxels are
     /// zeroed, inside voxels that were outside get the base value. Marks all bricks dirty.
     void setInsideMask(const std::vector<uint8_t>& inside);
@@ -117,13 +126,18 @@ public:
     //! @{ \name Brick storage (SoA per brick: component-major, then x fastest within the brick)
     [[nodiscard]] Coord brickOrigin(int b) const;
     [[nodiscard]] int brickIndexOf(const Coord& c) const;
-    [[nodiscard]] const float* brickData(int b) const { return &m_data[size_t(b) * BRICK_VOXELS * COMPONENTS]; }
+    [[nodiscard]] const float* brickData(int b) const {
+        return &m_data[size_t(b) * BRICK_VOXELS * COMPONENTS];
+    }
     float* brickData(int b) { return &m_data[size_t(b) * BRICK_VOXELS * COMPONENTS]; }
     static constexpr int voxelInBrick(int x, int y, int z) { return (z * BRICK + y) * BRICK + x; }
     //! @}
 
     //! @{ \name Dirty tracking
-    void markBrickDirty(int b) { m_dirty[b] = 1; ++m_revision; }
+    void markBrickDirty(int b) {
+        m_dirty[b] = 1;
+        ++m_revision;
+    }
     void markAllDirty();
     [[nodiscard]] bool isBrickDirty(int b) const { return m_dirty[b] != 0; }
     /// Indices of dirty bricks; clears the flags.
@@ -143,8 +157,8 @@ private:
     int m_bricksPerAxis = 0;
     float m_eta = 1.3f;
     MaterialSample m_base;
-    std::vector<float> m_data;        // brickCount × COMPONENTS × BRICK_VOXELS
-    std::vector<uint8_t> m_inside;    // voxelCount, dense
+    std::vector<float> m_data;      // brickCount × COMPONENTS × BRICK_VOXELS
+    std::vector<uint8_t> m_inside;  // voxelCount, dense
     std::vector<uint8_t> m_brickInside;
     std::vector<uint8_t> m_dirty;
     uint64_t m_revision = 0;

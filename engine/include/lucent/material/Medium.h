@@ -50,7 +50,8 @@ inline MediumCoefficients toMedium(const MaterialSample& s) {
 /// Single-scattering albedo of the reduced medium, σs′/σt (0 where σt = 0).
 inline Rgb reducedAlbedo(const MaterialSample& s) {
     Rgb a;
-    for (int c = 0; c < 3; ++c) a[c] = s.sigma_t[c] > 0.f ? s.sigma_s[c] / s.sigma_t[c] : 0.f;
+    for (int c = 0; c < 3; ++c)
+        a[c] = s.sigma_t[c] > 0.f ? s.sigma_s[c] / s.sigma_t[c] : 0.f;
     return a;
 }
 

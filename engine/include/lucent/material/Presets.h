@@ -18,7 +18,7 @@ struct MaterialPreset {
     Rgb sigma_a;          ///< σa, mm⁻¹
     Rgb g{0.f};
     float eta = 1.3f;
-    std::string source;   ///< citation
+    std::string source;  ///< citation
 
     /// σt = σa + σs′, σs′, g as a painted sample.
     [[nodiscard]] MaterialSample sample() const {
@@ -30,5 +30,10 @@ struct MaterialPreset {
 const std::vector<MaterialPreset>& allPresets();
 /// Looks a preset up by name (case-insensitive). @throw ValueError listing the valid names.
 const MaterialPreset& findPreset(const std::string& name);
+/// Parses a preset file ({"source": ..., "presets": [{"name", "sigma_s_reduced": [r,g,b],
+/// "sigma_a": [r,g,b], optional "g": [r,g,b], "eta", optional "source"}]}), σ in mm⁻¹.
+/// @param origin file name used in error messages.
+/// @throw IoError naming the file and field when the JSON is malformed or a value is invalid.
+std::vector<MaterialPreset> parsePresetJson(const std::string& text, const std::string& origin);
 
 }  // namespace lucent

@@ -13,11 +13,11 @@ namespace lucent {
 /// A dense coarse grid of material, SoA, x fastest. Same world box as the source volume.
 struct CoarseMaterial {
     GridSpec spec;
-    std::vector<float> sigma_t[3];  ///< effective reduced extinction per channel, mm⁻¹
-    std::vector<float> sigma_s[3];  ///< effective reduced scattering per channel, mm⁻¹
-    std::vector<float> g[3];        ///< scattering-weighted mean asymmetry
+    std::vector<float> sigma_t[3];      ///< effective reduced extinction per channel, mm⁻¹
+    std::vector<float> sigma_s[3];      ///< effective reduced scattering per channel, mm⁻¹
+    std::vector<float> g[3];            ///< scattering-weighted mean asymmetry
     std::vector<float> insideFraction;  ///< fraction of fine inside voxels in the cell, [0,1]
-    bool homogeneous = false;       ///< every inside cell identical (fast paths may skip reads)
+    bool homogeneous = false;           ///< every inside cell identical (fast paths may skip reads)
 };
 
 /// Resamples `volume` to `resolution`³ cells over the same box. The effective σt of a coarse

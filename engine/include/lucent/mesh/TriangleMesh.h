@@ -14,16 +14,17 @@ namespace lucent {
 
 /// Indexed triangles with per-vertex normals. Counter-clockwise faces seen from outside.
 struct TriangleMesh {
-    std::vector<Point3f> positions;                 ///< mm
-    std::vector<Normal3f> normals;                  ///< unit, per vertex (same size as positions)
-    std::vector<std::array<uint32_t, 3>> triangles; ///< vertex indices
+    std::vector<Point3f> positions;                  ///< mm
+    std::vector<Normal3f> normals;                   ///< unit, per vertex (same size as positions)
+    std::vector<std::array<uint32_t, 3>> triangles;  ///< vertex indices
 
     [[nodiscard]] bool isEmpty() const { return triangles.empty(); }
     [[nodiscard]] size_t vertexCount() const { return positions.size(); }
     [[nodiscard]] size_t triangleCount() const { return triangles.size(); }
     [[nodiscard]] Bounds3f bounds() const {
         Bounds3f b;
-        for (const auto& p : positions) b.expand(p);
+        for (const auto& p : positions)
+            b.expand(p);
         return b;
     }
 };

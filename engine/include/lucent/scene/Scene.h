@@ -19,12 +19,13 @@ namespace lucent {
 /// W/mm² on a surface facing it; sphere light radiance in W/(mm²·sr).
 struct Light {
     enum class Type { Point, Spot, Directional, Sphere } type = Type::Point;
-    Point3f position{0.f};          ///< point, spot, sphere centre (mm)
-    Vector3f direction{0.f, -1.f, 0.f}; ///< spot axis / directional: direction light travels (unit)
-    Rgb intensity{0.f};             ///< point/spot: W/sr; directional: W/mm²; sphere: W/(mm²·sr)
-    float spotOuterDeg = 30.f;      ///< spot: half-angle where intensity reaches 0
-    float spotInnerDeg = 25.f;      ///< spot: half-angle of full intensity
-    float radius = 0.f;             ///< sphere light radius (mm)
+    Point3f position{0.f};  ///< point, spot, sphere centre (mm)
+    /// Spot axis / directional: the direction the light travels (unit).
+    Vector3f direction{0.f, -1.f, 0.f};
+    Rgb intensity{0.f};         ///< point/spot: W/sr; directional: W/mm²; sphere: W/(mm²·sr)
+    float spotOuterDeg = 30.f;  ///< spot: half-angle where intensity reaches 0
+    float spotInnerDeg = 25.f;  ///< spot: half-angle of full intensity
+    float radius = 0.f;         ///< sphere light radius (mm)
 
     /// Intensity (W/sr) toward unit direction `towardSurface` (from the light), including the
     /// spot falloff (smoothstep between outer and inner cones). Point/spot only.
@@ -41,8 +42,8 @@ struct Camera {
     float orthoHeight = 40.f;  ///< orthographic: full view height in mm
     int width = 256;
     int height = 256;
-    float nearPlane = 0.1f;    ///< mm
-    float farPlane = 1e4f;     ///< mm
+    float nearPlane = 0.1f;  ///< mm
+    float farPlane = 1e4f;   ///< mm
 
     [[nodiscard]] Mat4f viewFromWorld() const;
     [[nodiscard]] Mat4f clipFromView() const;  ///< OpenGL clip convention, depth in [-1, 1]
@@ -52,10 +53,10 @@ struct Camera {
 
 /// Procedural or file mesh description, kept so the scene can be saved again.
 struct MeshSource {
-    std::string file;          ///< path when loaded from a file (empty if procedural)
-    std::string procedural;    ///< "sphere", "box", "torus", "thin-thick" or empty
-    std::vector<float> params; ///< procedural parameters, see docs/file-formats.md
-    float scale = 1.f;         ///< file units → mm
+    std::string file;           ///< path when loaded from a file (empty if procedural)
+    std::string procedural;     ///< "sphere", "box", "torus", "thin-thick" or empty
+    std::vector<float> params;  ///< procedural parameters, see docs/file-formats.md
+    float scale = 1.f;          ///< file units → mm
 };
 
 /// Material description, kept so the scene can be saved again.

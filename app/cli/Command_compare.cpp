@@ -1,0 +1,93 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief `lucent-cli compare`: RMSE, relative RMSE and mean relative error of an image against
+/// a reference, per channel and luminance, next to the Monte Carlo noise floor.
+
+#include "CliArgs.h"
+
+#include <lucent/bench/ErrorMetrics.h>
+#include <lucent/core/Error.h>
+#include <lucent/core/Image.h>
+
+#include <cstdio>
+#include <optional>
+
+namespace lucent::cli {
+
+namespace {
+
+/// A layer of an EXR, or nothing when the file lacks it.
+std::optional<ImageRgb> tryLayer(const std::string& path, const std::string& layer) {
+    try {
+        return readExr(path, layer);
+    } catch (const IoError&) {
+        return std::nullopt;
+    }
+}
+
+ImageRgb readAny(const std::string& path) {
+    const bool png = path.size() >= 4 && path.compare(path.size() - 4, 4, ".png") == 0;
+    return png ? readPng(path) : readExr(path);
+}
+
+int runCompare(const std::vector<std::string>& argv) {
+    const Args args(argv, {"mask"}, {});
+    if (args.positional().size() != 2)
+        LUCENT_THROW(ValueError, "expected TEST.exr REFERENCE.exr (see --help)");
+    const std::string& testPath = args.positional()[0];
+    const std::string& refPath = args.positional()[1];
+    const ImageRgb test = readExr(testPath);
+    const ImageRgb ref = readExr(refPath);
+    const std::optional<ImageRgb> refVar = tryLayer(refPath, "variance");
+    const std::optional<ImageRgb> testVar = tryLayer(testPath, "variance");
+
+    std::vector<uint8_t> mask;
+    std::string maskFrom;
+    if (auto m = args.value("mask")) {
+        const ImageRgb img = readAny(*m);
+        if (img.width() != ref.width() || img.height() != ref.height())
+            LUCENT_THROW(ValueError, "--mask ", *m, ": ", img.width(), "×", img.height(),
+                         " but the reference is ", ref.width(), "×", ref.height());
+        mask = maskFromImage(img);
+        maskFrom = *m;
+    } else if (auto cov = tryLayer(refPath, "coverage"); cov && cov->width() == ref.width() &&
+                                                         cov->height() == ref.height()) {
+        mask = maskFromImage(*cov);
+        maskFrom = refPath + " (coverage layer)";
+    } else {
+        // No coverage information: pixels where either image is not black.
+        mask.resize(ref.pixels().size());
+        if (test.pixels().size() == mask.size())
+            for (size_t i = 0; i < mask.size(); ++i)
+                mask[i] = (luminance(ref.pixels()[i]) != 0.f || luminance(test.pixels()[i]) != 0.f);
+        maskFrom = "non-black pixels";
+    }
+    const ErrorReport r = compareImages(test, ref, refVar ? &*refVar : nullptr,
+                                        testVar ? &*testVar : nullptr, &mask);
+    std::printf("test: %s\nreference: %s\nmask: %s\nnoise floor from: %s\n", testPath.c_str(),
+                refPath.c_str(), maskFrom.c_str(),
+                refVar && testVar ? "variance layers of both images"
+                : refVar          ? "the reference's variance layer"
+                : testVar         ? "the test image's variance layer"
+                                  : "none (no variance layer)");
+    std::fputs(formatReport(r).c_str(), stdout);
+    return 0;
+}
+
+}  // namespace
+
+extern const Command compareCommand;
+const Command compareCommand{
+    "compare", "error metrics of an image against a reference, with its noise floor",
+    "usage: lucent-cli compare TEST.exr REFERENCE.exr [--mask MASK]\n"
+    "\n"
+    "Prints per channel (R, G, B) and for luminance, over the object-covered pixels:\n"
+    "RMSE, relative RMSE (RMSE / mean reference) and mean relative error (|a−b| / b per pixel),\n"
+    "each beside its noise floor: the value expected from the Monte Carlo variance alone (the\n"
+    "'variance' layers of REFERENCE and, if present, TEST). Definitions: docs/reference.md.\n"
+    "\n"
+    "  --mask MASK   EXR or PNG, same size; pixels with any channel > 0.5 are compared.\n"
+    "                Default: REFERENCE's 'coverage' layer, else pixels not black in either.\n",
+    &runCompare};
+
+}  // namespace lucent::cli

@@ -1,0 +1,62 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief The SSLPV propagation as GL 4.5 compute (shaders/sslpv_propagate.comp): same maths,
+/// data layout and folded factors as the CPU solver, grids in SSBOs stored as fp32 or fp16.
+///
+///     SslpvSolver cpu(opt);  cpu.setMaterial(m, eta);  cpu.setInjectionSamples(s);  cpu.solve();
+///     SslpvGlPropagator gl(SslpvGlStorage::Float16);   // a GL 4.5 context is current
+///     gl.propagate(cpu);           // re-runs cpu's propagation on the GPU (all maxSteps steps)
+///     gl.accumulation();           // read back into an SslpvGrid
+///     gl.destroy();                // context current
+///
+/// The CPU solver still does injection and folds the per-cell factors; the GPU runs the
+/// steps. No early stop on the GPU (it would need a reduction per step): always maxSteps.
+
+#include <lucent/sslpv/SslpvSolver.h>
+
+#include <memory>
+
+namespace lucent {
+
+/// Storage precision of the GPU grids (factors and masks are always fp32).
+enum class SslpvGlStorage { Float32, Float16 };
+
+/// CPU and GPU times of the last propagate(), milliseconds.
+struct SslpvGlTimings {
+    double uploadCpuMs = 0.0;
+    double propagateCpuMs = 0.0;  ///< issuing the dispatches
+    double propagateGpuMs = 0.0;  ///< GL timestamp queries around the steps
+    double readbackCpuMs = 0.0;
+};
+
+class SslpvGlPropagator {
+public:
+    /// Compiles the program. Precondition: a GL 4.5 context is current.
+    /// @throw GpuError on compile/link errors.
+    explicit SslpvGlPropagator(SslpvGlStorage storage = SslpvGlStorage::Float32);
+    ~SslpvGlPropagator();
+    SslpvGlPropagator(const SslpvGlPropagator&) = delete;
+    SslpvGlPropagator& operator=(const SslpvGlPropagator&) = delete;
+
+    /// Runs `solver`'s propagation (its injection grid, folded factors, sink mask, order,
+    /// maxSteps, skipAccumulateSteps) and reads back the accumulation and exitant grids.
+    /// @throw ValueError if the solver has not been solved; GpuError on GL errors.
+    void propagate(const SslpvSolver& solver);
+    [[nodiscard]] const SslpvGrid& accumulation() const;
+    [[nodiscard]] const SslpvGrid& exitant() const;
+    [[nodiscard]] const SslpvGlTimings& timings() const;
+    [[nodiscard]] SslpvGlStorage storage() const;
+    /// Frees GL objects (context current). Idempotent.
+    void destroy();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+/// IEEE 754 binary16 conversions (round to nearest even), used for fp16 grids.
+uint16_t floatToHalf(float value);
+float halfToFloat(uint16_t bits);
+
+}  // namespace lucent

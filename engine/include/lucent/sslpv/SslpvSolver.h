@@ -1,0 +1,203 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief Subsurface Light Propagation Volumes on the CPU (Børlum et al. 2011, seed 000):
+/// injection of refracted light (§3.1, Eq. 1), iterative propagation with absorption and
+/// scattering (§3.2, Eq. 2–3), exitant-flux sinks, and the area-light radiance estimate of
+/// §3.3 (Eq. 5–7). Incremental: the app sets what changed and calls solve().
+///
+///     SslpvSolver solver({.order = 1, .maxSteps = 32});
+///     solver.setMaterial(resampleForPropagation(volume, 32), /*eta=*/1.3f);  // re-propagates
+///     solver.setInjectionSamples(rsmTexels);                                 // re-injects
+///     const SslpvStats& st = solver.solve();          // no-op when nothing is dirty
+///     Rgb L = solver.radiance(p, n);                  // W/(mm²·sr), before Fresnel
+///
+/// Units: positions mm, σ mm⁻¹, SH coefficients of point-light intensities W/sr, flux W.
+/// Grids are cell-centred on the material's GridSpec (docs/conventions.md).
+
+#include <lucent/core/SphericalHarmonics.h>
+#include <lucent/core/Types.h>
+#include <lucent/material/Resample.h>
+#include <lucent/sslpv/Transfer.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace lucent {
+
+/// Dense SH grid, structure of arrays: one plane per (channel, coefficient), each a
+/// (N+2)³ array with a one-cell zero border (x fastest) so the propagation stencil needs no
+/// bounds tests. Coefficients are SH of point-light intensity in W/sr (orthonormal basis).
+class SslpvGrid {
+public:
+    static constexpr int CHANNELS = 3;
+
+    SslpvGrid() = default;
+    /// @param resolution cells per axis (≥ 1). @param order 1 or 2.
+    SslpvGrid(int resolution, int order);
+
+    [[nodiscard]] int resolution() const { return m_res; }
+    [[nodiscard]] int order() const { return m_order; }
+    [[nodiscard]] int coeffCount() const { return m_coeffs; }
+    /// Padded edge length N+2.
+    [[nodiscard]] int paddedResolution() const { return m_res + 2; }
+    [[nodiscard]] size_t planeSize() const { return m_planeSize; }
+    /// Padded linear index of interior cell c ∈ [0,N)³.
+    [[nodiscard]] size_t index(const Coord& c) const {
+        const size_t p = size_t(m_res + 2);
+        return (size_t(c.z + 1) * p + size_t(c.y + 1)) * p + size_t(c.x + 1);
+    }
+    float* plane(int channel, int coeff) { return &m_data[planeOffset(channel, coeff)]; }
+    [[nodiscard]] const float* plane(int channel, int coeff) const {
+        return &m_data[planeOffset(channel, coeff)];
+    }
+    /// Coefficient `coeff` of channel `channel` at interior cell c.
+    [[nodiscard]] float at(const Coord& c, int channel, int coeff) const {
+        return plane(channel, coeff)[index(c)];
+    }
+    void clear();
+    /// Total flux Σ_cells ∫ I dω = 2√π Σ c00 per channel, W.
+    [[nodiscard]] Rgb flux() const;
+    /// Largest |coefficient| over the grid (NaN propagates as NaN).
+    [[nodiscard]] float maxAbs() const;
+    /// True when every value is finite.
+    [[nodiscard]] bool isFinite() const;
+    [[nodiscard]] const std::vector<float>& raw() const { return m_data; }
+    std::vector<float>& raw() { return m_data; }
+
+private:
+    [[nodiscard]] size_t planeOffset(int channel, int coeff) const {
+        return (size_t(channel) * m_coeffs + coeff) * m_planeSize;
+    }
+    int m_res = 0;
+    int m_order = 1;
+    int m_coeffs = 4;
+    size_t m_planeSize = 0;
+    std::vector<float> m_data;
+};
+
+/// What the Beer attenuation of §3.2.1 uses.
+enum class SslpvAttenuation {
+    Extinction,  ///< exp(−σt·Δx), σt = σa + σs′: the paper, literally (§3.2.1)
+    Absorption,  ///< exp(−σa·Δx), σa = σt − σs′: scattering is only redistributed (Eq. 3)
+};
+
+/// Solver settings. Changing order/steps/skip/sinks/attenuation re-propagates.
+struct SslpvOptions {
+    int order = 1;                ///< SH order: 1 (4 coefficients, the paper) or 2 (9)
+    int maxSteps = 32;            ///< propagation steps, [0, 4096]
+    int skipAccumulateSteps = 2;  ///< first steps not accumulated (§4, last paragraph)
+    bool removeExitant = true;    ///< cells outside the object are sinks (paper: false, Fig. 8)
+    SslpvAttenuation attenuation = SslpvAttenuation::Extinction;
+    /// Stop once the flux left in the propagation grid is below stopEpsilon · injected flux
+    /// (all channels); 0 runs maxSteps. [0, 1].
+    float stopEpsilon = 0.f;
+};
+
+/// One injection texel of a reflective shadow map (§3.1).
+struct SslpvInjectionSample {
+    Point3f position{0.f};               ///< x_p on the surface, mm
+    Normal3f normal{0.f, 0.f, 1.f};      ///< n_p, outward unit normal
+    Vector3f direction{0.f, 0.f, -1.f};  ///< unit direction the light travels (light → x_p)
+    Rgb flux{0.f};                       ///< Φ_p = I·Δω_p through the texel, W
+};
+
+/// Results and energy bookkeeping of the last solve. Fluxes in W per channel.
+struct SslpvStats {
+    int stepsUsed = 0;
+    Rgb injected{0.f};   ///< flux put into the grid (after Fresnel transmission)
+    Rgb remaining{0.f};  ///< flux still in the propagation grid
+    Rgb exitant{0.f};    ///< flux that reached sink cells (removeExitant)
+    Rgb absorbed{0.f};   ///< flux removed by the Beer attenuation
+    int injectedTexels = 0;
+    int skippedTexels = 0;  ///< back-facing, zero flux, or no inside cell near x_p
+    double injectMs = 0.0;
+    double propagateMs = 0.0;   ///< whole propagation, including set-up and bookkeeping
+    double stepsMs = 0.0;       ///< the propagation steps alone
+    bool reinjected = false;    ///< this solve re-ran injection
+    bool repropagated = false;  ///< this solve re-ran propagation
+};
+
+/// Incremental SSLPV solver (see file comment). Not thread-safe; solve() uses parallelFor.
+class SslpvSolver {
+public:
+    explicit SslpvSolver(const SslpvOptions& options = {});
+
+    //! @{ \name Inputs (each marks what must be redone)
+    /// @throw ValueError for an option out of range.
+    void setOptions(const SslpvOptions& options);
+    [[nodiscard]] const SslpvOptions& options() const { return m_opt; }
+    /// Copies the coarse material (its GridSpec defines the LPV grid) and the relative index
+    /// of refraction. Re-injects when the grid changed, always re-propagates.
+    /// @throw ValueError naming the field for missing/inconsistent arrays or eta ∉ [1, 3].
+    void setMaterial(const CoarseMaterial& material, float eta);
+    /// The material arrays were edited in place through material(): re-propagate.
+    void markMaterialDirty() { m_materialDirty = m_factorsDirty = true; }
+    CoarseMaterial& material() { return m_material; }
+    /// Replaces the injection texels (lights or mesh moved): re-inject and re-propagate.
+    void setInjectionSamples(std::vector<SslpvInjectionSample> samples);
+    //! @}
+
+    /// True when solve() has work to do.
+    [[nodiscard]] bool isDirty() const { return m_injectionDirty || m_materialDirty; }
+    /// Runs what is dirty: injection (§3.1) then propagation (§3.2).
+    /// @throw ValueError if no material was set.
+    const SslpvStats& solve();
+    [[nodiscard]] const SslpvStats& stats() const { return m_stats; }
+
+    //! @{ \name Results
+    [[nodiscard]] const GridSpec& spec() const { return m_material.spec; }
+    [[nodiscard]] const SslpvGrid& injection() const { return m_injection; }
+    [[nodiscard]] const SslpvGrid& accumulation() const { return m_accum; }
+    [[nodiscard]] const SslpvGrid& exitant() const { return m_exitant; }
+    [[nodiscard]] const SslpvGrid& propagation() const { return m_prop[m_cur]; }
+    /// Cell c is part of the object (insideFraction ≥ ½).
+    [[nodiscard]] bool isInside(const Coord& c) const;
+    /// Incident radiance estimate just inside the surface at p with outward unit normal n
+    /// (Eq. 5–7: area light of cross-section A = Δx², L_i = Φ_hemisphere/(Aπ)), W/(mm²·sr),
+    /// from the accumulation grid sampled half a cell inside along −n (trilinear over inside
+    /// cells only). Not multiplied by Fresnel T (the caller knows ω_o).
+    [[nodiscard]] Rgb radiance(const Point3f& p, const Normal3f& n) const;
+    //! @}
+
+    //! @{ \name Folded propagation data (valid after solve(); for the GL path)
+    /// Per-source-cell factor a·((1 − s′) + s′g^l) of channel `channel`, band `band`, as one
+    /// padded plane (SslpvGrid layout), homogeneous values expanded.
+    [[nodiscard]] std::vector<float> foldedFactorPlane(int channel, int band) const;
+    /// 1 for inside cells, 0 for sinks, as one padded plane (all 1 when sinks are off).
+    [[nodiscard]] std::vector<float> sinkMaskPlane() const;
+    //! @}
+
+private:
+    void validateMaterial(const CoarseMaterial& m) const;
+    void rebuildFactors();
+    void inject();
+    void propagate();
+
+    SslpvOptions m_opt;
+    CoarseMaterial m_material;
+    float m_eta = 1.3f;
+    std::vector<SslpvInjectionSample> m_samples;
+    bool m_injectionDirty = true;
+    bool m_materialDirty = true;  ///< propagation must rerun
+    bool m_factorsDirty = true;   ///< per-cell factors must be refolded (material/options)
+    bool m_hasMaterial = false;
+
+    SslpvGrid m_injection, m_accum, m_exitant;
+    SslpvGrid m_prop[2];
+    int m_cur = 0;
+    // Per-cell factors folded once per material change (padded layout like SslpvGrid planes):
+    // m_factor[ch][band] = a · ((1 − s′) + s′·g^l), a = Beer attenuation, s′ = per-step
+    // scattering fraction; m_mask = 1 inside, 0 in sink cells.
+    std::vector<float> m_factor[3][3];
+    std::vector<float> m_absorb[3];  ///< 1 − a per cell (energy bookkeeping)
+    std::vector<float> m_mask;
+    bool m_homogeneous = false;
+    float m_homFactor[3][3] = {};
+    float m_homAbsorb[3] = {};
+    CoordBox m_active;  ///< cells that can hold light (inside cells dilated by one, or all)
+    CoordBox m_lastActive;
+    SslpvStats m_stats;
+};
+
+}  // namespace lucent

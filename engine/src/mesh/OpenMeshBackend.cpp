@@ -1,0 +1,186 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief The OpenMesh boundary: OBJ/PLY/OFF/STL reading and writing, quadric decimation,
+/// Loop subdivision and Laplacian smoothing.
+
+#include "Backends.h"
+
+#include <lucent/core/Error.h>
+#include <lucent/mesh/MeshEdit.h>
+
+// OpenMesh requires its IO header before the mesh kernel.
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Tools/Decimater/DecimaterT.hh>
+#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
+#include <OpenMesh/Tools/Smoother/JacobiLaplaceSmootherT.hh>
+#include <OpenMesh/Tools/Subdivider/Uniform/LoopT.hh>
+
+#include <mutex>
+#include <sstream>
+
+namespace lucent {
+namespace {
+
+using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+
+OmMesh toOpenMesh(const TriangleMesh& mesh) {
+    OmMesh om;
+    om.request_vertex_normals();
+    std::vector<OmMesh::VertexHandle> vh;
+    vh.reserve(mesh.positions.size());
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+        const Point3f& p = mesh.positions[i];
+        vh.push_back(om.add_vertex(OmMesh::Point(p.x, p.y, p.z)));
+        if (i < mesh.normals.size()) {
+            const Normal3f& n = mesh.normals[i];
+            om.set_normal(vh.back(), OmMesh::Normal(n.x, n.y, n.z));
+        }
+    }
+    for (const auto& t : mesh.triangles) {
+        LUCENT_CHECK(t[0] < vh.size() && t[1] < vh.size() && t[2] < vh.size(),
+                     "mesh: triangle index out of range");
+        om.add_face(vh[t[0]], vh[t[1]], vh[t[2]]);  // complex faces are skipped by OpenMesh
+    }
+    return om;
+}
+
+TriangleMesh fromOpenMesh(const OmMesh& om, bool useNormals) {
+    TriangleMesh m;
+    m.positions.reserve(om.n_vertices());
+    for (const auto v : om.vertices()) {
+        const auto& p = om.point(v);
+        m.positions.emplace_back(p[0], p[1], p[2]);
+        if (useNormals) {
+            const auto& n = om.normal(v);
+            m.normals.emplace_back(n[0], n[1], n[2]);
+        }
+    }
+    m.triangles.reserve(om.n_faces());
+    for (const auto f : om.faces()) {
+        std::array<uint32_t, 3> t{};
+        int k = 0;
+        for (const auto v : om.fv_range(f)) {
+            if (k < 3)
+                t[size_t(k)] = uint32_t(v.idx());
+            ++k;
+        }
+        if (k == 3)
+            m.triangles.push_back(t);
+    }
+    if (!useNormals)
+        computeVertexNormals(m);
+    return m;
+}
+
+}  // namespace
+
+namespace detail {
+
+RawMesh readOpenMesh(const std::string& path) {
+    OmMesh om;
+    om.request_vertex_normals();
+    om.request_face_status();
+    OpenMesh::IO::Options opt = OpenMesh::IO::Options::VertexNormal;
+    // OpenMesh's importer reports the faces it rejects only on its error stream: listen to it
+    // (a process-wide stream, hence the lock) to count them.
+    static std::mutex s_logMutex;
+    std::ostringstream log;
+    bool ok = false;
+    {
+        const std::lock_guard<std::mutex> lock(s_logMutex);
+        ::omerr().connect(log);
+        ok = OpenMesh::IO::read_mesh(om, path, opt);
+        ::omerr().flush();
+        ::omerr().disconnect(log);
+    }
+    if (!ok)
+        LUCENT_THROW(IoError, "mesh file '", path, "': cannot be parsed (unreadable or malformed)");
+    const std::string messages = log.str();
+    auto count = [&](const char* what) {
+        size_t n = 0;
+        for (size_t at = messages.find(what); at != std::string::npos;
+             at = messages.find(what, at + 1))
+            ++n;
+        return n;
+    };
+    if (const size_t bad = count("invalid vertex index"))
+        LUCENT_THROW(IoError, "mesh file '", path, "': ", bad,
+                     " face(s) refer to vertices that could not be read (malformed or NaN/Inf "
+                     "coordinates)");
+    RawMesh raw;
+    raw.readerDroppedDegenerate = count("equal vertices");
+    raw.hasNormals = opt.check(OpenMesh::IO::Options::VertexNormal);
+    for (const auto f : om.faces())
+        if (om.status(f).fixed_nonmanifold())
+            ++raw.nonManifoldDetached;
+    raw.mesh = fromOpenMesh(om, raw.hasNormals);
+    return raw;
+}
+
+void writeOpenMesh(const TriangleMesh& mesh, const std::string& path, bool binary) {
+    OmMesh om = toOpenMesh(mesh);
+    OpenMesh::IO::Options opt;
+    // STL stores face normals only (OpenMesh's STL writer refuses vertex normals).
+    if (path.size() < 4 || (path.compare(path.size() - 4, 4, ".stl") != 0 &&
+                            path.compare(path.size() - 4, 4, ".STL") != 0))
+        opt += OpenMesh::IO::Options::VertexNormal;
+    if (binary)
+        opt += OpenMesh::IO::Options::Binary;
+    if (!OpenMesh::IO::write_mesh(om, path, opt))
+        LUCENT_THROW(IoError, "mesh file '", path, "': cannot be written");
+}
+
+}  // namespace detail
+
+TriangleMesh decimate(const TriangleMesh& mesh, size_t targetTriangles) {
+    LUCENT_CHECK(!mesh.isEmpty(), "decimate: the mesh is empty");
+    LUCENT_CHECK(targetTriangles >= 4, "decimate: targetTriangles must be ≥ 4, got ",
+                 targetTriangles);
+    OmMesh om = toOpenMesh(mesh);
+    om.request_vertex_status();
+    om.request_edge_status();
+    om.request_face_status();
+    om.request_face_normals();
+    om.update_face_normals();
+    using Decimater = OpenMesh::Decimater::DecimaterT<OmMesh>;
+    using Quadric = OpenMesh::Decimater::ModQuadricT<OmMesh>::Handle;
+    Decimater dec(om);
+    Quadric hq;
+    dec.add(hq);
+    dec.module(hq).unset_max_err();
+    if (!dec.initialize())
+        LUCENT_THROW(Error, "decimate: OpenMesh decimater failed to initialise");
+    dec.decimate_to_faces(0, targetTriangles);
+    om.garbage_collection();
+    return fromOpenMesh(om, false);
+}
+
+TriangleMesh subdivideLoop(const TriangleMesh& mesh, int iterations) {
+    LUCENT_CHECK(!mesh.isEmpty(), "subdivideLoop: the mesh is empty");
+    LUCENT_CHECK(iterations >= 1 && iterations <= 5,
+                 "subdivideLoop: iterations must be in [1, 5], got ", iterations);
+    OmMesh om = toOpenMesh(mesh);
+    OpenMesh::Subdivider::Uniform::LoopT<OmMesh> loop;
+    loop.attach(om);
+    loop(size_t(iterations));
+    loop.detach();
+    return fromOpenMesh(om, false);
+}
+
+TriangleMesh smoothLaplacian(const TriangleMesh& mesh, int iterations) {
+    LUCENT_CHECK(!mesh.isEmpty(), "smoothLaplacian: the mesh is empty");
+    LUCENT_CHECK(iterations >= 1 && iterations <= 1000,
+                 "smoothLaplacian: iterations must be in [1, 1000], got ", iterations);
+    OmMesh om = toOpenMesh(mesh);
+    om.request_vertex_status();
+    om.request_face_normals();
+    om.update_normals();
+    OpenMesh::Smoother::JacobiLaplaceSmootherT<OmMesh> smoother(om);
+    smoother.initialize(OpenMesh::Smoother::SmootherT<OmMesh>::Tangential_and_Normal,
+                        OpenMesh::Smoother::SmootherT<OmMesh>::C0);
+    smoother.smooth(unsigned(iterations));
+    return fromOpenMesh(om, false);
+}
+
+}  // namespace lucent

@@ -1,0 +1,687 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief CPU SSLPV: injection, propagation (the hot loop) and the radiance estimate.
+
+#include <lucent/sslpv/SslpvSolver.h>
+
+#include <lucent/core/Error.h>
+#include <lucent/core/Parallel.h>
+#include <lucent/core/Timer.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace lucent {
+namespace {
+
+constexpr double TWO_SQRT_PI = 3.544907701811032;  // ∫ y00 dω = 2√π: flux of c00 = 1
+constexpr float Y00 = 0.282094791773878f;          // 1/(2√π)
+constexpr float K1 = 0.488602511902920f;           // √(3/(4π))
+
+constexpr int bandOf(int i) {
+    return i == 0 ? 0 : (i < 4 ? 1 : 2);
+}
+
+/// One non-zero entry of a propagation matrix, as a shifted read of a source plane.
+struct Term {
+    int srcCoeff;
+    std::ptrdiff_t offset;  ///< padded linear offset of the source cell from the destination
+    float weight;
+};
+
+/// Everything one propagation step needs; raw pointers into the solver's arrays.
+struct StepCtx {
+    int coeffs = 4;
+    const std::vector<Term>* terms = nullptr;  ///< [coeffs]
+    const float* src[3][SSLPV_MAX_COEFFS] = {};
+    float* dst[3][SSLPV_MAX_COEFFS] = {};
+    float* acc[3][SSLPV_MAX_COEFFS] = {};   ///< null: do not accumulate this step
+    float* exit[3][SSLPV_MAX_COEFFS] = {};  ///< null: no sinks
+    bool assignAcc = false;                 ///< first accumulated step: acc = c, not +=
+    bool assignExit = false;                ///< first step: exit = leave, not +=
+    const float* mask = nullptr;            ///< null: no sinks
+    const float* factor[3][3] = {};         ///< null: homogeneous (use homFactor)
+    const float* absorb[3] = {};
+    float homFactor[3][3] = {};
+    float homAbsorb[3] = {};
+    CoordBox box;
+    int padded = 0;
+};
+
+/// Sums of one z-slice: [channel] × {remaining, exitant, absorbed}.
+struct SliceSums {
+    double v[3][3] = {};
+};
+
+constexpr int VEC = 8;  ///< floats per GCC vector below (AVX2 register; two SSE ones otherwise)
+typedef float Vec16 __attribute__((vector_size(2 * VEC * sizeof(float))));
+
+// Unaligned 16-float load/store as macros: helper functions returning vectors would be
+// compiled for the baseline ABI outside the cloned kernel (GCC -Wpsabi).
+#define LUCENT_LOAD16(ptr)                        \
+    ({                                            \
+        Vec16 v_;                                 \
+        __builtin_memcpy(&v_, (ptr), sizeof(v_)); \
+        v_;                                       \
+    })
+#define LUCENT_STORE16(ptr, val)                  \
+    do {                                          \
+        const Vec16 s_ = (val);                   \
+        __builtin_memcpy((ptr), &s_, sizeof(s_)); \
+    } while (false)
+
+// The propagation kernel for one z-slice. Compiled for x86-64-v4 (AVX-512), v3 (AVX2+FMA)
+// and baseline, picked at load time. The gather of §4, c_d,i = Σ_o Σ_j M_o[i][j] c_{d+o,j},
+// runs register-blocked on 32 x-consecutive cells: all non-zero matrix terms (shifted
+// unaligned loads of SoA planes) summed over 4 independent accumulator pairs to hide the FMA
+// latency, then the per-cell post-processing (sinks, accumulation, the folded factors of the
+// next step, energy sums) is applied in registers. Row tails go through a small buffer.
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void processSlice(
+    const StepCtx& ctx, int z, SliceSums& sums) {
+    const int len = ctx.box.hi.x - ctx.box.lo.x + 1;
+    const size_t p = size_t(ctx.padded);
+    constexpr int BLOCK = 4 * VEC;  // 32 cells
+    alignas(64) float out[BLOCK];
+    for (int y = ctx.box.lo.y; y <= ctx.box.hi.y; ++y) {
+        const size_t base = (size_t(z + 1) * p + size_t(y + 1)) * p + size_t(ctx.box.lo.x + 1);
+        for (int ch = 0; ch < 3; ++ch) {
+            for (int i = 0; i < ctx.coeffs; ++i) {
+                const std::vector<Term>& terms = ctx.terms[i];
+                const int nt = int(terms.size());
+                const float* ptr[SSLPV_MAX_COEFFS * 6 + 4];
+                for (int t = 0; t < nt; ++t)
+                    ptr[t] = ctx.src[ch][terms[t].srcCoeff] + base + terms[t].offset;
+                const int band = bandOf(i);
+                const float* fac = ctx.factor[ch][band] ? ctx.factor[ch][band] + base : nullptr;
+                const float homF = ctx.homFactor[ch][band];
+                const float* ab = ctx.absorb[ch] ? ctx.absorb[ch] + base : nullptr;
+                const float* msk = ctx.mask ? ctx.mask + base : nullptr;
+                float* ex = ctx.exit[ch][i] ? ctx.exit[ch][i] + base : nullptr;
+                float* ac = ctx.acc[ch][i] ? ctx.acc[ch][i] + base : nullptr;
+                float* ds = ctx.dst[ch][i] + base;
+                const bool sum = i == 0;
+                Vec16 remV = {}, absV = {}, exitV = {};
+                float remS = 0.f, absS = 0.f, exitS = 0.f;
+                for (int x0 = 0; x0 < len; x0 += BLOCK) {
+                    Vec16 a[4][2] = {};
+                    for (int t = 0; t < nt; t += 4) {
+                        for (int u = 0; u < 4; ++u) {
+                            const float* q = ptr[t + u] + x0;
+                            const float w = terms[t + u].weight;
+                            a[u][0] += w * LUCENT_LOAD16(q);
+                            a[u][1] += w * LUCENT_LOAD16(q + 2 * VEC);
+                        }
+                    }
+                    Vec16 o[2] = {(a[0][0] + a[1][0]) + (a[2][0] + a[3][0]),
+                                  (a[0][1] + a[1][1]) + (a[2][1] + a[3][1])};
+                    if (x0 + BLOCK <= len) {
+                        for (int h = 0; h < 2; ++h) {
+                            const int x = x0 + h * 2 * VEC;
+                            // Sinks: flux reaching a cell outside the object leaves it.
+                            if (msk) {
+                                const Vec16 m = LUCENT_LOAD16(msk + x);
+                                const Vec16 leave = o[h] * (1.f - m);
+                                LUCENT_STORE16(
+                                    ex + x, ctx.assignExit ? leave : LUCENT_LOAD16(ex + x) + leave);
+                                if (sum)
+                                    exitV += leave;
+                                o[h] *= m;
+                            }
+                            if (ac)
+                                LUCENT_STORE16(ac + x,
+                                               ctx.assignAcc ? o[h] : LUCENT_LOAD16(ac + x) + o[h]);
+                            // The next step's per-source factors: Beer attenuation (§3.2.1) times
+                            // the scattering reweighting of band l (Eq. 3).
+                            const Vec16 d = fac ? o[h] * LUCENT_LOAD16(fac + x) : o[h] * homF;
+                            LUCENT_STORE16(ds + x, d);
+                            if (sum) {
+                                remV += d;
+                                absV += ab ? o[h] * LUCENT_LOAD16(ab + x) : o[h];
+                            }
+                        }
+                        continue;
+                    }
+                    // Row tail (fewer than 32 cells left): scalar, same operations.
+                    LUCENT_STORE16(out, o[0]);
+                    LUCENT_STORE16(out + 2 * VEC, o[1]);
+                    for (int x = x0; x < len; ++x) {
+                        float v = out[x - x0];
+                        if (msk) {
+                            const float leave = v * (1.f - msk[x]);
+                            ex[x] = ctx.assignExit ? leave : ex[x] + leave;
+                            if (sum)
+                                exitS += leave;
+                            v *= msk[x];
+                        }
+                        if (ac)
+                            ac[x] = ctx.assignAcc ? v : ac[x] + v;
+                        const float d = v * (fac ? fac[x] : homF);
+                        ds[x] = d;
+                        if (sum) {
+                            remS += d;
+                            absS += ab ? v * ab[x] : v;
+                        }
+                    }
+                }
+                if (sum) {
+                    for (int k = 0; k < 2 * VEC; ++k) {
+                        remS += remV[k];
+                        absS += absV[k];
+                        exitS += exitV[k];
+                    }
+                    const float absTotal = absS;
+                    sums.v[ch][0] += remS;
+                    sums.v[ch][1] += exitS;
+                    sums.v[ch][2] += ab ? absTotal : absTotal * ctx.homAbsorb[ch];
+                }
+            }
+        }
+    }
+}
+
+#undef LUCENT_LOAD16
+#undef LUCENT_STORE16
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// SslpvGrid
+
+SslpvGrid::SslpvGrid(int resolution, int order)
+    : m_res(resolution), m_order(order), m_coeffs(shCount(order)) {
+    LUCENT_CHECK(resolution >= 1 && resolution <= 1022, "SSLPV grid: resolution ", resolution,
+                 " outside [1, 1022]");
+    LUCENT_CHECK(order == 1 || order == 2, "SSLPV grid: SH order must be 1 or 2, got ", order);
+    const size_t p = size_t(resolution + 2);
+    m_planeSize = p * p * p;
+    // Slack after the last plane: the vector kernel reads whole 32-float blocks past a row end.
+    m_data.assign(m_planeSize * CHANNELS * m_coeffs + 64, 0.f);
+}
+
+void SslpvGrid::clear() {
+    std::fill(m_data.begin(), m_data.end(), 0.f);
+}
+
+Rgb SslpvGrid::flux() const {
+    Rgb r(0.f);
+    if (m_data.empty())
+        return r;
+    for (int ch = 0; ch < CHANNELS; ++ch) {
+        const float* c = plane(ch, 0);
+        double s = 0.0;
+        for (size_t k = 0; k < m_planeSize; ++k)
+            s += c[k];
+        r[ch] = float(s * TWO_SQRT_PI);
+    }
+    return r;
+}
+
+float SslpvGrid::maxAbs() const {
+    float m = 0.f;
+    for (float v : m_data) {
+        if (std::isnan(v))
+            return v;
+        m = std::max(m, std::abs(v));
+    }
+    return m;
+}
+
+bool SslpvGrid::isFinite() const {
+    return std::all_of(m_data.begin(), m_data.end(), [](float v) { return std::isfinite(v); });
+}
+
+// ---------------------------------------------------------------------------------------------
+// SslpvSolver
+
+SslpvSolver::SslpvSolver(const SslpvOptions& options) {
+    setOptions(options);
+}
+
+void SslpvSolver::setOptions(const SslpvOptions& o) {
+    LUCENT_CHECK(o.order == 1 || o.order == 2, "SSLPV option 'order' must be 1 or 2, got ",
+                 o.order);
+    LUCENT_CHECK(o.maxSteps >= 0 && o.maxSteps <= 4096,
+                 "SSLPV option 'maxSteps' must be in [0, 4096], got ", o.maxSteps);
+    LUCENT_CHECK(o.skipAccumulateSteps >= 0,
+                 "SSLPV option 'skipAccumulateSteps' must be >= 0, got ", o.skipAccumulateSteps);
+    LUCENT_CHECK(std::isfinite(o.stopEpsilon) && o.stopEpsilon >= 0.f && o.stopEpsilon <= 1.f,
+                 "SSLPV option 'stopEpsilon' must be in [0, 1], got ", o.stopEpsilon);
+    // Order and sinks change where light is injected; everything changes propagation.
+    if (o.order != m_opt.order || o.removeExitant != m_opt.removeExitant)
+        m_injectionDirty = true;
+    m_opt = o;
+    m_materialDirty = true;
+    m_factorsDirty = true;
+}
+
+void SslpvSolver::validateMaterial(const CoarseMaterial& m) const {
+    const GridSpec& s = m.spec;
+    LUCENT_CHECK(s.resolution >= 1 && s.resolution <= 1022, "SSLPV material: spec.resolution ",
+                 s.resolution, " outside [1, 1022]");
+    LUCENT_CHECK(std::isfinite(s.voxelSize) && s.voxelSize > 0.f,
+                 "SSLPV material: spec.voxelSize must be finite and > 0 mm, got ", s.voxelSize);
+    LUCENT_CHECK(lucent::isFinite(s.origin), "SSLPV material: spec.origin is not finite");
+    const size_t n = s.voxelCount();
+    const char* names[3] = {"sigma_t", "sigma_s", "g"};
+    for (int c = 0; c < 3; ++c) {
+        const std::vector<float>* arrays[3] = {&m.sigma_t[c], &m.sigma_s[c], &m.g[c]};
+        for (int a = 0; a < 3; ++a) {
+            LUCENT_CHECK(arrays[a]->size() == n, "SSLPV material: ", names[a], "[", c, "] has ",
+                         arrays[a]->size(), " values, expected ", n);
+        }
+        for (size_t k = 0; k < n; ++k) {
+            const float st = m.sigma_t[c][k], ss = m.sigma_s[c][k], g = m.g[c][k];
+            if (!(std::isfinite(st) && st >= 0.f) || !(std::isfinite(ss) && ss >= 0.f) ||
+                !(std::isfinite(g) && std::abs(g) <= 1.f)) {
+                LUCENT_THROW(ValueError, "SSLPV material: cell ", k, " channel ", c,
+                             " has sigma_t=", st, " sigma_s=", ss, " g=", g,
+                             " (need finite sigma_t, sigma_s >= 0 mm^-1 and |g| <= 1)");
+            }
+        }
+    }
+    LUCENT_CHECK(m.insideFraction.size() == n, "SSLPV material: insideFraction has ",
+                 m.insideFraction.size(), " values, expected ", n);
+}
+
+void SslpvSolver::setMaterial(const CoarseMaterial& material, float eta) {
+    validateMaterial(material);
+    LUCENT_CHECK(std::isfinite(eta) && eta >= 1.f && eta <= 3.f,
+                 "SSLPV: eta must be in [1, 3], got ", eta);
+    const bool regrid = !m_hasMaterial || !(material.spec == m_material.spec);
+    const bool insideChanged = regrid || material.insideFraction != m_material.insideFraction;
+    m_material = material;
+    if (regrid || insideChanged || eta != m_eta)
+        m_injectionDirty = true;
+    m_eta = eta;
+    m_hasMaterial = true;
+    m_materialDirty = true;
+    m_factorsDirty = true;
+}
+
+void SslpvSolver::setInjectionSamples(std::vector<SslpvInjectionSample> samples) {
+    m_samples = std::move(samples);
+    m_injectionDirty = true;
+}
+
+bool SslpvSolver::isInside(const Coord& c) const {
+    const GridSpec& s = m_material.spec;
+    return m_hasMaterial && s.contains(c) && m_material.insideFraction[s.linearIndex(c)] >= 0.5f;
+}
+
+void SslpvSolver::rebuildFactors() {
+    const GridSpec& s = m_material.spec;
+    const int n = s.resolution;
+    const float dx = s.voxelSize;
+    const size_t plane = size_t(n + 2) * (n + 2) * (n + 2);
+    auto padded = [&](int x, int y, int z) {
+        return (size_t(z + 1) * (n + 2) + size_t(y + 1)) * (n + 2) + size_t(x + 1);
+    };
+
+    // Per-cell factors for every channel and band (§3.2.1 and Eq. 3). The paper's σs′ is a
+    // dimensionless per-step fraction; ours is mm⁻¹, converted per cell as the probability of
+    // scattering over one cell width, s′ = 1 − exp(−σs′·Δx) (docs/methods/sslpv.md).
+    auto cellFactors = [&](size_t k, int c, float f[3], float& absorb) {
+        const float st = m_material.sigma_t[c][k];
+        const float ss = std::min(m_material.sigma_s[c][k], st);
+        const float g = m_material.g[c][k];
+        const float sFrac = -std::expm1(-ss * dx);
+        const float sigAtt = m_opt.attenuation == SslpvAttenuation::Extinction ? st : st - ss;
+        const float a = std::exp(-sigAtt * dx);
+        for (int l = 0; l < 3; ++l)
+            f[l] = a * ((1.f - sFrac) + sFrac * hgMoment(g, l));
+        absorb = 1.f - a;
+    };
+
+    m_mask.assign(m_opt.removeExitant ? plane : 0, 0.f);
+    Bounds3f insideBox;
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x)
+                if (m_material.insideFraction[s.linearIndex({x, y, z})] >= 0.5f) {
+                    if (m_opt.removeExitant)
+                        m_mask[padded(x, y, z)] = 1.f;
+                    insideBox.expand(Point3f(float(x), float(y), float(z)));
+                }
+    if (m_opt.removeExitant) {
+        // Light can only exist in inside cells and the sink cells one step away.
+        if (insideBox.isEmpty()) {
+            m_active = CoordBox{};
+        } else {
+            m_active.lo = glm::max(Coord(insideBox.lo) - Coord(1), Coord(0));
+            m_active.hi = glm::min(Coord(insideBox.hi) + Coord(1), Coord(n - 1));
+        }
+    } else {
+        m_active.lo = Coord(0);
+        m_active.hi = Coord(n - 1);
+    }
+
+    // Homogeneous fast path: every cell that can carry light to a neighbour has the same
+    // factors (inside cells with sinks, all cells without).
+    bool hom = true;
+    size_t ref = SIZE_MAX;
+    for (size_t k = 0; k < s.voxelCount() && hom; ++k) {
+        if (m_opt.removeExitant && m_material.insideFraction[k] < 0.5f)
+            continue;
+        if (ref == SIZE_MAX) {
+            ref = k;
+            continue;
+        }
+        for (int c = 0; c < 3; ++c)
+            if (m_material.sigma_t[c][k] != m_material.sigma_t[c][ref] ||
+                m_material.sigma_s[c][k] != m_material.sigma_s[c][ref] ||
+                m_material.g[c][k] != m_material.g[c][ref])
+                hom = false;
+    }
+    m_homogeneous = hom;
+    if (hom) {
+        for (int c = 0; c < 3; ++c) {
+            if (ref == SIZE_MAX) {
+                m_homFactor[c][0] = m_homFactor[c][1] = m_homFactor[c][2] = 1.f;
+                m_homAbsorb[c] = 0.f;
+            } else {
+                cellFactors(ref, c, m_homFactor[c], m_homAbsorb[c]);
+            }
+            for (auto& f : m_factor[c])
+                f.clear();
+            m_absorb[c].clear();
+        }
+        return;
+    }
+    for (int c = 0; c < 3; ++c) {
+        for (auto& f : m_factor[c])
+            f.assign(plane, 0.f);
+        m_absorb[c].assign(plane, 0.f);
+    }
+    parallelFor(
+        0, n,
+        [&](int64_t z0, int64_t z1) {
+            for (int z = int(z0); z < int(z1); ++z)
+                for (int c = 0; c < 3; ++c)
+                    for (int y = 0; y < n; ++y)
+                        for (int x = 0; x < n; ++x) {
+                            const size_t k = s.linearIndex({x, y, z});
+                            const size_t pk = padded(x, y, z);
+                            float f[3], ab;
+                            cellFactors(k, c, f, ab);
+                            for (int l = 0; l < 3; ++l)
+                                m_factor[c][l][pk] = f[l];
+                            m_absorb[c][pk] = ab;
+                        }
+        },
+        /*grain=*/1);
+}
+
+void SslpvSolver::inject() {
+    const Timer timer;
+    const GridSpec& s = m_material.spec;
+    const int count = shCount(m_opt.order);
+    if (m_injection.resolution() != s.resolution || m_injection.order() != m_opt.order)
+        m_injection = SslpvGrid(s.resolution, m_opt.order);
+    else
+        m_injection.clear();
+    int used = 0, skipped = 0;
+    const float h = s.voxelSize;
+    for (const SslpvInjectionSample& smp : m_samples) {
+        const float cosI = -glm::dot(smp.direction, smp.normal);
+        if (!(cosI > 0.f) || !(smp.flux.x > 0.f || smp.flux.y > 0.f || smp.flux.z > 0.f) ||
+            !lucent::isFinite(smp.position) || !lucent::isFinite(smp.flux)) {
+            ++skipped;
+            continue;
+        }
+        // The texel's cell (§3.1): taken half a cell inside along −n so the virtual point light
+        // lands in a boundary cell of the object; with sinks it must be an inside cell.
+        Coord cell(-1);
+        for (float depth : {0.5f, 1.0f, 0.0f, 1.5f}) {
+            const Coord c = s.cellOf(smp.position - depth * h * smp.normal);
+            if (!s.contains(c))
+                continue;
+            if (m_opt.removeExitant && !isInside(c))
+                continue;
+            cell = c;
+            break;
+        }
+        if (cell.x < 0) {
+            ++skipped;
+            continue;
+        }
+        // Eq. 1: I_p(ω) = (1/π) T(ω_p, ω_t) Φ_p max(0, ω_t·ω), T exact dielectric Fresnel
+        // transmittance, ω_t from Snell's law; projected on SH with the clamped-cosine zonal
+        // coefficients √π/2, √(π/3), √(5π)/8 (seed 003).
+        const float T = 1.f - dielectricReflectance(cosI, m_eta);
+        const Vector3f wt = refractInto(smp.direction, smp.normal, m_eta);
+        const ShCoeffs<2> lobe = clampedCosineLobe<2>(wt);
+        const size_t idx = m_injection.index(cell);
+        for (int ch = 0; ch < 3; ++ch) {
+            const float k = T * smp.flux[ch] * INV_PI;
+            for (int i = 0; i < count; ++i)
+                m_injection.plane(ch, i)[idx] += k * lobe.c[i];
+        }
+        ++used;
+    }
+    m_stats.injectedTexels = used;
+    m_stats.skippedTexels = skipped;
+    m_stats.injectMs = timer.elapsedMs();
+}
+
+void SslpvSolver::propagate() {
+    const Timer timer;
+    const GridSpec& s = m_material.spec;
+    const int n = s.resolution;
+    const int count = shCount(m_opt.order);
+    LUCENT_CHECK(n + 2 <= 1024, "SSLPV: resolution ", n, " too large for the row kernel");
+    // Cells outside the active box are never written and stay zero, so the grids are cleared
+    // only when they are new or the box moved; inside it the first write assigns.
+    const bool boxMoved = m_active.lo != m_lastActive.lo || m_active.hi != m_lastActive.hi;
+    for (SslpvGrid* g : {&m_accum, &m_exitant, &m_prop[0], &m_prop[1]}) {
+        if (g->resolution() != n || g->order() != m_opt.order)
+            *g = SslpvGrid(n, m_opt.order);
+        else if (boxMoved)
+            g->clear();
+    }
+    m_lastActive = m_active;
+    bool accWritten = false, exitWritten = false;
+
+    // Term lists of the gather: c_d,i += Σ_o Σ_j M_o[i][j] c_{d+o, j} (§4).
+    const auto& mats = propagationMatrices(m_opt.order);
+    const std::ptrdiff_t p = n + 2;
+    const std::ptrdiff_t offs[6] = {1, -1, p, -p, p * p, -p * p};
+    std::vector<Term> terms[SSLPV_MAX_COEFFS];
+    for (int i = 0; i < count; ++i)
+        for (int o = 0; o < 6; ++o)
+            for (int j = 0; j < count; ++j) {
+                const float w = mats[o].at(i, j);
+                // Entries that vanish by symmetry come out of the quadrature at ~1e−17.
+                if (std::abs(w) > 1e-7f)
+                    terms[i].push_back({j, offs[o], w});
+            }
+    // Pad every list to a multiple of 4 (the kernel's unroll) with zero-weight reads of the
+    // destination cell itself, which is always inside the allocation.
+    for (int i = 0; i < count; ++i)
+        while (terms[i].size() % 4 != 0)
+            terms[i].push_back({0, 0, 0.f});
+
+    StepCtx ctx;
+    ctx.coeffs = count;
+    ctx.terms = terms;
+    ctx.box = m_active;
+    ctx.padded = int(p);
+    ctx.mask = m_opt.removeExitant ? m_mask.data() : nullptr;
+    for (int ch = 0; ch < 3; ++ch) {
+        for (int l = 0; l < 3; ++l) {
+            ctx.factor[ch][l] = m_homogeneous ? nullptr : m_factor[ch][l].data();
+            ctx.homFactor[ch][l] = m_homFactor[ch][l];
+        }
+        ctx.absorb[ch] = m_homogeneous ? nullptr : m_absorb[ch].data();
+        ctx.homAbsorb[ch] = m_homAbsorb[ch];
+    }
+
+    // Step 0: the injected lights become the first sources, with their cells' factors folded in.
+    Rgb absorbed(0.f), exitant(0.f), remaining(0.f);
+    const Rgb injected = m_injection.flux();
+    for (int ch = 0; ch < 3; ++ch) {
+        for (int i = 0; i < count; ++i) {
+            const float* in = m_injection.plane(ch, i);
+            float* out = m_prop[0].plane(ch, i);
+            const int band = bandOf(i);
+            for (size_t k = 0; k < m_injection.planeSize(); ++k)
+                out[k] = in[k] * (m_homogeneous ? m_homFactor[ch][band] : m_factor[ch][band][k]);
+        }
+        const float* c0 = m_injection.plane(ch, 0);
+        double ab = 0.0;
+        for (size_t k = 0; k < m_injection.planeSize(); ++k)
+            ab += double(c0[k]) * (m_homogeneous ? m_homAbsorb[ch] : m_absorb[ch][k]);
+        absorbed[ch] = float(ab * TWO_SQRT_PI);
+    }
+    remaining = m_prop[0].flux();
+    m_cur = 0;
+
+    int steps = 0;
+    const bool empty = m_active.isEmpty();
+    auto converged = [&] {
+        if (m_opt.stopEpsilon <= 0.f)
+            return false;
+        for (int ch = 0; ch < 3; ++ch)
+            if (remaining[ch] > m_opt.stopEpsilon * injected[ch])
+                return false;
+        return true;
+    };
+    std::vector<SliceSums> sums(size_t(std::max(n, 1)));
+    const Timer stepTimer;
+    while (!empty && steps < m_opt.maxSteps && !converged()) {
+        const int next = 1 - m_cur;
+        const bool accumulate = steps + 1 > m_opt.skipAccumulateSteps;
+        ctx.assignAcc = accumulate && !accWritten;
+        ctx.assignExit = !exitWritten;
+        accWritten = accWritten || accumulate;
+        exitWritten = exitWritten || m_opt.removeExitant;
+        for (int ch = 0; ch < 3; ++ch)
+            for (int i = 0; i < count; ++i) {
+                ctx.src[ch][i] = m_prop[m_cur].plane(ch, i);
+                ctx.dst[ch][i] = m_prop[next].plane(ch, i);
+                ctx.acc[ch][i] = accumulate ? m_accum.plane(ch, i) : nullptr;
+                ctx.exit[ch][i] = m_opt.removeExitant ? m_exitant.plane(ch, i) : nullptr;
+            }
+        std::fill(sums.begin(), sums.end(), SliceSums{});
+        parallelFor(
+            m_active.lo.z, m_active.hi.z + 1,
+            [&](int64_t b, int64_t e) {
+                for (int64_t z = b; z < e; ++z)
+                    processSlice(ctx, int(z), sums[size_t(z)]);
+            },
+            /*grain=*/1);
+        Rgb rem(0.f);
+        for (const SliceSums& sl : sums)
+            for (int ch = 0; ch < 3; ++ch) {
+                rem[ch] += float(sl.v[ch][0] * TWO_SQRT_PI);
+                exitant[ch] += float(sl.v[ch][1] * TWO_SQRT_PI);
+                absorbed[ch] += float(sl.v[ch][2] * TWO_SQRT_PI);
+            }
+        remaining = rem;
+        m_cur = next;
+        ++steps;
+    }
+    m_stats.stepsMs = stepTimer.elapsedMs();
+    if (!accWritten)
+        m_accum.clear();
+    if (!exitWritten)
+        m_exitant.clear();
+    m_stats.stepsUsed = steps;
+    m_stats.injected = injected;
+    m_stats.remaining = remaining;
+    m_stats.exitant = exitant;
+    m_stats.absorbed = absorbed;
+    m_stats.propagateMs = timer.elapsedMs();
+}
+
+const SslpvStats& SslpvSolver::solve() {
+    LUCENT_CHECK(m_hasMaterial, "SSLPV: solve() called before setMaterial()");
+    m_stats.reinjected = m_stats.repropagated = false;
+    if (m_injectionDirty) {
+        inject();
+        m_injectionDirty = false;
+        m_materialDirty = true;  // new sources: propagation must rerun
+        m_stats.reinjected = true;
+    }
+    if (m_materialDirty) {
+        if (m_factorsDirty)
+            rebuildFactors();
+        m_factorsDirty = false;
+        propagate();
+        m_materialDirty = false;
+        m_stats.repropagated = true;
+    }
+    return m_stats;
+}
+
+std::vector<float> SslpvSolver::foldedFactorPlane(int channel, int band) const {
+    LUCENT_CHECK(channel >= 0 && channel < 3 && band >= 0 && band < 3, "SSLPV: foldedFactorPlane(",
+                 channel, ", ", band, ") out of range");
+    const int n = m_material.spec.resolution;
+    const size_t plane = size_t(n + 2) * (n + 2) * (n + 2);
+    if (!m_homogeneous && m_factor[channel][band].size() == plane)
+        return m_factor[channel][band];
+    return std::vector<float>(plane, m_homFactor[channel][band]);
+}
+
+std::vector<float> SslpvSolver::sinkMaskPlane() const {
+    const int n = m_material.spec.resolution;
+    const size_t plane = size_t(n + 2) * (n + 2) * (n + 2);
+    if (m_opt.removeExitant && m_mask.size() == plane)
+        return m_mask;
+    return std::vector<float>(plane, 1.f);
+}
+
+Rgb SslpvSolver::radiance(const Point3f& p, const Normal3f& n) const {
+    if (!m_hasMaterial || m_accum.resolution() == 0)
+        return Rgb(0.f);
+    const GridSpec& s = m_material.spec;
+    const float h = s.voxelSize;
+    const int count = m_accum.coeffCount();
+    float c[3][SSLPV_MAX_COEFFS] = {};
+    bool found = false;
+    for (float depth : {0.5f, 1.0f, 1.5f}) {
+        // Trilinear over the eight nearest cell centres, inside cells only (renormalised).
+        const Vector3f u = (p - depth * h * n - s.origin) / h - Vector3f(0.5f);
+        const Coord i0(glm::floor(u));
+        const Vector3f f = u - Vector3f(i0);
+        float wsum = 0.f;
+        for (int corner = 0; corner < 8; ++corner) {
+            const Coord o(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+            const Coord cell = i0 + o;
+            if (!isInside(cell))
+                continue;
+            const float w =
+                (o.x ? f.x : 1.f - f.x) * (o.y ? f.y : 1.f - f.y) * (o.z ? f.z : 1.f - f.z);
+            if (w <= 0.f)
+                continue;
+            wsum += w;
+            for (int ch = 0; ch < 3; ++ch)
+                for (int i = 0; i < count; ++i)
+                    c[ch][i] += w * m_accum.at(cell, ch, i);
+        }
+        if (wsum > 1e-4f) {
+            for (auto& row : c)
+                for (int i = 0; i < count; ++i)
+                    row[i] /= wsum;
+            found = true;
+            break;
+        }
+        for (auto& row : c)
+            std::fill(row, row + SSLPV_MAX_COEFFS, 0.f);
+    }
+    if (!found)
+        return Rgb(0.f);
+    // Eq. 7 with the rotation of Eq. 6 (zyz Euler angles of n): c10^(n) = n·(c11, c1−1, c10);
+    // hemisphere integrals ∫₀^{π/2} y_l0 sin θ dθ = 1/(2√π), ½√(3/4π), 0 (band 2: (3cos²−1)
+    // integrates to zero), so L_i = (2/A)(c00/(2√π) + ½√(3/4π) c10^(n)), A = Δx² (§4).
+    const float invA = 1.f / (h * h);
+    Rgb L(0.f);
+    for (int ch = 0; ch < 3; ++ch) {
+        const float c10n = n.x * c[ch][3] + n.y * c[ch][1] + n.z * c[ch][2];
+        L[ch] = std::max(0.f, 2.f * invA * (Y00 * c[ch][0] + 0.5f * K1 * c10n));
+    }
+    return L;
+}
+
+}  // namespace lucent

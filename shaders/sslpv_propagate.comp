@@ -1,0 +1,94 @@
+#version 450 core
+// SPDX-License-Identifier: MIT
+// One SSLPV propagation step (Børlum et al. 2011, §3.2 and §4), GLSL port of the CPU kernel in
+// engine/src/sslpv/SslpvSolver.cpp: gather c_d,i = Σ_o Σ_j M_o[i][j] c_{d+o,j} from the six
+// neighbours (matrices computed on the CPU by quadrature, passed as a term list), then sinks
+// (exitant flux removal), accumulation and the next step's folded per-cell factors
+// a·((1 − s′) + s′g^l) (§3.2.1, Eq. 3). Grids are SoA planes [channel][coefficient][cell] with a
+// one-cell zero border, x fastest; SSLPV_FP16 stores them as packed half pairs.
+// One invocation per pair of consecutive cells (so fp16 pairs are written by one invocation)
+// and per colour channel (gl_GlobalInvocationID.y).
+
+layout(local_size_x = 64) in;
+
+#ifdef SSLPV_FP16
+#define CELL uint
+#define LOAD(buf, i) (unpackHalf2x16(buf[(i) >> 1])[(i) & 1])
+#define STORE_PAIR(buf, e, a, b) buf[(e) >> 1] = packHalf2x16(vec2(a, b))
+#else
+#define CELL float
+#define LOAD(buf, i) (buf[i])
+#define STORE_PAIR(buf, e, a, b) \
+    buf[e] = (a);                \
+    buf[(e) + 1] = (b)
+#endif
+
+layout(std430, binding = 0) readonly buffer SrcBlock { CELL b_src[]; };
+layout(std430, binding = 1) writeonly buffer DstBlock { CELL b_dst[]; };
+layout(std430, binding = 2) buffer AccBlock { CELL b_acc[]; };
+layout(std430, binding = 3) buffer ExitBlock { CELL b_exit[]; };
+layout(std430, binding = 4) readonly buffer FactorBlock { float b_factor[]; };  // [ch*3+band]
+layout(std430, binding = 5) readonly buffer MaskBlock { float b_mask[]; };
+// x: source coefficient, y: padded linear offset of the source cell, z: weight bits.
+layout(std430, binding = 6) readonly buffer TermBlock { ivec4 b_terms[]; };
+
+uniform int u_planeSize;      // floats per plane on the GPU (even)
+uniform int u_cells;          // (N+2)³ real cells per plane
+uniform int u_padded;         // N+2
+uniform int u_coeffs;         // 4 or 9
+uniform int u_termStart[10];  // term list of coefficient i: [u_termStart[i], u_termStart[i+1])
+uniform int u_accumulate;     // add this step to the accumulation grid
+uniform int u_assignAcc;      // first accumulated step: acc = c
+uniform int u_sinks;          // exitant removal on
+uniform int u_assignExit;     // first step: exit = leave
+
+int bandOf(int i) { return i == 0 ? 0 : (i < 4 ? 1 : 2); }
+
+void main() {
+    int e = int(gl_GlobalInvocationID.x) * 2;
+    int ch = int(gl_GlobalInvocationID.y);
+    if (e >= u_planeSize || ch >= 3) return;
+    bool interior[2];
+    for (int h = 0; h < 2; ++h) {
+        int cell = e + h;
+        int x = cell % u_padded, y = (cell / u_padded) % u_padded;
+        int z = cell / (u_padded * u_padded);
+        interior[h] = cell < u_cells && x >= 1 && y >= 1 && z >= 1 && x < u_padded - 1 &&
+                      y < u_padded - 1 && z < u_padded - 1;
+    }
+    for (int i = 0; i < u_coeffs; ++i) {
+        float o[2] = float[2](0.0, 0.0);
+        for (int h = 0; h < 2; ++h) {
+            if (!interior[h]) continue;
+            float sum = 0.0;
+            for (int t = u_termStart[i]; t < u_termStart[i + 1]; ++t) {
+                ivec4 term = b_terms[t];
+                sum += intBitsToFloat(term.z) *
+                       LOAD(b_src, (ch * u_coeffs + term.x) * u_planeSize + e + h + term.y);
+            }
+            o[h] = sum;
+        }
+        int base = (ch * u_coeffs + i) * u_planeSize + e;
+        if (u_sinks != 0) {
+            // Sinks: flux reaching a cell outside the object leaves it (recorded, removed).
+            float leave[2];
+            for (int h = 0; h < 2; ++h) {
+                float m = b_mask[e + h];
+                leave[h] = o[h] * (1.0 - m);
+                o[h] *= m;
+                if (u_assignExit == 0) leave[h] += LOAD(b_exit, base + h);
+            }
+            STORE_PAIR(b_exit, base, leave[0], leave[1]);
+        }
+        if (u_accumulate != 0) {
+            float a0 = o[0], a1 = o[1];
+            if (u_assignAcc == 0) {
+                a0 += LOAD(b_acc, base);
+                a1 += LOAD(b_acc, base + 1);
+            }
+            STORE_PAIR(b_acc, base, a0, a1);
+        }
+        int f = (ch * 3 + bandOf(i)) * u_planeSize + e;
+        STORE_PAIR(b_dst, base, o[0] * b_factor[f], o[1] * b_factor[f + 1]);
+    }
+}

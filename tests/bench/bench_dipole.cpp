@@ -1,0 +1,238 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief Image-space dipole gather on the CPU (seed 004 §5–6): time at 640×360 and 1280×720 for
+/// 8…256 samples per pixel on a lit sphere, against two baselines measured in the same run: the
+/// camera-view irradiance pass (one primary + one shadow ray per pixel, Embree) and a single
+/// R_d evaluation per pixel-sample (the arithmetic floor of the gather). Results:
+/// docs/benchmarks.md, "Dipoles".
+#include <lucent/dipole/GpuGather.h>
+#include <lucent/dipole/IrradiancePass.h>
+#include <lucent/gpu/GlContext.h>
+#include <lucent/gpu/Shader.h>
+#include <lucent/dipole/Sampling.h>
+#include <lucent/mesh/Procedural.h>
+#include <lucent/reference/PathTracer.h>
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <string>
+
+using namespace lucent;
+using namespace lucent::dipole;
+
+namespace {
+
+Scene sphereScene(int w, int h) {
+    Scene s;
+    SceneObject obj;
+    obj.mesh = makeSphere(10.f, 5);
+    MaterialSample m;  // marble-like (Jensen 2001), scaled to a 20 mm object: σs′ ≈ 2 mm⁻¹
+    m.sigma_s = Rgb(2.19f, 2.62f, 3.00f);
+    m.sigma_t = m.sigma_s + Rgb(0.0021f, 0.0041f, 0.0071f);
+    obj.material = std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), 64), m);
+    s.objects.push_back(std::move(obj));
+    Light l;
+    l.type = Light::Type::Point;
+    l.position = {30.f, 30.f, 30.f};
+    l.intensity = Rgb(2000.f);
+    s.lights.push_back(l);
+    s.camera.position = {0.f, 0.f, 45.f};
+    s.camera.width = w;
+    s.camera.height = h;
+    s.eta = 1.3f;
+    return s;
+}
+
+const SurfaceBuffers& buffers(int w) {
+    static std::map<int, SurfaceBuffers> cache;
+    auto it = cache.find(w);
+    if (it == cache.end())
+        it = cache.emplace(w, buildSurfaceBuffers(sphereScene(w, w * 9 / 16))).first;
+    return it->second;
+}
+
+size_t coveredPixels(const SurfaceBuffers& b) {
+    size_t n = 0;
+    for (uint8_t c : b.covered)
+        n += c != 0;
+    return n;
+}
+
+void BM_IrradiancePass(benchmark::State& state) {
+    const int w = int(state.range(0));
+    const Scene scene = sphereScene(w, w * 9 / 16);
+    for (auto _ : state)
+        benchmark::DoNotOptimize(buildSurfaceBuffers(scene));
+    state.counters["Mpix/s"] = benchmark::Counter(double(w) * (w * 9 / 16) / 1e6,
+                                                  benchmark::Counter::kIsIterationInvariantRate);
+}
+
+void BM_ProfileFloor(benchmark::State& state) {
+    // One R_d evaluation + one pdf evaluation per pixel-sample, 3 channels, no image access.
+    const int w = int(state.range(0)), spp = int(state.range(1));
+    const size_t n = coveredPixels(buffers(w)) * size_t(spp);
+    const DipoleProfile p = DipoleProfile::jensen(0.0021, 2.19, 1.3);
+    const DipoleSampler s(p);
+    for (auto _ : state) {
+        double acc = 0.0;
+        for (size_t i = 0; i < n; ++i) {
+            const double r = 1e-3 * double(i % 4096);
+            acc += 3.0 * p.Rd(r) / s.pdfArea(r);
+        }
+        benchmark::DoNotOptimize(acc);
+    }
+    state.counters["Msamples/s"] =
+        benchmark::Counter(double(n) / 1e6, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+void BM_Gather(benchmark::State& state) {
+    const int w = int(state.range(0)), spp = int(state.range(1));
+    const SurfaceBuffers& b = buffers(w);
+    GatherSettings gs;
+    gs.model = state.range(2) ? Model::BetterDipole : Model::Dipole;
+    gs.uniformSamples = spp / 4;  // ¼ uniform disc samples, ¾ importance (balance heuristic)
+    gs.importanceSamples = spp - gs.uniformSamples;
+    for (auto _ : state)
+        benchmark::DoNotOptimize(gatherImageSpace(b, gs));
+    const double samples = double(coveredPixels(b)) * spp;
+    state.counters["Msamples/s"] =
+        benchmark::Counter(samples / 1e6, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+void BM_GpuGather(benchmark::State& state) {
+    // The same gather as a GL compute shader (llvmpipe on the CI box: CPU again, but SIMD).
+    std::string reason;
+    if (!gpu::GlContext::isHeadlessAvailable(&reason)) {
+        state.SkipWithError(("no headless GL: " + reason).c_str());
+        return;
+    }
+    static std::unique_ptr<gpu::GlContext> ctx = gpu::GlContext::createHeadless();
+    const int w = int(state.range(0)), spp = int(state.range(1));
+    const SurfaceBuffers& b = buffers(w);
+    GatherSettings gs;
+    gs.uniformSamples = spp / 4;
+    gs.importanceSamples = spp - gs.uniformSamples;
+    GpuGather gather{gpu::ShaderLibrary{}};
+    for (auto _ : state)
+        benchmark::DoNotOptimize(gather.run(b, gs));
+    gather.destroy();
+    const double samples = double(coveredPixels(b)) * spp;
+    state.counters["Msamples/s"] =
+        benchmark::Counter(samples / 1e6, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+}  // namespace
+
+BENCHMARK(BM_IrradiancePass)->Arg(640)->Arg(1280)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ProfileFloor)
+    ->Args({640, 32})
+    ->Args({1280, 32})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_Gather)
+    ->ArgsProduct({{640}, {8, 32, 128, 256}, {0}})
+    ->ArgsProduct({{1280}, {8, 32, 128, 256}, {0}})
+    ->ArgsProduct({{1280}, {32}, {1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
+BENCHMARK(BM_GpuGather)
+    ->ArgsProduct({{640, 1280}, {8, 32, 128}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
+namespace {
+
+/// `bench_dipole --reference-error`: radiance of the centre of a lit slab face, image-space
+/// dipole / better dipole vs the reference path tracer (subsurface only, dielectric boundary).
+int referenceError() {
+    // Jensen 2001 skin1 (mm⁻¹), g = 0 so σs = σs′; 60×60×20 mm box, face at z = 10 mm.
+    MaterialSample m;
+    m.sigma_s = Rgb(0.74f, 0.88f, 1.01f);
+    m.sigma_t = m.sigma_s + Rgb(0.032f, 0.17f, 0.48f);
+    Scene s;
+    SceneObject obj;
+    obj.mesh = makeBox({60.f, 60.f, 20.f});
+    obj.material = std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), 32), m);
+    s.objects.push_back(std::move(obj));
+    Light l;
+    l.type = Light::Type::Directional;
+    l.direction = {0.f, 0.f, -1.f};
+    l.intensity = Rgb(1.f);  // W/mm²
+    s.lights.push_back(l);
+    s.camera.position = {0.f, 0.f, 80.f};
+    s.camera.orthographic = true;
+    s.eta = 1.3f;
+    // Reference: 8×8 pixels over the central 0.8 mm.
+    Scene ref = s;
+    ref.camera.orthoHeight = 0.8f;
+    ref.camera.width = ref.camera.height = 8;
+    ReferenceOptions opt;
+    opt.spp = 3 * 2048;
+    opt.subsurfaceOnly = true;
+    const ReferenceImage pt = renderReference(ref, opt);
+    Rgb ptMean(0.f), ptVar(0.f);
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) {
+            ptMean += pt.mean.at(x, y) / 64.f;
+            ptVar += pt.variance.at(x, y) / (64.f * 64.f);
+        }
+    std::printf(
+        "reference path tracer: %d spp, %.1f s: L = (%.5f, %.5f, %.5f) ± (%.5f, %.5f, %.5f) W/(mm² "
+        "sr)\n",
+        pt.spp, pt.seconds, ptMean.r, ptMean.g, ptMean.b, std::sqrt(ptVar.r), std::sqrt(ptVar.g),
+        std::sqrt(ptVar.b));
+    // Image-space gather: 400×400 pixels over the central 40 mm (0.1 mm pixels).
+    s.camera.orthoHeight = 40.f;
+    s.camera.width = s.camera.height = 400;
+    for (Model model : {Model::Dipole, Model::BetterDipole}) {
+        GatherSettings gs;
+        gs.model = model;
+        gs.importanceSamples = 96;
+        gs.uniformSamples = 32;
+        const GatherResult g = renderImageSpaceDipole(s, gs);
+        Rgb mean(0.f);
+        for (int y = 196; y < 204; ++y)
+            for (int x = 196; x < 204; ++x)
+                mean += g.radiance.at(x, y) / 64.f;
+        std::printf(
+            "%-14s image-space: L = (%.5f, %.5f, %.5f), relative error vs reference (%+.1f%%, "
+            "%+.1f%%, %+.1f%%)\n",
+            modelName(model), mean.r, mean.g, mean.b, 100.f * (mean.r / ptMean.r - 1.f),
+            100.f * (mean.g / ptMean.g - 1.f), 100.f * (mean.b / ptMean.b - 1.f));
+    }
+    // Directional dipole at normal incidence, semi-infinite plane: L = T₂₁ · ρ_dir... via its
+    // exitance: B = F_t(1) ∫ R dA, L = F_t(1) B/π (the profile folds in 1/(4C_φ(1/η))).
+    const double ft = 1.0 - fresnelReflectance(1.0, 1.3);
+    Rgb dir;
+    for (int c = 0; c < 3; ++c) {
+        const double rho =
+            totalReflectance(Model::Directional, fromReduced(m.sigma_t[c], m.sigma_s[c], 1.3f));
+        dir[c] = float(ft * ft * rho / 3.14159265358979323846);
+    }
+    std::printf(
+        "%-14s plane, closed: L = (%.5f, %.5f, %.5f), relative error vs reference (%+.1f%%, "
+        "%+.1f%%, %+.1f%%)\n",
+        "dirpole", dir.r, dir.g, dir.b, 100.f * (dir.r / ptMean.r - 1.f),
+        100.f * (dir.g / ptMean.g - 1.f), 100.f * (dir.b / ptMean.b - 1.f));
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    for (int i = 1; i < argc; ++i)
+        if (std::string(argv[i]) == "--reference-error")
+            return referenceError();
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv))
+        return 1;
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}

@@ -1,0 +1,201 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief Mesh import/export: every format round-trips a generated fixture; malformed files
+/// fail cleanly with the file named; repairs are reported.
+
+#include "MeshTestUtil.h"
+
+#include <lucent/core/Error.h>
+#include <lucent/mesh/MeshIO.h>
+#include <lucent/mesh/Procedural.h>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace lucent {
+namespace {
+
+std::string outPath(const std::string& name) {
+    std::filesystem::create_directories(LUCENT_TEST_OUTPUT_DIR);
+    return std::string(LUCENT_TEST_OUTPUT_DIR) + "/mesh_" + name;
+}
+
+void writeText(const std::string& path, const std::string& text) {
+    std::ofstream f(path, std::ios::binary | std::ios::trunc);
+    f << text;
+}
+
+/// Expects `fn` to throw IoError whose message names `path`.
+template <typename Fn>
+void expectIoErrorNaming(Fn fn, const std::string& path) {
+    try {
+        fn();
+        ADD_FAILURE() << "no exception for " << path;
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+}
+
+struct Format {
+    const char* ext;
+    bool binary;
+};
+
+class RoundTrip : public ::testing::TestWithParam<Format> {};
+
+TEST_P(RoundTrip, GeneratedFixtureReadsBackIdentically) {
+    const Format f = GetParam();
+    const TriangleMesh src = makeSphere(7.5f, 3);
+    const std::string path =
+        outPath(std::string("roundtrip_") + (f.binary ? "bin" : "ascii") + f.ext);
+    std::filesystem::remove(path);
+    saveMesh(src, path, f.binary);
+    ASSERT_TRUE(std::filesystem::exists(path));
+    MeshReport report;
+    const TriangleMesh back = loadMesh(path, 1.f, &report);
+    EXPECT_EQ(back.triangleCount(), src.triangleCount());
+    EXPECT_EQ(back.vertexCount(), src.vertexCount());  // STL re-merges by position
+    EXPECT_TRUE(report.isClosedManifold());
+    EXPECT_EQ(report.degenerateDropped, 0u);
+    EXPECT_TRUE(test::isClosedOriented(back));
+    // Same geometry: text formats print ≥ 6 significant digits (≤ 1e-5 relative error of 7.5).
+    EXPECT_NEAR(test::signedVolume(back), test::signedVolume(src), 1e-4 * test::signedVolume(src));
+    const Bounds3f a = src.bounds(), b = back.bounds();
+    EXPECT_NEAR(glm::length(a.lo - b.lo), 0.f, 1e-4f);
+    EXPECT_NEAR(glm::length(a.hi - b.hi), 0.f, 1e-4f);
+    ASSERT_EQ(back.normals.size(), back.positions.size());
+    for (size_t i = 0; i < back.positions.size(); ++i)  // sphere normals are radial
+        EXPECT_GT(glm::dot(back.normals[i], glm::normalize(back.positions[i])), 0.99f);
+}
+
+INSTANTIATE_TEST_SUITE_P(Formats, RoundTrip,
+                         ::testing::Values(Format{".obj", false}, Format{".ply", false},
+                                           Format{".ply", true}, Format{".off", false},
+                                           Format{".stl", false}, Format{".stl", true},
+                                           Format{".vtp", false}, Format{".vtp", true},
+                                           Format{".vtk", false}, Format{".vtk", true}),
+                         [](const auto& info) {
+                             return std::string(info.param.ext + 1) +
+                                    (info.param.binary ? "Binary" : "Ascii");
+                         });
+
+TEST(MeshIO, ScaleConvertsToMillimetres) {
+    const std::string path = outPath("scale.ply");
+    saveMesh(makeBox({1.f, 2.f, 3.f}), path);
+    const TriangleMesh m = loadMesh(path, /*scale=*/10.f);
+    EXPECT_NEAR(m.bounds().extent().z, 30.f, 1e-4f);
+    EXPECT_THROW(loadMesh(path, 0.f), ValueError);
+    EXPECT_THROW(loadMesh(path, NAN), ValueError);
+}
+
+TEST(MeshIO, MalformedFilesFailCleanly) {
+    const std::string missing = outPath("does_not_exist.obj");
+    expectIoErrorNaming([&] { loadMesh(missing); }, missing);
+
+    const std::string empty = outPath("empty.obj");
+    writeText(empty, "");
+    expectIoErrorNaming([&] { loadMesh(empty); }, empty);
+
+    const std::string nan = outPath("nan.obj");
+    writeText(nan, "v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n");
+    expectIoErrorNaming([&] { loadMesh(nan); }, nan);
+
+    const std::string inf = outPath("inf.off");
+    writeText(inf,
+              "OFF\n4 4 0\n0 0 0\n1 0 0\n0 inf 0\n0 0 1\n3 0 1 2\n3 0 2 3\n3 0 3 1\n3 1 3 2\n");
+    expectIoErrorNaming([&] { loadMesh(inf); }, inf);
+
+    const std::string garbage = outPath("garbage.ply");
+    writeText(garbage, "this is not a mesh \x01\x02\x03 at all\n");
+    expectIoErrorNaming([&] { loadMesh(garbage); }, garbage);
+
+    const std::string garbageObj = outPath("garbage.obj");
+    writeText(garbageObj, "hello world\nnothing here\n");
+    expectIoErrorNaming([&] { loadMesh(garbageObj); }, garbageObj);
+
+    const std::string garbageVtp = outPath("garbage.vtp");
+    writeText(garbageVtp, "<VTKFile broken");
+    expectIoErrorNaming([&] { loadMesh(garbageVtp); }, garbageVtp);
+
+    const std::string truncated = outPath("truncated.ply");
+    saveMesh(makeSphere(1.f, 2), truncated, /*binary=*/true);
+    std::filesystem::resize_file(truncated, std::filesystem::file_size(truncated) / 2);
+    expectIoErrorNaming([&] { loadMesh(truncated); }, truncated);
+
+    const std::string unknown = outPath("mesh.xyz");
+    writeText(unknown, "1 2 3\n");
+    expectIoErrorNaming([&] { loadMesh(unknown); }, unknown);
+}
+
+TEST(MeshIO, DegenerateDuplicateAndOpenFacesAreReported) {
+    // A tetrahedron plus a zero-area face (collinear vertices 1, 2, 5) and a duplicate face.
+    const std::string path = outPath("repair.obj");
+    writeText(path,
+              "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 2 0 0\n"
+              "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+              "f 1 2 5\n"
+              "f 2 3 4\n");
+    MeshReport r;
+    const TriangleMesh m = loadMesh(path, 1.f, &r);
+    EXPECT_EQ(m.triangleCount(), 4u);
+    EXPECT_EQ(r.degenerateDropped, 1u);
+    EXPECT_EQ(r.duplicateDropped, 1u);
+    EXPECT_EQ(r.unreferencedDropped, 1u);  // vertex 5 only served the degenerate face
+    EXPECT_TRUE(r.isClosedManifold());
+    EXPECT_GE(r.warnings.size(), 3u);
+
+    // An open mesh (tetrahedron without one face): reported, not rejected.
+    const std::string open = outPath("open.obj");
+    writeText(open, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\n");
+    MeshReport ro;
+    loadMesh(open, 1.f, &ro);
+    EXPECT_EQ(ro.boundaryEdges, 3u);
+    EXPECT_FALSE(ro.isClosedManifold());
+    ASSERT_FALSE(ro.warnings.empty());
+    EXPECT_NE(ro.warnings.back().find("open"), std::string::npos);
+}
+
+TEST(MeshIO, NonManifoldEdgeIsReported) {
+    // Three triangles sharing the edge (1, 2): OpenMesh detaches one; we weld it back and
+    // report the non-manifold edge.
+    const std::string path = outPath("nonmanifold.obj");
+    writeText(path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n");
+    MeshReport r;
+    const TriangleMesh m = loadMesh(path, 1.f, &r);
+    EXPECT_EQ(m.triangleCount(), 3u);
+    EXPECT_EQ(r.nonManifoldEdges, 1u);
+    EXPECT_FALSE(r.isClosedManifold());
+}
+
+TEST(MeshIO, ValidateRejectsNonFiniteAndBadIndices) {
+    TriangleMesh m = makeSphere(1.f, 1);
+    m.positions[0].y = INFINITY;
+    EXPECT_THROW(validateMesh(m), ValueError);
+    TriangleMesh n = makeSphere(1.f, 1);
+    n.triangles[0][1] = 99999;
+    EXPECT_THROW(validateMesh(n), ValueError);
+    TriangleMesh empty;
+    EXPECT_THROW(validateMesh(empty), ValueError);
+}
+
+TEST(MeshIO, SharedMeshesLoadIfPresent) {
+    const std::string dir = std::string(LUCENT_SHARED_DIR) + "/meshes/";
+    if (!std::filesystem::exists(dir + "suzanne.obj"))
+        GTEST_SKIP() << "shared meshes absent";
+    MeshReport r;
+    const TriangleMesh suz = loadMesh(dir + "suzanne.obj", 10.f, &r);
+    // 968 faces in the file; one repeats the vertex set of another (removed, reported).
+    EXPECT_EQ(suz.triangleCount() + r.duplicateDropped + r.degenerateDropped, 968u);
+    EXPECT_EQ(r.duplicateDropped, 1u);
+    EXPECT_GT(r.boundaryEdges, 0u);  // SOURCES.md: 42 boundary edges
+    MeshReport rb;
+    const TriangleMesh bunny = loadMesh(dir + "bunny_closed_75k.ply", 100.f, &rb);
+    EXPECT_EQ(bunny.triangleCount(), 75408u);
+    EXPECT_TRUE(rb.isClosedManifold());
+    EXPECT_GT(test::signedVolume(bunny), 0.0);
+}
+
+}  // namespace
+}  // namespace lucent

@@ -1,0 +1,81 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief Small analytic set-ups for the path-tracer tests: box meshes and grids.
+
+#include <lucent/mesh/TriangleMesh.h>
+#include <lucent/reference/GridMedium.h>
+
+#include <array>
+#include <functional>
+
+namespace lucent::test {
+
+/// Axis-aligned box [lo, hi] as 12 triangles, counter-clockwise seen from outside.
+inline TriangleMesh boxMesh(const Point3f& lo, const Point3f& hi) {
+    TriangleMesh m;
+    for (int i = 0; i < 8; ++i)
+        m.positions.push_back({(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
+    // Faces as quads (a, b, c, d); the winding is fixed below from the outward direction.
+    const int quads[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                             {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+    const Point3f c = 0.5f * (lo + hi);
+    for (const auto& q : quads) {
+        for (const std::array<int, 3>& t : {std::array<int, 3>{q[0], q[1], q[2]},
+                                           std::array<int, 3>{q[0], q[2], q[3]}}) {
+            const Point3f a = m.positions[t[0]], b = m.positions[t[1]], d = m.positions[t[2]];
+            const Vector3f n = glm::cross(b - a, d - a);
+            const bool outward = glm::dot(n, (a + b + d) / 3.f - c) > 0.f;
+            m.triangles.push_back(outward ? std::array<uint32_t, 3>{uint32_t(t[0]), uint32_t(t[1]),
+                                                                   uint32_t(t[2])}
+                                          : std::array<uint32_t, 3>{uint32_t(t[0]), uint32_t(t[2]),
+                                                                   uint32_t(t[1])});
+        }
+    }
+    m.normals.assign(m.positions.size(), Normal3f(0.f, 0.f, 1.f));
+    return m;
+}
+
+/// Grid of `res`³ voxels of size h starting at `origin`, value from `f(i, j, k)`.
+inline GridMedium gridFrom(const Point3f& origin, float h, int res,
+                           const std::function<MediumCoefficients(int, int, int)>& f,
+                           const GridMedium::Options& options) {
+    GridSpec spec;
+    spec.origin = origin;
+    spec.voxelSize = h;
+    spec.resolution = res;
+    std::vector<MediumCoefficients> v(spec.voxelCount());
+    for (int k = 0; k < res; ++k)
+        for (int j = 0; j < res; ++j)
+            for (int i = 0; i < res; ++i) v[spec.linearIndex({i, j, k})] = f(i, j, k);
+    return GridMedium(spec, v, options);
+}
+
+/// Coefficients with the same σt, σs, g in all three channels.
+inline MediumCoefficients grey(float sigma_t, float sigma_s, float g = 0.f) {
+    MediumCoefficients m;
+    m.sigma_t = Rgb(sigma_t);
+    m.sigma_s = Rgb(sigma_s);
+    m.sigma_a = Rgb(sigma_t - sigma_s);
+    m.g = Rgb(g);
+    return m;
+}
+
+/// Running mean and standard error of i.i.d. samples.
+struct MeanSe {
+    double sum = 0, sumSq = 0;
+    long n = 0;
+    void add(double x) {
+        sum += x;
+        sumSq += x * x;
+        ++n;
+    }
+    [[nodiscard]] double mean() const { return sum / double(n); }
+    /// Standard error of the mean: √(s²/n).
+    [[nodiscard]] double se() const {
+        const double m = mean();
+        return std::sqrt(std::max(0.0, (sumSq / double(n) - m * m) / double(n - 1)));
+    }
+};
+
+}  // namespace lucent::test

@@ -1,0 +1,295 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief Scene JSON: the minimal scene and the shipped examples load; unknown, missing and
+/// mistyped fields are errors naming the field; round trips through JSON and projects.
+
+#include <lucent/core/Error.h>
+#include <lucent/material/Presets.h>
+#include <lucent/mesh/MeshIO.h>
+#include <lucent/mesh/Procedural.h>
+#include <lucent/mesh/Voxelize.h>
+#include <lucent/scene/SceneFile.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+namespace lucent {
+namespace {
+
+using nlohmann::json;
+
+const char* MINIMAL =
+    R"({"mesh":{"procedural":"sphere","radius":10},"material":{"preset":"marble"},"eta":1.3,)"
+    R"("lights":[{"type":"point","position":[30,30,30],"intensity":[1e4,1e4,1e4]}],)"
+    R"("camera":{"position":[0,0,60],"target":[0,0,0],"up":[0,1,0],"fov_y_deg":40,)"
+    R"("width":256,"height":256}})";
+
+/// The minimal scene with a coarse grid (fast) after `edit`.
+std::string minimalWith(const std::function<void(json&)>& edit) {
+    json j = json::parse(MINIMAL);
+    j["resolution"] = 24;
+    edit(j);
+    return j.dump();
+}
+
+/// Expects parseScene to throw a lucent::Error whose message contains `field`.
+void expectErrorNaming(const std::string& text, const std::string& field) {
+    try {
+        parseScene(text);
+        ADD_FAILURE() << "no error, expected one naming '" << field << "'";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("'" + field + "'"), std::string::npos)
+            << "message: " << e.what();
+    }
+}
+
+size_t insideCount(const MaterialVolume& v) {
+    const auto& m = v.insideMask();
+    return size_t(std::count_if(m.begin(), m.end(), [](uint8_t x) { return x != 0; }));
+}
+
+std::string outDir() {
+    const std::string d = std::string(LUCENT_TEST_OUTPUT_DIR) + "/scene";
+    std::filesystem::create_directories(d);
+    return d;
+}
+
+TEST(SceneFile, MinimalSceneLoads) {
+    const Scene s = parseScene(MINIMAL);
+    ASSERT_EQ(s.objects.size(), 1u);
+    const SceneObject& o = s.objects[0];
+    EXPECT_EQ(o.meshSource.procedural, "sphere");
+    EXPECT_NEAR(o.mesh.bounds().extent().x, 20.f, 1e-3f);
+    ASSERT_TRUE(o.material);
+    EXPECT_EQ(o.material->resolution(), GridSpec::DEFAULT_RESOLUTION);
+    EXPECT_EQ(o.material->spec(), GridSpec::around(o.mesh.bounds(), 128));
+    EXPECT_FLOAT_EQ(o.material->eta(), 1.3f);
+    EXPECT_FLOAT_EQ(s.eta, 1.3f);
+    EXPECT_EQ(o.material->base(), sanitize(findPreset("marble").sample()));
+    // The inside mask is the solid voxelisation of the sphere.
+    EXPECT_EQ(o.material->insideMask(), voxelizeSolid(o.mesh, o.material->spec()));
+    const double h = o.material->spec().voxelSize;
+    EXPECT_NEAR(double(insideCount(*o.material)) * h * h * h, 4.0 / 3.0 * M_PI * 1000.0,
+                0.02 * 4.0 / 3.0 * M_PI * 1000.0);  // 128³ over 20 mm: ≪ 2% (see test_mesh)
+    ASSERT_EQ(s.lights.size(), 1u);
+    EXPECT_EQ(s.lights[0].type, Light::Type::Point);
+    EXPECT_EQ(s.lights[0].position, Point3f(30.f));
+    EXPECT_EQ(s.lights[0].intensity, Rgb(1e4f));
+    EXPECT_EQ(s.camera.position, Point3f(0.f, 0.f, 60.f));
+    EXPECT_FALSE(s.camera.orthographic);
+    EXPECT_FLOAT_EQ(s.camera.fovYDeg, 40.f);
+    EXPECT_EQ(s.camera.width, 256);
+}
+
+TEST(SceneFile, ShippedExampleScenesLoad) {
+    for (const char* name : {"minimal.json", "backlit_thin_thick.json", "torus_uniform_sun.json"}) {
+        const std::string path = std::string(LUCENT_SCENES_DIR) + "/" + name;
+        const Scene s = loadScene(path);
+        ASSERT_EQ(s.objects.size(), 1u) << name;
+        EXPECT_GT(insideCount(*s.objects[0].material), 1000u) << name;
+        EXPECT_FALSE(s.lights.empty()) << name;
+    }
+}
+
+TEST(SceneFile, VersionResolutionAndProceduralShapes) {
+    EXPECT_NO_THROW(parseScene(minimalWith([](json& j) { j["version"] = 1; })));
+    expectErrorNaming(minimalWith([](json& j) { j["version"] = 2; }), "version");
+    expectErrorNaming(minimalWith([](json& j) { j["resolution"] = 8; }), "resolution");
+    expectErrorNaming(minimalWith([](json& j) { j["resolution"] = 1000; }), "resolution");
+    const Scene box = parseScene(minimalWith([](json& j) {
+        j["mesh"] = {{"procedural", "box"}, {"size", {4, 6, 8}}};
+    }));
+    EXPECT_EQ(box.objects[0].material->resolution(), 24);
+    EXPECT_NEAR(box.objects[0].mesh.bounds().extent().z, 8.f, 1e-4f);
+    const Scene torus = parseScene(minimalWith([](json& j) {
+        j["mesh"] = {{"procedural", "torus"}, {"radii", {10, 3}}};
+    }));
+    EXPECT_NEAR(torus.objects[0].mesh.bounds().extent().x, 26.f, 1e-3f);
+    const Scene tt = parseScene(minimalWith([](json& j) {
+        j["mesh"] = {{"procedural", "thin-thick"}, {"size", 30}};
+    }));
+    EXPECT_NEAR(tt.objects[0].mesh.bounds().extent().y, 30.f, 1e-2f);
+    expectErrorNaming(minimalWith([](json& j) { j["mesh"]["procedural"] = "teapot"; }),
+                      "mesh.procedural");
+}
+
+TEST(SceneFile, UnknownFieldsAreNamed) {
+    expectErrorNaming(minimalWith([](json& j) { j["colour"] = 1; }), "colour");
+    expectErrorNaming(minimalWith([](json& j) { j["lights"][0]["colour"] = 1; }),
+                      "lights[0].colour");
+    expectErrorNaming(minimalWith([](json& j) { j["camera"]["fovy"] = 40; }), "camera.fovy");
+    expectErrorNaming(minimalWith([](json& j) { j["mesh"]["radius2"] = 1; }), "mesh.radius2");
+    expectErrorNaming(minimalWith([](json& j) { j["material"]["extra"] = 1; }), "material.extra");
+    expectErrorNaming(minimalWith([](json& j) { j["lights"][0]["type"] = "laser"; }),
+                      "lights[0].type");
+    expectErrorNaming(minimalWith([](json& j) { j["material"]["preset"] = "unobtainium"; }),
+                      "material.preset");
+}
+
+TEST(SceneFile, MissingFieldsAreNamed) {
+    expectErrorNaming(minimalWith([](json& j) { j.erase("camera"); }), "camera");
+    expectErrorNaming(minimalWith([](json& j) { j.erase("mesh"); }), "mesh");
+    expectErrorNaming(minimalWith([](json& j) { j["mesh"].erase("radius"); }), "mesh.radius");
+    expectErrorNaming(minimalWith([](json& j) { j["lights"][0].erase("intensity"); }),
+                      "lights[0].intensity");
+    expectErrorNaming(minimalWith([](json& j) { j["camera"].erase("width"); }), "camera.width");
+    expectErrorNaming(minimalWith([](json& j) { j["camera"].erase("fov_y_deg"); }),
+                      "camera.fov_y_deg");
+    expectErrorNaming(minimalWith([](json& j) {
+                          j["material"] = {{"sigma_t", {1, 1, 1}}};
+                      }),
+                      "material.sigma_s");
+}
+
+TEST(SceneFile, WrongTypesAndValuesAreNamed) {
+    expectErrorNaming(minimalWith([](json& j) { j["eta"] = "high"; }), "eta");
+    expectErrorNaming(minimalWith([](json& j) { j["eta"] = 0.5; }), "eta");
+    expectErrorNaming(minimalWith([](json& j) {
+                          j["lights"][0]["intensity"] = {1, 2};
+                      }),
+                      "lights[0].intensity");
+    expectErrorNaming(minimalWith([](json& j) {
+                          j["lights"][0]["intensity"] = {1, -2, 3};
+                      }),
+                      "lights[0].intensity");
+    expectErrorNaming(minimalWith([](json& j) { j["lights"][0]["position"][1] = "x"; }),
+                      "lights[0].position[1]");
+    expectErrorNaming(minimalWith([](json& j) { j["camera"]["width"] = 1.5; }), "camera.width");
+    expectErrorNaming(minimalWith([](json& j) {
+                          j["camera"]["target"] = {0, 0, 60};
+                      }),
+                      "camera.target");
+    expectErrorNaming(minimalWith([](json& j) { j["lights"] = json::object(); }), "lights");
+    expectErrorNaming(minimalWith([](json& j) { j["mesh"]["radius"] = -1; }), "mesh.radius");
+    expectErrorNaming(minimalWith([](json& j) {
+                          j["material"] = {{"sigma_t", {1, 1, 1}}, {"sigma_s", {2, 0, 0}}};
+                      }),
+                      "material.sigma_s");
+    EXPECT_THROW(parseScene("{ not json"), IoError);
+    EXPECT_THROW(parseScene("[1, 2]"), IoError);
+}
+
+TEST(SceneFile, UniformMaterialAndMeshFile) {
+    const std::string dir = outDir();
+    saveMesh(makeBox({1.f, 1.f, 1.f}), dir + "/unit_box.ply");
+    const Scene s = parseScene(minimalWith([](json& j) {
+                                   j["mesh"] = {{"file", "unit_box.ply"}, {"scale", 10}};
+                                   j["material"] = {{"sigma_t", {1, 2, 3}},
+                                                    {"sigma_s", {0.5, 1, 1.5}},
+                                                    {"g", {0.1, 0.2, 0.3}}};
+                               }),
+                               dir);
+    const SceneObject& o = s.objects[0];
+    EXPECT_NEAR(o.mesh.bounds().extent().x, 10.f, 1e-4f);
+    EXPECT_EQ(o.material->base().sigma_t, Rgb(1.f, 2.f, 3.f));
+    EXPECT_EQ(o.material->base().g, Rgb(0.1f, 0.2f, 0.3f));
+    const GridSpec& spec = o.material->spec();
+    EXPECT_EQ(o.material->at(spec.cellOf(Point3f(0.f))).sigma_s, Rgb(0.5f, 1.f, 1.5f));
+    // A missing mesh file names the file.
+    try {
+        parseScene(minimalWith([](json& j) { j["mesh"] = {{"file", "nope.ply"}}; }), dir);
+        ADD_FAILURE() << "no error for a missing mesh file";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("nope.ply"), std::string::npos) << e.what();
+    }
+}
+
+TEST(SceneFile, LoadSceneNamesTheFile) {
+    const std::string bad = outDir() + "/broken_scene.json";
+    {
+        std::ofstream f(bad);
+        f << minimalWith([](json& j) { j["camera"]["height"] = "tall"; });
+    }
+    try {
+        loadScene(bad);
+        ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find(bad), std::string::npos) << msg;
+        EXPECT_NE(msg.find("camera.height"), std::string::npos) << msg;
+    }
+    EXPECT_THROW(loadScene(outDir() + "/missing.json"), IoError);
+}
+
+TEST(SceneFile, JsonRoundTrip) {
+    const Scene a = loadScene(std::string(LUCENT_SCENES_DIR) + "/torus_uniform_sun.json");
+    const Scene b = parseScene(sceneToJson(a));
+    ASSERT_EQ(b.lights.size(), a.lights.size());
+    for (size_t i = 0; i < a.lights.size(); ++i) {
+        EXPECT_EQ(b.lights[i].type, a.lights[i].type);
+        EXPECT_EQ(b.lights[i].position, a.lights[i].position);
+        EXPECT_NEAR(glm::length(b.lights[i].direction - a.lights[i].direction), 0.f, 1e-6f);
+        EXPECT_EQ(b.lights[i].intensity, a.lights[i].intensity);
+        EXPECT_EQ(b.lights[i].radius, a.lights[i].radius);
+    }
+    EXPECT_EQ(b.camera.orthographic, a.camera.orthographic);
+    EXPECT_EQ(b.camera.orthoHeight, a.camera.orthoHeight);
+    EXPECT_EQ(b.camera.position, a.camera.position);
+    EXPECT_EQ(b.eta, a.eta);
+    EXPECT_EQ(b.objects[0].material->spec(), a.objects[0].material->spec());
+    EXPECT_EQ(b.objects[0].material->base(), a.objects[0].material->base());
+    EXPECT_EQ(b.objects[0].material->insideMask(), a.objects[0].material->insideMask());
+}
+
+TEST(SceneFile, DefaultSceneIsBackLitAndHeterogeneous) {
+    const Scene s = makeDefaultScene();
+    ASSERT_EQ(s.objects.size(), 1u);
+    const SceneObject& o = s.objects[0];
+    EXPECT_EQ(o.meshSource.procedural, "thin-thick");
+    EXPECT_FALSE(o.material->isHomogeneous());
+    EXPECT_GT(insideCount(*o.material), 10000u);
+    ASSERT_FALSE(s.lights.empty());
+    EXPECT_LT(s.lights[0].position.z, o.mesh.bounds().lo.z);  // behind the object
+    EXPECT_GT(s.camera.position.z, o.mesh.bounds().hi.z);     // camera in front
+    // Deterministic: built twice, identical.
+    const Scene t = makeDefaultScene();
+    EXPECT_EQ(t.objects[0].material->denseComponent(0), o.material->denseComponent(0));
+}
+
+TEST(SceneFile, ProjectSaveAndReloadIsExact) {
+    const std::string path = outDir() + "/project.json";
+    Scene s = parseScene(minimalWith([](json& j) { j["resolution"] = 32; }));
+    MaterialVolume& vol = *s.objects[0].material;
+    const Coord c = vol.spec().cellOf(Point3f(1.f, 2.f, 3.f));
+    vol.set(c, {Rgb(3.f), Rgb(1.f), Rgb(0.5f)});
+    saveProject(s, path);
+    EXPECT_TRUE(std::filesystem::exists(outDir() + "/project.vdb"));
+    EXPECT_FALSE(std::filesystem::exists(path + ".saving"));
+    const Scene r = loadScene(path);
+    const MaterialVolume& back = *r.objects[0].material;
+    EXPECT_EQ(back.spec(), vol.spec());
+    EXPECT_EQ(back.insideMask(), vol.insideMask());
+    EXPECT_EQ(back.at(c), vol.at(c));
+    for (int comp = 0; comp < MaterialVolume::COMPONENTS; ++comp)
+        EXPECT_EQ(back.denseComponent(comp), vol.denseComponent(comp)) << comp;
+    EXPECT_EQ(r.camera.position, s.camera.position);
+    // A failed save (directory does not exist) leaves nothing behind and throws IoError.
+    EXPECT_THROW(saveProject(s, outDir() + "/no/such/dir/p.json"), IoError);
+}
+
+TEST(SceneFile, ProjectReferencesMeshFilesRelatively) {
+    const std::string meshDir = outDir() + "/meshes";
+    const std::string projDir = outDir() + "/proj";
+    std::filesystem::create_directories(meshDir);
+    std::filesystem::create_directories(projDir);
+    saveMesh(makeSphere(1.f, 2), meshDir + "/ball.obj");
+    const Scene s = parseScene(minimalWith([&](json& j) {
+        j["mesh"] = {{"file", meshDir + "/ball.obj"}, {"scale", 5}};
+        j["resolution"] = 16;
+    }));
+    saveProject(s, projDir + "/p.json");
+    std::ifstream f(projDir + "/p.json");
+    const json saved = json::parse(f);
+    EXPECT_EQ(saved["mesh"]["file"], "../meshes/ball.obj");
+    EXPECT_EQ(saved["material"]["vdb"], "p.vdb");
+    EXPECT_EQ(saved["mesh"]["scale"], 5.0);
+    const Scene r = loadScene(projDir + "/p.json");
+    EXPECT_NEAR(r.objects[0].mesh.bounds().extent().x, 10.f, 1e-3f);
+    EXPECT_EQ(r.objects[0].material->insideMask(), s.objects[0].material->insideMask());
+}
+
+}  // namespace
+}  // namespace lucent

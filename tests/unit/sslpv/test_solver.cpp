@@ -1,0 +1,340 @@
+// SPDX-License-Identifier: MIT
+#include <lucent/sslpv/SslpvSolver.h>
+
+#include <lucent/core/Error.h>
+#include <lucent/core/Parallel.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace lucent;
+
+namespace {
+
+/// A ball of radius 0.35·N cells centred in an N³ grid of cell size h (mm), uniform material.
+CoarseMaterial ballMaterial(int n, float h, Rgb sigma_t, Rgb sigma_s, Rgb g) {
+    CoarseMaterial m;
+    m.spec.resolution = n;
+    m.spec.voxelSize = h;
+    m.spec.origin = Point3f(-0.5f * n * h);
+    const size_t count = m.spec.voxelCount();
+    m.insideFraction.assign(count, 0.f);
+    for (int c = 0; c < 3; ++c) {
+        m.sigma_t[c].assign(count, 0.f);
+        m.sigma_s[c].assign(count, 0.f);
+        m.g[c].assign(count, 0.f);
+    }
+    const float radius = 0.35f * n * h;
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const Point3f p = m.spec.cellCenter({x, y, z});
+                if (glm::length(p) > radius)
+                    continue;
+                const size_t k = m.spec.linearIndex({x, y, z});
+                m.insideFraction[k] = 1.f;
+                for (int c = 0; c < 3; ++c) {
+                    m.sigma_t[c][k] = sigma_t[c];
+                    m.sigma_s[c][k] = sigma_s[c];
+                    m.g[c][k] = g[c];
+                }
+            }
+    m.homogeneous = true;
+    return m;
+}
+
+/// Texels of an orthographic RSM of a directional light travelling along `dir` onto the ball:
+/// texel area a (mm²) times irradiance E (W/mm²) gives Φ_p (§3.1, directional case).
+std::vector<SslpvInjectionSample> ballTexels(const CoarseMaterial& m, Vector3f dir, Rgb E,
+                                             int texels = 48) {
+    dir = glm::normalize(dir);
+    const float radius = 0.35f * m.spec.resolution * m.spec.voxelSize;
+    const Vector3f a = std::abs(dir.x) < 0.9f ? Vector3f(1, 0, 0) : Vector3f(0, 1, 0);
+    const Vector3f u = glm::normalize(glm::cross(dir, a)), v = glm::cross(dir, u);
+    const float pitch = 2.f * radius / texels;
+    std::vector<SslpvInjectionSample> out;
+    for (int j = 0; j < texels; ++j)
+        for (int i = 0; i < texels; ++i) {
+            const float s = (i + 0.5f) * pitch - radius, t = (j + 0.5f) * pitch - radius;
+            const float r2 = s * s + t * t;
+            if (r2 >= radius * radius)
+                continue;
+            const Point3f p = s * u + t * v - std::sqrt(radius * radius - r2) * dir;
+            out.push_back({p, glm::normalize(p), dir, E * pitch * pitch});
+        }
+    return out;
+}
+
+// Float sums over ≤ 64³ cells and ≤ 512 steps: relative rounding ~1e-6 per step; the matrices'
+// flux conservation holds to ~1e-7 (SslpvTransfer.FluxIsConservedAcrossSixNeighbours).
+constexpr float ENERGY_TOL = 2e-4f;
+
+void expectBalance(const SslpvStats& st, const char* what) {
+    for (int c = 0; c < 3; ++c) {
+        const float sum = st.remaining[c] + st.exitant[c] + st.absorbed[c];
+        EXPECT_NEAR(sum, st.injected[c], ENERGY_TOL * st.injected[c] + 1e-30f)
+            << what << " channel " << c << ": remaining " << st.remaining[c] << " exitant "
+            << st.exitant[c] << " absorbed " << st.absorbed[c];
+    }
+}
+
+}  // namespace
+
+TEST(SslpvSolver, InjectedFluxIsFresnelTransmitted) {
+    const CoarseMaterial m = ballMaterial(16, 1.f, Rgb(1.f), Rgb(0.9f), Rgb(0.f));
+    SslpvSolver solver({.order = 1, .maxSteps = 0});
+    const float eta = 1.4f;
+    solver.setMaterial(m, eta);
+    const auto texels = ballTexels(m, Vector3f(0, 0, -1), Rgb(1.f, 2.f, 3.f));
+    double expected = 0.0;
+    for (const auto& t : texels)
+        expected += (1.0 - dielectricReflectance(-glm::dot(t.direction, t.normal), eta)) * t.flux.x;
+    solver.setInjectionSamples(texels);
+    const SslpvStats& st = solver.solve();
+    EXPECT_EQ(st.skippedTexels, 0);
+    EXPECT_NEAR(st.injected.x, expected, 1e-5 * expected);
+    EXPECT_NEAR(st.injected.z, 3.0 * expected, 3e-5 * expected);
+}
+
+TEST(SslpvSolver, EnergyBalanceWithoutAbsorption) {
+    // σa = 0 (σs′ = σt, absorption-only attenuation): injected = exitant + remaining.
+    for (int order : {1, 2}) {
+        const CoarseMaterial m = ballMaterial(24, 0.5f, Rgb(2.f), Rgb(2.f), Rgb(0.3f));
+        SslpvSolver solver(
+            {.order = order, .maxSteps = 40, .attenuation = SslpvAttenuation::Absorption});
+        solver.setMaterial(m, 1.3f);
+        solver.setInjectionSamples(ballTexels(m, Vector3f(0.3f, -0.2f, -1.f), Rgb(1.f)));
+        const SslpvStats& st = solver.solve();
+        EXPECT_EQ(st.stepsUsed, 40);
+        EXPECT_GT(st.exitant.x, 0.5f * st.injected.x) << "light should leave a 8.4 mm ball";
+        EXPECT_EQ(st.absorbed.x, 0.f);
+        expectBalance(st, order == 1 ? "L1" : "L2");
+        // Independent check of the bookkeeping: re-sum the grids themselves.
+        const Rgb ex = solver.exitant().flux(), rem = solver.propagation().flux();
+        EXPECT_NEAR(ex.x + rem.x, st.injected.x, ENERGY_TOL * st.injected.x);
+    }
+}
+
+TEST(SslpvSolver, VacuumPaperModeConservesFlux) {
+    // Paper attenuation with σt = 0 inside a vacuum ball: nothing absorbed, all accounted for.
+    const CoarseMaterial m = ballMaterial(20, 1.f, Rgb(0.f), Rgb(0.f), Rgb(0.f));
+    SslpvSolver solver({.order = 1, .maxSteps = 16});
+    solver.setMaterial(m, 1.5f);
+    solver.setInjectionSamples(ballTexels(m, Vector3f(0, -1, 0), Rgb(1.f)));
+    expectBalance(solver.solve(), "vacuum");
+}
+
+TEST(SslpvSolver, EnergyBalanceWithAbsorptionAndHeterogeneity) {
+    CoarseMaterial m = ballMaterial(24, 1.f, Rgb(0.5f, 1.f, 2.f), Rgb(0.4f), Rgb(0.f, 0.5f, -0.5f));
+    // Make the +x half four times as absorbing.
+    for (int z = 0; z < 24; ++z)
+        for (int y = 0; y < 24; ++y)
+            for (int x = 12; x < 24; ++x) {
+                const size_t k = m.spec.linearIndex({x, y, z});
+                if (m.insideFraction[k] > 0.f)
+                    for (int c = 0; c < 3; ++c)
+                        m.sigma_t[c][k] *= 4.f;
+            }
+    m.homogeneous = false;
+    for (auto att : {SslpvAttenuation::Extinction, SslpvAttenuation::Absorption}) {
+        SslpvSolver solver({.order = 1, .maxSteps = 32, .attenuation = att});
+        solver.setMaterial(m, 1.3f);
+        solver.setInjectionSamples(ballTexels(m, Vector3f(0, 0, -1), Rgb(1.f)));
+        const SslpvStats& st = solver.solve();
+        EXPECT_GT(st.absorbed.x, 0.f);
+        expectBalance(st, "heterogeneous");
+        // More absorption on +x: less light leaves there than on −x.
+        double plus = 0.0, minus = 0.0;
+        for (int z = 0; z < 24; ++z)
+            for (int y = 0; y < 24; ++y)
+                for (int x = 0; x < 24; ++x) {
+                    const float e = solver.exitant().at({x, y, z}, 1, 0);
+                    (x >= 12 ? plus : minus) += e;
+                }
+        EXPECT_LT(plus, 0.8 * minus);
+    }
+}
+
+TEST(SslpvSolver, HeterogeneousPathMatchesHomogeneousPath) {
+    const CoarseMaterial hom = ballMaterial(20, 1.f, Rgb(1.f), Rgb(0.7f), Rgb(0.4f));
+    CoarseMaterial het = hom;
+    // One cell differs by a float ulp-scale amount: forces the per-cell factor arrays.
+    het.g[0][het.spec.linearIndex({10, 10, 10})] = std::nextafter(0.4f, 1.f);
+    const auto texels = ballTexels(hom, Vector3f(1, 1, -1), Rgb(1.f));
+    SslpvSolver a({.maxSteps = 24}), b({.maxSteps = 24});
+    a.setMaterial(hom, 1.3f);
+    b.setMaterial(het, 1.3f);
+    a.setInjectionSamples(texels);
+    b.setInjectionSamples(texels);
+    a.solve();
+    b.solve();
+    const float peak = a.accumulation().maxAbs();
+    ASSERT_GT(peak, 0.f);
+    const auto& ra = a.accumulation().raw();
+    const auto& rb = b.accumulation().raw();
+    ASSERT_EQ(ra.size(), rb.size());
+    float worst = 0.f;
+    for (size_t k = 0; k < ra.size(); ++k)
+        worst = std::max(worst, std::abs(ra[k] - rb[k]));
+    EXPECT_LT(worst, 1e-5f * peak);  // float rounding only; the ulp change is ~1e-7
+}
+
+TEST(SslpvSolver, DeterministicAcrossThreadCounts) {
+    const CoarseMaterial m = ballMaterial(20, 1.f, Rgb(1.f), Rgb(0.7f), Rgb(0.4f));
+    const auto texels = ballTexels(m, Vector3f(0, 1, -1), Rgb(1.f));
+    std::vector<float> results[2];
+    for (int t = 1; t <= 2; ++t) {
+        ThreadLimit limit(t);
+        SslpvSolver s({.maxSteps = 16});
+        s.setMaterial(m, 1.3f);
+        s.setInjectionSamples(texels);
+        s.solve();
+        results[t - 1] = s.accumulation().raw();
+    }
+    EXPECT_EQ(results[0], results[1]);  // each cell is written by exactly one task
+}
+
+TEST(SslpvSolver, StopsWhenRemainingEnergyIsSmall) {
+    const CoarseMaterial m = ballMaterial(16, 1.f, Rgb(1.f), Rgb(0.8f), Rgb(0.f));
+    SslpvSolver solver({.maxSteps = 512, .stopEpsilon = 1e-3f});
+    solver.setMaterial(m, 1.3f);
+    solver.setInjectionSamples(ballTexels(m, Vector3f(0, 0, -1), Rgb(1.f)));
+    const SslpvStats& st = solver.solve();
+    EXPECT_LT(st.stepsUsed, 512);
+    EXPECT_GT(st.stepsUsed, 2);
+    for (int c = 0; c < 3; ++c)
+        EXPECT_LE(st.remaining[c], 1e-3f * st.injected[c]);
+}
+
+TEST(SslpvSolver, IncrementalDirtyFlags) {
+    const CoarseMaterial m = ballMaterial(16, 1.f, Rgb(1.f), Rgb(0.8f), Rgb(0.f));
+    SslpvSolver solver({.maxSteps = 8});
+    EXPECT_THROW(solver.solve(), ValueError);
+    solver.setMaterial(m, 1.3f);
+    solver.setInjectionSamples(ballTexels(m, Vector3f(0, 0, -1), Rgb(1.f)));
+    EXPECT_TRUE(solver.isDirty());
+    const SslpvStats first = solver.solve();
+    EXPECT_TRUE(first.reinjected && first.repropagated);
+    EXPECT_FALSE(solver.isDirty());
+    const SslpvStats idle = solver.solve();
+    EXPECT_FALSE(idle.reinjected || idle.repropagated);
+    // Painting: material edited in place → propagation only.
+    for (auto& v : solver.material().sigma_t[0])
+        v *= 2.f;
+    solver.markMaterialDirty();
+    const Rgb before = solver.accumulation().flux();
+    const SslpvStats painted = solver.solve();
+    EXPECT_FALSE(painted.reinjected);
+    EXPECT_TRUE(painted.repropagated);
+    EXPECT_LT(solver.accumulation().flux().x, before.x);  // red absorbs more now
+    EXPECT_NEAR(solver.accumulation().flux().y, before.y, 1e-6f * before.y);
+    // Lights moved → re-inject.
+    solver.setInjectionSamples(ballTexels(m, Vector3f(1, 0, 0), Rgb(1.f)));
+    EXPECT_TRUE(solver.solve().reinjected);
+}
+
+TEST(SslpvSolver, RejectsBadInput) {
+    CoarseMaterial m = ballMaterial(16, 1.f, Rgb(1.f), Rgb(0.8f), Rgb(0.f));
+    SslpvSolver solver;
+    EXPECT_THROW(solver.setMaterial(m, 0.5f), ValueError);
+    CoarseMaterial nan = m;
+    nan.sigma_t[1][100] = std::nanf("");
+    EXPECT_THROW(solver.setMaterial(nan, 1.3f), ValueError);
+    CoarseMaterial shortArr = m;
+    shortArr.g[2].pop_back();
+    EXPECT_THROW(solver.setMaterial(shortArr, 1.3f), ValueError);
+    EXPECT_THROW(solver.setOptions({.order = 3}), ValueError);
+    EXPECT_THROW(solver.setOptions({.maxSteps = -1}), ValueError);
+    EXPECT_THROW(solver.setOptions({.stopEpsilon = 2.f}), ValueError);
+}
+
+TEST(SslpvSolver, RadianceFacesTheLight) {
+    // A ball lit from +z: the radiance estimate (Eq. 7) is larger on the lit side than on the
+    // far side, finite and non-negative everywhere.
+    const CoarseMaterial m = ballMaterial(24, 1.f, Rgb(0.5f), Rgb(0.45f), Rgb(0.f));
+    SslpvSolver solver({.maxSteps = 32});
+    solver.setMaterial(m, 1.3f);
+    solver.setInjectionSamples(ballTexels(m, Vector3f(0, 0, -1), Rgb(1.f)));
+    solver.solve();
+    const float r = 0.35f * 24.f - 0.3f;
+    const Rgb top = solver.radiance(Point3f(0, 0, r), Normal3f(0, 0, 1));
+    const Rgb side = solver.radiance(Point3f(r, 0, 0), Normal3f(1, 0, 0));
+    const Rgb bottom = solver.radiance(Point3f(0, 0, -r), Normal3f(0, 0, -1));
+    EXPECT_GT(top.x, side.x);
+    EXPECT_GT(side.x, bottom.x);
+    EXPECT_GT(bottom.x, 0.f);
+    EXPECT_TRUE(isFinite(top));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stress (issue E): extreme parameters never produce NaN/Inf and never create energy.
+
+struct StressCase {
+    const char* name;
+    float sigma_t, sigma_s, g, eta, cell;
+    int steps;
+    Vector3f dir;
+};
+
+TEST(SslpvSolver, StressExtremeParameters) {
+    const StressCase cases[] = {
+        {"sigma_t->0", 1e-9f, 0.f, 0.f, 1.3f, 1.f, 64, {0, 0, -1}},
+        {"sigma_t=1e4", 1e4f, 5e3f, 0.f, 1.3f, 1.f, 64, {0, 0, -1}},
+        {"sigma_s=sigma_t", 3.f, 3.f, 0.f, 1.3f, 1.f, 64, {0, 0, -1}},
+        {"g=+0.99", 1.f, 1.f, 0.99f, 1.3f, 1.f, 64, {0, 0, -1}},
+        {"g=-0.99", 1.f, 1.f, -0.99f, 1.3f, 1.f, 64, {0, 0, -1}},
+        {"eta=1", 1.f, 0.5f, 0.f, 1.f, 1.f, 32, {0, 0, -1}},
+        {"eta=2.5", 1.f, 0.5f, 0.f, 2.5f, 1.f, 32, {0, 0, -1}},
+        {"grazing", 1.f, 0.9f, 0.f, 1.3f, 1.f, 32, {1, 0, -1e-3f}},
+        {"cell=1e-3mm", 1.f, 0.9f, 0.f, 1.3f, 1e-3f, 32, {0, 0, -1}},
+        {"cell=1e3mm", 1.f, 0.9f, 0.f, 1.3f, 1e3f, 32, {0, 0, -1}},
+        {"1 step", 1.f, 0.9f, 0.5f, 1.3f, 1.f, 1, {0, 0, -1}},
+        {"512 steps", 0.f, 0.f, 0.f, 1.3f, 1.f, 512, {0, 0, -1}},
+    };
+    for (const StressCase& sc : cases) {
+        for (int order : {1, 2}) {
+            const CoarseMaterial m =
+                ballMaterial(16, sc.cell, Rgb(sc.sigma_t), Rgb(sc.sigma_s), Rgb(sc.g));
+            SslpvSolver solver({.order = order,
+                                .maxSteps = sc.steps,
+                                .skipAccumulateSteps = 0,
+                                .attenuation = SslpvAttenuation::Absorption});
+            solver.setMaterial(m, sc.eta);
+            solver.setInjectionSamples(ballTexels(m, sc.dir, Rgb(1.f), 32));
+            const SslpvStats& st = solver.solve();
+            SCOPED_TRACE(std::string(sc.name) + " order " + std::to_string(order));
+            EXPECT_TRUE(solver.accumulation().isFinite());
+            EXPECT_TRUE(solver.propagation().isFinite());
+            EXPECT_TRUE(solver.exitant().isFinite());
+            EXPECT_GT(st.injected.x, 0.f);
+            // Energy never grows: what is left plus what left never exceeds the injection,
+            // and every part of the balance is accounted for.
+            EXPECT_LE(st.remaining.x, st.injected.x * (1.f + ENERGY_TOL));
+            expectBalance(st, sc.name);
+            const Rgb L = solver.radiance(Point3f(0, 0, 0.3f * 16 * sc.cell), Normal3f(0, 0, 1));
+            EXPECT_TRUE(isFinite(L));
+        }
+    }
+}
+
+TEST(SslpvSolver, LightInsideTheBoundingBoxAndEmptyInputs) {
+    const CoarseMaterial m = ballMaterial(16, 1.f, Rgb(1.f), Rgb(0.5f), Rgb(0.f));
+    SslpvSolver solver({.maxSteps = 8});
+    solver.setMaterial(m, 1.3f);
+    // No samples: a valid, dark solution.
+    solver.setInjectionSamples({});
+    EXPECT_EQ(solver.solve().injected.x, 0.f);
+    // Samples from a light inside the grid's box (rays leaving the centre hit the surface
+    // from inside: back-facing, skipped) and degenerate ones (NaN, zero flux).
+    std::vector<SslpvInjectionSample> s;
+    s.push_back({Point3f(0, 0, 5.5f), Normal3f(0, 0, 1), Vector3f(0, 0, 1), Rgb(1.f)});
+    s.push_back({Point3f(std::nanf("")), Normal3f(0, 0, 1), Vector3f(0, 0, -1), Rgb(1.f)});
+    s.push_back({Point3f(0, 0, 5.5f), Normal3f(0, 0, 1), Vector3f(0, 0, -1), Rgb(0.f)});
+    s.push_back({Point3f(0, 0, 5.5f), Normal3f(0, 0, 1), Vector3f(0, 0, -1), Rgb(1.f)});
+    solver.setInjectionSamples(s);
+    const SslpvStats& st = solver.solve();
+    EXPECT_EQ(st.injectedTexels, 1);
+    EXPECT_EQ(st.skippedTexels, 3);
+    EXPECT_TRUE(solver.accumulation().isFinite());
+}
