@@ -41,6 +41,11 @@ uniform int u_accumulate;     // add this step to the accumulation grid
 uniform int u_assignAcc;      // first accumulated step: acc = c
 uniform int u_sinks;          // exitant removal on
 uniform int u_assignExit;     // first step: exit = leave
+#ifdef SSLPV_L1
+uniform vec4 u_l1[6];   // per neighbour (+x, −x, +y, −y, +z, −z): w00, w0k, wk0, wkk
+uniform vec2 u_l1d[6];  // the other two dipole coefficients' diagonal weights
+uniform int u_offset[6];
+#endif
 
 int bandOf(int i) { return i == 0 ? 0 : (i < 4 ? 1 : 2); }
 
@@ -56,8 +61,36 @@ void main() {
         interior[h] = cell < u_cells && x >= 1 && y >= 1 && z >= 1 && x < u_padded - 1 &&
                       y < u_padded - 1 && z < u_padded - 1;
     }
+#ifdef SSLPV_L1
+    // Order 1: the matrices' sparsity (§4) with the weights in uniforms, all four outputs at
+    // once; a neighbour along the axis with dipole coefficient k couples c00 and c_k and scales
+    // the other two (u_l1[nb] = w00, w0k, wk0, wkk; u_l1d[nb] = the two diagonal weights).
+    float g[2][4];
+    for (int h = 0; h < 2; ++h) {
+        for (int c = 0; c < 4; ++c) g[h][c] = 0.0;
+        if (!interior[h]) continue;
+        for (int nb = 0; nb < 6; ++nb) {
+            int k = nb < 2 ? 3 : (nb < 4 ? 1 : 2);
+            int a = k == 1 ? 2 : 1;
+            int b = k == 3 ? 2 : 3;
+            int at = e + h + u_offset[nb];
+            float s0 = LOAD(b_src, (ch * 4) * u_planeSize + at);
+            float sk = LOAD(b_src, (ch * 4 + k) * u_planeSize + at);
+            float sa = LOAD(b_src, (ch * 4 + a) * u_planeSize + at);
+            float sb = LOAD(b_src, (ch * 4 + b) * u_planeSize + at);
+            g[h][0] += u_l1[nb].x * s0 + u_l1[nb].y * sk;
+            g[h][k] += u_l1[nb].z * s0 + u_l1[nb].w * sk;
+            g[h][a] += u_l1d[nb].x * sa;
+            g[h][b] += u_l1d[nb].y * sb;
+        }
+    }
+#endif
     for (int i = 0; i < u_coeffs; ++i) {
         float o[2] = float[2](0.0, 0.0);
+#ifdef SSLPV_L1
+        o[0] = g[0][i];
+        o[1] = g[1][i];
+#else
         for (int h = 0; h < 2; ++h) {
             if (!interior[h]) continue;
             float sum = 0.0;
@@ -68,6 +101,7 @@ void main() {
             }
             o[h] = sum;
         }
+#endif
         int base = (ch * u_coeffs + i) * u_planeSize + e;
         if (u_sinks != 0) {
             // Sinks: flux reaching a cell outside the object leaves it (recorded, removed).

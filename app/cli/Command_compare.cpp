@@ -50,8 +50,8 @@ int runCompare(const std::vector<std::string>& argv) {
                          " but the reference is ", ref.width(), "×", ref.height());
         mask = maskFromImage(img);
         maskFrom = *m;
-    } else if (auto cov = tryLayer(refPath, "coverage"); cov && cov->width() == ref.width() &&
-                                                         cov->height() == ref.height()) {
+    } else if (auto cov = tryLayer(refPath, "coverage");
+               cov && cov->width() == ref.width() && cov->height() == ref.height()) {
         mask = maskFromImage(*cov);
         maskFrom = refPath + " (coverage layer)";
     } else {
@@ -62,8 +62,8 @@ int runCompare(const std::vector<std::string>& argv) {
                 mask[i] = (luminance(ref.pixels()[i]) != 0.f || luminance(test.pixels()[i]) != 0.f);
         maskFrom = "non-black pixels";
     }
-    const ErrorReport r = compareImages(test, ref, refVar ? &*refVar : nullptr,
-                                        testVar ? &*testVar : nullptr, &mask);
+    const ErrorReport r =
+        compareImages(test, ref, refVar ? &*refVar : nullptr, testVar ? &*testVar : nullptr, &mask);
     std::printf("test: %s\nreference: %s\nmask: %s\nnoise floor from: %s\n", testPath.c_str(),
                 refPath.c_str(), maskFrom.c_str(),
                 refVar && testVar ? "variance layers of both images"

@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: MIT
 /// @file
 /// @brief `lucent-cli export`: fills a mesh's volume with a material preset and writes it as
-/// OpenVDB (docs/file-formats.md, "Material volumes (OpenVDB)").
+/// OpenVDB and/or Mitsuba 3 `.vol` grids + medium XML (docs/file-formats.md, "Material volumes
+/// (OpenVDB)" and its "Mitsuba 3 (.vol)" subsection).
 
 #include "CliArgs.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Timer.h>
+#include <lucent/io/MitsubaIO.h>
 #include <lucent/io/VdbIO.h>
 #include <lucent/material/MaterialVolume.h>
 #include <lucent/material/Presets.h>
@@ -36,8 +38,9 @@ TriangleMesh proceduralMesh(const std::string& name) {
 }
 
 int runExport(const std::vector<std::string>& argv) {
-    const Args args(argv, {"preset", "mesh", "procedural", "res", "scale", "o", "output"},
-                    {"no-renderer-grids"});
+    const Args args(argv,
+                    {"preset", "mesh", "procedural", "res", "scale", "o", "output", "mitsuba"},
+                    {"no-renderer-grids", "mitsuba-grey-sigma-t", "mitsuba-isotropic"});
     if (!args.positional().empty())
         LUCENT_THROW(ValueError, "unexpected argument '", args.positional().front(),
                      "' (see --help)");
@@ -46,8 +49,16 @@ int runExport(const std::vector<std::string>& argv) {
         LUCENT_THROW(ValueError, "--preset NAME is required (see --help)");
     const MaterialPreset& preset = findPreset(*presetName);
     const auto out = args.value("o") ? args.value("o") : args.value("output");
-    if (!out || out->empty())
-        LUCENT_THROW(ValueError, "-o FILE.vdb is required (see --help)");
+    const auto mitsuba = args.value("mitsuba");
+    if ((!out || out->empty()) && !mitsuba)
+        LUCENT_THROW(ValueError, "-o FILE.vdb or --mitsuba PREFIX is required (see --help)");
+    if (mitsuba && mitsuba->empty())
+        LUCENT_THROW(ValueError, "--mitsuba needs a non-empty PREFIX");
+    if (!mitsuba && (args.has("mitsuba-grey-sigma-t") || args.has("mitsuba-isotropic")))
+        LUCENT_THROW(ValueError,
+                     "--mitsuba-grey-sigma-t and --mitsuba-isotropic apply to --mitsuba only");
+    if (!out && args.has("no-renderer-grids"))
+        LUCENT_THROW(ValueError, "--no-renderer-grids applies to the .vdb output (-o) only");
     if (args.has("mesh") && args.has("procedural"))
         LUCENT_THROW(ValueError, "give either --mesh or --procedural, not both");
     const int res = args.intOr("res", GridSpec::DEFAULT_RESOLUTION, GridSpec::MIN_RESOLUTION,
@@ -78,17 +89,34 @@ int runExport(const std::vector<std::string>& argv) {
                      " (is it closed, and not too thin?)");
     volume.setInsideMask(inside);
 
-    VdbExportOptions options;
-    options.materialName = preset.name;
-    options.rendererGrids = !args.has("no-renderer-grids");
-    exportVdb(volume, *out, options);
+    if (out) {
+        VdbExportOptions options;
+        options.materialName = preset.name;
+        options.rendererGrids = !args.has("no-renderer-grids");
+        exportVdb(volume, *out, options);
 
-    std::error_code ec;
-    const auto bytes = std::filesystem::file_size(*out, ec);
-    std::printf(
-        "wrote %s: preset %s on %s, %d^3 voxels of %.4g mm, %zu inside, %llu bytes, %.0f ms\n",
-        out->c_str(), preset.name.c_str(), source.c_str(), res, double(spec.voxelSize), insideCount,
-        static_cast<unsigned long long>(ec ? 0 : bytes), timer.elapsedMs());
+        std::error_code ec;
+        const auto bytes = std::filesystem::file_size(*out, ec);
+        std::printf(
+            "wrote %s: preset %s on %s, %d^3 voxels of %.4g mm, %zu inside, %llu bytes, %.0f ms\n",
+            out->c_str(), preset.name.c_str(), source.c_str(), res, double(spec.voxelSize),
+            insideCount, static_cast<unsigned long long>(ec ? 0 : bytes), timer.elapsedMs());
+    }
+    if (mitsuba) {
+        Timer mitsubaTimer;
+        MitsubaExportOptions options;
+        options.materialName = preset.name;
+        options.rgbSigmaT = !args.has("mitsuba-grey-sigma-t");
+        options.hgMeanG = !args.has("mitsuba-isotropic");
+        const MitsubaExportResult r = exportMitsubaVol(volume, *mitsuba, options);
+        std::printf(
+            "wrote %s, %s, %s: Mitsuba 3 medium '%s', preset %s on %s, %d^3 voxels of "
+            "%.4g mm, %s sigma_t, phase %s g = %.4g, %.0f ms\n",
+            r.sigmaTPath.c_str(), r.albedoPath.c_str(), r.xmlPath.c_str(), options.mediumId.c_str(),
+            preset.name.c_str(), source.c_str(), res, double(spec.voxelSize),
+            options.rgbSigmaT ? "RGB" : "grey", options.hgMeanG ? "hg" : "isotropic",
+            double(r.meanG), mitsubaTimer.elapsedMs());
+    }
     return 0;
 }
 
@@ -96,9 +124,10 @@ int runExport(const std::vector<std::string>& argv) {
 
 extern const Command exportCommand;
 const Command exportCommand{
-    "export", "write a material preset filling a mesh as OpenVDB",
+    "export", "write a material preset filling a mesh as OpenVDB and/or Mitsuba 3 .vol",
     "usage: lucent-cli export --preset NAME [--mesh FILE [--scale S] | --procedural SHAPE]\n"
-    "                         [--res N] [--no-renderer-grids] -o OUT.vdb\n"
+    "                         [--res N] [--no-renderer-grids] [-o OUT.vdb]\n"
+    "                         [--mitsuba PREFIX [--mitsuba-grey-sigma-t] [--mitsuba-isotropic]]\n"
     "\n"
     "Fills the volume of a mesh with a material preset and writes an OpenVDB file with the\n"
     "grids sigma_t, sigma_s (REDUCED scattering), g (vec3s, 1/mm) and, unless\n"
@@ -112,7 +141,15 @@ const Command exportCommand{
     "                        thin-thick (20 mm)\n"
     "  --res N               voxels per axis, 16..256 (default 128)\n"
     "  --no-renderer-grids   write only sigma_t, sigma_s and g\n"
-    "  -o, --output FILE     output .vdb (written atomically)\n",
+    "  -o, --output FILE     output .vdb (written atomically)\n"
+    "  --mitsuba PREFIX      also (or instead) write Mitsuba 3 files PREFIX_sigma_t.vol,\n"
+    "                        PREFIX_albedo.vol (dense, 1/mm and 1) and PREFIX_medium.xml (a\n"
+    "                        heterogeneous medium with gridvolume textures, to_world in mm,\n"
+    "                        scale 1: the scene must be in mm). sigma_t/albedo are the medium\n"
+    "                        unreduced with the mean g, used as the HG phase parameter\n"
+    "  --mitsuba-grey-sigma-t  1-channel sigma_t (Rec.709 luminance) instead of RGB\n"
+    "  --mitsuba-isotropic   write the reduced medium with an isotropic phase instead\n"
+    "At least one of -o and --mitsuba is required.\n",
     &runExport};
 
 }  // namespace lucent::cli

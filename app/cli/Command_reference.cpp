@@ -19,7 +19,9 @@ namespace {
 
 std::atomic<bool> g_interrupted{false};
 
-extern "C" void onInterrupt(int) { g_interrupted = true; }
+extern "C" void onInterrupt(int) {
+    g_interrupted = true;
+}
 
 /// One-line terminal progress bar on stderr.
 void printProgress(const ReferenceProgress& p) {
@@ -27,31 +29,38 @@ void printProgress(const ReferenceProgress& p) {
     double frac = double(p.spp) / double(std::max(1, p.maxSpp));
     if (p.targetRse > 0.f && std::isfinite(p.rse) && p.rse > 0.f)
         // Error ∝ 1/√N: the fraction of the samples still needed is (rse/target)².
-        frac = std::max(frac, std::min(1.0, double(p.targetRse * p.targetRse) /
-                                                double(p.rse * p.rse)));
+        frac = std::max(frac,
+                        std::min(1.0, double(p.targetRse * p.targetRse) / double(p.rse * p.rse)));
     const int filled = int(frac * WIDTH + 0.5);
     char bar[WIDTH + 1];
-    for (int i = 0; i < WIDTH; ++i) bar[i] = i < filled ? '#' : '-';
+    for (int i = 0; i < WIDTH; ++i)
+        bar[i] = i < filled ? '#' : '-';
     bar[WIDTH] = 0;
     std::fprintf(stderr, "\r[%s] %6d spp  RSE %.4f", bar, p.spp, double(p.rse));
-    if (p.targetRse > 0.f) std::fprintf(stderr, " (target %.4f)", double(p.targetRse));
+    if (p.targetRse > 0.f)
+        std::fprintf(stderr, " (target %.4f)", double(p.targetRse));
     std::fprintf(stderr, "  %.1f s ", p.elapsedMs * 1e-3);
     std::fflush(stderr);
 }
 
 BoundaryModel parseBoundary(const std::string& s) {
-    if (s == "matched") return BoundaryModel::Matched;
-    if (s == "dielectric") return BoundaryModel::Dielectric;
+    if (s == "matched")
+        return BoundaryModel::Matched;
+    if (s == "dielectric")
+        return BoundaryModel::Dielectric;
     LUCENT_THROW(ValueError, "--boundary: expected 'matched' or 'dielectric', got '", s, "'");
 }
 
 int runReference(const std::vector<std::string>& argv) {
-    const Args args(argv, {"spp", "rse", "o", "output", "seed", "threads", "boundary", "max-scatter"},
-                    {"subsurface-only", "no-bricks", "quiet"});
+    const Args args(argv,
+                    {"spp", "rse", "o", "output", "seed", "threads", "boundary", "max-scatter",
+                     "majorant", "width", "height"},
+                    {"subsurface-only", "per-channel", "quiet"});
     if (args.positional().size() != 1)
         LUCENT_THROW(ValueError, "expected exactly one SCENE.json (see --help)");
     const std::string out = args.value("o").value_or(args.valueOr("output", ""));
-    if (out.empty()) LUCENT_THROW(ValueError, "missing -o OUT.exr");
+    if (out.empty())
+        LUCENT_THROW(ValueError, "missing -o OUT.exr");
     if (!args.has("spp") && !args.has("rse"))
         LUCENT_THROW(ValueError, "give --spp N or --rse R (or both: R with N as the cap)");
 
@@ -62,21 +71,35 @@ int runReference(const std::vector<std::string>& argv) {
     try {
         size_t used = 0;
         opt.seed = std::stoull(seed, &used);
-        if (used != seed.size()) throw std::invalid_argument(seed);
+        if (used != seed.size())
+            throw std::invalid_argument(seed);
     } catch (const std::exception&) {
         LUCENT_THROW(ValueError, "--seed: expected a non-negative integer, got '", seed, "'");
     }
     opt.threads = args.intOr("threads", 0, 0, 1024);
     opt.boundary = parseBoundary(args.valueOr("boundary", "dielectric"));
     opt.subsurfaceOnly = args.has("subsurface-only");
-    opt.majorant = args.has("no-bricks") ? MajorantMode::Global : MajorantMode::Bricks;
+    const std::string majorant = args.valueOr("majorant", "auto");
+    if (majorant == "auto")
+        opt.majorant = MajorantMode::Auto;
+    else if (majorant == "bricks")
+        opt.majorant = MajorantMode::Bricks;
+    else if (majorant == "global")
+        opt.majorant = MajorantMode::Global;
+    else
+        LUCENT_THROW(ValueError, "--majorant: expected auto, bricks or global, got '", majorant,
+                     "'");
+    opt.spectralMis = !args.has("per-channel");
     opt.maxScatter = args.intOr("max-scatter", 1 << 20, 1, 1 << 30);
     const bool quiet = args.has("quiet");
-    if (!quiet) opt.progress = printProgress;
+    if (!quiet)
+        opt.progress = printProgress;
     g_interrupted = false;
     opt.cancel = &g_interrupted;
 
-    const Scene scene = loadScene(args.positional().front());
+    Scene scene = loadScene(args.positional().front());
+    scene.camera.width = args.intOr("width", scene.camera.width, 1, 16384);
+    scene.camera.height = args.intOr("height", scene.camera.height, 1, 16384);
     auto previous = std::signal(SIGINT, onInterrupt);
     ReferenceImage img;
     try {
@@ -86,8 +109,10 @@ int runReference(const std::vector<std::string>& argv) {
         throw;
     }
     std::signal(SIGINT, previous);
-    if (!quiet) std::fputc('\n', stderr);
-    if (img.spp == 0) LUCENT_THROW(Cancelled, "interrupted before the first pass finished");
+    if (!quiet)
+        std::fputc('\n', stderr);
+    if (img.spp == 0)
+        LUCENT_THROW(Cancelled, "interrupted before the first pass finished");
     writeReferenceExr(img, out);
     std::printf("%s: %dx%d, %d spp, RSE %.4f, %.2f s, %.3g paths/s%s\n", out.c_str(),
                 img.mean.width(), img.mean.height(), img.spp, double(img.rse), img.seconds,
@@ -120,7 +145,7 @@ const Command referenceCommand{
     "usage: lucent-cli reference SCENE.json (--spp N | --rse R) -o OUT.exr [options]\n"
     "\n"
     "Volumetric path tracing of the painted material inside the mesh (null-collision tracking,\n"
-    "per-brick majorants, HG phase, per-channel stratified sampling; docs/reference.md).\n"
+    "per-brick majorants, HG phase, hero-channel spectral MIS; docs/reference.md).\n"
     "Writes linear RGB radiance with the layers 'variance' (per-pixel variance of the mean)\n"
     "and 'coverage' (1 where the object covers the pixel centre). Ctrl-C stops after the\n"
     "current tiles and writes the passes completed.\n"
@@ -128,11 +153,13 @@ const Command referenceCommand{
     "  --spp N            samples per pixel (≥ 3; with --rse: the cap, default 65536)\n"
     "  --rse R            stop when the image relative standard error is ≤ R (e.g. 0.01)\n"
     "  -o, --output FILE  output EXR\n"
+    "  --width, --height  override the scene camera's image size (pixels)\n"
     "  --seed S           random seed (default 1); same seed and spp → same image\n"
     "  --threads T        worker threads (default: all)\n"
     "  --boundary B       'dielectric' (default: Fresnel, η from the scene) or 'matched' (η = 1)\n"
     "  --subsurface-only  drop the direct Fresnel surface reflection\n"
-    "  --no-bricks        one global majorant instead of per-brick majorants (for timing)\n"
+    "  --majorant M       auto (default), bricks (per-brick majorants + DDA) or global\n"
+    "  --per-channel      trace one channel per sample instead of hero-channel spectral MIS\n"
     "  --max-scatter K    cut paths after K scattering events (default 1048576)\n"
     "  --quiet            no progress bar\n",
     &runReference};

@@ -105,6 +105,16 @@ ImageRgb renderDirpole(const RenderRequest& req) {
 }
 #endif
 
+#ifdef LUCENT_CLI_HAS_BENCH
+}  // namespace
+/// Defined in Command_bench.cpp: SSLPV on the CPU (--grid, --steps, --sh).
+ImageRgb renderSslpvMethod(const Scene& scene, bool subsurfaceOnly, const Args& args);
+namespace {
+ImageRgb renderSslpvCpu(const RenderRequest& req) {
+    return renderSslpvMethod(req.scene, req.subsurfaceOnly, req.args);
+}
+#endif
+
 struct RenderMethod {
     const char* name;
     const char* summary;
@@ -127,6 +137,10 @@ const RenderMethod METHODS[] = {
     {"dirpole", "CPU directional dipole pipeline (Frisvad 2014; directional lights; --spp)",
      &renderDirpole},
 #endif
+#ifdef LUCENT_CLI_HAS_BENCH
+    {"sslpv", "CPU subsurface light propagation volumes (Borlum 2011; --grid, --steps, --sh)",
+     &renderSslpvCpu},
+#endif
 };
 
 const RenderMethod& findMethod(const std::string& name) {
@@ -147,7 +161,8 @@ bool endsWith(const std::string& s, const std::string& suffix) {
 int runRender(const std::vector<std::string>& argv) {
     const Args args(argv,
                     {"method", "o", "output", "width", "height", "exposure", "tonemap", "spp",
-                     "seed", "threads", "boundary"},
+                     "seed", "threads", "boundary", "grid", "steps", "sh",
+                     "attenuation"},
                     {"subsurface-only"});
     if (args.positional().size() != 1)
         LUCENT_THROW(ValueError, "expected exactly one SCENE.json (see --help)");
@@ -200,6 +215,9 @@ const Command renderCommand{
     "                     --threads T, --boundary matched|dielectric (docs/reference.md)\n"
     "                     dipole, better-dipole, dirpole: CPU dipole family, subsurface term\n"
     "                     only, --spp N (32), --seed S (docs/methods/dipole.md)\n"
+    "                     sslpv: CPU SSLPV with --grid N (32), --steps K (32), --sh 1|2,\n"
+    "                     --attenuation absorption|extinction (absorption)\n"
+    "                     (docs/methods/sslpv.md)\n"
     "  -o, --output FILE  .exr: linear radiance W/(mm^2 sr), 32-bit float;\n"
     "                     .png: 8-bit sRGB after --exposure and --tonemap (default aces)\n"
     "  --width, --height  override the scene camera's image size (pixels)\n"

@@ -150,7 +150,7 @@ namespace {
 
 /// `bench_dipole --reference-error`: radiance of the centre of a lit slab face, image-space
 /// dipole / better dipole vs the reference path tracer (subsurface only, dielectric boundary).
-int referenceError() {
+int referenceError(float eta) {
     // Jensen 2001 skin1 (mm⁻¹), g = 0 so σs = σs′; 60×60×20 mm box, face at z = 10 mm.
     MaterialSample m;
     m.sigma_s = Rgb(0.74f, 0.88f, 1.01f);
@@ -167,7 +167,7 @@ int referenceError() {
     s.lights.push_back(l);
     s.camera.position = {0.f, 0.f, 80.f};
     s.camera.orthographic = true;
-    s.eta = 1.3f;
+    s.eta = eta;
     // Reference: 8×8 pixels over the central 0.8 mm.
     Scene ref = s;
     ref.camera.orthoHeight = 0.8f;
@@ -208,11 +208,11 @@ int referenceError() {
     }
     // Directional dipole at normal incidence, semi-infinite plane: L = T₂₁ · ρ_dir... via its
     // exitance: B = F_t(1) ∫ R dA, L = F_t(1) B/π (the profile folds in 1/(4C_φ(1/η))).
-    const double ft = 1.0 - fresnelReflectance(1.0, 1.3);
+    const double ft = 1.0 - fresnelReflectance(1.0, eta);
     Rgb dir;
     for (int c = 0; c < 3; ++c) {
         const double rho =
-            totalReflectance(Model::Directional, fromReduced(m.sigma_t[c], m.sigma_s[c], 1.3f));
+            totalReflectance(Model::Directional, fromReduced(m.sigma_t[c], m.sigma_s[c], eta));
         dir[c] = float(ft * ft * rho / 3.14159265358979323846);
     }
     std::printf(
@@ -227,8 +227,13 @@ int referenceError() {
 
 int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i)
-        if (std::string(argv[i]) == "--reference-error")
-            return referenceError();
+        if (std::string(argv[i]) == "--reference-error") {
+            for (float eta : {1.0f, 1.3f}) {
+                std::printf("eta = %.2f\n", double(eta));
+                referenceError(eta);
+            }
+            return 0;
+        }
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv))
         return 1;

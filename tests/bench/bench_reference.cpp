@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
 /// @file
 /// @brief Reference path tracer throughput: camera paths per second and the time to reach 1 %
-/// relative standard error, on homogeneous spheres (marble, skin1) and the default scene (a
-/// thin-and-thick back-lit shape with heterogeneous paint), with and without majorant bricks,
+/// relative standard error, on homogeneous spheres (marble, skin1), the default scene (a
+/// thin-and-thick back-lit shape with heterogeneous paint) and a sparse sphere (thin haze
+/// around a dense core, "cored"), with and without majorant bricks,
 /// on 1 and 2 threads. After the runs a table prints each figure as a ratio against its
 /// baseline measured in the same run (global majorant for bricks; 1 thread for 2 threads).
 ///
@@ -20,6 +21,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
+#include <ctime>
 #include <map>
 #include <memory>
 #include <string>
@@ -52,6 +54,25 @@ Scene sphereScene(const std::string& preset) {
     return scene;
 }
 
+/// Sparse medium: a thin haze filling a 10 mm sphere around a dense marble core (r = 4 mm),
+/// where per-brick majorants can skip most null collisions.
+Scene coredScene() {
+    Scene scene = sphereScene("marble");
+    MaterialVolume& vol = *scene.objects.front().material;
+    MaterialSample haze;
+    haze.sigma_s = Rgb(0.02f);
+    haze.sigma_t = Rgb(0.025f);
+    const MaterialSample core = findPreset("marble").sample();
+    const GridSpec& spec = vol.spec();
+    for (int z = 0; z < spec.resolution; ++z)
+        for (int y = 0; y < spec.resolution; ++y)
+            for (int x = 0; x < spec.resolution; ++x) {
+                const Coord c(x, y, z);
+                vol.set(c, glm::length(spec.cellCenter(c)) < 4.f ? core : haze);
+            }
+    return scene;
+}
+
 Scene defaultScene() {
     Scene scene = makeDefaultScene();
     const float aspect = float(scene.camera.width) / float(scene.camera.height);
@@ -63,79 +84,128 @@ Scene defaultScene() {
 const Scene& sceneNamed(const std::string& name) {
     static std::map<std::string, std::unique_ptr<Scene>> cache;
     auto& s = cache[name];
-    if (!s) s = std::make_unique<Scene>(name == "default" ? defaultScene() : sphereScene(name));
+    if (!s)
+        s = std::make_unique<Scene>(name == "default" ? defaultScene()
+                                    : name == "cored" ? coredScene()
+                                                      : sphereScene(name));
     return *s;
 }
 
 struct Result {
     double pathsPerSecond = 0, secondsTo1Percent = 0, rse = 0;
+    double cpuTo1Percent = 0;   ///< process CPU seconds to 1 % RSE (robust on a shared machine)
+    double lookupsPerPath = 0;  ///< σt lookups per camera path (deterministic work measure)
 };
 std::map<std::string, Result> g_results;
 
-std::string key(const std::string& scene, bool bricks, int threads) {
-    return scene + (bricks ? "/bricks" : "/global") + "/threads:" + std::to_string(threads);
+enum class Variant { Bricks, Global, Auto, PerChannel };
+const char* variantName(Variant v) {
+    switch (v) {
+        case Variant::Bricks:
+            return "bricks";
+        case Variant::Global:
+            return "global";
+        case Variant::Auto:
+            return "auto";
+        case Variant::PerChannel:
+            return "auto-per-channel";
+    }
+    return "?";
 }
 
-void runReference(benchmark::State& state, const std::string& scene, bool bricks, int threads) {
+std::string key(const std::string& scene, Variant v, int threads) {
+    return scene + "/" + variantName(v) + "/threads:" + std::to_string(threads);
+}
+
+void runReference(benchmark::State& state, const std::string& scene, Variant v, int threads) {
     ReferenceOptions opt;
     opt.spp = SPP;
     opt.threads = threads;
-    opt.majorant = bricks ? MajorantMode::Bricks : MajorantMode::Global;
+    opt.majorant = v == Variant::Bricks   ? MajorantMode::Bricks
+                   : v == Variant::Global ? MajorantMode::Global
+                                          : MajorantMode::Auto;
+    opt.spectralMis = v != Variant::PerChannel;
     const Scene& s = sceneNamed(scene);
     ReferenceImage img;
     double seconds = 0;
     uint64_t paths = 0;
+    double cpu = 0;
     for (auto _ : state) {
+        const std::clock_t c0 = std::clock();
         img = renderReference(s, opt);
+        cpu += double(std::clock() - c0) / CLOCKS_PER_SEC;
         seconds += img.seconds;
         paths += img.paths;
     }
     Result r;
     r.pathsPerSecond = double(paths) / seconds;
     r.rse = img.rse;
+    // 1/√N law: RSE²·time is constant, so t(1 %) = t·(RSE/0.01)².
     r.secondsTo1Percent = img.seconds * double(img.rse / 0.01f) * double(img.rse / 0.01f);
-    g_results[key(scene, bricks, threads)] = r;
+    r.cpuTo1Percent = cpu * double(img.rse / 0.01f) * double(img.rse / 0.01f);
+    r.lookupsPerPath = double(img.tentativeCollisions) / double(img.paths);
+    g_results[key(scene, v, threads)] = r;
     state.counters["paths/s"] = r.pathsPerSecond;
     state.counters["RSE"] = r.rse;
     state.counters["s_to_1%RSE"] = r.secondsTo1Percent;
 }
 
+/// Speed-up of run a over baseline b: ratio of their times to 1 % RSE (CPU time, or wall time
+/// for thread scaling).
+std::string ratio(const std::string& a, const std::string& b, bool wall = false) {
+    const auto ia = g_results.find(a), ib = g_results.find(b);
+    if (ia == g_results.end() || ib == g_results.end())
+        return "-";
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.2fx",
+                  wall ? ib->second.secondsTo1Percent / ia->second.secondsTo1Percent
+                       : ib->second.cpuTo1Percent / ia->second.cpuTo1Percent);
+    return buf;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    for (const char* scene : {"marble", "skin1", "default"})
-        for (bool bricks : {true, false})
+    for (const char* scene : {"marble", "skin1", "default", "cored"}) {
+        for (Variant v : {Variant::Bricks, Variant::Global})
             for (int threads : {1, 2})
-                benchmark::RegisterBenchmark(key(scene, bricks, threads).c_str(),
-                                             [=](benchmark::State& st) {
-                                                 runReference(st, scene, bricks, threads);
-                                             })
+                benchmark::RegisterBenchmark(
+                    key(scene, v, threads).c_str(),
+                    [=](benchmark::State& st) { runReference(st, scene, v, threads); })
                     ->Iterations(1)
                     ->Unit(benchmark::kMillisecond);
+        for (Variant v : {Variant::Auto, Variant::PerChannel})
+            benchmark::RegisterBenchmark(
+                key(scene, v, 1).c_str(),
+                [=](benchmark::State& st) { runReference(st, scene, v, 1); })
+                ->Iterations(1)
+                ->Unit(benchmark::kMillisecond);
+    }
     benchmark::Initialize(&argc, argv);
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
 
-    std::printf("\n%-34s %12s %12s %10s %14s %14s\n", "run", "paths/s", "t(1% RSE) s", "RSE",
-                "vs global", "vs 1 thread");
+    // Speed-ups: baseline time to 1 % RSE / this run's (work for equal quality).
+    std::printf("\n%-34s %9s %10s %10s %7s %9s  %s\n", "run", "paths/s", "wall t(1%)", "CPU t(1%)",
+                "RSE", "σt/path", "speed-up (CPU time to 1 % RSE; threads: wall)");
     for (const auto& [name, r] : g_results) {
-        std::string vsGlobal = "-", vsOne = "-";
-        const auto pos = name.find("/bricks/");
-        if (pos != std::string::npos) {
-            std::string other = name;
-            other.replace(pos, 8, "/global/");
-            if (auto it = g_results.find(other); it != g_results.end())
-                vsGlobal = std::to_string(r.pathsPerSecond / it->second.pathsPerSecond) + "x";
+        std::string vs;
+        const std::string scene = name.substr(0, name.find('/'));
+        if (name.find("/bricks/") != std::string::npos) {
+            const std::string t = name.substr(name.rfind(':') + 1);
+            vs = "vs global: " + ratio(name, key(scene, Variant::Global, std::stoi(t)));
         }
-        const auto tpos = name.find("threads:2");
-        if (tpos != std::string::npos) {
-            std::string other = name;
-            other.replace(tpos, 9, "threads:1");
-            if (auto it = g_results.find(other); it != g_results.end())
-                vsOne = std::to_string(r.pathsPerSecond / it->second.pathsPerSecond) + "x";
+        if (name.find("threads:2") != std::string::npos) {
+            std::string one = name;
+            one.replace(one.size() - 1, 1, "1");
+            vs += (vs.empty() ? "" : ", ") + std::string("vs 1 thread: ") +
+                  ratio(name, one, /*wall=*/true);
         }
-        std::printf("%-34s %12.4g %12.4g %10.4f %14s %14s\n", name.c_str(), r.pathsPerSecond,
-                    r.secondsTo1Percent, r.rse, vsGlobal.c_str(), vsOne.c_str());
+        if (name.find("/auto/") != std::string::npos)
+            vs = "vs global: " + ratio(name, key(scene, Variant::Global, 1)) +
+                 ", vs per-channel: " + ratio(name, key(scene, Variant::PerChannel, 1));
+        std::printf("%-34s %9.4g %10.4g %10.4g %7.4f %9.4g  %s\n", name.c_str(), r.pathsPerSecond,
+                    r.secondsTo1Percent, r.cpuTo1Percent, r.rse, r.lookupsPerPath, vs.c_str());
     }
     return 0;
 }

@@ -11,13 +11,13 @@
 namespace lucent {
 
 namespace {
-constexpr double LUMA[3] = {0.2126, 0.7152, 0.0722};  // Rec. 709, as luminance() in Types.h
+constexpr double LUMA[3] = {0.2126, 0.7152, 0.0722};       // Rec. 709, as luminance() in Types.h
 constexpr double SQRT_2_OVER_PI = 0.79788456080286535588;  // E|X|/σ for a zero-mean normal
 
 void checkSize(const ImageRgb& img, const ImageRgb& ref, const char* what) {
     LUCENT_CHECK(img.width() == ref.width() && img.height() == ref.height(), "compare: ", what,
-                 " is ", img.width(), "×", img.height(), " but the reference is ", ref.width(),
-                 "×", ref.height());
+                 " is ", img.width(), "×", img.height(), " but the reference is ", ref.width(), "×",
+                 ref.height());
 }
 }  // namespace
 
@@ -26,8 +26,10 @@ ErrorReport compareImages(const ImageRgb& test, const ImageRgb& reference,
                           const std::vector<uint8_t>* mask) {
     LUCENT_CHECK(!reference.isEmpty(), "compare: the reference image is empty");
     checkSize(test, reference, "the test image");
-    if (referenceVariance) checkSize(*referenceVariance, reference, "the reference variance");
-    if (testVariance) checkSize(*testVariance, reference, "the test variance");
+    if (referenceVariance)
+        checkSize(*referenceVariance, reference, "the reference variance");
+    if (testVariance)
+        checkSize(*testVariance, reference, "the test variance");
     const size_t n = reference.pixels().size();
     if (mask)
         LUCENT_CHECK(mask->size() == n, "compare: the mask has ", mask->size(),
@@ -40,7 +42,8 @@ ErrorReport compareImages(const ImageRgb& test, const ImageRgb& reference,
     std::vector<Px> px;
     px.reserve(n);
     for (size_t i = 0; i < n; ++i) {
-        if (mask && !(*mask)[i]) continue;
+        if (mask && !(*mask)[i])
+            continue;
         const Rgb& a = test.pixels()[i];
         const Rgb& b = reference.pixels()[i];
         LUCENT_CHECK(isFinite(a) && isFinite(b), "compare: non-finite value at pixel (",
@@ -50,8 +53,10 @@ ErrorReport compareImages(const ImageRgb& test, const ImageRgb& reference,
             p.a[c] = a[c];
             p.b[c] = b[c];
             double v = 0.0;
-            if (referenceVariance) v += std::max(0.f, referenceVariance->pixels()[i][c]);
-            if (testVariance) v += std::max(0.f, testVariance->pixels()[i][c]);
+            if (referenceVariance)
+                v += std::max(0.f, referenceVariance->pixels()[i][c]);
+            if (testVariance)
+                v += std::max(0.f, testVariance->pixels()[i][c]);
             p.v[c] = v;
             p.a[3] += LUMA[c] * a[c];
             p.b[3] += LUMA[c] * b[c];
@@ -68,7 +73,8 @@ ErrorReport compareImages(const ImageRgb& test, const ImageRgb& reference,
     for (int c = 0; c < 4; ++c) {
         ChannelError& e = r.channels[size_t(c)];
         double sumB = 0;
-        for (const Px& p : px) sumB += p.b[c];
+        for (const Px& p : px)
+            sumB += p.b[c];
         e.meanReference = sumB / count;
         const double eps = 1e-3 * std::abs(e.meanReference);
         double se = 0, rel = 0, sv = 0, relFloor = 0;

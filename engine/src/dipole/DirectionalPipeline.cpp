@@ -34,8 +34,6 @@ DirectionalDipoleRenderer::DirectionalDipoleRenderer(const Scene& scene,
     : m_impl(std::make_unique<Impl>()) {
     LUCENT_CHECK(s.samplesPerPass >= 1 && s.samplesPerPass <= 65536,
                  "DirectionalSettings.samplesPerPass must be in [1, 65536]");
-    LUCENT_CHECK(s.discQuantile > 0.f && s.discQuantile < 1.f,
-                 "DirectionalSettings.discQuantile must be in (0, 1)");
     LUCENT_CHECK(s.shrink >= 0.f && std::isfinite(s.shrink),
                  "DirectionalSettings.shrink must be >= 0 mm");
     for (const Light& l : scene.lights)
@@ -75,7 +73,9 @@ void DirectionalDipoleRenderer::addPass() {
         MaterialSample lastMat;
         bool haveMat = false;
         std::array<DirectionalDipole, 3> dd;
-        double R = 0.0;
+        std::array<DipoleSampler, 3> samplers;
+        std::array<int, 3> channels{};
+        int channelCount = 0;
         for (int y = int(y0); y < int(y1); ++y)
             for (int x = 0; x < buf.width; ++x) {
                 const size_t idx = buf.index(x, y);
@@ -83,46 +83,60 @@ void DirectionalDipoleRenderer::addPass() {
                     continue;
                 const MaterialSample& mat = buf.material[idx];
                 if (!haveMat || !(mat == lastMat)) {
-                    R = 0.0;
+                    channelCount = 0;
                     for (int c = 0; c < 3; ++c) {
                         const ScalarMedium med = fromReduced(mat.sigma_t[c], mat.sigma_s[c], eta);
                         dd[size_t(c)] = DirectionalDipole(med.sigma_a, med.sigma_s, med.eta);
-                        // Disc radius from the better dipole (same D and σ_tr as the directional
-                        // one).
-                        const DipoleProfile bp =
-                            DipoleProfile::make(Model::BetterDipole, med.sigma_a, med.sigma_s, bd);
-                        if (bp.zr() > 0.0)
-                            R = std::max(R, sampleSourceRadius(bp.sigmaTr(), bp.zv(),
-                                                               m.settings.discQuantile));
+                        // Importance function: the better dipole's exact sampler (same D and
+                        // σ_tr as the directional dipole), seed 004 §4.
+                        samplers[size_t(c)] = DipoleSampler(
+                            DipoleProfile::make(Model::BetterDipole, med.sigma_a, med.sigma_s, bd));
+                        if (samplers[size_t(c)].isValid() && !dd[size_t(c)].isZero())
+                            channels[size_t(channelCount++)] = c;
                     }
                     lastMat = mat;
                     haveMat = true;
                 }
-                if (!(R > 0.0))
+                if (channelCount == 0)
                     continue;
+                std::array<int, 3> nChan{0, 0, 0};
+                for (int i = 0; i < k; ++i)
+                    ++nChan[size_t(channels[size_t(i % channelCount)])];
                 const Point3f xo = buf.position[idx];
                 const Normal3f no = glm::normalize(buf.normal[idx]);
                 const Vector3f toEye = buf.towardEye(xo);
                 const double cosO = std::max(0.0, double(glm::dot(no, toEye)));
                 const double t21 = 1.0 - fresnelReflectance(cosO, eta);  // T₂₁(ω_o)
-                // Per-pixel Cranley–Patterson offset of the R2 sequence (deterministic per seed).
+                // Per-pixel Cranley–Patterson offset of the R2 sequence (deterministic per seed)
+                // and a per-pixel, per-pass stream for the source choice.
                 Pcg32 rng(pixelSeed(uint32_t(x), uint32_t(y), 0, m.settings.seed));
                 const Point2f offset(rng.uniform(), rng.uniform());
+                Pcg32 sourceRng(pixelSeed(uint32_t(x), uint32_t(y), pass + 1, m.settings.seed));
                 glm::dvec3 L(0.0);
                 for (const Light& light : m.scene.lights) {
                     const Vector3f wl = glm::normalize(light.direction);  // direction light travels
                     // Seed 001 §4.3.1: shrink x_o towards the inside, across the light direction.
                     const Point3f xs = xo - m.settings.shrink * (no - (-wl) * glm::dot(-wl, no));
                     const Frame lf(wl);
-                    const double discArea = PI * R * R;
                     for (int i = 0; i < k; ++i) {
                         const Point2f u = r2Sequence(pass * uint32_t(k) + uint32_t(i), offset);
-                        const Point2f d = sampleConcentricDisc(u) * float(R);
-                        // Ray along the light direction through the disc point (light-view
-                        // G-buffer).
-                        const Point3f onDisc = xs + d.x * lf.s + d.y * lf.t;
-                        const Point3f origin = onDisc - wl * (2.f * m.sceneRadius +
-                                                              glm::length(onDisc - m.sceneCenter));
+                        const int ch = channels[size_t(i % channelCount)];
+                        const double r = samplers[size_t(ch)].sample(sourceRng.uniform(), u.x);
+                        const float phi = 2.f * PI * u.y;
+                        // Multi-sample balance heuristic over the channels' samplers:
+                        // weight/pdf = 1/Σ_c n_c p_c(r), p_c per unit light-plane area.
+                        double denom = 0.0;
+                        for (int c = 0; c < 3; ++c)
+                            if (nChan[size_t(c)] > 0)
+                                denom += nChan[size_t(c)] * samplers[size_t(c)].pdfArea(r);
+                        if (!(denom > 0.0))
+                            continue;
+                        // Ray along the light direction through the sample (light-view G-buffer).
+                        const Point3f onPlane =
+                            xs + float(r) * (std::cos(phi) * lf.s + std::sin(phi) * lf.t);
+                        const Point3f origin =
+                            onPlane -
+                            wl * (2.f * m.sceneRadius + glm::length(onPlane - m.sceneCenter));
                         const auto hit = m.boundary->intersect(origin, wl, 0.f, INF);
                         if (!hit)
                             continue;
@@ -140,9 +154,8 @@ void DirectionalDipoleRenderer::addPass() {
                             const double sd =
                                 dd[size_t(c)].Sd(glm::dvec3(xi), glm::dvec3(ni), glm::dvec3(w12),
                                                  glm::dvec3(xo), glm::dvec3(no));
-                            // L = ∫ E⊥ T₁₂ S_d dA⊥ (dA⊥ = cos θ_i dA: light-plane area), uniform
-                            // disc.
-                            L[c] += double(light.intensity[c]) * t12 * sd * discArea / k;
+                            // L = ∫ E⊥ T₁₂ S_d dA⊥ (dA⊥ = cos θ_i dA: light-plane area).
+                            L[c] += double(light.intensity[c]) * t12 * sd / denom;
                         }
                     }
                 }

@@ -213,6 +213,9 @@ GatherResult gatherImageSpace(const SurfaceBuffers& buf, const GatherSettings& g
                         const size_t j = buf.index(int(px.x), int(px.y));
                         if (!buf.covered[j])
                             return;
+                        const Rgb& E = buf.irradiance[j];
+                        if (E == Rgb(0.f))
+                            return;  // unlit (shadowed) sample: contributes exactly 0
                         // Reconstruct the surface point: the eye ray through p′ meets the fetched
                         // pixel's tangent plane (exact on planar regions; "location p_i on the
                         // surface from the depth texture", §6.2).
@@ -249,7 +252,6 @@ GatherResult gatherImageSpace(const SurfaceBuffers& buf, const GatherSettings& g
                                     nChan[size_t(c)] * pm.sampler[size_t(c)].pdfArea(rPlane);
                         if (!(denomPdf > 0.0))
                             return;
-                        const Rgb& E = buf.irradiance[j];
                         const double w = J / denomPdf;
                         for (int c = 0; c < 3; ++c)
                             B[c] += pm.profile[size_t(c)].Rd(r) * double(E[c]) * w;

@@ -74,7 +74,15 @@ SurfaceBuffers buildSurfaceBuffers(const Scene& scene, int objectIndex) {
                 buf.position[i] = p;
                 buf.normal[i] = n;
                 buf.covered[i] = 1;
-                buf.material[i] = volume.sample(p - inset * n);
+                // Material just inside the surface. Voxels cut by the surface may be masked out
+                // (their centre lies outside the mesh): step inwards, up to 3 voxels.
+                MaterialSample mat;
+                for (int step = 1; step <= 6; ++step) {
+                    mat = volume.sample(p - float(step) * inset * n);
+                    if (mat.sigma_t != Rgb(0.f))
+                        break;
+                }
+                buf.material[i] = mat;
                 Rgb e(0.f);
                 const Point3f origin = p + boundary.offsetAt(p) * n;
                 for (const Light& light : scene.lights) {

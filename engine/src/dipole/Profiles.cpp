@@ -252,7 +252,7 @@ DirectionalDipole::DirectionalDipole(double sigma_a, double sigma_s, double eta)
     m_A = (1.0 - m_cE) / (2.0 * m_cPhi);
     // External moments: C_φ(1/η) from light arriving from outside (relative index 1/η).
     m_cPhiInvEta = 0.25 * (1.0 - 2.0 * fresnelMoment(1, 1.0 / eta));
-    // Extrapolation distance of the modified tangent plane: d_e = 2.131 D/√α′.
+    // Extrapolation distance of the modified tangent plane: d_e = 2.131 D/√α′ (paper Eq. 21).
     m_de = 2.131 * m_D / std::sqrt(alphaP);
     // Exitance → radiance factor 1/(4C_φ(1/η)) and the 1/(4π²) of S′_d.
     m_norm = 1.0 / (4.0 * m_cPhiInvEta) / (4.0 * PI_D * PI_D);
@@ -303,7 +303,8 @@ double DirectionalDipole::Sd(const glm::dvec3& xi, const glm::dvec3& ni, const g
     }
     const double dr = std::sqrt(dr2);
     const double value = sdPrime(x, w12, dr, no) - sdPrime(xo - xv, wv, dv, no);
-    // The dipole difference can dip below zero in extreme geometry; radiance cannot: clamp.
+    // The dipole difference can dip below zero in extreme geometry; radiance cannot: clamp
+    // (paper §6.1).
     return std::isfinite(value) ? std::max(0.0, value) : 0.0;
 }
 

@@ -102,7 +102,7 @@ struct SceneRenderer::Impl {
     int width = 0;
     int height = 0;
     GlObject gPosition, gNormal, gDepth, gFbo;
-    GlObject subsurface;
+    GlObject subsurface, subsurfaceFbo;
     GlObject radiance, radianceFbo;
     GlObject display, displayFbo;
     bool displayValid = false;
@@ -198,13 +198,17 @@ struct SceneRenderer::Impl {
         const GLenum bufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
         glNamedFramebufferDrawBuffers(gFbo.id(), 2, bufs);
         subsurface = createTexture2D(GL_RGBA32F, width, height);
+        // Cleared through a framebuffer: glClearTexImage maps the texture on some drivers
+        // (llvmpipe), which stalls until all queued work has run.
+        subsurfaceFbo = GlObject::create(GlObjectKind::Framebuffer);
+        glNamedFramebufferTexture(subsurfaceFbo.id(), GL_COLOR_ATTACHMENT0, subsurface.id(), 0);
         radiance = createTexture2D(GL_RGBA32F, width, height, /*linear=*/true);
         radianceFbo = GlObject::create(GlObjectKind::Framebuffer);
         glNamedFramebufferTexture(radianceFbo.id(), GL_COLOR_ATTACHMENT0, radiance.id(), 0);
         display = createTexture2D(GL_RGBA32F, width, height);
         displayFbo = GlObject::create(GlObjectKind::Framebuffer);
         glNamedFramebufferTexture(displayFbo.id(), GL_COLOR_ATTACHMENT0, display.id(), 0);
-        for (GLuint fbo : {gFbo.id(), radianceFbo.id(), displayFbo.id()})
+        for (GLuint fbo : {gFbo.id(), subsurfaceFbo.id(), radianceFbo.id(), displayFbo.id()})
             if (glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
                 LUCENT_THROW(GpuError, "SceneRenderer: incomplete framebuffer at ", width, "x",
                              height);
@@ -212,8 +216,8 @@ struct SceneRenderer::Impl {
     }
 
     void destroyTargets() {
-        for (GlObject* o : {&gPosition, &gNormal, &gDepth, &gFbo, &subsurface, &radiance,
-                            &radianceFbo, &display, &displayFbo})
+        for (GlObject* o : {&gPosition, &gNormal, &gDepth, &gFbo, &subsurface, &subsurfaceFbo,
+                            &radiance, &radianceFbo, &display, &displayFbo})
             o->destroy();
         width = height = 0;
     }
@@ -375,6 +379,16 @@ SceneRenderer::~SceneRenderer() = default;
 void SceneRenderer::create(const ShaderLibrary& library) {
     if (m->created)
         return;
+    try {
+        createPrograms(library);
+    } catch (...) {
+        destroy();  // free what was created before the failure
+        throw;
+    }
+    m->created = true;
+}
+
+void SceneRenderer::createPrograms(const ShaderLibrary& library) {
     m->gbufferProgram = GlProgram::graphics(library, "mesh_gbuffer.vert", "mesh_gbuffer.frag");
     m->shadowProgram = GlProgram::graphics(library, "shadow_depth.vert", "shadow_depth.frag");
     m->shadeProgram = GlProgram::graphics(library, "post_fullscreen.vert", "direct_shade.frag");
@@ -384,7 +398,6 @@ void SceneRenderer::create(const ShaderLibrary& library) {
     m->lightSsbo = createBuffer(MAX_LIGHTS * sizeof(sh::GpuLight), nullptr, GL_DYNAMIC_STORAGE_BIT);
     m->layerSsbo = createBuffer(MAX_SHADOW_LAYERS * sizeof(sh::GpuShadowLayer), nullptr,
                                 GL_DYNAMIC_STORAGE_BIT);
-    m->created = true;
 }
 
 void SceneRenderer::destroy() {
@@ -574,7 +587,7 @@ void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int
     {
         auto s = r.profiler.scope("subsurface");
         const float zero[4] = {0.f, 0.f, 0.f, 0.f};
-        glClearTexImage(r.subsurface.id(), 0, GL_RGBA, GL_FLOAT, zero);
+        glClearNamedFramebufferfv(r.subsurfaceFbo.id(), GL_COLOR, 0, zero);
         if (r.provider) {
             r.provider->renderSubsurface(gbufferView(), r.subsurface.id());
             glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
@@ -611,6 +624,12 @@ void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int
 namespace {
 ImageRgb readTexture(GLuint tex, int w, int h) {
     std::vector<float> rgba(size_t(w) * size_t(h) * 4);
+    // Default pack state, whatever another pass (or Qt) left: client memory, tight rows.
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    glPixelStorei(GL_PACK_ROW_LENGTH, 0);
+    glPixelStorei(GL_PACK_SKIP_ROWS, 0);
+    glPixelStorei(GL_PACK_SKIP_PIXELS, 0);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
     glGetTextureImage(tex, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)), rgba.data());
     ImageRgb img(w, h);
     for (int y = 0; y < h; ++y) {

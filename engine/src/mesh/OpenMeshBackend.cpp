@@ -16,6 +16,8 @@
 #include <OpenMesh/Tools/Smoother/JacobiLaplaceSmootherT.hh>
 #include <OpenMesh/Tools/Subdivider/Uniform/LoopT.hh>
 
+#include <cctype>
+#include <filesystem>
 #include <mutex>
 #include <sstream>
 
@@ -79,9 +81,18 @@ namespace detail {
 
 RawMesh readOpenMesh(const std::string& path) {
     OmMesh om;
-    om.request_vertex_normals();
     om.request_face_status();
-    OpenMesh::IO::Options opt = OpenMesh::IO::Options::VertexNormal;
+    OpenMesh::IO::Options opt;
+    // OBJ normals are per face corner (`f v//vn`), and OpenMesh 9's OBJ importer writes them
+    // out of bounds when a corrupt face refers to a missing vertex (heap corruption, found by
+    // fuzzing): for OBJ the normals are recomputed from the geometry instead.
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (auto& ch : ext)
+        ch = char(std::tolower(static_cast<unsigned char>(ch)));
+    if (ext != ".obj") {
+        om.request_vertex_normals();
+        opt += OpenMesh::IO::Options::VertexNormal;
+    }
     // OpenMesh's importer reports the faces it rejects only on its error stream: listen to it
     // (a process-wide stream, hence the lock) to count them.
     static std::mutex s_logMutex;
@@ -89,10 +100,16 @@ RawMesh readOpenMesh(const std::string& path) {
     bool ok = false;
     {
         const std::lock_guard<std::mutex> lock(s_logMutex);
-        ::omerr().connect(log);
+        // Disconnects even when the reader throws (a dangling stream would be written later).
+        struct Listen {
+            std::ostringstream& log;
+            explicit Listen(std::ostringstream& l) : log(l) { ::omerr().connect(log); }
+            ~Listen() {
+                ::omerr().flush();
+                ::omerr().disconnect(log);
+            }
+        } listen(log);
         ok = OpenMesh::IO::read_mesh(om, path, opt);
-        ::omerr().flush();
-        ::omerr().disconnect(log);
     }
     if (!ok)
         LUCENT_THROW(IoError, "mesh file '", path, "': cannot be parsed (unreadable or malformed)");
@@ -110,7 +127,7 @@ RawMesh readOpenMesh(const std::string& path) {
                      "coordinates)");
     RawMesh raw;
     raw.readerDroppedDegenerate = count("equal vertices");
-    raw.hasNormals = opt.check(OpenMesh::IO::Options::VertexNormal);
+    raw.hasNormals = om.has_vertex_normals() && opt.check(OpenMesh::IO::Options::VertexNormal);
     for (const auto f : om.faces())
         if (om.status(f).fixed_nonmanifold())
             ++raw.nonManifoldDetached;

@@ -66,6 +66,25 @@ Ptr<vtkPolyData> toVtk(const TriangleMesh& mesh) {
     return pd;
 }
 
+/// True when every cell of `pd` refers to existing points (VTK's filters do not check, and a
+/// corrupt file makes vtkTriangleFilter read out of bounds: found by fuzzing).
+bool cellsValid(vtkPolyData* pd) {
+    const vtkIdType np = pd->GetNumberOfPoints();
+    for (vtkCellArray* cells : {pd->GetVerts(), pd->GetLines(), pd->GetPolys(), pd->GetStrips()}) {
+        if (!cells)
+            continue;
+        if (!cells->IsValid())  // offsets monotone and within the connectivity array
+            return false;
+        auto ids = Ptr<vtkIdList>::New();
+        cells->InitTraversal();
+        while (cells->GetNextCell(ids))
+            for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k)
+                if (ids->GetId(k) < 0 || ids->GetId(k) >= np)
+                    return false;
+    }
+    return true;
+}
+
 /// Triangulates `input` and converts it; `hasNormals` tells whether point normals came along.
 TriangleMesh fromVtk(vtkPolyData* input, bool* hasNormals = nullptr) {
     auto tri = Ptr<vtkTriangleFilter>::New();
@@ -146,6 +165,8 @@ RawMesh readVtk(const std::string& path) {
             LUCENT_THROW(IoError, "mesh file '", path, "': VTK could not parse it");
         pd = reader->GetOutput();
     }
+    if (!pd->GetPoints() || !cellsValid(pd))
+        LUCENT_THROW(IoError, "mesh file '", path, "': cells refer to missing points (corrupt)");
     RawMesh raw;
     raw.mesh = fromVtk(pd, &raw.hasNormals);
     return raw;

@@ -35,8 +35,8 @@ GridMedium::GridMedium(const GridSpec& spec, const std::vector<MediumCoefficient
             m_sigmaT[c][i] = st;
             m_sigmaS[c][i] = std::min(ss, st);
             m_g[c][i] = g;
-            if (i > 0 && (st != m_sigmaT[c][0] || m_sigmaS[c][i] != m_sigmaS[c][0] ||
-                          g != m_g[c][0]))
+            if (i > 0 &&
+                (st != m_sigmaT[c][0] || m_sigmaS[c][i] != m_sigmaS[c][0] || g != m_g[c][0]))
                 same = false;
         }
     }
@@ -50,15 +50,40 @@ GridMedium GridMedium::uniform(const GridSpec& spec, const MediumCoefficients& v
 }
 
 void GridMedium::buildMajorants() {
+    if (m_options.majorant == MajorantMode::Auto) {
+        // Cost model: inside a brick of majorant σ̄b a global majorant σ̄g makes σ̄g/σ̄b times
+        // as many tentative collisions; the DDA costs about as much as a few of them per
+        // free flight (measured, docs/benchmarks.md). Keep the bricks when the mean of σ̄g/σ̄b
+        // over non-empty bricks is ≥ AUTO_BRICK_GAIN.
+        constexpr double AUTO_BRICK_GAIN = 4.0;
+        buildMajorants(MajorantMode::Bricks);
+        const float global = m_globalMajorant[ANY_CHANNEL];
+        double gain = 0.0;
+        size_t nonEmpty = 0;
+        for (size_t cell = 0; cell + 3 < m_majorant.size(); cell += 4) {
+            const float m = m_majorant[cell + ANY_CHANNEL];
+            if (m > 0.f) {
+                gain += double(global) / double(m);
+                ++nonEmpty;
+            }
+        }
+        if (nonEmpty == 0 || gain < AUTO_BRICK_GAIN * double(nonEmpty))
+            buildMajorants(MajorantMode::Global);
+        return;
+    }
+    buildMajorants(m_options.majorant);
+}
+
+void GridMedium::buildMajorants(MajorantMode mode) {
     const int r = m_spec.resolution;
-    if (m_options.majorant == MajorantMode::Global) {
+    if (mode == MajorantMode::Global) {
         m_cells = 1;
         m_cellSize = m_spec.voxelSize * float(r);
     } else {
         m_cells = (r + BRICK - 1) / BRICK;
         m_cellSize = m_spec.voxelSize * float(BRICK);
     }
-    const int per = m_options.majorant == MajorantMode::Global ? r : BRICK;
+    const int per = mode == MajorantMode::Global ? r : BRICK;
     m_majorant.assign(size_t(m_cells) * m_cells * m_cells * 4, 0.f);
     m_globalMajorant = {0.f, 0.f, 0.f, 0.f};
     for (int z = 0; z < r; ++z)

@@ -17,8 +17,10 @@ struct MeshBoundary::Impl {
     std::vector<Normal3f> faceNormals;  // outward unit normals (counter-clockwise winding)
 
     ~Impl() {
-        if (scene) rtcReleaseScene(scene);
-        if (device) rtcReleaseDevice(device);
+        if (scene)
+            rtcReleaseScene(scene);
+        if (device)
+            rtcReleaseDevice(device);
     }
 };
 
@@ -30,7 +32,8 @@ MeshBoundary::MeshBoundary(const TriangleMesh& mesh) : m_impl(std::make_unique<I
 
     Impl& im = *m_impl;
     im.device = rtcNewDevice(nullptr);
-    if (!im.device) LUCENT_THROW(Error, "MeshBoundary: Embree device creation failed");
+    if (!im.device)
+        LUCENT_THROW(Error, "MeshBoundary: Embree device creation failed");
     im.scene = rtcNewScene(im.device);
     // ROBUST: watertight traversal, no leaks through shared edges of closed meshes.
     rtcSetSceneFlags(im.scene, RTC_SCENE_FLAG_ROBUST);
@@ -45,17 +48,17 @@ MeshBoundary::MeshBoundary(const TriangleMesh& mesh) : m_impl(std::make_unique<I
         vb[3 * i + 1] = mesh.positions[i].y;
         vb[3 * i + 2] = mesh.positions[i].z;
     }
-    auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0,
-                                                              RTC_FORMAT_UINT3,
-                                                              3 * sizeof(uint32_t),
-                                                              mesh.triangles.size()));
+    auto* ib = static_cast<uint32_t*>(
+        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                3 * sizeof(uint32_t), mesh.triangles.size()));
     im.faceNormals.resize(mesh.triangles.size());
     const size_t nv = mesh.positions.size();
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
         const auto& tri = mesh.triangles[t];
         if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv) {
             rtcReleaseGeometry(geom);
-            LUCENT_THROW(ValueError, "MeshBoundary: triangle ", t, " has a vertex index out of range");
+            LUCENT_THROW(ValueError, "MeshBoundary: triangle ", t,
+                         " has a vertex index out of range");
         }
         ib[3 * t + 0] = tri[0];
         ib[3 * t + 1] = tri[1];
@@ -95,7 +98,8 @@ std::optional<SurfaceHit> MeshBoundary::intersect(const Point3f& o, const Vector
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(m_impl->scene, &context, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+        return std::nullopt;
     return SurfaceHit{rh.ray.tfar, m_impl->faceNormals[rh.hit.primID]};
 }
 

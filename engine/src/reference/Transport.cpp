@@ -27,7 +27,9 @@ constexpr float ROULETTE_WEIGHT = 0.5f;
 /// Ratio-tracking roulette threshold on the running transmittance.
 constexpr float RATIO_ROULETTE = 0.1f;
 
-Vector3f reflect(const Vector3f& d, const Normal3f& n) { return d - 2.f * glm::dot(d, n) * n; }
+Vector3f reflect(const Vector3f& d, const Normal3f& n) {
+    return d - 2.f * glm::dot(d, n) * n;
+}
 
 /// Refraction of unit `d` through a surface whose unit normal `n` faces the incident side,
 /// relative index eta = η_t/η_i (Snell's law, vector form: pbrt-v3 Eq. 8.8).
@@ -36,7 +38,8 @@ std::optional<Vector3f> refract(const Vector3f& d, const Normal3f& n, float eta)
     const float cosI = -glm::dot(d, n);
     const float inv = 1.f / eta;
     const float k = 1.f - inv * inv * (1.f - cosI * cosI);
-    if (k < 0.f) return std::nullopt;
+    if (k < 0.f)
+        return std::nullopt;
     return glm::normalize(inv * d + (inv * cosI - std::sqrt(k)) * n);
 }
 
@@ -46,11 +49,14 @@ float intersectSphere(const Point3f& o, const Vector3f& d, const Point3f& c, flo
     const float b = glm::dot(oc, d);
     const float cc = glm::dot(oc, oc) - r * r;
     const float disc = b * b - cc;
-    if (disc < 0.f) return INF;
+    if (disc < 0.f)
+        return INF;
     const float s = std::sqrt(disc);
     const float t0 = -b - s, t1 = -b + s;
-    if (t0 > 0.f) return t0;
-    if (t1 > 0.f) return t1;
+    if (t0 > 0.f)
+        return t0;
+    if (t1 > 0.f)
+        return t1;
     return INF;
 }
 
@@ -61,9 +67,11 @@ float exponentialStep(Pcg32& rng, float majorant) {
 
 /// Roulette on `weight`; returns false when the path is terminated.
 bool roulette(float& weight, Pcg32& rng) {
-    if (weight >= ROULETTE_WEIGHT) return true;
+    if (weight >= ROULETTE_WEIGHT)
+        return true;
     const float q = weight / ROULETTE_WEIGHT;
-    if (rng.uniform() >= q) return false;
+    if (rng.uniform() >= q)
+        return false;
     weight = ROULETTE_WEIGHT;
     return true;
 }
@@ -81,7 +89,8 @@ float directLighting(const VolumeScene& scene, const Point3f& x, const Vector3f&
             case Light::Type::Spot: {
                 const Vector3f toLight = light.position - x;
                 const float d2 = glm::dot(toLight, toLight);
-                if (!(d2 > 0.f)) continue;
+                if (!(d2 > 0.f))
+                    continue;
                 dist = std::sqrt(d2);
                 wi = toLight / dist;
                 // Radiant intensity I (W/sr) at distance r gives irradiance I/r² (inverse square).
@@ -97,7 +106,8 @@ float directLighting(const VolumeScene& scene, const Point3f& x, const Vector3f&
                 const Vector3f toC = light.position - x;
                 const float d2 = glm::dot(toC, toC);
                 const float r2 = light.radius * light.radius;
-                if (d2 <= r2) continue;
+                if (d2 <= r2)
+                    continue;
                 // Uniform sampling of the cone subtended by the sphere: pdf = 1/(2π(1 − cos θmax))
                 // (pbrt-v3 Sec. 14.2.3, Eq. 14.9 solid angle of a sphere).
                 const float cosMax = std::sqrt(std::max(0.f, 1.f - r2 / d2));
@@ -109,20 +119,23 @@ float directLighting(const VolumeScene& scene, const Point3f& x, const Vector3f&
                 wi = glm::normalize(
                     frame.toWorld({sinT * std::cos(phi), sinT * std::sin(phi), cosT}));
                 dist = intersectSphere(x, wi, light.position, light.radius);
-                if (!std::isfinite(dist)) dist = std::sqrt(d2);  // grazing rounding
+                if (!std::isfinite(dist))
+                    dist = std::sqrt(d2);  // grazing rounding
                 le = light.intensity[ch] * 2.f * PI * (1.f - cosMax);
                 break;
             }
             default:
                 continue;
         }
-        if (!(le > 0.f)) continue;
+        if (!(le > 0.f))
+            continue;
         // HG phase value for the angle between the path's travel direction and wi (the
         // light's travel direction −wi against −dirIn gives the same cosine).
         const float phase = hgPhase(g, glm::dot(dirIn, wi));
-        if (!(phase > 0.f)) continue;
-        const float tr = shadowTransmittance(scene, x, wi, dist, /*pInside=*/true, ch, rng,
-                                             options, stats);
+        if (!(phase > 0.f))
+            continue;
+        const float tr =
+            shadowTransmittance(scene, x, wi, dist, /*pInside=*/true, ch, rng, options, stats);
         sum += phase * tr * le;
     }
     return sum;
@@ -134,7 +147,8 @@ float fresnelDielectric(float cosI, float eta) {
     cosI = std::clamp(cosI, 0.f, 1.f);
     // Snell: sin θt = sin θi / η (η = η_t/η_i).
     const float sin2T = (1.f - cosI * cosI) / (eta * eta);
-    if (sin2T >= 1.f) return 1.f;  // total internal reflection
+    if (sin2T >= 1.f)
+        return 1.f;  // total internal reflection
     const float cosT = std::sqrt(1.f - sin2T);
     // Fresnel equations for s and p polarisation, divided through by η_i (pbrt-v3 Eq. 8.1–8.2).
     const float rs = (cosI - eta * cosT) / (cosI + eta * cosT);
@@ -148,7 +162,8 @@ VolumeScene::VolumeScene(const TriangleMesh& mesh, GridMedium medium, std::vecto
         const Light& l = m_lights[i];
         LUCENT_CHECK(isFinite(l.position) && isFinite(l.direction) && isFinite(l.intensity) &&
                          l.intensity.r >= 0.f && l.intensity.g >= 0.f && l.intensity.b >= 0.f,
-                     "lights[", i, "]: position, direction and intensity must be finite, "
+                     "lights[", i,
+                     "]: position, direction and intensity must be finite, "
                      "intensity ≥ 0");
         if (l.type == Light::Type::Directional)
             LUCENT_CHECK(glm::length(l.direction) > 0.f, "lights[", i,
@@ -159,19 +174,20 @@ VolumeScene::VolumeScene(const TriangleMesh& mesh, GridMedium medium, std::vecto
     }
 }
 
-std::optional<float> sampleFreeFlight(const GridMedium& medium, const Point3f& o,
-                                      const Vector3f& d, float tMax, int ch, Pcg32& rng,
-                                      TrackingStats* stats) {
+std::optional<float> sampleFreeFlight(const GridMedium& medium, const Point3f& o, const Vector3f& d,
+                                      float tMax, int ch, Pcg32& rng, TrackingStats* stats) {
     std::optional<float> result;
     const bool homogeneous = medium.isHomogeneous();
     uint64_t lookups = 0;
     medium.forEachMajorantSegment(o, d, 0.f, tMax, ch, [&](float t0, float t1, float majorant) {
-        if (!(majorant > 0.f)) return true;  // empty brick: skipped without a collision
+        if (!(majorant > 0.f))
+            return true;  // empty brick: skipped without a collision
         float t = t0;
         for (;;) {
             t += exponentialStep(rng, majorant);
-            if (!(t < t1)) return true;  // restart in the next segment (memorylessness)
-            if (homogeneous) {           // σt = σ̄ everywhere: every collision is real
+            if (!(t < t1))
+                return true;    // restart in the next segment (memorylessness)
+            if (homogeneous) {  // σt = σ̄ everywhere: every collision is real
                 result = t;
                 return false;
             }
@@ -186,7 +202,8 @@ std::optional<float> sampleFreeFlight(const GridMedium& medium, const Point3f& o
     });
     if (stats) {
         stats->tentativeCollisions += lookups;
-        if (result) ++stats->realCollisions;
+        if (result)
+            ++stats->realCollisions;
     }
     return result;
 }
@@ -197,7 +214,8 @@ float estimateTransmittance(const GridMedium& medium, const Point3f& o, const Ve
     const bool homogeneous = medium.isHomogeneous();
     uint64_t lookups = 0;
     medium.forEachMajorantSegment(o, d, 0.f, tMax, ch, [&](float t0, float t1, float majorant) {
-        if (!(majorant > 0.f)) return true;
+        if (!(majorant > 0.f))
+            return true;
         if (homogeneous) {  // Beer–Lambert in closed form: T = exp(−σt·ℓ)
             tr *= std::exp(-majorant * (t1 - t0));
             return true;
@@ -205,7 +223,8 @@ float estimateTransmittance(const GridMedium& medium, const Point3f& o, const Ve
         float t = t0;
         for (;;) {
             t += exponentialStep(rng, majorant);
-            if (!(t < t1)) return true;
+            if (!(t < t1))
+                return true;
             ++lookups;
             const float st = medium.sigmaT(o + d * t, ch);
             // Ratio tracking: T ×= 1 − σt/σ̄ per tentative collision (Novák 2014, Eq. 7).
@@ -222,7 +241,8 @@ float estimateTransmittance(const GridMedium& medium, const Point3f& o, const Ve
             }
         }
     });
-    if (stats) stats->tentativeCollisions += lookups;
+    if (stats)
+        stats->tentativeCollisions += lookups;
     return tr;
 }
 
@@ -238,17 +258,19 @@ WalkResult walkMedium(const VolumeScene& scene, const Point3f& p, const Vector3f
     int surfaceEvents = 0;
     while (surfaceEvents < MAX_SURFACE_EVENTS) {
         const std::optional<SurfaceHit> exit = boundary.intersect(pos, dir, 0.f, INF);
-        if (!exit) return r;  // numerically outside the closed mesh: lost
-        const std::optional<float> tc =
-            sampleFreeFlight(medium, pos, dir, exit->t, ch, rng, stats);
+        if (!exit)
+            return r;  // numerically outside the closed mesh: lost
+        const std::optional<float> tc = sampleFreeFlight(medium, pos, dir, exit->t, ch, rng, stats);
         if (tc) {
             const Point3f x = pos + dir * *tc;
             const float st = medium.sigmaT(x, ch);
             // Collision weight: single-scattering albedo σs/σt (analog absorption as weight).
             weight *= st > 0.f ? medium.sigmaS(x, ch) / st : 0.f;
             ++r.scatterCount;
-            if (!(weight > 0.f) || r.scatterCount > options.maxScatter) return r;
-            if (options.russianRoulette && !roulette(weight, rng)) return r;
+            if (!(weight > 0.f) || r.scatterCount > options.maxScatter)
+                return r;
+            if (options.russianRoulette && !roulette(weight, rng))
+                return r;
             dir = sampleHenyeyGreenstein(dir, medium.g(x, ch), {rng.uniform(), rng.uniform()});
             pos = x;
             continue;
@@ -295,8 +317,10 @@ float shadowTransmittance(const VolumeScene& scene, const Point3f& p, const Vect
     for (int crossing = 0; crossing < 256; ++crossing) {
         const std::optional<SurfaceHit> hit = boundary.intersect(pos, wi, 0.f, remaining);
         const float segEnd = hit ? hit->t : remaining;
-        if (inside) tr *= estimateTransmittance(scene.medium(), pos, wi, segEnd, ch, rng, stats);
-        if (!(tr > 0.f) || !hit) return tr;
+        if (inside)
+            tr *= estimateTransmittance(scene.medium(), pos, wi, segEnd, ch, rng, stats);
+        if (!(tr > 0.f) || !hit)
+            return tr;
         const Point3f x = pos + wi * hit->t;
         const float off = boundary.offsetAt(x);
         if (dielectric) {
@@ -308,7 +332,8 @@ float shadowTransmittance(const VolumeScene& scene, const Point3f& p, const Vect
         inside = !inside;
         pos = x + wi * off;
         remaining -= hit->t + off;
-        if (!(remaining > 0.f)) return tr;
+        if (!(remaining > 0.f))
+            return tr;
     }
     return tr;
 }
@@ -333,7 +358,8 @@ float estimateRadiance(const VolumeScene& scene, const Point3f& o, const Vector3
             // chains; after a scattering event they are reached by next-event estimation.
             float tLight = INF, le = 0.f;
             for (const Light& light : scene.lights()) {
-                if (light.type != Light::Type::Sphere) continue;
+                if (light.type != Light::Type::Sphere)
+                    continue;
                 const float t = intersectSphere(pos, dir, light.position, light.radius);
                 if (t < tLight) {
                     tLight = t;
@@ -341,10 +367,12 @@ float estimateRadiance(const VolumeScene& scene, const Point3f& o, const Vector3
                 }
             }
             if (tLight < tHit) {
-                if (specularChain) radiance += beta * le;
+                if (specularChain)
+                    radiance += beta * le;
                 break;
             }
-            if (!hit) break;  // black background
+            if (!hit)
+                break;  // black background
             ++surfaceEvents;
             const Point3f x = pos + dir * tHit;
             const Normal3f n = hit->normal;
@@ -368,7 +396,13 @@ float estimateRadiance(const VolumeScene& scene, const Point3f& o, const Vector3
                 continue;
             }
             const std::optional<Vector3f> t = refract(dir, n, options.eta);
-            if (!t) break;  // impossible entering a denser medium; rounding guard
+            if (!t)
+                break;  // impossible entering a denser medium; rounding guard
+            // Radiance is not symmetric under refraction: L_outside = T·L_inside/η²
+            // (Veach 1997 §5.2; pbrt-v3 §8.2.3), so a camera path entering the object
+            // carries 1/η². The straight shadow connections need no factor: for a point
+            // light the refracted fluence equals T·I/d² to first order in depth/d.
+            beta /= options.eta * options.eta;
             dir = *t;
             pos = x - n * off;
             inside = true;
@@ -379,17 +413,18 @@ float estimateRadiance(const VolumeScene& scene, const Point3f& o, const Vector3
             inside = false;  // numerically outside: continue as an outside ray
             continue;
         }
-        const std::optional<float> tc =
-            sampleFreeFlight(medium, pos, dir, exit->t, ch, rng, stats);
+        const std::optional<float> tc = sampleFreeFlight(medium, pos, dir, exit->t, ch, rng, stats);
         if (tc) {
             const Point3f x = pos + dir * *tc;
             const float st = medium.sigmaT(x, ch);
             beta *= st > 0.f ? medium.sigmaS(x, ch) / st : 0.f;
-            if (!(beta > 0.f) || ++scatterCount > options.maxScatter) break;
+            if (!(beta > 0.f) || ++scatterCount > options.maxScatter)
+                break;
             const float g = medium.g(x, ch);
             radiance += beta * directLighting(scene, x, dir, g, ch, rng, options, stats);
             specularChain = false;
-            if (options.russianRoulette && !roulette(beta, rng)) break;
+            if (options.russianRoulette && !roulette(beta, rng))
+                break;
             dir = sampleHenyeyGreenstein(dir, g, {rng.uniform(), rng.uniform()});
             pos = x;
             continue;
@@ -408,6 +443,7 @@ float estimateRadiance(const VolumeScene& scene, const Point3f& o, const Vector3
                 pos = x - n * off;
                 continue;
             }
+            beta *= options.eta * options.eta;  // leaving: the inverse radiance scaling
             dir = *t;
         }
         pos = x + n * off;
@@ -464,11 +500,13 @@ std::optional<float> sampleFreeFlightMis(const GridMedium& medium, const Point3f
     uint64_t lookups = 0;
     medium.forEachMajorantSegment(
         o, d, 0.f, tMax, GridMedium::ANY_CHANNEL, [&](float t0, float t1, float majorant) {
-            if (!(majorant > 0.f)) return true;
+            if (!(majorant > 0.f))
+                return true;
             float t = t0;
             for (;;) {
                 t += exponentialStep(rng, majorant);
-                if (!(t < t1)) return true;
+                if (!(t < t1))
+                    return true;
                 ++lookups;
                 const int64_t v = medium.voxelIndex(o + d * t);
                 double st[3];
@@ -478,19 +516,22 @@ std::optional<float> sampleFreeFlightMis(const GridMedium& medium, const Point3f
                 // the hero's null probability is never zero.
                 if (st[hero] >= double(majorant) || rng.uniform() * majorant < st[hero]) {
                     double f[3];
-                    for (int c = 0; c < 3; ++c) f[c] = double(medium.sigmaSAt(v, c));
+                    for (int c = 0; c < 3; ++c)
+                        f[c] = double(medium.sigmaSAt(v, c));
                     sw.update(f, st, hero);  // throughput σs,c; pdf σt,k (σ̄ cancels)
                     result = t;
                     return false;
                 }
                 double sn[3];
-                for (int c = 0; c < 3; ++c) sn[c] = double(majorant) - st[c];
+                for (int c = 0; c < 3; ++c)
+                    sn[c] = double(majorant) - st[c];
                 sw.update(sn, sn, hero);  // null collision: σn in throughput and pdf
             }
         });
     if (stats) {
         stats->tentativeCollisions += lookups;
-        if (result) ++stats->realCollisions;
+        if (result)
+            ++stats->realCollisions;
     }
     return result;
 }
@@ -507,8 +548,10 @@ Rgb shadowTransmittanceRgb(const VolumeScene& scene, const Point3f& p, const Vec
     for (int crossing = 0; crossing < 256; ++crossing) {
         const std::optional<SurfaceHit> hit = boundary.intersect(pos, wi, 0.f, remaining);
         const float segEnd = hit ? hit->t : remaining;
-        if (inside) tr *= estimateTransmittanceRgb(scene.medium(), pos, wi, segEnd, rng, stats);
-        if (!(std::max({tr.r, tr.g, tr.b}) > 0.f) || !hit) return tr;
+        if (inside)
+            tr *= estimateTransmittanceRgb(scene.medium(), pos, wi, segEnd, rng, stats);
+        if (!(std::max({tr.r, tr.g, tr.b}) > 0.f) || !hit)
+            return tr;
         const Point3f x = pos + wi * hit->t;
         const float off = boundary.offsetAt(x);
         if (dielectric) {  // straight connection weighted by 1 − F (as in shadowTransmittance)
@@ -518,7 +561,8 @@ Rgb shadowTransmittanceRgb(const VolumeScene& scene, const Point3f& p, const Vec
         inside = !inside;
         pos = x + wi * off;
         remaining -= hit->t + off;
-        if (!(remaining > 0.f)) return tr;
+        if (!(remaining > 0.f))
+            return tr;
     }
     (void)hero;
     return tr;
@@ -538,7 +582,8 @@ Rgb directLightingRgb(const VolumeScene& scene, const Point3f& x, const Vector3f
             case Light::Type::Spot: {
                 const Vector3f toLight = light.position - x;
                 const float d2 = glm::dot(toLight, toLight);
-                if (!(d2 > 0.f)) continue;
+                if (!(d2 > 0.f))
+                    continue;
                 dist = std::sqrt(d2);
                 wi = toLight / dist;
                 le = light.intensityToward(-wi) / d2;  // I/r² (inverse square law)
@@ -553,7 +598,8 @@ Rgb directLightingRgb(const VolumeScene& scene, const Point3f& x, const Vector3f
                 const Vector3f toC = light.position - x;
                 const float d2 = glm::dot(toC, toC);
                 const float r2 = light.radius * light.radius;
-                if (d2 <= r2) continue;
+                if (d2 <= r2)
+                    continue;
                 // Cone sampling, pdf 1/(2π(1 − cos θmax)) (pbrt-v3 Sec. 14.2.3).
                 const float cosMax = std::sqrt(std::max(0.f, 1.f - r2 / d2));
                 const float u0 = rng.uniform(), u1 = rng.uniform();
@@ -564,14 +610,16 @@ Rgb directLightingRgb(const VolumeScene& scene, const Point3f& x, const Vector3f
                 wi = glm::normalize(
                     frame.toWorld({sinT * std::cos(phi), sinT * std::sin(phi), cosT}));
                 dist = intersectSphere(x, wi, light.position, light.radius);
-                if (!std::isfinite(dist)) dist = std::sqrt(d2);
+                if (!std::isfinite(dist))
+                    dist = std::sqrt(d2);
                 le = light.intensity * (2.f * PI * (1.f - cosMax));
                 break;
             }
             default:
                 continue;
         }
-        if (!(std::max({le.r, le.g, le.b}) > 0.f)) continue;
+        if (!(std::max({le.r, le.g, le.b}) > 0.f))
+            continue;
         const float cosT = glm::dot(dirIn, wi);
         const Rgb phase(hgPhase(g.r, cosT), hgPhase(g.g, cosT), hgPhase(g.b, cosT));
         const Rgb tr = shadowTransmittanceRgb(scene, x, wi, dist, hero, rng, options, stats);
@@ -580,7 +628,9 @@ Rgb directLightingRgb(const VolumeScene& scene, const Point3f& x, const Vector3f
     return sum;
 }
 
-Rgb toRgb(const SpectralWeights& sw) { return Rgb(float(sw.w[0]), float(sw.w[1]), float(sw.w[2])); }
+Rgb toRgb(const SpectralWeights& sw) {
+    return Rgb(float(sw.w[0]), float(sw.w[1]), float(sw.w[2]));
+}
 
 }  // namespace
 
@@ -590,14 +640,17 @@ Rgb estimateTransmittanceRgb(const GridMedium& medium, const Point3f& o, const V
     uint64_t lookups = 0;
     medium.forEachMajorantSegment(
         o, d, 0.f, tMax, GridMedium::ANY_CHANNEL, [&](float t0, float t1, float majorant) {
-            if (!(majorant > 0.f)) return true;
+            if (!(majorant > 0.f))
+                return true;
             float t = t0;
             for (;;) {
                 t += exponentialStep(rng, majorant);
-                if (!(t < t1)) return true;
+                if (!(t < t1))
+                    return true;
                 ++lookups;
                 const int64_t v = medium.voxelIndex(o + d * t);
-                if (v < 0) continue;  // σt = 0 outside the grid: factor 1
+                if (v < 0)
+                    continue;  // σt = 0 outside the grid: factor 1
                 // Ratio tracking per channel against the common majorant (Novák 2014, Eq. 7).
                 for (int c = 0; c < 3; ++c)
                     tr[c] *= std::max(0.f, 1.f - medium.sigmaTAt(v, c) / majorant);
@@ -611,7 +664,8 @@ Rgb estimateTransmittanceRgb(const GridMedium& medium, const Point3f& o, const V
                 }
             }
         });
-    if (stats) stats->tentativeCollisions += lookups;
+    if (stats)
+        stats->tentativeCollisions += lookups;
     return tr;
 }
 
@@ -636,7 +690,8 @@ Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector
             float tLight = INF;
             Rgb le(0.f);
             for (const Light& light : scene.lights()) {
-                if (light.type != Light::Type::Sphere) continue;
+                if (light.type != Light::Type::Sphere)
+                    continue;
                 const float t = intersectSphere(pos, dir, light.position, light.radius);
                 if (t < tLight) {
                     tLight = t;
@@ -644,10 +699,12 @@ Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector
                 }
             }
             if (tLight < tHit) {
-                if (specularChain) radiance += float(scale) * toRgb(sw) * le;
+                if (specularChain)
+                    radiance += float(scale) * toRgb(sw) * le;
                 break;
             }
-            if (!hit) break;
+            if (!hit)
+                break;
             ++surfaceEvents;
             const Point3f x = pos + dir * tHit;
             const Normal3f n = hit->normal;
@@ -671,7 +728,9 @@ Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector
                 continue;
             }
             const std::optional<Vector3f> t = refract(dir, n, options.eta);
-            if (!t) break;
+            if (!t)
+                break;
+            scale /= double(options.eta) * options.eta;  // radiance scaling, see estimateRadiance
             dir = *t;
             pos = x - n * off;
             inside = true;
@@ -684,10 +743,12 @@ Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector
         }
         const std::optional<float> tc =
             sampleFreeFlightMis(medium, pos, dir, exit->t, hero, rng, sw, stats);
-        if (sw.isZero()) break;
+        if (sw.isZero())
+            break;
         if (tc) {
             const Point3f x = pos + dir * *tc;
-            if (++scatterCount > options.maxScatter) break;
+            if (++scatterCount > options.maxScatter)
+                break;
             const Rgb g(medium.g(x, 0), medium.g(x, 1), medium.g(x, 2));
             radiance += float(scale) * toRgb(sw) *
                         directLightingRgb(scene, x, dir, g, hero, rng, options, stats);
@@ -696,14 +757,16 @@ Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector
             const double m = scale * sw.maxWeight();
             if (options.russianRoulette && m < ROULETTE_WEIGHT) {
                 const double q = m / ROULETTE_WEIGHT;
-                if (rng.uniform() >= q) break;
+                if (rng.uniform() >= q)
+                    break;
                 scale /= q;
             }
             const Vector3f next =
                 sampleHenyeyGreenstein(dir, g[hero], {rng.uniform(), rng.uniform()});
             const float cosT = glm::dot(dir, next);
             double p[3];
-            for (int c = 0; c < 3; ++c) p[c] = double(hgPhase(g[c], cosT));
+            for (int c = 0; c < 3; ++c)
+                p[c] = double(hgPhase(g[c], cosT));
             sw.update(p, p, hero);  // phase value in throughput and pdf alike
             dir = next;
             pos = x;
@@ -723,6 +786,7 @@ Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector
                 pos = x - n * off;
                 continue;
             }
+            scale *= double(options.eta) * options.eta;  // leaving: inverse radiance scaling
             dir = *t;
         }
         pos = x + n * off;

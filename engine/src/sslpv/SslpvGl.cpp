@@ -65,7 +65,8 @@ float halfToFloat(uint16_t bits) {
 
 struct SslpvGlPropagator::Impl {
     SslpvGlStorage storage;
-    gpu::GlProgram program;
+    gpu::GlProgram program;    ///< generic term-list gather (order 2)
+    gpu::GlProgram programL1;  ///< order 1, sparsity-specialised gather
     gpu::GpuProfiler profiler;
     SslpvGrid acc, exit;
     SslpvGlTimings timings;
@@ -78,6 +79,8 @@ SslpvGlPropagator::SslpvGlPropagator(SslpvGlStorage storage) : m_impl(std::make_
     if (storage == SslpvGlStorage::Float16)
         defines.push_back("SSLPV_FP16");
     m_impl->program = gpu::GlProgram::compute(lib, "sslpv_propagate.comp", defines);
+    defines.push_back("SSLPV_L1");
+    m_impl->programL1 = gpu::GlProgram::compute(lib, "sslpv_propagate.comp", defines);
 }
 
 SslpvGlPropagator::~SslpvGlPropagator() = default;
@@ -86,6 +89,7 @@ void SslpvGlPropagator::destroy() {
     if (!m_impl)
         return;
     m_impl->program.destroy();
+    m_impl->programL1.destroy();
     m_impl->profiler.destroy();
 }
 
@@ -103,7 +107,8 @@ SslpvGlStorage SslpvGlPropagator::storage() const {
 }
 
 void SslpvGlPropagator::propagate(const SslpvSolver& solver) {
-    LUCENT_CHECK(m_impl->program.isValid(), "SslpvGlPropagator: the program was destroyed");
+    LUCENT_CHECK(m_impl->program.isValid() && m_impl->programL1.isValid(),
+                 "SslpvGlPropagator: the program was destroyed");
     const SslpvGrid& inj = solver.injection();
     LUCENT_CHECK(inj.resolution() > 0 && !solver.isDirty(),
                  "SslpvGlPropagator: solve the CPU solver first (injection and factors)");
@@ -181,8 +186,35 @@ void SslpvGlPropagator::propagate(const SslpvSolver& solver) {
     m_impl->timings.uploadCpuMs = upload.elapsedMs();
 
     const Timer issue;
-    const gpu::GlProgram& prog = m_impl->program;
+    // Order 1: the specialised program when the matrices have the sparsity of §4.
+    bool l1 = opt.order == 1;
+    float l1w[6][4] = {}, l1d[6][2] = {};
+    if (l1) {
+        for (int o = 0; o < 6; ++o) {
+            const int k = o < 2 ? 3 : (o < 4 ? 1 : 2);
+            const int a = k == 1 ? 2 : 1, b = k == 3 ? 2 : 3;
+            const PropagationMatrix& m = mats[o];
+            l1w[o][0] = m.at(0, 0);
+            l1w[o][1] = m.at(0, k);
+            l1w[o][2] = m.at(k, 0);
+            l1w[o][3] = m.at(k, k);
+            l1d[o][0] = m.at(a, a);
+            l1d[o][1] = m.at(b, b);
+            for (int i = 0; i < 4; ++i)
+                for (int j = 0; j < 4; ++j) {
+                    const bool used = i == j || (i == 0 && j == k) || (i == k && j == 0);
+                    if (!used && std::abs(m.at(i, j)) > 1e-7f)
+                        l1 = false;
+                }
+        }
+    }
+    const gpu::GlProgram& prog = l1 ? m_impl->programL1 : m_impl->program;
     glUseProgram(prog.id());
+    if (l1) {
+        glUniform4fv(prog.uniformLocation("u_l1"), 6, &l1w[0][0]);
+        glUniform2fv(prog.uniformLocation("u_l1d"), 6, &l1d[0][0]);
+        glUniform1iv(prog.uniformLocation("u_offset"), 6, offs);
+    }
     glUniform1i(prog.uniformLocation("u_planeSize"), int(gpuPlane));
     glUniform1i(prog.uniformLocation("u_cells"), int(cells));
     glUniform1i(prog.uniformLocation("u_padded"), p);

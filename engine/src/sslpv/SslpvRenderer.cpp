@@ -137,7 +137,14 @@ void SslpvRenderer::setOptions(const SslpvRenderOptions& o) {
                      glm::all(glm::greaterThanEqual(o.diffuseReflectance, Rgb(0.f))) &&
                      glm::all(glm::lessThanEqual(o.diffuseReflectance, Rgb(1.f))),
                  "SSLPV option 'diffuseReflectance' must be in [0, 1]");
-    m_solver.setOptions(o.solver);
+    // Only solver settings trigger re-propagation (shading options do not).
+    const SslpvOptions& a = o.solver;
+    const SslpvOptions& b = m_solver.options();
+    if (a.order != b.order || a.maxSteps != b.maxSteps ||
+        a.skipAccumulateSteps != b.skipAccumulateSteps || a.removeExitant != b.removeExitant ||
+        a.attenuation != b.attenuation || a.stopEpsilon != b.stopEpsilon ||
+        a.skipEmptySlices != b.skipEmptySlices)
+        m_solver.setOptions(a);
     if (o.injectionResolution != m_opt.injectionResolution)
         m_rsmDirty = true;
     if (o.gridResolution != m_opt.gridResolution)

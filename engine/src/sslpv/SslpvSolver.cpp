@@ -23,11 +23,58 @@ constexpr int bandOf(int i) {
     return i == 0 ? 0 : (i < 4 ? 1 : 2);
 }
 
+/// e^x for x ≤ 0 without libm, so the per-cell factor loops vectorise: x·log₂e = n + f with
+/// n rounded to nearest (|f| ≤ ½), 2^f = e^{f ln 2} by its degree-6 Taylor polynomial
+/// (remainder ≤ 0.347⁷/7! ≈ 1.2·10⁻⁷ relative), 2^n from the exponent bits; x below
+/// −87 (2⁻¹²⁶) returns ≈ 1.2·10⁻³⁸ instead of a subnormal.
+__attribute__((always_inline)) inline float expNonPositive(float x) {
+    float t = (x < 0.f ? x : 0.f) * 1.44269504f;
+    t = t > -126.f ? t : -126.f;
+    // Round to nearest for t ≤ 0 by truncating t − ½ (conversions vectorise, and unlike the
+    // magic-number trick this survives the file's -fassociative-math).
+    const int32_t ni = int32_t(t - 0.5f);
+    const float y = (t - float(ni)) * 0.693147181f;
+    const float p =
+        1.f +
+        y * (1.f + y * (0.5f + y * (1.f / 6.f + y * (1.f / 24.f + y * (1.f / 120.f + y / 720.f)))));
+    const int32_t bits = (ni + 127) << 23;
+    float scale;
+    std::memcpy(&scale, &bits, sizeof(scale));
+    return p * scale;
+}
+
+/// Per-cell factors of one row (§3.2.1 and Eq. 3): f_l = a·((1 − s′) + s′ g^l) with
+/// a = exp(−σatt Δx), s′ = 1 − exp(−σs′ Δx). Cloned like the propagation kernel so the
+/// polynomial exp vectorises (16 cells per AVX-512 instruction).
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void foldFactorRow(
+    const float* __restrict st, const float* __restrict ssIn, const float* __restrict gg,
+    float* __restrict f0, float* __restrict f1, float* __restrict f2, int n, float dx,
+    bool extinction) {
+    const float scatterLoss = extinction ? 0.f : 1.f;  // σatt = σt − scatterLoss·σs′
+    for (int x = 0; x < n; ++x) {
+        const float ss = ssIn[x] < st[x] ? ssIn[x] : st[x];
+        const float sFrac = 1.f - expNonPositive(-ss * dx);
+        const float a = expNonPositive((scatterLoss * ss - st[x]) * dx);
+        const float keep = 1.f - sFrac;
+        f0[x] = a;
+        f1[x] = a * (keep + sFrac * gg[x]);
+        f2[x] = a * (keep + sFrac * gg[x] * gg[x]);
+    }
+}
+
 /// One non-zero entry of a propagation matrix, as a shifted read of a source plane.
 struct Term {
     int srcCoeff;
     std::ptrdiff_t offset;  ///< padded linear offset of the source cell from the destination
     float weight;
+};
+
+/// Order-1 weights of one neighbour along axis a (dipole coefficient k): the only non-zero
+/// entries of M_o by symmetry (§4).
+struct L1Weights {
+    std::ptrdiff_t offset = 0;
+    int k = 3, a = 1, b = 2;  ///< k: the axis' coefficient; a, b: the other two dipole ones
+    float w00 = 0.f, w0k = 0.f, wk0 = 0.f, wkk = 0.f, waa = 0.f, wbb = 0.f;
 };
 
 /// Everything one propagation step needs; raw pointers into the solver's arrays.
@@ -42,11 +89,13 @@ struct StepCtx {
     bool assignExit = false;                ///< first step: exit = leave, not +=
     const float* mask = nullptr;            ///< null: no sinks
     const float* factor[3][3] = {};         ///< null: homogeneous (use homFactor)
-    const float* absorb[3] = {};
+    bool perCellFactors = false;  ///< absorbed = Σc − Σc·a (no separate 1 − a planes)
     float homFactor[3][3] = {};
     float homAbsorb[3] = {};
     CoordBox box;
     int padded = 0;
+    bool l1 = false;  ///< order 1 with the symmetric sparsity: use l1w instead of terms
+    L1Weights l1w[6];
 };
 
 /// Sums of one z-slice: [channel] × {remaining, exitant, absorbed}.
@@ -72,81 +121,116 @@ typedef float Vec16 __attribute__((vector_size(2 * VEC * sizeof(float))));
     } while (false)
 
 // The propagation kernel for one z-slice. Compiled for x86-64-v4 (AVX-512), v3 (AVX2+FMA)
-// and baseline, picked at load time. The gather of §4, c_d,i = Σ_o Σ_j M_o[i][j] c_{d+o,j},
-// runs register-blocked on 32 x-consecutive cells: all non-zero matrix terms (shifted
-// unaligned loads of SoA planes) summed over 4 independent accumulator pairs to hide the FMA
-// latency, then the per-cell post-processing (sinks, accumulation, the folded factors of the
-// next step, energy sums) is applied in registers. Row tails go through a small buffer.
+// and baseline, picked at load time. Rows are processed in blocks of 32 x-consecutive cells:
+// first the gather of §4, c_d,i = Σ_o Σ_j M_o[i][j] c_{d+o,j}, for every output coefficient
+// into a small block buffer, then per coefficient the post-processing (sinks, accumulation,
+// the next step's folded factors, energy sums). Order 1 uses the matrices' sparsity (§4: a
+// neighbour along axis a couples only c00 with its own dipole coefficient, the other two are
+// scaled): 24 shifted loads and 36 FMAs per 32 cells instead of 36 loads; order 2 walks the
+// generic term list over 4 independent accumulator pairs to hide the FMA latency.
 __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void processSlice(
     const StepCtx& ctx, int z, SliceSums& sums) {
     const int len = ctx.box.hi.x - ctx.box.lo.x + 1;
     const size_t p = size_t(ctx.padded);
     constexpr int BLOCK = 4 * VEC;  // 32 cells
-    alignas(64) float out[BLOCK];
+    alignas(64) float out[SSLPV_MAX_COEFFS][BLOCK];
     for (int y = ctx.box.lo.y; y <= ctx.box.hi.y; ++y) {
         const size_t base = (size_t(z + 1) * p + size_t(y + 1)) * p + size_t(ctx.box.lo.x + 1);
         for (int ch = 0; ch < 3; ++ch) {
-            for (int i = 0; i < ctx.coeffs; ++i) {
-                const std::vector<Term>& terms = ctx.terms[i];
-                const int nt = int(terms.size());
-                const float* ptr[SSLPV_MAX_COEFFS * 6 + 4];
-                for (int t = 0; t < nt; ++t)
-                    ptr[t] = ctx.src[ch][terms[t].srcCoeff] + base + terms[t].offset;
-                const int band = bandOf(i);
-                const float* fac = ctx.factor[ch][band] ? ctx.factor[ch][band] + base : nullptr;
-                const float homF = ctx.homFactor[ch][band];
-                const float* ab = ctx.absorb[ch] ? ctx.absorb[ch] + base : nullptr;
-                const float* msk = ctx.mask ? ctx.mask + base : nullptr;
-                float* ex = ctx.exit[ch][i] ? ctx.exit[ch][i] + base : nullptr;
-                float* ac = ctx.acc[ch][i] ? ctx.acc[ch][i] + base : nullptr;
-                float* ds = ctx.dst[ch][i] + base;
-                const bool sum = i == 0;
-                Vec16 remV = {}, absV = {}, exitV = {};
-                float remS = 0.f, absS = 0.f, exitS = 0.f;
-                for (int x0 = 0; x0 < len; x0 += BLOCK) {
-                    Vec16 a[4][2] = {};
-                    for (int t = 0; t < nt; t += 4) {
-                        for (int u = 0; u < 4; ++u) {
-                            const float* q = ptr[t + u] + x0;
-                            const float w = terms[t + u].weight;
-                            a[u][0] += w * LUCENT_LOAD16(q);
-                            a[u][1] += w * LUCENT_LOAD16(q + 2 * VEC);
-                        }
+            Vec16 remV = {}, absV = {}, exitV = {};
+            float remS = 0.f, absS = 0.f, exitS = 0.f;
+            for (int x0 = 0; x0 < len; x0 += BLOCK) {
+                // ---- gather
+                if (ctx.l1) {
+                    const float* s[4];
+                    for (int j = 0; j < 4; ++j)
+                        s[j] = ctx.src[ch][j] + base + x0;
+                    Vec16 o[4][2] = {};
+                    // Neighbour NB along the axis whose dipole coefficient is K (A, B: the
+                    // other two); literal indices keep o[][] and s[] in registers.
+#define LUCENT_NEIGHBOUR(NB, K, A, B)                                                 \
+    do {                                                                              \
+        const L1Weights& w = ctx.l1w[NB];                                             \
+        for (int h = 0; h < 2; ++h) {                                                 \
+            const std::ptrdiff_t at = w.offset + h * 2 * VEC;                         \
+            const Vec16 s0 = LUCENT_LOAD16(s[0] + at), sk = LUCENT_LOAD16(s[K] + at); \
+            o[0][h] += w.w00 * s0 + w.w0k * sk;                                       \
+            o[K][h] += w.wk0 * s0 + w.wkk * sk;                                       \
+            o[A][h] += w.waa * LUCENT_LOAD16(s[A] + at);                              \
+            o[B][h] += w.wbb * LUCENT_LOAD16(s[B] + at);                              \
+        }                                                                             \
+    } while (false)
+                    LUCENT_NEIGHBOUR(0, 3, 1, 2);  // +x
+                    LUCENT_NEIGHBOUR(1, 3, 1, 2);  // −x
+                    LUCENT_NEIGHBOUR(2, 1, 2, 3);  // +y
+                    LUCENT_NEIGHBOUR(3, 1, 2, 3);  // −y
+                    LUCENT_NEIGHBOUR(4, 2, 1, 3);  // +z
+                    LUCENT_NEIGHBOUR(5, 2, 1, 3);  // −z
+#undef LUCENT_NEIGHBOUR
+                    for (int i = 0; i < 4; ++i) {
+                        LUCENT_STORE16(out[i], o[i][0]);
+                        LUCENT_STORE16(out[i] + 2 * VEC, o[i][1]);
                     }
-                    Vec16 o[2] = {(a[0][0] + a[1][0]) + (a[2][0] + a[3][0]),
-                                  (a[0][1] + a[1][1]) + (a[2][1] + a[3][1])};
-                    if (x0 + BLOCK <= len) {
+                } else {
+                    for (int i = 0; i < ctx.coeffs; ++i) {
+                        const std::vector<Term>& terms = ctx.terms[i];
+                        const int nt = int(terms.size());
+                        Vec16 a[4][2] = {};
+                        for (int t = 0; t < nt; t += 4) {
+                            for (int u = 0; u < 4; ++u) {
+                                const Term& tm = terms[t + u];
+                                const float* q = ctx.src[ch][tm.srcCoeff] + base + tm.offset + x0;
+                                a[u][0] += tm.weight * LUCENT_LOAD16(q);
+                                a[u][1] += tm.weight * LUCENT_LOAD16(q + 2 * VEC);
+                            }
+                        }
+                        LUCENT_STORE16(out[i], (a[0][0] + a[1][0]) + (a[2][0] + a[3][0]));
+                        LUCENT_STORE16(out[i] + 2 * VEC, (a[0][1] + a[1][1]) + (a[2][1] + a[3][1]));
+                    }
+                }
+                // ---- post-processing per coefficient
+                const bool full = x0 + BLOCK <= len;
+                const size_t bx = base + size_t(x0);
+                const float* msk = ctx.mask ? ctx.mask + bx : nullptr;
+                for (int i = 0; i < ctx.coeffs; ++i) {
+                    const int band = bandOf(i);
+                    const float* fac = ctx.factor[ch][band] ? ctx.factor[ch][band] + bx : nullptr;
+                    const float homF = ctx.homFactor[ch][band];
+                    float* ex = ctx.exit[ch][i] ? ctx.exit[ch][i] + bx : nullptr;
+                    float* ac = ctx.acc[ch][i] ? ctx.acc[ch][i] + bx : nullptr;
+                    float* ds = ctx.dst[ch][i] + bx;
+                    const bool sum = i == 0;
+                    if (full) {
                         for (int h = 0; h < 2; ++h) {
-                            const int x = x0 + h * 2 * VEC;
+                            const int x = h * 2 * VEC;
+                            Vec16 o = LUCENT_LOAD16(out[i] + x);
                             // Sinks: flux reaching a cell outside the object leaves it.
                             if (msk) {
                                 const Vec16 m = LUCENT_LOAD16(msk + x);
-                                const Vec16 leave = o[h] * (1.f - m);
+                                const Vec16 leave = o * (1.f - m);
                                 LUCENT_STORE16(
                                     ex + x, ctx.assignExit ? leave : LUCENT_LOAD16(ex + x) + leave);
                                 if (sum)
                                     exitV += leave;
-                                o[h] *= m;
+                                o *= m;
                             }
                             if (ac)
                                 LUCENT_STORE16(ac + x,
-                                               ctx.assignAcc ? o[h] : LUCENT_LOAD16(ac + x) + o[h]);
-                            // The next step's per-source factors: Beer attenuation (§3.2.1) times
-                            // the scattering reweighting of band l (Eq. 3).
-                            const Vec16 d = fac ? o[h] * LUCENT_LOAD16(fac + x) : o[h] * homF;
+                                               ctx.assignAcc ? o : LUCENT_LOAD16(ac + x) + o);
+                            // The next step's per-source factors: Beer attenuation (§3.2.1)
+                            // times the scattering reweighting of band l (Eq. 3).
+                            const Vec16 d = fac ? o * LUCENT_LOAD16(fac + x) : o * homF;
                             LUCENT_STORE16(ds + x, d);
                             if (sum) {
                                 remV += d;
-                                absV += ab ? o[h] * LUCENT_LOAD16(ab + x) : o[h];
+                                absV += o;
                             }
                         }
                         continue;
                     }
                     // Row tail (fewer than 32 cells left): scalar, same operations.
-                    LUCENT_STORE16(out, o[0]);
-                    LUCENT_STORE16(out + 2 * VEC, o[1]);
-                    for (int x = x0; x < len; ++x) {
-                        float v = out[x - x0];
+                    for (int x = 0; x < len - x0; ++x) {
+                        float v = out[i][x];
                         if (msk) {
                             const float leave = v * (1.f - msk[x]);
                             ex[x] = ctx.assignExit ? leave : ex[x] + leave;
@@ -160,22 +244,21 @@ __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) vo
                         ds[x] = d;
                         if (sum) {
                             remS += d;
-                            absS += ab ? v * ab[x] : v;
+                            absS += v;
                         }
                     }
                 }
-                if (sum) {
-                    for (int k = 0; k < 2 * VEC; ++k) {
-                        remS += remV[k];
-                        absS += absV[k];
-                        exitS += exitV[k];
-                    }
-                    const float absTotal = absS;
-                    sums.v[ch][0] += remS;
-                    sums.v[ch][1] += exitS;
-                    sums.v[ch][2] += ab ? absTotal : absTotal * ctx.homAbsorb[ch];
-                }
             }
+            for (int k = 0; k < 2 * VEC; ++k) {
+                remS += remV[k];
+                absS += absV[k];
+                exitS += exitV[k];
+            }
+            sums.v[ch][0] += remS;
+            sums.v[ch][1] += exitS;
+            // Absorbed this step: Σ c00 (1 − a) — with per-cell factors as Σ c00 − Σ c00·a,
+            // the latter being the remaining sum (band-0 factor = a).
+            sums.v[ch][2] += ctx.perCellFactors ? absS - remS : absS * ctx.homAbsorb[ch];
         }
     }
 }
@@ -321,15 +404,16 @@ void SslpvSolver::rebuildFactors() {
     // Per-cell factors for every channel and band (§3.2.1 and Eq. 3). The paper's σs′ is a
     // dimensionless per-step fraction; ours is mm⁻¹, converted per cell as the probability of
     // scattering over one cell width, s′ = 1 − exp(−σs′·Δx) (docs/methods/sslpv.md).
-    auto cellFactors = [&](size_t k, int c, float f[3], float& absorb) {
+    const bool extinction = m_opt.attenuation == SslpvAttenuation::Extinction;
+    auto cellFactors = [&](size_t k, int c, float f[3], float& absorb) {  // homogeneous path
         const float st = m_material.sigma_t[c][k];
         const float ss = std::min(m_material.sigma_s[c][k], st);
         const float g = m_material.g[c][k];
-        const float sFrac = -std::expm1(-ss * dx);
-        const float sigAtt = m_opt.attenuation == SslpvAttenuation::Extinction ? st : st - ss;
-        const float a = std::exp(-sigAtt * dx);
-        for (int l = 0; l < 3; ++l)
-            f[l] = a * ((1.f - sFrac) + sFrac * hgMoment(g, l));
+        const float sFrac = 1.f - expNonPositive(-ss * dx);
+        const float a = expNonPositive(-(extinction ? st : st - ss) * dx);
+        f[0] = a;  // band 0: Eq. 3 leaves c00 unchanged
+        f[1] = a * ((1.f - sFrac) + sFrac * g);
+        f[2] = a * ((1.f - sFrac) + sFrac * g * g);
         absorb = 1.f - a;
     };
 
@@ -384,30 +468,30 @@ void SslpvSolver::rebuildFactors() {
             }
             for (auto& f : m_factor[c])
                 f.clear();
-            m_absorb[c].clear();
         }
         return;
     }
     for (int c = 0; c < 3; ++c) {
         for (auto& f : m_factor[c])
             f.assign(plane, 0.f);
-        m_absorb[c].assign(plane, 0.f);
     }
     parallelFor(
         0, n,
         [&](int64_t z0, int64_t z1) {
+            // Row loops over contiguous arrays with the branch-free exp: they vectorise.
             for (int z = int(z0); z < int(z1); ++z)
                 for (int c = 0; c < 3; ++c)
-                    for (int y = 0; y < n; ++y)
-                        for (int x = 0; x < n; ++x) {
-                            const size_t k = s.linearIndex({x, y, z});
-                            const size_t pk = padded(x, y, z);
-                            float f[3], ab;
-                            cellFactors(k, c, f, ab);
-                            for (int l = 0; l < 3; ++l)
-                                m_factor[c][l][pk] = f[l];
-                            m_absorb[c][pk] = ab;
-                        }
+                    for (int y = 0; y < n; ++y) {
+                        const size_t k = s.linearIndex({0, y, z});
+                        const size_t pk = padded(0, y, z);
+                        const float* __restrict st = &m_material.sigma_t[c][k];
+                        const float* __restrict ssIn = &m_material.sigma_s[c][k];
+                        const float* __restrict gg = &m_material.g[c][k];
+                        float* __restrict f0 = &m_factor[c][0][pk];
+                        float* __restrict f1 = &m_factor[c][1][pk];
+                        float* __restrict f2 = &m_factor[c][2][pk];
+                        foldFactorRow(st, ssIn, gg, f0, f1, f2, n, dx, extinction);
+                    }
         },
         /*grain=*/1);
 }
@@ -421,6 +505,7 @@ void SslpvSolver::inject() {
     else
         m_injection.clear();
     int used = 0, skipped = 0;
+    m_injSliceLit.assign(size_t(s.resolution), 0);
     const float h = s.voxelSize;
     for (const SslpvInjectionSample& smp : m_samples) {
         const float cosI = -glm::dot(smp.direction, smp.normal);
@@ -452,6 +537,7 @@ void SslpvSolver::inject() {
         const Vector3f wt = refractInto(smp.direction, smp.normal, m_eta);
         const ShCoeffs<2> lobe = clampedCosineLobe<2>(wt);
         const size_t idx = m_injection.index(cell);
+        m_injSliceLit[size_t(cell.z)] = 1;
         for (int ch = 0; ch < 3; ++ch) {
             const float k = T * smp.flux[ch] * INV_PI;
             for (int i = 0; i < count; ++i)
@@ -473,12 +559,20 @@ void SslpvSolver::propagate() {
     // Cells outside the active box are never written and stay zero, so the grids are cleared
     // only when they are new or the box moved; inside it the first write assigns.
     const bool boxMoved = m_active.lo != m_lastActive.lo || m_active.hi != m_lastActive.hi;
+    bool cleared = boxMoved;
     for (SslpvGrid* g : {&m_accum, &m_exitant, &m_prop[0], &m_prop[1]}) {
-        if (g->resolution() != n || g->order() != m_opt.order)
+        if (g->resolution() != n || g->order() != m_opt.order) {
             *g = SslpvGrid(n, m_opt.order);
-        else if (boxMoved)
+            cleared = true;
+        } else if (boxMoved) {
             g->clear();
+        }
     }
+    // Which z-slices of each ping-pong grid may hold non-zero values (persist across solves,
+    // like the grids). prop[0] is rewritten below from the injection.
+    if (cleared || m_sliceLit[1].size() != size_t(n))
+        m_sliceLit[1].assign(size_t(n), 0);
+    m_sliceLit[0] = m_injSliceLit;
     m_lastActive = m_active;
     bool accWritten = false, exitWritten = false;
 
@@ -503,6 +597,31 @@ void SslpvSolver::propagate() {
 
     StepCtx ctx;
     ctx.coeffs = count;
+    if (m_opt.order == 1) {
+        // Check the sparsity the specialised gather relies on; otherwise use the term list.
+        const int axisCoeff[3] = {3, 1, 2};
+        ctx.l1 = true;
+        for (int o = 0; o < 6; ++o) {
+            const int axis = o / 2, k = axisCoeff[axis];
+            L1Weights& w = ctx.l1w[o];
+            w.offset = offs[o];
+            w.k = k;
+            w.a = k == 1 ? 2 : 1;
+            w.b = k == 3 ? 2 : 3;
+            w.w00 = mats[o].at(0, 0);
+            w.w0k = mats[o].at(0, k);
+            w.wk0 = mats[o].at(k, 0);
+            w.wkk = mats[o].at(k, k);
+            w.waa = mats[o].at(w.a, w.a);
+            w.wbb = mats[o].at(w.b, w.b);
+            for (int i = 0; i < 4; ++i)
+                for (int j = 0; j < 4; ++j) {
+                    const bool used = (i == j) || (i == 0 && j == k) || (i == k && j == 0);
+                    if (!used && std::abs(mats[o].at(i, j)) > 1e-7f)
+                        ctx.l1 = false;
+                }
+        }
+    }
     ctx.terms = terms;
     ctx.box = m_active;
     ctx.padded = int(p);
@@ -510,9 +629,9 @@ void SslpvSolver::propagate() {
     for (int ch = 0; ch < 3; ++ch) {
         for (int l = 0; l < 3; ++l) {
             ctx.factor[ch][l] = m_homogeneous ? nullptr : m_factor[ch][l].data();
+            ctx.perCellFactors = !m_homogeneous;
             ctx.homFactor[ch][l] = m_homFactor[ch][l];
         }
-        ctx.absorb[ch] = m_homogeneous ? nullptr : m_absorb[ch].data();
         ctx.homAbsorb[ch] = m_homAbsorb[ch];
     }
 
@@ -530,7 +649,7 @@ void SslpvSolver::propagate() {
         const float* c0 = m_injection.plane(ch, 0);
         double ab = 0.0;
         for (size_t k = 0; k < m_injection.planeSize(); ++k)
-            ab += double(c0[k]) * (m_homogeneous ? m_homAbsorb[ch] : m_absorb[ch][k]);
+            ab += double(c0[k]) * (m_homogeneous ? m_homAbsorb[ch] : 1.f - m_factor[ch][0][k]);
         absorbed[ch] = float(ab * TWO_SQRT_PI);
     }
     remaining = m_prop[0].flux();
@@ -563,11 +682,40 @@ void SslpvSolver::propagate() {
                 ctx.exit[ch][i] = m_opt.removeExitant ? m_exitant.plane(ch, i) : nullptr;
             }
         std::fill(sums.begin(), sums.end(), SliceSums{});
+        // Slice skipping: destination slice z can only receive light from source slices
+        // z−1, z, z+1; otherwise its new values are exactly zero and it is only cleared
+        // (with the accumulation/exitant slices on the step that assigns them).
+        const std::vector<uint8_t>& srcLit = m_sliceLit[m_cur];
+        std::vector<uint8_t>& dstLit = m_sliceLit[next];
+        const CoordBox box = m_active;
+        auto zeroSlice = [&](SslpvGrid& g, int z) {
+            const size_t len = size_t(box.hi.x - box.lo.x + 1);
+            for (int ch = 0; ch < 3; ++ch)
+                for (int i = 0; i < count; ++i)
+                    for (int y = box.lo.y; y <= box.hi.y; ++y)
+                        std::memset(g.plane(ch, i) + g.index({box.lo.x, y, z}), 0,
+                                    len * sizeof(float));
+        };
         parallelFor(
             m_active.lo.z, m_active.hi.z + 1,
             [&](int64_t b, int64_t e) {
-                for (int64_t z = b; z < e; ++z)
-                    processSlice(ctx, int(z), sums[size_t(z)]);
+                for (int64_t z = b; z < e; ++z) {
+                    const size_t zi = size_t(z);
+                    const bool needed = !m_opt.skipEmptySlices || srcLit[zi] ||
+                                        (z > 0 && srcLit[zi - 1]) || (z + 1 < n && srcLit[zi + 1]);
+                    if (needed) {
+                        processSlice(ctx, int(z), sums[zi]);
+                        dstLit[zi] = 1;  // conservative: computed from lit sources
+                        continue;
+                    }
+                    if (dstLit[zi])
+                        zeroSlice(m_prop[next], int(z));
+                    dstLit[zi] = 0;
+                    if (ctx.assignAcc)
+                        zeroSlice(m_accum, int(z));
+                    if (ctx.assignExit && ctx.exit[0][0])
+                        zeroSlice(m_exitant, int(z));
+                }
             },
             /*grain=*/1);
         Rgb rem(0.f);

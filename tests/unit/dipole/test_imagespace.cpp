@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <functional>
 
 using namespace lucent;
@@ -191,4 +192,76 @@ TEST(ImageSpace, BadInputIsAClearError) {
         m = MaterialSample{};
     const GatherResult g = gatherImageSpace(b, gs);
     EXPECT_EQ(g.exitance.at(4, 4), Rgb(0.f));
+}
+
+TEST(ImageSpace, JacobianOnASphereMatchesSurfaceIntegral) {
+    // Sphere of radius 4 mm seen orthographically along −z, 0.04 mm pixels, E = 1 on every
+    // visible point. Exact B(x_o) = ∫ R_d(|x − x_o|) dA over the visible hemisphere z > 0
+    // (spherical quadrature). At a pixel whose normal is 60° from the view direction the
+    // tangent plane and the surface differ; the Eq. 9 Jacobian must restore the surface measure.
+    const float rad = 4.f, pix = 0.04f;
+    const int W = 220, H = 220;
+    SurfaceBuffers b;
+    b.resize(W, H);
+    const float hw = 0.5f * W * pix;
+    b.clipFromWorld = glm::ortho(-hw, hw, -hw, hw, 0.1f, 100.f) *
+                      glm::lookAt(glm::vec3(0, 0, 20), glm::vec3(0), glm::vec3(0, 1, 0));
+    b.orthographic = true;
+    b.viewDirection = {0, 0, -1};
+    MaterialSample m;
+    m.sigma_s = Rgb(4.f);
+    m.sigma_t = Rgb(4.2f);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const float px = (x + 0.5f) * pix - hw, py = hw - (y + 0.5f) * pix;
+            const float z2 = rad * rad - px * px - py * py;
+            if (z2 <= 0.f)
+                continue;
+            const size_t i = b.index(x, y);
+            b.position[i] = {px, py, std::sqrt(z2)};
+            b.normal[i] = b.position[i] / rad;
+            b.covered[i] = 1;
+            b.material[i] = m;
+            b.irradiance[i] = Rgb(1.f);
+        }
+    const DipoleProfile p = DipoleProfile::jensen(0.2, 4.0, 1.3);
+    const auto exactSphere = [&](glm::dvec3 xo) {
+        // Midpoint rule in (θ, φ) over the hemisphere; R_d varies on the scale z_r ≈ 0.24 mm,
+        // i.e. 0.06 rad of θ: 1600 × 3200 cells resolve it to < 1e-4.
+        const int nt = 1600, np = 3200;
+        double s = 0.0;
+        for (int i = 0; i < nt; ++i) {
+            const double th = (i + 0.5) * (M_PI / 2) / nt;
+            const double st = std::sin(th), ct = std::cos(th);
+            for (int j = 0; j < np; ++j) {
+                const double ph = (j + 0.5) * 2 * M_PI / np;
+                const glm::dvec3 x(rad * st * std::cos(ph), rad * st * std::sin(ph), rad * ct);
+                s += p.Rd(glm::length(x - xo)) * rad * rad * st;
+            }
+        }
+        return s * (M_PI / 2 / nt) * (2 * M_PI / np);
+    };
+    GatherSettings gs;
+    gs.importanceSamples = 48;
+    gs.uniformSamples = 16;
+    const GatherResult on = gatherImageSpace(b, gs);
+    gs.jacobian = false;
+    const GatherResult off = gatherImageSpace(b, gs);
+    // Pixels around x = 4·sin 60° mm on the y = 0 row (normal 60° from the view direction).
+    const int px0 = int((rad * std::sin(M_PI / 3) + hw) / pix) - 2, py0 = H / 2 - 2;
+    const Point3f c = b.position[b.index(px0 + 2, py0 + 2)];
+    const double exact = exactSphere(glm::dvec3(c));
+    double meanOn = 0.0, meanOff = 0.0;
+    for (const auto& q : block(px0, py0, 4, 4)) {
+        meanOn += on.exitance.at(q.x, q.y).g / 16.0;
+        meanOff += off.exitance.at(q.x, q.y).g / 16.0;
+    }
+    std::printf("sphere at 60 deg: exact %.5f, with Jacobian %.5f, without %.5f\n", exact, meanOn,
+                meanOff);
+    // Measured: exact 0.4127, with the Jacobian −0.9 %, without −2.0 %. The residual is the
+    // method's own approximation (tangent-plane samples, distance through the reconstructed
+    // tangent planes, the block spanning ±0.08 mm): 3 % accepts it; leaving the Jacobian out
+    // must be strictly worse.
+    EXPECT_NEAR(meanOn, exact, 0.03 * exact);
+    EXPECT_GT(std::abs(meanOff - exact), std::abs(meanOn - exact));
 }

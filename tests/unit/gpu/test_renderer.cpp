@@ -501,3 +501,22 @@ TEST_F(RendererFixture, ProfilerReportsPasses) {
     for (const char* pass : {"shadows", "gbuffer", "subsurface", "shade", "tonemap"})
         EXPECT_NE(r.profiler().find(pass), nullptr) << pass;
 }
+
+TEST(SceneRendererCreate, ShaderErrorThrowsAndLeaksNothing) {
+    LUCENT_REQUIRE_GL();
+    ShaderLibrary lib;
+    lib.setFile("direct_shade.frag", "#version 450 core\nvoid main() { oops }\n");
+    const size_t live = liveGlObjectCount();
+    const size_t leaked = leakedGlObjectCount();
+    SceneRenderer r;
+    try {
+        r.create(lib);
+        FAIL() << "a broken direct_shade.frag was accepted";
+    } catch (const GpuError& e) {
+        EXPECT_NE(std::string(e.what()).find("direct_shade.frag:2"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(r.isCreated());
+    EXPECT_EQ(liveGlObjectCount(), live);
+    EXPECT_EQ(leakedGlObjectCount(), leaked);
+    test::sharedContext()->debugLog().takeErrors();
+}

@@ -266,7 +266,8 @@ std::pair<int, std::string> runCommand(const std::string& cmd) {
 
 TEST(ShaderValidation, GlslangReportsOriginalFileAndLine) {
     const std::string validator = LUCENT_GLSLANG_VALIDATOR;
-    if (validator.empty() || validator.find("NOTFOUND") != std::string::npos)
+    if (validator.empty() || validator.find("NOTFOUND") != std::string::npos ||
+        !std::filesystem::exists(validator))
         GTEST_SKIP() << "glslangValidator not installed (package glslang-tools)";
     const std::string dir = makeShaderDir(
         "validate", {{"good.comp", MAIN_COMP},

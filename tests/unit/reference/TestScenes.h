@@ -15,21 +15,21 @@ namespace lucent::test {
 inline TriangleMesh boxMesh(const Point3f& lo, const Point3f& hi) {
     TriangleMesh m;
     for (int i = 0; i < 8; ++i)
-        m.positions.push_back({(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
+        m.positions.push_back(
+            {(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
     // Faces as quads (a, b, c, d); the winding is fixed below from the outward direction.
     const int quads[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4},
                              {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
     const Point3f c = 0.5f * (lo + hi);
     for (const auto& q : quads) {
-        for (const std::array<int, 3>& t : {std::array<int, 3>{q[0], q[1], q[2]},
-                                           std::array<int, 3>{q[0], q[2], q[3]}}) {
+        for (const std::array<int, 3>& t :
+             {std::array<int, 3>{q[0], q[1], q[2]}, std::array<int, 3>{q[0], q[2], q[3]}}) {
             const Point3f a = m.positions[t[0]], b = m.positions[t[1]], d = m.positions[t[2]];
             const Vector3f n = glm::cross(b - a, d - a);
             const bool outward = glm::dot(n, (a + b + d) / 3.f - c) > 0.f;
-            m.triangles.push_back(outward ? std::array<uint32_t, 3>{uint32_t(t[0]), uint32_t(t[1]),
-                                                                   uint32_t(t[2])}
-                                          : std::array<uint32_t, 3>{uint32_t(t[0]), uint32_t(t[2]),
-                                                                   uint32_t(t[1])});
+            m.triangles.push_back(
+                outward ? std::array<uint32_t, 3>{uint32_t(t[0]), uint32_t(t[1]), uint32_t(t[2])}
+                        : std::array<uint32_t, 3>{uint32_t(t[0]), uint32_t(t[2]), uint32_t(t[1])});
         }
     }
     m.normals.assign(m.positions.size(), Normal3f(0.f, 0.f, 1.f));
@@ -47,7 +47,8 @@ inline GridMedium gridFrom(const Point3f& origin, float h, int res,
     std::vector<MediumCoefficients> v(spec.voxelCount());
     for (int k = 0; k < res; ++k)
         for (int j = 0; j < res; ++j)
-            for (int i = 0; i < res; ++i) v[spec.linearIndex({i, j, k})] = f(i, j, k);
+            for (int i = 0; i < res; ++i)
+                v[spec.linearIndex({i, j, k})] = f(i, j, k);
     return GridMedium(spec, v, options);
 }
 

@@ -57,7 +57,8 @@ TEST(ReferenceRender, SameImageForAnyThreadCount) {
     EXPECT_EQ(a.variance.pixels(), b.variance.pixels());
     EXPECT_EQ(a.paths, uint64_t(24 * 16 * 6));
     double covered = 0;
-    for (const Rgb& c : a.coverage.pixels()) covered += c.r;
+    for (const Rgb& c : a.coverage.pixels())
+        covered += c.r;
     EXPECT_GT(covered, 40.0);
 }
 
@@ -109,10 +110,14 @@ TEST(ReferenceRender, CancelAndProgress) {
     o.progress = [&](const ReferenceProgress& p) {
         ++calls;
         EXPECT_EQ(p.maxSpp, 300);
-        if (p.spp >= 6) cancel = true;
+        if (p.spp >= 6)
+            cancel = true;
     };
+    ImageRgb lastPreview;
+    o.preview = [&](const ImageRgb& mean) { lastPreview = mean; };
     const ReferenceImage img = renderReference(scene, o);
     EXPECT_TRUE(img.cancelled);
+    EXPECT_EQ(lastPreview.pixels(), img.mean.pixels());  // the preview of the last full pass
     EXPECT_EQ(img.spp, 6);
     EXPECT_EQ(calls, 2);
 }

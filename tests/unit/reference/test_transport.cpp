@@ -150,7 +150,8 @@ TEST(Transport, WhiteFurnaceAllFluxLeaves) {
             const Point3f p(-5.f + 10.f * rng.uniform(), 5.f - 1e-4f, -5.f + 10.f * rng.uniform());
             const Vector3f local = sampleCosineHemisphere({rng.uniform(), rng.uniform()});
             const WalkResult w = walkMedium(scene, p, {local.x, -local.z, local.y}, i % 3, rng, to);
-            if (w.escaped) flux += w.weight;
+            if (w.escaped)
+                flux += w.weight;
             totalScatter += w.scatterCount;
         }
         // Exact conservation: all n units of flux leave (no statistical tolerance needed).
@@ -186,8 +187,8 @@ TEST(Transport, SingleScatteringThinSlab) {
     spec.voxelSize = 12.5f;
     spec.resolution = 16;
     for (bool fast : {true, false}) {
-        const GridMedium m = GridMedium::uniform(spec, grey(sigmaT, sigmaS),
-                                                 opts(MajorantMode::Bricks, fast));
+        const GridMedium m =
+            GridMedium::uniform(spec, grey(sigmaT, sigmaS), opts(MajorantMode::Bricks, fast));
         // 200 mm wide: a single-scattered path reaching the side travels ≥ 100 mm in the slab
         // (attenuation e^{−100}), so the slab is infinite for this estimate.
         const VolumeScene scene(boxMesh({-100, -100, 0}, {100, 100, d}), m, {});
@@ -277,7 +278,8 @@ TEST(Transport, ErrorFallsAsInverseSqrtN) {
         const int runs = 400;
         for (int r = 0; r < runs; ++r) {
             double s = 0;
-            for (int i = 0; i < n; ++i) s += estimateTransmittance(m, a, d, len, 1, rng);
+            for (int i = 0; i < n; ++i)
+                s += estimateTransmittance(m, a, d, len, 1, rng);
             se += (s / n - exact) * (s / n - exact);
         }
         return std::sqrt(se / runs);
@@ -321,8 +323,10 @@ TEST(Transport, MajorantBricksChangeTimeNotAnswer) {
     // Mostly empty grid with a dense block and a thin haze: the brick majorants skip the empty
     // bricks and bound the haze tightly, the global majorant (= the block's σt) does not.
     const auto sparse = [](int i, int j, int k) {
-        if (i >= 8 && i < 16 && j >= 8 && j < 16 && k >= 8 && k < 16) return grey(4.f, 3.6f, 0.2f);
-        if (k < 8) return grey(0.02f, 0.015f);
+        if (i >= 8 && i < 16 && j >= 8 && j < 16 && k >= 8 && k < 16)
+            return grey(4.f, 3.6f, 0.2f);
+        if (k < 8)
+            return grey(0.02f, 0.015f);
         return grey(0.f, 0.f);
     };
     const TriangleMesh box = boxMesh({0, 0, 0}, {32, 32, 32});
@@ -335,6 +339,15 @@ TEST(Transport, MajorantBricksChangeTimeNotAnswer) {
     const VolumeScene global(box, gridFrom({0, 0, 0}, 1.f, 32, sparse, opts(MajorantMode::Global)),
                              {sun});
     EXPECT_GT(bricks.medium().majorantCells(), 1);
+    // Auto keeps the bricks here (some bricks are far below the global majorant) and drops
+    // them for a uniform grid, where they cannot save a lookup.
+    EXPECT_EQ(gridFrom({0, 0, 0}, 1.f, 32, sparse, opts(MajorantMode::Auto)).majorantMode(),
+              MajorantMode::Bricks);
+    EXPECT_EQ(gridFrom(
+                  {0, 0, 0}, 1.f, 32, [](int, int, int) { return grey(1.f, 0.5f); },
+                  opts(MajorantMode::Auto))
+                  .majorantMode(),
+              MajorantMode::Global);
     EXPECT_EQ(global.medium().majorantCells(), 1);
     TransportOptions to;
     to.boundary = BoundaryModel::Matched;
@@ -360,7 +373,8 @@ TEST(Transport, MajorantBricksChangeTimeNotAnswer) {
         Pcg32 r1(31), r2(32);
         MeanSe lb, lg;
         for (int i = 0; i < 20000; ++i) {
-            const Point3f o(4.f + 24.f * float(i % 100) / 100.f, 40.f, 4.f + 24.f * float(i / 100) / 200.f);
+            const Point3f o(4.f + 24.f * float(i % 100) / 100.f, 40.f,
+                            4.f + 24.f * float(i / 100) / 200.f);
             lb.add(estimateRadiance(bricks, o, {0, -1, 0}, 0, r1, to, &sb));
             lg.add(estimateRadiance(global, o, {0, -1, 0}, 0, r2, to, &sg));
         }
@@ -388,11 +402,12 @@ TEST(Transport, SphereLightSeenDirectlyAndThroughMatchedMedium) {
     to.boundary = BoundaryModel::Matched;
     Pcg32 rng(3);
     // From (20, 0, 10) toward the light's centre: passes beside the slab (x = 14 at z = 1).
-    EXPECT_FLOAT_EQ(estimateRadiance(scene, {20, 0, 10}, glm::normalize(Vector3f(-20, 0, -30)), 0,
-                                     rng, to),
-                    2.f);
+    EXPECT_FLOAT_EQ(
+        estimateRadiance(scene, {20, 0, 10}, glm::normalize(Vector3f(-20, 0, -30)), 0, rng, to),
+        2.f);
     MeanSe l;
-    for (int i = 0; i < 20000; ++i) l.add(estimateRadiance(scene, {0, 0, 10}, {0, 0, -1}, 1, rng, to));
+    for (int i = 0; i < 20000; ++i)
+        l.add(estimateRadiance(scene, {0, 0, 10}, {0, 0, -1}, 1, rng, to));
     // Delta tracking makes this a binomial estimate of T = exp(−σt·thickness) = e^{−1}.
     EXPECT_NEAR(l.mean(), std::exp(-0.5 * 2.0), Z * l.se());
 }
@@ -417,8 +432,10 @@ TEST(Transport, SmallSphereLightActsAsPointLight) {
     TransportOptions to;
     to.boundary = BoundaryModel::Dielectric;
     to.eta = 1.33f;
-    const MeanSe s = fluenceAt(VolumeScene(box, m, {ball}), {5, 5, 20}, {5, 5, 5}, 8.67f, 100000, 3, to);
-    const MeanSe p = fluenceAt(VolumeScene(box, m, {point}), {5, 5, 20}, {5, 5, 5}, 8.67f, 100000, 4, to);
+    const MeanSe s =
+        fluenceAt(VolumeScene(box, m, {ball}), {5, 5, 20}, {5, 5, 5}, 8.67f, 100000, 3, to);
+    const MeanSe p =
+        fluenceAt(VolumeScene(box, m, {point}), {5, 5, 20}, {5, 5, 5}, 8.67f, 100000, 4, to);
     ASSERT_GT(p.mean(), 0.0);
     EXPECT_NEAR(s.mean(), p.mean(), Z * std::hypot(s.se(), p.se()) + 3e-3 * p.mean());
 }
@@ -468,7 +485,8 @@ TEST(Transport, SpectralMisMatchesPerChannelTracking) {
     const auto chroma = [](int i, int j, int k) {
         const float s = float((i * 5 + j * 11 + k * 3) % 7);
         MediumCoefficients m;
-        if (s == 0.f) return m;  // vacuum pockets
+        if (s == 0.f)
+            return m;  // vacuum pockets
         m.sigma_t = Rgb(0.15f * s, 0.3f + 0.1f * s, 1.2f);
         m.sigma_s = m.sigma_t * Rgb(0.95f, 0.7f, 0.4f);
         m.sigma_a = m.sigma_t - m.sigma_s;
@@ -504,7 +522,8 @@ TEST(Transport, SpectralMisMatchesPerChannelTracking) {
     Pcg32 r1(51), r2(52);
     for (int i = 0; i < n; ++i) {
         const Rgb v = estimateRadianceRgb(scene, probe, direction(r1), i % 3, r1, to);
-        for (int c = 0; c < 3; ++c) mis[c].add(invPdf * v[c]);
+        for (int c = 0; c < 3; ++c)
+            mis[c].add(invPdf * v[c]);
         const int c = i % 3;
         single[c].add(invPdf * estimateRadiance(scene, probe, direction(r2), c, r2, to));
     }
@@ -512,5 +531,81 @@ TEST(Transport, SpectralMisMatchesPerChannelTracking) {
         ASSERT_GT(single[c].mean(), 0.0);
         EXPECT_NEAR(mis[c].mean(), single[c].mean(), Z * std::hypot(mis[c].se(), single[c].se()))
             << "channel " << c;
+    }
+}
+
+TEST(Transport, SurfaceReflectionAndSubsurfaceOnly) {
+    // A camera ray meets a dielectric slab of black absorber (σt = 20 mm⁻¹: nothing comes back
+    // out) at cos θ = 0.8 and sees a sphere light in the mirror direction: the expected radiance
+    // is F(0.8)·Le (Fresnel, Born & Wolf), a Bernoulli estimate (5σ). --subsurface-only drops
+    // exactly this term: every sample is 0.
+    Light ball;
+    ball.type = Light::Type::Sphere;
+    ball.position = Point3f(0, 0, 1) + 20.f * Vector3f(0.6f, 0, 0.8f);
+    ball.radius = 2.f;
+    ball.intensity = Rgb(3.f, 2.f, 1.f);
+    GridSpec spec;
+    spec.origin = Point3f(-60.f);
+    spec.voxelSize = 7.5f;
+    spec.resolution = 16;
+    const VolumeScene scene(boxMesh({-50, -50, -1}, {50, 50, 1}),
+                            GridMedium::uniform(spec, grey(20.f, 0.f), {}), {ball});
+    const Vector3f d(0.6f, 0.f, -0.8f);
+    const Point3f o = Point3f(0, 0, 1) - 10.f * d;
+    TransportOptions to;
+    to.boundary = BoundaryModel::Dielectric;
+    to.eta = 1.3f;
+    const double f = fresnelDielectric(0.8f, 1.3f);
+    Pcg32 rng(61);
+    MeanSe scalar, rgb;
+    for (int i = 0; i < 20000; ++i) {
+        scalar.add(estimateRadiance(scene, o, d, 0, rng, to));
+        rgb.add(estimateRadianceRgb(scene, o, d, i % 3, rng, to).g);
+    }
+    EXPECT_NEAR(scalar.mean(), f * 3.0, Z * scalar.se());
+    EXPECT_NEAR(rgb.mean(), f * 2.0, Z * rgb.se());
+    to.subsurfaceOnly = true;
+    for (int i = 0; i < 1000; ++i) {
+        ASSERT_EQ(estimateRadiance(scene, o, d, 0, rng, to), 0.f);
+        ASSERT_EQ(estimateRadianceRgb(scene, o, d, i % 3, rng, to), Rgb(0.f));
+    }
+}
+
+TEST(Transport, SingleScatteringBelowDielectricCarriesRadianceScaling) {
+    // Optically thick slab (σt·d = 16) with a smooth dielectric top, directional light and view
+    // both along −z. At normal incidence nothing bends, so the straight shadow connection is
+    // exact and the single-scattered radiance has the closed form
+    //   L1 = T0 · T0/η² · σs·p_HG(−1)·E / (2σt),   T0 = 1 − ((η−1)/(η+1))²,
+    // where 1/η² is the radiance scaling of the camera ray leaving the denser medium
+    // (L_out = T·L_in/η²; Veach 1997 §5.2). Without it the estimate is η² too bright.
+    const float sigmaT = 0.8f, sigmaS = 0.6f, d = 20.f, g = 0.3f;
+    GridSpec spec;
+    spec.origin = Point3f(-100.f);
+    spec.voxelSize = 12.5f;
+    spec.resolution = 16;
+    Light sun;
+    sun.type = Light::Type::Directional;
+    sun.direction = Vector3f(0.f, 0.f, -1.f);
+    sun.intensity = Rgb(2.f);
+    const VolumeScene scene(boxMesh({-100, -100, -d}, {100, 100, 0}),
+                            GridMedium::uniform(spec, grey(sigmaT, sigmaS, g),
+                                                opts(MajorantMode::Bricks, /*fastPath=*/false)),
+                            {sun});
+    for (float eta : {1.3f, 1.8f}) {
+        TransportOptions to;
+        to.boundary = BoundaryModel::Dielectric;
+        to.eta = eta;
+        to.maxScatter = 1;
+        to.subsurfaceOnly = true;
+        const double r0 = double(eta - 1) / double(eta + 1);
+        const double t0 = 1.0 - r0 * r0;
+        const double expected = t0 * t0 / (double(eta) * eta) * sigmaS * hgPhase(g, -1.f) * 2.0 *
+                                (1 - std::exp(-2.0 * sigmaT * d)) / (2.0 * sigmaT);
+        Pcg32 rng(eta > 1.5f ? 51 : 52);
+        MeanSe l;
+        for (int i = 0; i < 40000; ++i)
+            l.add(estimateRadiance(scene, Point3f(0.f, 0.f, 10.f), Vector3f(0.f, 0.f, -1.f), 0,
+                                   rng, to));
+        EXPECT_NEAR(l.mean(), expected, Z * l.se()) << "eta = " << eta;
     }
 }

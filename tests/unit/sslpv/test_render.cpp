@@ -162,8 +162,9 @@ TEST(SslpvRender, FrontLitHasSpecularAndSubsurface) {
     }
     EXPECT_GT(sumSss, 0.0);
     EXPECT_GT(sumFull, sumSss);
-    // Only the options changed: nothing re-injected or re-propagated for the second image.
+    // Only shading options changed: nothing re-injected or re-propagated for the second image.
     EXPECT_FALSE(r.solver().stats().reinjected);
+    EXPECT_FALSE(r.solver().stats().repropagated);
 }
 
 TEST(SslpvRender, RejectsMissingInputs) {

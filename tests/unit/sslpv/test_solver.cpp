@@ -338,3 +338,33 @@ TEST(SslpvSolver, LightInsideTheBoundingBoxAndEmptyInputs) {
     EXPECT_EQ(st.skippedTexels, 3);
     EXPECT_TRUE(solver.accumulation().isFinite());
 }
+
+TEST(SslpvSolver, FoldedFactorsMatchBeerAndEq3) {
+    // Factor of band l: exp(−σatt·Δx)·((1 − s′) + s′ g^l), s′ = 1 − exp(−σs′Δx). The solver's
+    // polynomial exp is accurate to ~2e-7 relative (Taylor remainder + float rounding).
+    for (float h : {0.1f, 1.f, 7.f}) {
+        CoarseMaterial m = ballMaterial(16, h, Rgb(0.8f, 2.f, 0.05f), Rgb(0.5f, 1.5f, 0.f),
+                                        Rgb(0.3f, -0.6f, 0.9f));
+        m.sigma_t[0][m.spec.linearIndex({8, 8, 8})] = 3.f;  // heterogeneous path
+        for (auto att : {SslpvAttenuation::Extinction, SslpvAttenuation::Absorption}) {
+            SslpvSolver solver({.maxSteps = 1, .attenuation = att});
+            solver.setMaterial(m, 1.3f);
+            solver.solve();
+            for (int c = 0; c < 3; ++c) {
+                const Coord cell = (c == 0) ? Coord(8, 8, 8) : Coord(7, 8, 8);
+                const size_t k = m.spec.linearIndex(cell);
+                const double st = m.sigma_t[c][k], ss = m.sigma_s[c][k], g = m.g[c][k];
+                const double a =
+                    std::exp(-(att == SslpvAttenuation::Extinction ? st : st - ss) * h);
+                const double s = 1.0 - std::exp(-ss * h);
+                const size_t pk = solver.injection().index(cell);
+                for (int l = 0; l < 3; ++l) {
+                    const double expected = a * ((1.0 - s) + s * std::pow(g, l));
+                    EXPECT_NEAR(solver.foldedFactorPlane(c, l)[pk], expected,
+                                1e-6 * std::abs(expected) + 1e-12)
+                        << "h " << h << " channel " << c << " band " << l;
+                }
+            }
+        }
+    }
+}

@@ -2,11 +2,12 @@
 #pragma once
 /// @file
 /// @brief CPU version of the directional-dipole pipeline (seed 001 §4): for every pixel the
-/// camera sees (x_o), a disc is placed in the light's view around x_o (shrunk towards the inside,
-/// seed 001 §4.3.1) and the directional dipole S_d(x_i, ω₁₂; x_o) (Frisvad et al. 2014) is
-/// accumulated over the lit points x_i under the disc; passes accumulate progressively while the
-/// scene is static. The light-view G-buffer of the GPU method is replaced on the CPU by one
-/// Embree ray per disc sample (an exact "G-buffer" at infinite resolution).
+/// camera sees (x_o), points are sampled in the light's view around x_o (shrunk towards the
+/// inside, seed 001 §4.3.1) — importance-sampled with the better dipole's exact sampler (seed 004
+/// §4) instead of seed 001's uniform disc — and the directional dipole S_d(x_i, ω₁₂; x_o)
+/// (Frisvad et al. 2014) is accumulated over the lit points x_i; passes accumulate progressively
+/// while the scene is static. The light-view G-buffer of the GPU method is replaced on the CPU by
+/// one Embree ray per sample (an exact "G-buffer" at infinite resolution).
 ///
 ///     DirectionalDipoleRenderer r(scene);         // directional lights only
 ///     for (int i = 0; i < 8; ++i) r.addPass();     // progressive refinement

@@ -23,7 +23,8 @@ Rgb lightIrradiance(const Light& light, const Point3f& p, const Normal3f& n, flo
 
 /// Camera-view buffers of `scene.objects[objectIndex]` (pixel centres, scene.camera size).
 /// Pixels that miss the object stay uncovered. Irradiance includes shadow rays against the
-/// object itself (the scene holds one object). The material is sampled half a voxel inside.
+/// object itself (the scene holds one object). The material is sampled half a voxel inside,
+/// stepping further in (≤ 3 voxels) past masked-out voxels cut by the surface.
 /// @throw ValueError if the scene has no such object, no material, or a bad camera.
 SurfaceBuffers buildSurfaceBuffers(const Scene& scene, int objectIndex = 0);
 

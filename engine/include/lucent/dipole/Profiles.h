@@ -117,9 +117,11 @@ private:
 
 /// Frisvad, Hachisuka & Kjeldsen 2014, "Directional Dipole Model for Subsurface Scattering",
 /// ACM TOG 34(1):5. The diffusive part S_d(x_i, ω₁₂; x_o) = S′_d(x_o − x_i, ω₁₂, d_r)
-/// − S′_d(x_o − x_v, ω_v, d_v) (paper Eq. 13–15), S′_d the ray-source diffusion term with
+/// − S′_d(x_o − x_v, ω_v, d_v), S′_d the ray-source diffusion term with
 /// C_φ(η), C_E(η) and the 1/(4 C_φ(1/η)) exitance-to-radiance factor. Full BSSRDF:
-/// S = T₁₂(ω_i) S_d T₂₁(ω_o) (Fresnel transmittances applied by the caller).
+/// S = T₁₂(ω_i) S_d T₂₁(ω_o) (Fresnel transmittances applied by the caller). d_e: paper Eq. 21;
+/// negative values clamped to 0 (paper §6.1); the single-scattering term (paper Eq. 12) is not
+/// included. Experimental: see docs/methods/dipole.md §1 and §4 (measured error).
 class DirectionalDipole {
 public:
     DirectionalDipole() = default;

@@ -133,6 +133,7 @@ public:
     static constexpr int MAX_LIGHTS = 8;
 
 private:
+    void createPrograms(const ShaderLibrary& library);
     struct Impl;
     std::unique_ptr<Impl> m;
 };

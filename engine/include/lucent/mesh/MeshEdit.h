@@ -3,7 +3,8 @@
 /// @file
 /// @brief Mesh editing with library code: OpenMesh quadric decimation, Loop subdivision and
 /// Laplacian smoothing; VTK hole filling, cleaning and largest-component extraction. Every
-/// function returns a new mesh with fresh vertex normals and leaves its input untouched.
+/// function returns a new mesh with fresh vertex normals, leaves its input untouched and
+/// throws ValueError for an empty mesh or a parameter outside its documented range.
 ///
 ///     TriangleMesh lo = decimate(mesh, /*targetTriangles=*/5000);
 ///     TriangleMesh closed = fillHoles(scan, /*maxHoleSize=*/20.f);   // mm

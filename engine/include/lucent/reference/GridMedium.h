@@ -28,6 +28,10 @@ namespace lucent {
 enum class MajorantMode : uint8_t {
     Bricks,  ///< one majorant per brick of BRICK³ voxels, traversed by DDA (empty bricks skipped)
     Global,  ///< one majorant for the whole grid (the baseline the bricks are measured against)
+    /// Bricks when the global majorant is on average ≥ 4× the majorant of the non-empty
+    /// bricks (sparse or strongly varying media), else Global (dense, nearly uniform objects,
+    /// where the DDA costs more than the null collisions it saves).
+    Auto,
 };
 
 /// Unreduced per-voxel coefficients with a majorant grid. Immutable after construction, so it
@@ -63,6 +67,10 @@ public:
 
     [[nodiscard]] const GridSpec& spec() const { return m_spec; }
     [[nodiscard]] const Options& options() const { return m_options; }
+    /// The majorant mode in effect (Auto resolved to Bricks or Global).
+    [[nodiscard]] MajorantMode majorantMode() const {
+        return m_cells > 1 ? MajorantMode::Bricks : MajorantMode::Global;
+    }
     /// True when the homogeneous fast path is enabled and every voxel holds the same value.
     [[nodiscard]] bool isHomogeneous() const { return m_homogeneous; }
 
@@ -85,10 +93,12 @@ public:
     /// Linear voxel index of p, or −1 outside the grid.
     [[nodiscard]] int64_t voxelIndex(const Point3f& p) const {
         const Vector3f q = (p - m_spec.origin) * m_invVoxelSize;
-        if (!(q.x >= 0.f && q.y >= 0.f && q.z >= 0.f)) return -1;  // also rejects NaN
+        if (!(q.x >= 0.f && q.y >= 0.f && q.z >= 0.f))
+            return -1;  // also rejects NaN
         const int x = int(q.x), y = int(q.y), z = int(q.z);
         const int r = m_spec.resolution;
-        if (x >= r || y >= r || z >= r) return -1;
+        if (x >= r || y >= r || z >= r)
+            return -1;
         return (int64_t(z) * r + y) * r + x;
     }
     //! @}
@@ -103,12 +113,13 @@ public:
     /// (0–2, or ANY_CHANNEL for the largest of the three).
     /// Stops when `segment` returns false. `d` need not be unit (t is in units of |d|).
     template <typename F>
-    void forEachMajorantSegment(const Point3f& o, const Vector3f& d, float tMin, float tMax,
-                                int ch, F&& segment) const;
+    void forEachMajorantSegment(const Point3f& o, const Vector3f& d, float tMin, float tMax, int ch,
+                                F&& segment) const;
     //! @}
 
 private:
     void buildMajorants();
+    void buildMajorants(MajorantMode mode);
 
     GridSpec m_spec;
     Options m_options;
@@ -116,30 +127,34 @@ private:
     bool m_homogeneous = false;
     std::array<std::vector<float>, 3> m_sigmaT, m_sigmaS, m_g;  // per channel, x fastest
     std::array<float, 4> m_globalMajorant{0.f, 0.f, 0.f, 0.f};
-    int m_cells = 0;             // majorant cells per axis
-    float m_cellSize = 1.f;      // mm
+    int m_cells = 0;                // majorant cells per axis
+    float m_cellSize = 1.f;         // mm
     std::vector<float> m_majorant;  // cells³ × 4 (r, g, b, max; channel fastest)
 };
 
 template <typename F>
-void GridMedium::forEachMajorantSegment(const Point3f& o, const Vector3f& d, float tMin,
-                                        float tMax, int ch, F&& segment) const {
-    if (m_cells == 0) return;
+void GridMedium::forEachMajorantSegment(const Point3f& o, const Vector3f& d, float tMin, float tMax,
+                                        int ch, F&& segment) const {
+    if (m_cells == 0)
+        return;
     // Clip to the grid box (slab test).
     const Bounds3f box = m_spec.bounds();
     float t0 = tMin, t1 = tMax;
     for (int a = 0; a < 3; ++a) {
         if (d[a] == 0.f) {
-            if (o[a] < box.lo[a] || o[a] > box.hi[a]) return;
+            if (o[a] < box.lo[a] || o[a] > box.hi[a])
+                return;
             continue;
         }
         const float inv = 1.f / d[a];
         float tn = (box.lo[a] - o[a]) * inv, tf = (box.hi[a] - o[a]) * inv;
-        if (tn > tf) std::swap(tn, tf);
+        if (tn > tf)
+            std::swap(tn, tf);
         t0 = std::max(t0, tn);
         t1 = std::min(t1, tf);
     }
-    if (!(t0 < t1)) return;
+    if (!(t0 < t1))
+        return;
     if (m_cells == 1) {
         segment(t0, t1, m_majorant[size_t(ch)]);
         return;
@@ -167,14 +182,16 @@ void GridMedium::forEachMajorantSegment(const Point3f& o, const Vector3f& d, flo
     }
     float t = t0;
     while (t < t1) {
-        const int a = tNext[0] < tNext[1] ? (tNext[0] < tNext[2] ? 0 : 2)
-                                          : (tNext[1] < tNext[2] ? 1 : 2);
+        const int a =
+            tNext[0] < tNext[1] ? (tNext[0] < tNext[2] ? 0 : 2) : (tNext[1] < tNext[2] ? 1 : 2);
         const float tEnd = std::min(tNext[a], t1);
         const size_t idx = (size_t(cell[2]) * m_cells + cell[1]) * m_cells + cell[0];
-        if (tEnd > t && !segment(t, tEnd, m_majorant[idx * 4 + size_t(ch)])) return;
+        if (tEnd > t && !segment(t, tEnd, m_majorant[idx * 4 + size_t(ch)]))
+            return;
         t = std::max(t, tEnd);
         cell[a] += step[a];
-        if (cell[a] < 0 || cell[a] >= m_cells) return;
+        if (cell[a] < 0 || cell[a] >= m_cells)
+            return;
         tNext[a] += tDelta[a];
     }
 }

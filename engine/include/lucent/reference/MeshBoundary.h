@@ -17,8 +17,8 @@ namespace lucent {
 
 /// A ray's first surface crossing.
 struct SurfaceHit {
-    float t = 0.f;       ///< distance along the (unit) ray direction, mm
-    Normal3f normal{0.f}; ///< unit geometric normal of the triangle, pointing out of the object
+    float t = 0.f;         ///< distance along the (unit) ray direction, mm
+    Normal3f normal{0.f};  ///< unit geometric normal of the triangle, pointing out of the object
 };
 
 /// A closed triangle mesh (outward counter-clockwise faces) as the medium's boundary.

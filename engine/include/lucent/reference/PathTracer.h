@@ -23,27 +23,30 @@ namespace lucent {
 
 /// Progress of a running render (called from the rendering thread between passes).
 struct ReferenceProgress {
-    int spp = 0;        ///< samples per pixel done
-    int maxSpp = 0;     ///< cap
-    float rse = INF;    ///< current relative standard error (see renderReference)
+    int spp = 0;      ///< samples per pixel done
+    int maxSpp = 0;   ///< cap
+    float rse = INF;  ///< current relative standard error (see renderReference)
     float targetRse = 0.f;
     double elapsedMs = 0.0;
 };
 
 struct ReferenceOptions {
-    int spp = 64;            ///< samples per pixel (the cap when targetRse > 0); ≥ 3
-    float targetRse = 0.f;   ///< stop when the image RSE ≤ this (0: run to spp)
-    uint64_t seed = 1;       ///< image = f(scene, seed, spp), independent of threads
-    int threads = 0;         ///< worker threads, 0 = all
+    int spp = 64;           ///< samples per pixel (the cap when targetRse > 0); ≥ 3
+    float targetRse = 0.f;  ///< stop when the image RSE ≤ this (0: run to spp)
+    uint64_t seed = 1;      ///< image = f(scene, seed, spp), independent of threads
+    int threads = 0;        ///< worker threads, 0 = all
     BoundaryModel boundary = BoundaryModel::Dielectric;
     bool subsurfaceOnly = false;
-    MajorantMode majorant = MajorantMode::Bricks;
+    MajorantMode majorant = MajorantMode::Auto;
     /// true: every sample traces one path for all three channels with hero-channel spectral
     /// MIS (hero = sample index mod 3); false: sample s traces channel s mod 3 only.
     bool spectralMis = true;
     int maxScatter = 1 << 20;
     /// Called after every pass; may be empty.
     std::function<void(const ReferenceProgress&)> progress;
+    /// Called after every pass with the current mean image (progressive display); may be
+    /// empty (then no preview image is assembled).
+    std::function<void(const ImageRgb& mean)> preview;
     /// Polled between tiles; when it becomes true the render stops with the passes done.
     const std::atomic<bool>* cancel = nullptr;
 };
@@ -56,6 +59,7 @@ struct ReferenceImage {
     float rse = INF;     ///< final relative standard error
     double seconds = 0;  ///< wall time
     uint64_t paths = 0;  ///< camera paths traced
+    uint64_t tentativeCollisions = 0;  ///< σt lookups of delta and ratio tracking (work measure)
     bool cancelled = false;
 };
 

@@ -64,8 +64,8 @@ struct TrackingStats {
 
 /// Delta (Woodcock) tracking along o + t·d, t ∈ [0, tMax], channel ch: returns the distance of
 /// the first real collision, or nothing if the ray reaches tMax. `d` unit.
-std::optional<float> sampleFreeFlight(const GridMedium& medium, const Point3f& o,
-                                      const Vector3f& d, float tMax, int ch, Pcg32& rng,
+std::optional<float> sampleFreeFlight(const GridMedium& medium, const Point3f& o, const Vector3f& d,
+                                      float tMax, int ch, Pcg32& rng,
                                       TrackingStats* stats = nullptr);
 
 /// Ratio-tracking estimate of the transmittance exp(−∫₀^tMax σt) along o + t·d (unbiased;
@@ -75,11 +75,11 @@ float estimateTransmittance(const GridMedium& medium, const Point3f& o, const Ve
 
 /// Where an analog medium walk ended.
 struct WalkResult {
-    bool escaped = false;    ///< left the object (false: absorbed, cut or lost)
-    Point3f position{0.f};   ///< exit point on the surface (mm)
-    Vector3f direction{0.f}; ///< direction after leaving (outside the object)
-    float weight = 0.f;      ///< product of single-scattering albedos (and roulette factors)
-    int scatterCount = 0;    ///< real scattering events
+    bool escaped = false;     ///< left the object (false: absorbed, cut or lost)
+    Point3f position{0.f};    ///< exit point on the surface (mm)
+    Vector3f direction{0.f};  ///< direction after leaving (outside the object)
+    float weight = 0.f;       ///< product of single-scattering albedos (and roulette factors)
+    int scatterCount = 0;     ///< real scattering events
 };
 
 /// Random walk inside the object from `p` (inside, or on the surface with `d` pointing in)
@@ -87,8 +87,7 @@ struct WalkResult {
 /// HG scattering, weight ×= σs/σt per collision, Fresnel reflection/refraction at the surface
 /// for the Dielectric model. No light is gathered: it measures where flux goes.
 WalkResult walkMedium(const VolumeScene& scene, const Point3f& p, const Vector3f& d, int ch,
-                      Pcg32& rng, const TransportOptions& options,
-                      TrackingStats* stats = nullptr);
+                      Pcg32& rng, const TransportOptions& options, TrackingStats* stats = nullptr);
 
 /// Transmittance from p to the light sample at distance `dist` along unit `wi` (INF for a
 /// directional light), through every stretch of the object the segment crosses, times the
@@ -102,8 +101,7 @@ float shadowTransmittance(const VolumeScene& scene, const Point3f& p, const Vect
 /// reflection, subsurface transport with next-event estimation to every light, light seen
 /// directly or through the unscattered medium. Black background.
 float estimateRadiance(const VolumeScene& scene, const Point3f& o, const Vector3f& d, int ch,
-                       Pcg32& rng, const TransportOptions& options,
-                       TrackingStats* stats = nullptr);
+                       Pcg32& rng, const TransportOptions& options, TrackingStats* stats = nullptr);
 
 /// Ratio-tracking transmittance of all three channels at once against the common majorant
 /// (GridMedium::ANY_CHANNEL): Tc = Π (1 − σt,c/σ̄), unbiased per channel.

@@ -15,6 +15,7 @@
 
 #include <lucent/sslpv/SslpvSolver.h>
 
+#include <cstdint>
 #include <memory>
 
 namespace lucent {

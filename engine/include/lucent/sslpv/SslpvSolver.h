@@ -92,6 +92,9 @@ struct SslpvOptions {
     /// Stop once the flux left in the propagation grid is below stopEpsilon · injected flux
     /// (all channels); 0 runs maxSteps. [0, 1].
     float stopEpsilon = 0.f;
+    /// Skip z-slices whose neighbourhood holds no light (exact: their new values are zero).
+    /// Off: every cell of the active box is computed each step (the paper's dense GPU work).
+    bool skipEmptySlices = true;
 };
 
 /// One injection texel of a reflective shadow map (§3.1).
@@ -190,13 +193,14 @@ private:
     // m_factor[ch][band] = a · ((1 − s′) + s′·g^l), a = Beer attenuation, s′ = per-step
     // scattering fraction; m_mask = 1 inside, 0 in sink cells.
     std::vector<float> m_factor[3][3];
-    std::vector<float> m_absorb[3];  ///< 1 − a per cell (energy bookkeeping)
     std::vector<float> m_mask;
     bool m_homogeneous = false;
     float m_homFactor[3][3] = {};
     float m_homAbsorb[3] = {};
     CoordBox m_active;  ///< cells that can hold light (inside cells dilated by one, or all)
     CoordBox m_lastActive;
+    std::vector<uint8_t> m_injSliceLit;  ///< z-slices holding injected light
+    std::vector<uint8_t> m_sliceLit[2];  ///< z-slices of m_prop[k] that may be non-zero
     SslpvStats m_stats;
 };
 
