@@ -90,7 +90,8 @@ ImageRgb renderReferencePt(const RenderRequest& req) {
 
 #ifdef LUCENT_CLI_HAS_PROFILE
 }  // namespace
-/// Defined in Command_profile.cpp: the dipole family on the CPU (--spp, --seed).
+/// Defined in Command_profile.cpp: the dipole family (GPU image-space provider, or the CPU
+/// with --cpu / without EGL; --spp, --spp-frame, --seed).
 ImageRgb renderDipoleMethod(const Scene& scene, const std::string& model, bool subsurfaceOnly,
                             const Args& args);
 namespace {
@@ -131,8 +132,9 @@ const RenderMethod METHODS[] = {
      &renderReferencePt},
 #endif
 #ifdef LUCENT_CLI_HAS_PROFILE
-    {"dipole", "CPU image-space Jensen dipole (Mertens 2005; --spp, --seed)", &renderDipole},
-    {"better-dipole", "CPU image-space better dipole (d'Eon 2012; --spp, --seed)",
+    {"dipole", "image-space Jensen dipole (Mertens 2005; GL, or --cpu; --spp, --seed)",
+     &renderDipole},
+    {"better-dipole", "image-space better dipole (d'Eon 2012; GL, or --cpu; --spp, --seed)",
      &renderBetterDipole},
     {"dirpole", "CPU directional dipole pipeline (Frisvad 2014; directional lights; --spp)",
      &renderDirpole},
@@ -162,8 +164,8 @@ int runRender(const std::vector<std::string>& argv) {
     const Args args(argv,
                     {"method", "o", "output", "width", "height", "exposure", "tonemap", "spp",
                      "seed", "threads", "boundary", "grid", "steps", "sh",
-                     "attenuation"},
-                    {"subsurface-only"});
+                     "attenuation", "spp-frame", "mode"},
+                    {"subsurface-only", "cpu", "gl"});
     if (args.positional().size() != 1)
         LUCENT_THROW(ValueError, "expected exactly one SCENE.json (see --help)");
     const std::string out = args.value("o").value_or(args.valueOr("output", ""));
@@ -213,10 +215,16 @@ const Command renderCommand{
     "  --method NAME      direct (default): opaque surface, Lambert + Blinn-Phong, shadow maps\n"
     "                     reference: CPU path tracer (no GL), with --spp N (64), --seed S,\n"
     "                     --threads T, --boundary matched|dielectric (docs/reference.md)\n"
-    "                     dipole, better-dipole, dirpole: CPU dipole family, subsurface term\n"
-    "                     only, --spp N (32), --seed S (docs/methods/dipole.md)\n"
+    "                     dipole, better-dipole: GPU image-space dipole accumulated over\n"
+    "                     frames of --spp-frame M (16) up to --spp N (256) samples per pixel,\n"
+    "                     --seed S, plus the specular surface reflection; --cpu (or no EGL):\n"
+    "                     CPU gather, subsurface term only, --spp N (32)\n"
+    "                     dirpole: CPU directional dipole, subsurface term only, --spp N (32)\n"
+    "                     (docs/methods/dipole.md)\n"
     "                     sslpv: CPU SSLPV with --grid N (32), --steps K (32), --sh 1|2,\n"
-    "                     --attenuation absorption|extinction (absorption)\n"
+    "                     --mode calibrated|paper (calibrated), with paper:\n"
+    "                     --attenuation absorption|extinction (absorption); --gl: the GL\n"
+    "                     live-preview provider through the GPU scene renderer\n"
     "                     (docs/methods/sslpv.md)\n"
     "  -o, --output FILE  .exr: linear radiance W/(mm^2 sr), 32-bit float;\n"
     "                     .png: 8-bit sRGB after --exposure and --tonemap (default aces)\n"

@@ -206,14 +206,18 @@ int referenceError(float eta) {
             modelName(model), mean.r, mean.g, mean.b, 100.f * (mean.r / ptMean.r - 1.f),
             100.f * (mean.g / ptMean.g - 1.f), 100.f * (mean.b / ptMean.b - 1.f));
     }
-    // Directional dipole at normal incidence, semi-infinite plane: L = T₂₁ · ρ_dir... via its
-    // exitance: B = F_t(1) ∫ R dA, L = F_t(1) B/π (the profile folds in 1/(4C_φ(1/η))).
+    // Directional dipole at normal incidence, semi-infinite plane, uniform E:
+    // L = T₂₁ T₁₂ E ∫ S_d dA. The radial profile is R = S_d·4πC_φ(1/η) (Profiles.h), so
+    // ∫ S_d dA = ρ/(π(1 − 2C₁(1/η))) (Frisvad et al. 2014's 1/(4C_φ(1/η)) exitance→radiance
+    // factor; it is 1 at η = 1).
     const double ft = 1.0 - fresnelReflectance(1.0, eta);
+    const double toRadiance =
+        1.0 / (3.14159265358979323846 * (1.0 - 2.0 * fresnelMoment(1, 1.0 / double(eta))));
     Rgb dir;
     for (int c = 0; c < 3; ++c) {
         const double rho =
             totalReflectance(Model::Directional, fromReduced(m.sigma_t[c], m.sigma_s[c], eta));
-        dir[c] = float(ft * ft * rho / 3.14159265358979323846);
+        dir[c] = float(ft * ft * rho * toRadiance);
     }
     std::printf(
         "%-14s plane, closed: L = (%.5f, %.5f, %.5f), relative error vs reference (%+.1f%%, "

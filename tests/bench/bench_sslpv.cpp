@@ -59,8 +59,12 @@ double floorMsPerStep(int n, int order) {
 void BM_SslpvPropagate(benchmark::State& state) {
     const int n = int(state.range(0)), steps = int(state.range(1)), order = int(state.range(2));
     const bool het = state.range(3) != 0;
-    SslpvSolver solver(
-        {.order = order, .maxSteps = steps, .skipAccumulateSteps = 0, .removeExitant = false});
+    // Dense (every cell every step, the paper's GPU work): no empty-slice skipping.
+    SslpvSolver solver({.order = order,
+                        .maxSteps = steps,
+                        .skipAccumulateSteps = 0,
+                        .removeExitant = false,
+                        .skipEmptySlices = false});
     solver.setMaterial(material(n, het), 1.3f);
     std::vector<SslpvInjectionSample> texels;
     for (int y = 0; y < n; ++y)

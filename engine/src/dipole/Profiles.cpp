@@ -243,7 +243,10 @@ DirectionalDipole::DirectionalDipole(double sigma_a, double sigma_s, double eta)
     m_zero = false;
     m_sigmaTp = sigmaTp;
     const double alphaP = sigma_s / sigmaTp;
-    // Frisvad et al. 2014, Sec. 4: D = (2σa + σs′)/(3σt′²), σ_tr = √(σa/D).
+    // Frisvad et al. 2014, Sec. 4: D = (2σa + σs′)/(3σt′²), σ_tr = √(σa/D). (The authors'
+    // reference program uses D = 1/(3σt′); identical at σa = 0, ρ lower by ≈ 3 % at α′ = 0.9.)
+    // No α′ factor anywhere in S_d, as published: the model's total exceeds 1 at σa = 0
+    // (docs/methods/dipole.md, "Why the directional dipole is too bright").
     m_D = (2.0 * sigma_a + sigma_s) / (3.0 * sigmaTp * sigmaTp);
     m_sigmaTr = std::sqrt(sigma_a / m_D);
     // C_φ(η) = (1 − 2C₁(η))/4, C_E(η) = (1 − 3C₂(η))/2, A = (1 − C_E(η))/(2C_φ(η)).
@@ -298,6 +301,8 @@ double DirectionalDipole::Sd(const glm::dvec3& xi, const glm::dvec3& ni, const g
         const double cosBeta = -std::sqrt(std::max(0.0, r2 - xw * xw) / (r2 + m_de * m_de));
         dr2 = r2 + m_D * mu0 * (m_D * mu0 - 2.0 * m_de * cosBeta);
     } else {
+        // The paper's 1/(3σt) uses the unreduced σt; Lucent's media are reduced (g = 0), so
+        // σt = σt′ here.
         const double l = 1.0 / (3.0 * m_sigmaTp);
         dr2 = r2 + l * l;
     }

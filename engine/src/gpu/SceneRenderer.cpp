@@ -665,6 +665,11 @@ GBufferView SceneRenderer::Impl::gbufferView() const {
     v.viewFromWorld = viewFromWorld;
     v.clipFromWorld = clipFromWorld;
     v.cameraPosition = camera.position;
+    v.lightBuffer = lightSsbo.id();
+    v.shadowLayerBuffer = layerSsbo.id();
+    v.shadowMapTexture = shadowMaps.id();
+    v.lightCount = int(lights.size());
+    v.shadows = settings.shadows;
     return v;
 }
 

@@ -247,10 +247,23 @@ ImportedMaterial importOpen(vdb::io::File& file, const std::string& path) {
             LUCENT_THROW(IoError, "VDB file '", path, "': grid '", grid->getName(),
                          "' has active voxels ", box, " outside the ", res, "^3 grid");
     }
-    for (int k = 1; k < 3; ++k)
-        if (!grids[k]->tree().hasSameTopology(grids[0]->tree()))
+    // Same active voxels in every grid. Tree topology may legitimately differ: each grid is
+    // pruned on its own, so a block uniform in g but varying in σt is a tile in one and a leaf
+    // in the other. Equal counts plus "every active voxel of grid k is active in sigma_t"
+    // means equal sets.
+    for (int k = 1; k < 3; ++k) {
+        bool same = grids[k]->activeVoxelCount() == grids[0]->activeVoxelCount();
+        const auto acc0 = grids[0]->getConstAccessor();
+        for (auto it = grids[k]->cbeginValueOn(); same && it; ++it) {
+            vdb::CoordBBox box;
+            it.getBoundingBox(box);
+            for (auto ijk = box.begin(); same && ijk; ++ijk)
+                same = acc0.isValueOn(*ijk);
+        }
+        if (!same)
             LUCENT_THROW(IoError, "VDB file '", path, "': grid '", grids[k]->getName(),
                          "' is not active on the same voxels as 'sigma_t'");
+    }
 
     // Inside mask = active voxels of sigma_t (tiles expanded); then the values, validated as
     // they are stored: finite and already in the sanitised domain (so set() keeps them as is).

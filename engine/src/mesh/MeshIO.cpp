@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <set>
@@ -184,6 +186,74 @@ void checkHeader(const std::string& path, const std::string& ext, uintmax_t file
 
 }  // namespace
 
+/// Walks the body of an ASCII PLY file token by token against its header (called after
+/// checkHeader accepted the header). OpenMesh's ASCII PLY reader loops forever on some
+/// truncated or corrupted bodies (a failed stream read is never detected; found by the fuzz
+/// test), so every token it will read must be present and be a plain decimal number.
+void checkAsciiPlyBody(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    struct Element {
+        std::string name;
+        uintmax_t count = 0;
+        std::vector<bool> isList;  // per property
+    };
+    std::vector<Element> elements;
+    std::string line;
+    bool ascii = false;
+    while (std::getline(f, line)) {
+        if (!line.empty() && line.back() == '\r')
+            line.pop_back();
+        std::istringstream words(line);
+        std::string w0, w1, w2;
+        words >> w0 >> w1 >> w2;
+        if (w0 == "format") {
+            ascii = w1 == "ascii";
+        } else if (w0 == "element") {
+            elements.push_back({w1, uintmax_t(std::stoull(w2)), {}});
+        } else if (w0 == "property" && !elements.empty()) {
+            elements.back().isList.push_back(w1 == "list");
+        } else if (w0 == "end_header") {
+            break;
+        }
+    }
+    if (!ascii)
+        return;
+    auto isPlainNumber = [](const std::string& t) {
+        if (t.empty() || t.find_first_not_of("0123456789+-.eE") != std::string::npos)
+            return false;
+        char* end = nullptr;
+        std::strtod(t.c_str(), &end);
+        return end == t.c_str() + t.size();
+    };
+    std::string token;
+    for (const Element& e : elements) {
+        for (uintmax_t i = 0; i < e.count; ++i) {
+            for (const bool list : e.isList) {
+                uintmax_t n = 1;
+                if (list) {
+                    if (!(f >> token) || !isPlainNumber(token))
+                        LUCENT_THROW(IoError, "mesh file '", path,
+                                     "': ASCII PLY body is truncated or "
+                                     "malformed in element '",
+                                     e.name, "' ", i);
+                    const double k = std::strtod(token.c_str(), nullptr);
+                    if (!(k >= 0 && k <= 1e6) || k != std::floor(k))
+                        LUCENT_THROW(IoError, "mesh file '", path, "': ASCII PLY list length '",
+                                     token, "' in element '", e.name, "' ", i, " is invalid");
+                    n = uintmax_t(k);
+                }
+                for (uintmax_t k = 0; k < n; ++k)
+                    if (!(f >> token) || !isPlainNumber(token))
+                        LUCENT_THROW(IoError, "mesh file '", path,
+                                     "': ASCII PLY body is truncated or "
+                                     "malformed in element '",
+                                     e.name, "' ", i,
+                                     (f ? std::string(" (token '") + token + "')" : std::string()));
+            }
+        }
+    }
+}
+
 MeshReport validateMesh(TriangleMesh& mesh, const std::string& name) {
     MeshReport r;
     r.inputTriangles = mesh.triangles.size();
@@ -314,6 +384,8 @@ TriangleMesh loadMesh(const std::string& path, float scale, MeshReport* report) 
         LUCENT_THROW(IoError, "mesh file '", path, "': unsupported extension '", ext,
                      "' (expected .obj, .ply, .off, .stl, .vtp or .vtk)");
     checkHeader(path, ext, fs::file_size(path, ec));
+    if (ext == ".ply")
+        checkAsciiPlyBody(path);
     detail::RawMesh raw;
     try {
         raw = isOpenMeshFormat(ext) ? detail::readOpenMesh(path) : detail::readVtk(path);

@@ -242,8 +242,9 @@ ImageRgb SslpvRenderer::render(const Camera& camera) {
                         continue;  // seen from inside: no exterior radiance
                     Rgb L(0.f);
                     if (m_opt.subsurface) {
-                        // Eq. 4/7: L_o = T(ω_i, ω_o) L_i with T = 1 − F_r(cos θ_o, η).
-                        L += (1.f - dielectricReflectance(cosO, m_eta)) *
+                        // Eq. 4/7: L_o = T(ω_i, ω_o) L_i with T = 1 − F_r(cos θ_o, η);
+                        // calibrated mode also scales by G/η² (SslpvSolver::exitScale).
+                        L += (m_solver.exitScale() * (1.f - dielectricReflectance(cosO, m_eta))) *
                              m_solver.radiance(hit->position, n);
                     }
                     if (m_opt.direct) {

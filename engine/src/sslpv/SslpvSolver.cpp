@@ -43,18 +43,42 @@ __attribute__((always_inline)) inline float expNonPositive(float x) {
     return p * scale;
 }
 
+/// How the per-step attenuation exponent β is formed from one cell's σt, σs′ (mm⁻¹) and Δx:
+/// β = linear·(σt − scatterLoss·σs′)·Δx + transport·√(3(σt − σs′)σt)·Δx
+///     + diffusion·3(σt − σs′)σt·Δx².
+/// Paper mode: linear = 1, diffusion = 0, scatterLoss 0 (extinction, §3.2.1) or 1 (absorption).
+/// Calibrated mode: scatterLoss = 1 and the fitted weights (SslpvCalibration; the second term
+/// is (σ_tr·Δx)², σ_tr = √(3σa σt′), Jensen et al. 2001 Eq. 5).
+struct AttenuationModel {
+    float scatterLoss = 0.f;
+    float linear = 1.f;
+    float transport = 0.f;  ///< weight of σ_tr·Δx = √(3σaσt)·Δx
+    float diffusion = 0.f;
+};
+
+AttenuationModel attenuationModel(const SslpvOptions& o) {
+    if (o.mode == SslpvMode::Calibrated)
+        return {1.f, o.calibration.linear, o.calibration.transport, o.calibration.diffusion};
+    return {o.attenuation == SslpvAttenuation::Extinction ? 0.f : 1.f, 1.f, 0.f, 0.f};
+}
+
 /// Per-cell factors of one row (§3.2.1 and Eq. 3): f_l = a·((1 − s′) + s′ g^l) with
-/// a = exp(−σatt Δx), s′ = 1 − exp(−σs′ Δx). Cloned like the propagation kernel so the
-/// polynomial exp vectorises (16 cells per AVX-512 instruction).
+/// a = exp(−β) (AttenuationModel), s′ = 1 − exp(−σs′ Δx). Cloned like the propagation kernel
+/// so the polynomial exp vectorises (16 cells per AVX-512 instruction).
 __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void foldFactorRow(
     const float* __restrict st, const float* __restrict ssIn, const float* __restrict gg,
     float* __restrict f0, float* __restrict f1, float* __restrict f2, int n, float dx,
-    bool extinction) {
-    const float scatterLoss = extinction ? 0.f : 1.f;  // σatt = σt − scatterLoss·σs′
+    AttenuationModel model) {
+    const float scatterLoss = model.scatterLoss;  // σatt = σt − scatterLoss·σs′
+    const float lin = model.linear * dx;
+    const float quad = 3.f * model.diffusion * dx * dx;
+    const float tr = model.transport * dx;
     for (int x = 0; x < n; ++x) {
         const float ss = ssIn[x] < st[x] ? ssIn[x] : st[x];
         const float sFrac = 1.f - expNonPositive(-ss * dx);
-        const float a = expNonPositive((scatterLoss * ss - st[x]) * dx);
+        const float tr2 = 3.f * (st[x] - ss) * st[x];  // σ_tr² (Jensen et al. 2001, Eq. 5)
+        const float a =
+            expNonPositive((scatterLoss * ss - st[x]) * lin - tr * std::sqrt(tr2) - quad * tr2);
         const float keep = 1.f - sFrac;
         f0[x] = a;
         f1[x] = a * (keep + sFrac * gg[x]);
@@ -321,6 +345,18 @@ SslpvSolver::SslpvSolver(const SslpvOptions& options) {
     setOptions(options);
 }
 
+SslpvCalibration defaultSslpvCalibration() {
+    // Fitted by `lucent-cli bench sslpv-fit` (docs/methods/sslpv.md, "Calibrated mode"):
+    // thick slabs, α′ ∈ [0.3, 0.99], Δx·σt ∈ {0.5, 1, 2, 4}, η = 1.3, classical dipole target.
+    SslpvCalibration c;
+    c.linear = 0.f;
+    c.transport = 0.f;
+    c.diffusion = 0.f;
+    c.gain[0] = 1.f;
+    c.gain[1] = 1.f;
+    return c;
+}
+
 void SslpvSolver::setOptions(const SslpvOptions& o) {
     LUCENT_CHECK(o.order == 1 || o.order == 2, "SSLPV option 'order' must be 1 or 2, got ",
                  o.order);
@@ -328,6 +364,18 @@ void SslpvSolver::setOptions(const SslpvOptions& o) {
                  "SSLPV option 'maxSteps' must be in [0, 4096], got ", o.maxSteps);
     LUCENT_CHECK(o.skipAccumulateSteps >= 0,
                  "SSLPV option 'skipAccumulateSteps' must be >= 0, got ", o.skipAccumulateSteps);
+    const SslpvCalibration& cal = o.calibration;
+    LUCENT_CHECK(std::isfinite(cal.linear) && cal.linear >= 0.f && std::isfinite(cal.transport) &&
+                     cal.transport >= 0.f && std::isfinite(cal.diffusion) && cal.diffusion >= 0.f,
+                 "SSLPV option 'calibration': linear, transport and diffusion must be finite "
+                 "and >= 0, got ",
+                 cal.linear, ", ", cal.transport, " and ", cal.diffusion);
+    LUCENT_CHECK(std::isfinite(cal.gain[0]) && cal.gain[0] > 0.f && std::isfinite(cal.gain[1]) &&
+                     cal.gain[1] > 0.f,
+                 "SSLPV option 'calibration.gain' must be finite and > 0, got ", cal.gain[0], ", ",
+                 cal.gain[1]);
+    LUCENT_CHECK(o.mode == SslpvMode::Paper || o.mode == SslpvMode::Calibrated,
+                 "SSLPV option 'mode' is not Paper or Calibrated");
     LUCENT_CHECK(std::isfinite(o.stopEpsilon) && o.stopEpsilon >= 0.f && o.stopEpsilon <= 1.f,
                  "SSLPV option 'stopEpsilon' must be in [0, 1], got ", o.stopEpsilon);
     // Order and sinks change where light is injected; everything changes propagation.
@@ -404,13 +452,16 @@ void SslpvSolver::rebuildFactors() {
     // Per-cell factors for every channel and band (§3.2.1 and Eq. 3). The paper's σs′ is a
     // dimensionless per-step fraction; ours is mm⁻¹, converted per cell as the probability of
     // scattering over one cell width, s′ = 1 − exp(−σs′·Δx) (docs/methods/sslpv.md).
-    const bool extinction = m_opt.attenuation == SslpvAttenuation::Extinction;
+    const AttenuationModel model = attenuationModel(m_opt);
     auto cellFactors = [&](size_t k, int c, float f[3], float& absorb) {  // homogeneous path
         const float st = m_material.sigma_t[c][k];
         const float ss = std::min(m_material.sigma_s[c][k], st);
         const float g = m_material.g[c][k];
         const float sFrac = 1.f - expNonPositive(-ss * dx);
-        const float a = expNonPositive(-(extinction ? st : st - ss) * dx);
+        const float tr2 = 3.f * (st - ss) * st;  // σ_tr² (Jensen et al. 2001, Eq. 5)
+        const float a =
+            expNonPositive(-(st - model.scatterLoss * ss) * model.linear * dx -
+                           model.transport * dx * std::sqrt(tr2) - model.diffusion * dx * dx * tr2);
         f[0] = a;  // band 0: Eq. 3 leaves c00 unchanged
         f[1] = a * ((1.f - sFrac) + sFrac * g);
         f[2] = a * ((1.f - sFrac) + sFrac * g * g);
@@ -490,7 +541,7 @@ void SslpvSolver::rebuildFactors() {
                         float* __restrict f0 = &m_factor[c][0][pk];
                         float* __restrict f1 = &m_factor[c][1][pk];
                         float* __restrict f2 = &m_factor[c][2][pk];
-                        foldFactorRow(st, ssIn, gg, f0, f1, f2, n, dx, extinction);
+                        foldFactorRow(st, ssIn, gg, f0, f1, f2, n, dx, model);
                     }
         },
         /*grain=*/1);
@@ -778,6 +829,14 @@ std::vector<float> SslpvSolver::sinkMaskPlane() const {
     if (m_opt.removeExitant && m_mask.size() == plane)
         return m_mask;
     return std::vector<float>(plane, 1.f);
+}
+
+float SslpvSolver::exitScale() const {
+    if (m_opt.mode != SslpvMode::Calibrated)
+        return 1.f;  // Eq. 4: L_o = T·L_i (the paper has no 1/η²)
+    // Radiance scaling at refraction, L_o = T·L_i/η² (docs/reference.md; Veach 1997 §5.2),
+    // times the fitted normalisation of the Eq. 7 estimate.
+    return m_opt.calibration.gain[m_opt.order - 1] / (m_eta * m_eta);
 }
 
 Rgb SslpvSolver::radiance(const Point3f& p, const Normal3f& n) const {

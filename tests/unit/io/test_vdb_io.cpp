@@ -217,3 +217,32 @@ TEST(VdbIo, SummaryTextListsGrids) {
           "grid 'color'", "vec3s", "float", "generator = Lucent", "active voxels"})
         EXPECT_NE(text.find(s), std::string::npos) << s << "\n" << text;
 }
+
+TEST(VdbIo, RoundTripWhenChannelsPruneDifferently) {
+    // σt varies voxel to voxel while g (and σs′) stay uniform: OpenVDB's per-grid prune turns
+    // uniform blocks of g into tiles while σt keeps leaves, so the trees' topologies differ
+    // although their active voxels are the same. Import must compare active voxels, not trees
+    // (this was a real bug: untouched default scenes could not be reopened).
+    MaterialVolume vol = randomPaintedVolume(32, /*seed=*/11);
+    const MaterialSample base = vol.base();
+    for (int z = 0; z < 32; ++z)
+        for (int y = 0; y < 32; ++y)
+            for (int x = 0; x < 32; ++x) {
+                MaterialSample s = base;
+                s.sigma_t = base.sigma_t + Rgb(0.01f * float(x + y + z));
+                vol.set({x, y, z}, s);
+            }
+    const std::string path = outputPath("prune_differently.vdb");
+    exportVdb(vol, path, {.rendererGrids = true, .materialName = "prune"});
+    const ImportedMaterial back = importVdb(path);
+    for (int z = 0; z < 32; ++z)
+        for (int y = 0; y < 32; ++y)
+            for (int x = 0; x < 32; ++x) {
+                const Coord c(x, y, z);
+                ASSERT_EQ(back.volume.isInside(c), vol.isInside(c));
+                const MaterialSample a = back.volume.at(c), b = vol.at(c);
+                ASSERT_TRUE(bitEqual(a.sigma_t, b.sigma_t) && bitEqual(a.sigma_s, b.sigma_s) &&
+                            bitEqual(a.g, b.g))
+                    << x << ' ' << y << ' ' << z;
+            }
+}

@@ -121,7 +121,10 @@ private:
 /// C_φ(η), C_E(η) and the 1/(4 C_φ(1/η)) exitance-to-radiance factor. Full BSSRDF:
 /// S = T₁₂(ω_i) S_d T₂₁(ω_o) (Fresnel transmittances applied by the caller). d_e: paper Eq. 21;
 /// negative values clamped to 0 (paper §6.1); the single-scattering term (paper Eq. 12) is not
-/// included. Experimental: see docs/methods/dipole.md §1 and §4 (measured error).
+/// included. Verified term by term against the authors' own reference program (Hachisuka &
+/// Frisvad's dirpole.cpp): this is the published model, and the published model itself is
+/// not energy-conserving (normal-incidence total 1.34 at σa = 0, η = 1; no α′ factor), hence
+/// +48..131 % against the path tracer. Experimental: docs/methods/dipole.md §1 and §4.
 class DirectionalDipole {
 public:
     DirectionalDipole() = default;

@@ -60,6 +60,13 @@ struct GBufferView {
     Mat4f viewFromWorld{1.f};
     Mat4f clipFromWorld{1.f};
     Point3f cameraPosition{0.f};
+    // Lights and shadow maps of the frame (already rendered when the provider runs), for
+    // providers that compute their own irradiance (dipole::DipoleSubsurfaceProvider).
+    unsigned lightBuffer = 0;        ///< SSBO: GpuLight[lightCount] (shared/LightingShared.h)
+    unsigned shadowLayerBuffer = 0;  ///< SSBO: GpuShadowLayer[] referenced by GpuLight::shadow
+    unsigned shadowMapTexture = 0;   ///< DEPTH_COMPONENT32F 2-D array, compare mode (PCF)
+    int lightCount = 0;
+    bool shadows = false;  ///< DirectSettings::shadows: GpuLight::shadow layers are valid
 };
 
 /// A pass adding subsurface (translucency) radiance to every covered pixel. The renderer owns

@@ -23,7 +23,25 @@ struct CoarseMaterial {
 /// Resamples `volume` to `resolution`³ cells over the same box. The effective σt of a coarse
 /// cell is chosen so that exp(−σt·Δx) equals the mean transmittance across the cell of its
 /// fine columns (averaged over the three axes); σs′ keeps the fine cells' albedo weighting.
+/// Each cell depends only on the fine voxels it overlaps; cells are computed in parallel
+/// (parallelFor) straight from the brick storage.
 /// @throw ValueError if resolution is outside [1, volume.resolution()].
 CoarseMaterial resampleForPropagation(const MaterialVolume& volume, int resolution);
+
+/// Incremental resampling for the live preview: recomputes only the coarse cells of `coarse`
+/// that overlap the fine bricks `dirtyBricks` (e.g. volume.takeDirtyBricks() after a stroke)
+/// and refreshes `coarse.homogeneous`. The result is bit-identical to
+/// resampleForPropagation(volume, coarse.spec.resolution) provided `coarse` was up to date
+/// for every brick not listed.
+///
+///     CoarseMaterial coarse = resampleForPropagation(volume, 32);
+///     paint(volume);                                            // strokes mark bricks dirty
+///     updateCoarseMaterial(coarse, volume, volume.takeDirtyBricks());
+///
+/// @return the number of coarse cells recomputed.
+/// @throw ValueError if `coarse` was not resampled from a volume with this GridSpec (origin,
+/// voxel size, resolution), its arrays have the wrong size, or a brick index is out of range.
+size_t updateCoarseMaterial(CoarseMaterial& coarse, const MaterialVolume& volume,
+                            const std::vector<int>& dirtyBricks);
 
 }  // namespace lucent

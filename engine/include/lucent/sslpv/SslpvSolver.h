@@ -82,7 +82,29 @@ enum class SslpvAttenuation {
     Absorption,  ///< exp(−σa·Δx), σa = σt − σs′: scattering is only redistributed (Eq. 3)
 };
 
-/// Solver settings. Changing order/steps/skip/sinks/attenuation re-propagates.
+/// How material parameters map to the per-step factors and the exitant radiance.
+enum class SslpvMode {
+    Paper,       ///< §3.2.1 + Eq. 3 with `attenuation`; L_o = T·L_i (Eq. 4, no 1/η²)
+    Calibrated,  ///< fitted per-step absorption (SslpvCalibration); L_o = G·T·L_i/η²
+};
+
+/// Constants of the calibrated mode (docs/methods/sslpv.md, "Calibrated mode"). Per step and
+/// cell: absorption exp(−β), β = linear·σa·Δx + transport·σ_tr·Δx + diffusion·(σ_tr·Δx)²,
+/// σ_tr = √(3σa·σt) (σt, σa reduced, mm⁻¹; Jensen et al. 2001, Eq. 5), and the fraction
+/// s′ = 1 − exp(−σs′·Δx) of Eq. 3; exitant radiance scaled by gain[order − 1]/η². Defaults: the
+/// least-squares fit against the classical dipole's thick-slab reflectance printed by
+/// `lucent-cli bench sslpv-fit` (tests/unit/sslpv/test_calibrated.cpp checks the residuals).
+struct SslpvCalibration {
+    float linear = 0.f;          ///< weight of σa·Δx in β, ≥ 0
+    float transport = 0.f;       ///< weight of σ_tr·Δx in β, ≥ 0
+    float diffusion = 0.f;       ///< weight of (σ_tr·Δx)² in β, ≥ 0
+    float gain[2] = {1.f, 1.f};  ///< radiance normalisation G for SH order 1 and 2, > 0
+};
+
+/// The fitted calibration (values from `lucent-cli bench sslpv-fit`, docs/methods/sslpv.md).
+SslpvCalibration defaultSslpvCalibration();
+
+/// Solver settings. Changing order/steps/skip/sinks/attenuation/mode re-propagates.
 struct SslpvOptions {
     int order = 1;                ///< SH order: 1 (4 coefficients, the paper) or 2 (9)
     int maxSteps = 32;            ///< propagation steps, [0, 4096]
@@ -95,6 +117,10 @@ struct SslpvOptions {
     /// Skip z-slices whose neighbourhood holds no light (exact: their new values are zero).
     /// Off: every cell of the active box is computed each step (the paper's dense GPU work).
     bool skipEmptySlices = true;
+    /// Paper (default; `attenuation` applies) or Calibrated (`calibration` applies, the
+    /// attenuation setting is ignored).
+    SslpvMode mode = SslpvMode::Paper;
+    SslpvCalibration calibration = defaultSslpvCalibration();
 };
 
 /// One injection texel of a reflective shadow map (§3.1).
@@ -139,6 +165,10 @@ public:
     CoarseMaterial& material() { return m_material; }
     /// Replaces the injection texels (lights or mesh moved): re-inject and re-propagate.
     void setInjectionSamples(std::vector<SslpvInjectionSample> samples);
+    /// The injection texels last set (SslpvSubsurfaceProvider reuses SslpvRenderer's RSM).
+    [[nodiscard]] const std::vector<SslpvInjectionSample>& injectionSamples() const {
+        return m_samples;
+    }
     //! @}
 
     /// True when solve() has work to do.
@@ -161,6 +191,10 @@ public:
     /// from the accumulation grid sampled half a cell inside along −n (trilinear over inside
     /// cells only). Not multiplied by Fresnel T (the caller knows ω_o).
     [[nodiscard]] Rgb radiance(const Point3f& p, const Normal3f& n) const;
+    /// Factor from radiance() times Fresnel T(ω_o) to the exitant radiance: 1 in Paper mode
+    /// (Eq. 4), gain[order − 1]/η² in Calibrated mode (radiance scaling at refraction,
+    /// docs/reference.md). L_o = exitScale()·T(ω_o)·radiance(p, n).
+    [[nodiscard]] float exitScale() const;
     //! @}
 
     //! @{ \name Folded propagation data (valid after solve(); for the GL path)

@@ -1,0 +1,47 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief The app's brush (engine BrushSettings plus the surface-relative depth) and the
+/// QUndoCommand that wraps one stroke of the engine's History (lucent/material/History.h).
+///
+/// Edits are applied by the engine when the user paints; pushing the command onto the
+/// QUndoStack does not apply them again. QUndoStack and History stay in lock-step: both are
+/// linear stacks, both drop their redo lists when a new edit arrives.
+
+#include <lucent/material/Brush.h>
+
+#include <QUndoCommand>
+
+#include <functional>
+
+namespace lucent::app {
+
+/// Brush as the Tools dock edits it.
+struct AppBrush {
+    BrushSettings engine;  ///< radius (mm), falloff, strength, mode, channels, value, spacing
+    /// Stamp centre placed this far below the picked surface point, along −normal (mm): 0 paints
+    /// a hemisphere into the surface, radius paints a full sphere just under it.
+    float depthMm = 0.f;
+};
+
+/// One engine History step (stroke, fill, procedural fill, preset) on the QUndoStack.
+class HistoryCommand : public QUndoCommand {
+public:
+    /// @param undoFn / redoFn call History::undo / History::redo on the document's volume.
+    HistoryCommand(const QString& text, std::function<void()> undoFn, std::function<void()> redoFn)
+        : QUndoCommand(text), m_undo(std::move(undoFn)), m_redo(std::move(redoFn)) {}
+    void undo() override { m_undo(); }
+    void redo() override {
+        if (m_applied) {  // QUndoStack::push calls redo(); the edit is already in the volume
+            m_applied = false;
+            return;
+        }
+        m_redo();
+    }
+
+private:
+    std::function<void()> m_undo, m_redo;
+    bool m_applied = true;
+};
+
+}  // namespace lucent::app

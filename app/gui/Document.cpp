@@ -1,0 +1,132 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief Document: scene ownership, file operations, undoable edits, modification tracking.
+
+#include "Document.h"
+
+#include <lucent/core/Error.h>
+#include <lucent/scene/SceneFile.h>
+
+namespace lucent::app {
+
+Document::Document(QObject* parent) : QObject(parent) {
+    connect(&m_undo, &QUndoStack::cleanChanged, this,
+            [this](bool) { Q_EMIT modifiedChanged(isModified()); });
+}
+
+void Document::setScene(Scene scene, const QString& path) {
+    if (m_history.isStrokeOpen() && material())
+        m_history.cancelStroke(*material());
+    m_scene = std::move(scene);
+    m_path = path;
+    m_history.clear();
+    m_undo.clear();
+    m_undo.setClean();
+    m_extraChanges = false;
+    Q_EMIT sceneReplaced();
+    Q_EMIT modifiedChanged(false);
+}
+
+void Document::newDefault() {
+    setScene(makeDefaultScene(), QString());
+}
+
+void Document::open(const QString& path) {
+    Scene s = loadScene(path.toStdString());  // throws, leaving the current scene intact
+    if (s.objects.empty() || !s.objects[0].material)
+        LUCENT_THROW(IoError, path.toStdString(), ": the scene has no object with a material");
+    setScene(std::move(s), path);
+}
+
+void Document::save(const QString& path) {
+    saveProject(m_scene, path.toStdString());
+    m_path = path;
+    m_undo.setClean();
+    m_extraChanges = false;
+    Q_EMIT modifiedChanged(false);
+}
+
+void Document::saveCopy(const QString& path) const {
+    saveProject(m_scene, path.toStdString());
+}
+
+void Document::noteSceneEdited() {
+    m_extraChanges = true;
+    Q_EMIT sceneEdited();
+    Q_EMIT modifiedChanged(true);
+}
+
+void Document::pushHistoryStep(const QString& label) {
+    m_undo.push(new HistoryCommand(
+        label,
+        [this] {
+            if (MaterialVolume* v = material())
+                m_history.undo(*v);
+            Q_EMIT materialEdited();
+        },
+        [this] {
+            if (MaterialVolume* v = material())
+                m_history.redo(*v);
+            Q_EMIT materialEdited();
+        }));
+}
+
+void Document::beginStroke(const BrushSettings& brush) {
+    MaterialVolume* v = material();
+    LUCENT_CHECK(v != nullptr, "paint: the scene has no material volume");
+    validateBrush(brush);
+    if (m_history.isStrokeOpen())
+        m_history.endStroke(*v);
+    m_strokeBrush = brush;
+    m_history.beginStroke(*v);
+}
+
+size_t Document::strokeStamp(const Point3f& center) {
+    MaterialVolume* v = material();
+    if (!v || !m_history.isStrokeOpen())
+        return 0;
+    const size_t n = stamp(*v, m_strokeBrush, center, &m_history);
+    if (n > 0)
+        Q_EMIT materialEdited();
+    return n;
+}
+
+void Document::endStroke(const QString& label) {
+    MaterialVolume* v = material();
+    if (!v || !m_history.isStrokeOpen())
+        return;
+    if (m_history.endStroke(*v))
+        pushHistoryStep(label);
+}
+
+void Document::fill(const MaterialSample& value, ChannelMask channels) {
+    MaterialVolume* v = material();
+    LUCENT_CHECK(v != nullptr, "fill: the scene has no material volume");
+    m_history.beginStroke(*v);
+    try {
+        fillInterior(*v, value, channels, &m_history);
+    } catch (...) {
+        m_history.cancelStroke(*v);
+        throw;
+    }
+    if (m_history.endStroke(*v))
+        pushHistoryStep(tr("Fill"));
+    Q_EMIT materialEdited();
+}
+
+void Document::fillProcedural(const ProceduralFill& fill) {
+    MaterialVolume* v = material();
+    LUCENT_CHECK(v != nullptr, "procedural fill: the scene has no material volume");
+    m_history.beginStroke(*v);
+    try {
+        lucent::fillProcedural(*v, fill, &m_history);
+    } catch (...) {
+        m_history.cancelStroke(*v);
+        throw;
+    }
+    if (m_history.endStroke(*v))
+        pushHistoryStep(tr("Procedural fill"));
+    Q_EMIT materialEdited();
+}
+
+}  // namespace lucent::app

@@ -1,0 +1,88 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief The open project: the engine Scene, its file path, the engine's paint History and
+/// the QUndoStack mirroring it. Views listen to its signals; every voxel edit goes through it.
+
+#include "BrushTool.h"
+
+#include <lucent/material/History.h>
+#include <lucent/material/Procedural.h>
+#include <lucent/scene/Scene.h>
+
+#include <QObject>
+#include <QString>
+#include <QUndoStack>
+
+namespace lucent::app {
+
+class Document : public QObject {
+    Q_OBJECT
+public:
+    explicit Document(QObject* parent = nullptr);
+
+    /// Replaces the scene by the built-in default scene (makeDefaultScene; no files needed).
+    void newDefault();
+    /// Loads a project / scene JSON. @throw lucent::Error naming the file; the current scene
+    /// is kept on failure.
+    void open(const QString& path);
+    /// Saves a project (scene JSON + sidecar VDB, both atomic). @throw lucent::Error.
+    void save(const QString& path);
+    /// Saves a copy (autosave) without changing the path or the modified state.
+    void saveCopy(const QString& path) const;
+    /// Replaces the scene (e.g. autosave recovery); clears the undo stack.
+    void setScene(Scene scene, const QString& path);
+
+    [[nodiscard]] const QString& filePath() const { return m_path; }
+    [[nodiscard]] bool isModified() const { return !m_undo.isClean() || m_extraChanges; }
+    [[nodiscard]] Scene& scene() { return m_scene; }
+    [[nodiscard]] const Scene& scene() const { return m_scene; }
+    [[nodiscard]] bool hasObject() const {
+        return !m_scene.objects.empty() && m_scene.objects[0].material != nullptr;
+    }
+    /// The painted volume of the (single) object, nullptr if none.
+    [[nodiscard]] MaterialVolume* material() {
+        return hasObject() ? m_scene.objects[0].material.get() : nullptr;
+    }
+    [[nodiscard]] const MaterialVolume* material() const {
+        return hasObject() ? m_scene.objects[0].material.get() : nullptr;
+    }
+    [[nodiscard]] const TriangleMesh* mesh() const {
+        return m_scene.objects.empty() ? nullptr : &m_scene.objects[0].mesh;
+    }
+    QUndoStack* undoStack() { return &m_undo; }
+    [[nodiscard]] const History& history() const { return m_history; }
+
+    //! @{ \name Undoable material edits (engine Brush.h / Procedural.h operations)
+    /// Opens a stroke. @throw ValueError for invalid brush settings.
+    void beginStroke(const BrushSettings& brush);
+    /// One stamp of the open stroke at `center` (mm). @return voxels touched.
+    size_t strokeStamp(const Point3f& center);
+    /// Closes the stroke; pushes one undo step if anything changed.
+    void endStroke(const QString& label);
+    [[nodiscard]] bool isStrokeOpen() const { return m_history.isStrokeOpen(); }
+    void fill(const MaterialSample& value, ChannelMask channels);
+    void fillProcedural(const ProceduralFill& fill);
+    //! @}
+
+    /// Call after changing lights, camera or η (not undoable): marks the document modified.
+    void noteSceneEdited();
+
+Q_SIGNALS:
+    void sceneReplaced();   ///< a new scene: meshes, volumes, lights all changed
+    void materialEdited();  ///< voxels changed; the volume's dirty bricks say which
+    void sceneEdited();     ///< lights / η / camera changed
+    void modifiedChanged(bool modified);
+
+private:
+    void pushHistoryStep(const QString& label);
+
+    Scene m_scene;
+    QString m_path;
+    History m_history;
+    BrushSettings m_strokeBrush;
+    QUndoStack m_undo;
+    bool m_extraChanges = false;
+};
+
+}  // namespace lucent::app

@@ -1,0 +1,598 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief Main window: menus, docks, file operations, autosave.
+
+#include "MainWindow.h"
+
+#include "Document.h"
+#include "Panels.h"
+#include "SliceView.h"
+#include "Viewport.h"
+
+#include <lucent/core/Error.h>
+#include <lucent/core/Image.h>
+#include <lucent/mesh/Voxelize.h>
+#if LUCENT_APP_HAS_IO
+#include <lucent/io/VdbIO.h>
+#endif
+#if LUCENT_APP_HAS_MESHIO
+#include <lucent/mesh/MeshIO.h>
+#endif
+#if LUCENT_APP_HAS_REFERENCE
+#include "ReferencePanel.h"
+#endif
+#if LUCENT_APP_HAS_MESHEDIT
+#include <lucent/mesh/MeshEdit.h>
+#endif
+
+#include <QAction>
+#include <QApplication>
+#include <QCloseEvent>
+#include <QDir>
+#include <QDockWidget>
+#include <QElapsedTimer>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QLabel>
+#include <QMenuBar>
+#include <QMessageBox>
+#include <QMimeData>
+#include <QProgressDialog>
+#include <QSettings>
+#include <QStandardPaths>
+#include <QStatusBar>
+#include <QThread>
+#include <QUndoStack>
+
+#include <atomic>
+#include <cstdio>
+#include <memory>
+
+namespace lucent::app {
+
+namespace {
+constexpr int MAX_RECENT = 8;
+constexpr int AUTOSAVE_INTERVAL_MS = 120 * 1000;
+const QStringList MESH_SUFFIXES = {"obj", "ply", "off", "stl", "vtp", "vtk"};
+}  // namespace
+
+bool MainWindow::hasVdbSupport() {
+    return LUCENT_APP_HAS_IO != 0;
+}
+bool MainWindow::hasMeshImport() {
+    return LUCENT_APP_HAS_MESHIO != 0;
+}
+
+bool MainWindow::hasMeshEdit() {
+    return LUCENT_APP_HAS_MESHEDIT != 0;
+}
+
+bool MainWindow::applyMeshEdit(MeshEditKind kind) {
+#if LUCENT_APP_HAS_MESHEDIT
+    try {
+        if (!m_doc->hasObject() || m_doc->mesh()->isEmpty())
+            LUCENT_THROW(ValueError, "the scene has no mesh to edit");
+        const TriangleMesh& mesh = *m_doc->mesh();
+        TriangleMesh edited;
+        switch (kind) {
+            case MeshEditKind::Decimate:
+                edited = decimate(mesh, std::max<size_t>(4, mesh.triangleCount() / 2));
+                break;
+            case MeshEditKind::Subdivide:
+                edited = subdivideLoop(mesh, 1);
+                break;
+            case MeshEditKind::Smooth:
+                edited = smoothLaplacian(mesh, 5);
+                break;
+            case MeshEditKind::FillHoles:
+                // Holes up to a tenth of the object's diagonal (mm).
+                edited = fillHoles(mesh, 0.1f * glm::length(mesh.bounds().extent()));
+                break;
+        }
+        Scene scene = m_doc->scene();
+        SceneObject& obj = scene.objects[0];
+        const GridSpec spec = obj.material->spec();
+        const Bounds3f grid = spec.bounds(), b = edited.bounds();
+        if (!grid.contains(b.lo) || !grid.contains(b.hi))
+            LUCENT_THROW(ValueError, "the edited mesh leaves the material grid");
+        obj.material->setInsideMask(voxelizeSolid(edited, spec));
+        obj.mesh = std::move(edited);
+        scene.camera.position = m_viewport->camera().eye();  // keep the current view
+        scene.camera.target = m_viewport->camera().target;
+        m_doc->setScene(std::move(scene), m_doc->filePath());
+        m_doc->noteSceneEdited();
+        statusBar()->showMessage(
+            tr("Mesh edited: %1 triangles").arg(m_doc->mesh()->triangleCount()), 5000);
+        return true;
+    } catch (const std::exception& ex) {
+        reportError(tr("Mesh edit"), ex);
+        return false;
+    }
+#else
+    (void)kind;
+    return false;
+#endif
+}
+
+QString MainWindow::autosavePath() {
+    return QStandardPaths::writableLocation(QStandardPaths::AppLocalDataLocation) +
+           QStringLiteral("/autosave/autosave.json");
+}
+
+MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
+    : QMainWindow(parent), m_doc(new Document(this)), m_useSettings(restoreSettings) {
+    setObjectName(QStringLiteral("LucentMainWindow"));
+    setAcceptDrops(true);
+    m_doc->newDefault();
+    m_viewport = new Viewport(m_doc, this);
+    setCentralWidget(m_viewport);
+    createDocks();
+    createActions();
+    m_hoverLabel = new QLabel;
+    statusBar()->addPermanentWidget(m_hoverLabel);
+    connect(m_viewport, &Viewport::hoverVoxel, m_hoverLabel, &QLabel::setText);
+    connect(m_viewport, &Viewport::paintError, this,
+            [this](const QString& m) { statusBar()->showMessage(tr("Paint: %1").arg(m), 5000); });
+    connect(m_doc, &Document::modifiedChanged, this, [this] { updateTitle(); });
+    connect(m_doc, &Document::sceneReplaced, this, [this] { updateTitle(); });
+    updateTitle();
+    resize(1400, 900);
+    if (m_useSettings) {
+        QSettings s;
+        restoreGeometry(s.value("window/geometry").toByteArray());
+        m_layoutRestored = restoreState(s.value("window/state").toByteArray());
+        m_recent = s.value("recentFiles").toStringList();
+        m_autosave.setInterval(AUTOSAVE_INTERVAL_MS);
+        connect(&m_autosave, &QTimer::timeout, this, &MainWindow::autosaveNow);
+        m_autosave.start();
+        QTimer::singleShot(0, this, &MainWindow::offerRecovery);
+    }
+    rebuildRecentMenu();
+    statusBar()->showMessage(
+        tr("Default scene. LMB paints, Alt+LMB / MMB orbits, Shift+MMB / RMB "
+           "pans, wheel zooms, F frames the object."));
+}
+
+MainWindow::~MainWindow() = default;
+
+void MainWindow::reportError(const QString& what, const std::exception& ex) {
+    m_lastError = QStringLiteral("%1: %2").arg(what, QString::fromUtf8(ex.what()));
+    statusBar()->showMessage(tr("%1 failed").arg(what), 5000);
+    if (m_useSettings)
+        QMessageBox::warning(this, what, QString::fromUtf8(ex.what()));
+    else  // scripted / test runs never block on a dialog
+        std::fprintf(stderr, "lucent: %s\n", qPrintable(m_lastError));
+}
+
+void MainWindow::createDocks() {
+    auto addDock = [this](const QString& title, const char* name, QWidget* w,
+                          Qt::DockWidgetArea area) {
+        auto* dock = new QDockWidget(title, this);
+        dock->setObjectName(QString::fromLatin1(name));
+        dock->setWidget(w);
+        addDockWidget(area, dock);
+        return dock;
+    };
+    m_brush = new BrushPanel(m_doc, m_viewport);
+    auto* tools = addDock(tr("Tools"), "dockTools", m_brush, Qt::LeftDockWidgetArea);
+    auto* presets = addDock(tr("Presets"), "dockPresets", new PresetPanel(m_doc, m_brush),
+                            Qt::LeftDockWidgetArea);
+    m_slice = new SliceView(m_doc);
+    auto* channels =
+        addDock(tr("Material channels"), "dockChannels", m_slice, Qt::RightDockWidgetArea);
+    auto* render = addDock(tr("Render settings"), "dockRender", new RenderPanel(m_doc, m_viewport),
+                           Qt::RightDockWidgetArea);
+    auto* lights =
+        addDock(tr("Lights"), "dockLights", new LightPanel(m_doc), Qt::RightDockWidgetArea);
+    m_stats = new StatsPanel(m_doc, m_viewport);
+    auto* stats = addDock(tr("Statistics"), "dockStats", m_stats, Qt::RightDockWidgetArea);
+#if LUCENT_APP_HAS_REFERENCE
+    m_reference = new ReferencePanel(m_doc, m_viewport);
+    auto* reference =
+        addDock(tr("Reference"), "dockReference", m_reference, Qt::RightDockWidgetArea);
+    tabifyDockWidget(stats, reference);
+#endif
+    tabifyDockWidget(tools, presets);
+    tools->raise();
+    tabifyDockWidget(render, lights);
+    tabifyDockWidget(lights, stats);
+    render->raise();
+    // Default proportions (a saved layout, restored later, overrides them); applied once the
+    // window is laid out, since QMainWindow ignores resizeDocks before that.
+    QTimer::singleShot(0, this, [this, tools, channels, render] {
+        if (!m_layoutRestored) {
+            resizeDocks({tools, channels}, {300, 340}, Qt::Horizontal);
+            resizeDocks({channels, render}, {420, 300}, Qt::Vertical);
+        }
+    });
+}
+
+void MainWindow::createActions() {
+    QMenu* file = menuBar()->addMenu(tr("&File"));
+    QAction* a = file->addAction(tr("&New"), this, [this] {
+        if (maybeSave())
+            m_doc->newDefault();
+    });
+    a->setShortcut(QKeySequence::New);
+    a = file->addAction(tr("&Open…"), this, [this] {
+        if (!maybeSave())
+            return;
+        const QString p = QFileDialog::getOpenFileName(
+            this, tr("Open project"), QString(),
+            tr("Lucent projects (*.json);;Meshes (*.obj *.ply *.off *.stl *.vtp *.vtk);;"
+               "OpenVDB materials (*.vdb);;All files (*)"));
+        if (!p.isEmpty())
+            openFile(p);
+    });
+    a->setShortcut(QKeySequence::Open);
+    m_recentMenu = file->addMenu(tr("Open &Recent"));
+    a = file->addAction(tr("&Save"), this, [this] {
+        if (m_doc->filePath().isEmpty()) {
+            const QString p = QFileDialog::getSaveFileName(this, tr("Save project"),
+                                                           QStringLiteral("untitled.json"),
+                                                           tr("Lucent projects (*.json)"));
+            if (!p.isEmpty())
+                saveTo(p);
+        } else {
+            saveTo(m_doc->filePath());
+        }
+    });
+    a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_S));
+    a = file->addAction(tr("Save &As…"), this, [this] {
+        const QString p = QFileDialog::getSaveFileName(
+            this, tr("Save project as"), m_doc->filePath(), tr("Lucent projects (*.json)"));
+        if (!p.isEmpty())
+            saveTo(p);
+    });
+    a->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S));
+    file->addSeparator();
+    if (hasMeshImport()) {
+        file->addAction(tr("&Import Mesh…"), this, [this] {
+            const QString p =
+                QFileDialog::getOpenFileName(this, tr("Import mesh"), QString(),
+                                             tr("Meshes (*.obj *.ply *.off *.stl *.vtp *.vtk)"));
+            if (!p.isEmpty() && maybeSave())
+                importMesh(p);
+        });
+    }
+    if (hasVdbSupport()) {
+        file->addAction(tr("Import &VDB Material…"), this, [this] {
+            const QString p = QFileDialog::getOpenFileName(this, tr("Import VDB"), QString(),
+                                                           tr("OpenVDB (*.vdb)"));
+            if (!p.isEmpty())
+                importVdb(p);
+        });
+        a = file->addAction(tr("&Export VDB…"), this, [this] {
+            const QString p = QFileDialog::getSaveFileName(
+                this, tr("Export VDB"), QStringLiteral("material.vdb"), tr("OpenVDB (*.vdb)"));
+            if (!p.isEmpty())
+                exportVdbTo(p);
+        });
+        a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_E));
+    }
+    file->addAction(tr("Export &Render…"), this, [this] {
+        const QString p =
+            QFileDialog::getSaveFileName(this, tr("Export render"), QStringLiteral("render.png"),
+                                         tr("PNG (*.png);;OpenEXR (*.exr)"));
+        if (!p.isEmpty())
+            exportRenderTo(p);
+    });
+    file->addSeparator();
+    a = file->addAction(tr("&Quit"), this, &QWidget::close);
+    a->setShortcut(QKeySequence::Quit);
+
+    if (hasMeshEdit()) {
+        QMenu* meshMenu = menuBar()->addMenu(tr("&Mesh"));
+        meshMenu->addAction(tr("&Decimate to Half"), this,
+                            [this] { applyMeshEdit(MeshEditKind::Decimate); });
+        meshMenu->addAction(tr("&Subdivide (Loop)"), this,
+                            [this] { applyMeshEdit(MeshEditKind::Subdivide); });
+        meshMenu->addAction(tr("S&mooth (Laplacian ×5)"), this,
+                            [this] { applyMeshEdit(MeshEditKind::Smooth); });
+        meshMenu->addAction(tr("&Fill Holes"), this,
+                            [this] { applyMeshEdit(MeshEditKind::FillHoles); });
+    }
+    QMenu* edit = menuBar()->addMenu(tr("&Edit"));
+    QAction* undo = m_doc->undoStack()->createUndoAction(this, tr("&Undo"));
+    undo->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Z));
+    undo->setObjectName(QStringLiteral("actionUndo"));
+    QAction* redo = m_doc->undoStack()->createRedoAction(this, tr("&Redo"));
+    redo->setShortcuts(
+        {QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence(Qt::CTRL | Qt::Key_Y)});
+    redo->setObjectName(QStringLiteral("actionRedo"));
+    edit->addAction(undo);
+    edit->addAction(redo);
+
+    m_viewMenu = menuBar()->addMenu(tr("&View"));
+    a = m_viewMenu->addAction(tr("&Frame Object"), m_viewport, &Viewport::frameObject);
+    a->setShortcut(QKeySequence(Qt::Key_F));
+    m_viewMenu->addSeparator();
+    for (QDockWidget* d : findChildren<QDockWidget*>())
+        m_viewMenu->addAction(d->toggleViewAction());
+
+    QMenu* help = menuBar()->addMenu(tr("&Help"));
+    help->addAction(tr("&About Lucent"), this, [this] {
+        QMessageBox::about(this, tr("About Lucent"),
+                           tr("<b>Lucent</b> — paint heterogeneous subsurface-scattering material "
+                              "into a mesh's volume and preview its translucency.<br>See "
+                              "docs/user-guide.md."));
+    });
+}
+
+void MainWindow::updateTitle() {
+    const QString name =
+        m_doc->filePath().isEmpty() ? tr("Default scene") : QFileInfo(m_doc->filePath()).fileName();
+    setWindowTitle(QStringLiteral("%1%2 — Lucent")
+                       .arg(name, m_doc->isModified() ? QStringLiteral("*") : QString()));
+}
+
+bool MainWindow::maybeSave() {
+    if (!m_doc->isModified() || !m_useSettings)
+        return true;
+    const auto r =
+        QMessageBox::question(this, tr("Unsaved changes"), tr("Save the changes to the project?"),
+                              QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel);
+    if (r == QMessageBox::Cancel)
+        return false;
+    if (r == QMessageBox::Discard)
+        return true;
+    QString p = m_doc->filePath();
+    if (p.isEmpty())
+        p = QFileDialog::getSaveFileName(this, tr("Save project"), QStringLiteral("untitled.json"));
+    return !p.isEmpty() && saveTo(p);
+}
+
+bool MainWindow::openFile(const QString& path) {
+    const QString suffix = QFileInfo(path).suffix().toLower();
+    if (suffix == QLatin1String("vdb"))
+        return importVdb(path);
+    if (MESH_SUFFIXES.contains(suffix))
+        return importMesh(path);
+    try {
+        m_doc->open(path);
+        addRecent(path);
+        statusBar()->showMessage(tr("Opened %1").arg(path), 5000);
+        return true;
+    } catch (const std::exception& ex) {
+        reportError(tr("Open"), ex);
+        return false;
+    }
+}
+
+bool MainWindow::saveTo(const QString& path) {
+    try {
+        m_doc->save(path);
+        addRecent(path);
+        statusBar()->showMessage(tr("Saved %1").arg(path), 5000);
+        return true;
+    } catch (const std::exception& ex) {
+        reportError(tr("Save"), ex);
+        return false;
+    }
+}
+
+bool MainWindow::importMesh(const QString& path) {
+#if LUCENT_APP_HAS_MESHIO
+    try {
+        MeshReport report;
+        SceneObject obj;
+        obj.mesh = loadMesh(path.toStdString(), 1.f, &report);
+        obj.meshSource.file = path.toStdString();
+        const MaterialSample base =
+            m_doc->material() ? m_doc->material()->base() : MaterialSample{};
+        const GridSpec spec = GridSpec::around(obj.mesh.bounds(), GridSpec::DEFAULT_RESOLUTION);
+        obj.material = std::make_shared<MaterialVolume>(spec, base);
+        obj.material->setInsideMask(voxelizeSolid(obj.mesh, spec));
+        obj.material->setEta(m_doc->scene().eta);
+        obj.materialSource.uniform = true;
+        obj.materialSource.value = base;
+        Scene scene = m_doc->scene();
+        scene.objects = {std::move(obj)};
+        m_doc->setScene(std::move(scene), QString());
+        m_doc->noteSceneEdited();
+        m_viewport->frameObject();
+        statusBar()->showMessage(
+            tr("Imported %1: %2 triangles%3")
+                .arg(path)
+                .arg(m_doc->mesh()->triangleCount())
+                .arg(report.warnings.empty() ? QString()
+                                             : tr(", %1 warnings").arg(report.warnings.size())),
+            8000);
+        return true;
+    } catch (const std::exception& ex) {
+        reportError(tr("Import mesh"), ex);
+        return false;
+    }
+#else
+    QMessageBox::warning(this, tr("Import mesh"),
+                         tr("Mesh import is not available in this build."));
+    return false;
+#endif
+}
+
+bool MainWindow::importVdb(const QString& path) {
+#if LUCENT_APP_HAS_IO
+    try {
+        ImportedMaterial imported = lucent::importVdb(path.toStdString());
+        Scene scene = m_doc->scene();
+        if (scene.objects.empty())
+            LUCENT_THROW(ValueError, "no object to receive the material");
+        scene.objects[0].material = std::make_shared<MaterialVolume>(std::move(imported.volume));
+        scene.objects[0].materialSource = MaterialSource{};
+        scene.objects[0].materialSource.vdbFile = path.toStdString();
+        scene.eta = imported.metadata.eta;
+        m_doc->setScene(std::move(scene), QString());
+        m_doc->noteSceneEdited();
+        statusBar()->showMessage(tr("Imported material %1").arg(path), 5000);
+        return true;
+    } catch (const std::exception& ex) {
+        reportError(tr("Import VDB"), ex);
+        return false;
+    }
+#else
+    QMessageBox::warning(this, tr("Import VDB"),
+                         tr("OpenVDB support is not available in this build."));
+    return false;
+#endif
+}
+
+bool MainWindow::exportVdbTo(const QString& path, bool wait) {
+#if LUCENT_APP_HAS_IO
+    if (m_exporting || !m_doc->material())
+        return false;
+    m_exporting = true;
+    // The export works on a copy so painting can go on while the worker writes.
+    auto copy = std::make_shared<MaterialVolume>(*m_doc->material());
+    auto error = std::make_shared<std::string>();
+    const std::string target = path.toStdString();
+    QThread* worker = QThread::create([copy, error, target] {
+        try {
+            exportVdb(*copy, target, {});
+        } catch (const std::exception& ex) {
+            *error = ex.what();
+        }
+    });
+    auto* progress = new QProgressDialog(tr("Exporting %1…").arg(path), QString(), 0, 0, this);
+    progress->setWindowModality(Qt::WindowModal);
+    progress->setMinimumDuration(300);
+    auto ok = std::make_shared<bool>(false);
+    connect(worker, &QThread::finished, this, [this, worker, progress, error, path, ok] {
+        progress->deleteLater();
+        worker->deleteLater();
+        m_exporting = false;
+        if (error->empty()) {
+            *ok = true;
+            statusBar()->showMessage(tr("Exported %1").arg(path), 5000);
+        } else {
+            reportError(tr("Export VDB"), IoError(*error));
+        }
+    });
+    worker->start();
+    if (wait) {
+        while (m_exporting)
+            QApplication::processEvents(QEventLoop::AllEvents, 50);
+        return *ok;
+    }
+    return true;
+#else
+    (void)path;
+    (void)wait;
+    return false;
+#endif
+}
+
+bool MainWindow::exportRenderTo(const QString& path) {
+    try {
+        const QImage img = m_viewport->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
+        if (img.isNull())
+            LUCENT_THROW(GpuError, "the viewport has no image to export");
+        // The viewport holds display (tone-mapped sRGB) values; EXR gets them linearised by the
+        // inverse sRGB OETF (IEC 61966-2-1), so both files show the same picture.
+        ImageRgb out(img.width(), img.height());
+        auto toLinear = [](int v) {
+            const float c = float(v) / 255.f;
+            return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+        };
+        for (int y = 0; y < img.height(); ++y) {
+            const auto* row = reinterpret_cast<const QRgb*>(img.constScanLine(y));
+            for (int x = 0; x < img.width(); ++x)
+                out.at(x, y) =
+                    Rgb(toLinear(qRed(row[x])), toLinear(qGreen(row[x])), toLinear(qBlue(row[x])));
+        }
+        if (QFileInfo(path).suffix().toLower() == QLatin1String("exr"))
+            writeExr(out, path.toStdString());
+        else
+            writePng(out, path.toStdString());
+        statusBar()->showMessage(tr("Wrote %1").arg(path), 5000);
+        return true;
+    } catch (const std::exception& ex) {
+        reportError(tr("Export render"), ex);
+        return false;
+    }
+}
+
+void MainWindow::addRecent(const QString& path) {
+    const QString abs = QFileInfo(path).absoluteFilePath();
+    m_recent.removeAll(abs);
+    m_recent.prepend(abs);
+    while (m_recent.size() > MAX_RECENT)
+        m_recent.removeLast();
+    if (m_useSettings)
+        QSettings().setValue("recentFiles", m_recent);
+    rebuildRecentMenu();
+}
+
+void MainWindow::rebuildRecentMenu() {
+    m_recentMenu->clear();
+    for (const QString& p : m_recent)
+        m_recentMenu
+            ->addAction(QFileInfo(p).fileName(), this,
+                        [this, p] {
+                            if (maybeSave())
+                                openFile(p);
+                        })
+            ->setToolTip(p);
+    m_recentMenu->setEnabled(!m_recent.isEmpty());
+}
+
+void MainWindow::autosaveNow() {
+    if (!m_doc->isModified())
+        return;
+    try {
+        QDir().mkpath(QFileInfo(autosavePath()).absolutePath());
+        m_doc->saveCopy(autosavePath());
+        statusBar()->showMessage(tr("Autosaved"), 2000);
+    } catch (const std::exception& ex) {
+        statusBar()->showMessage(tr("Autosave failed: %1").arg(QString::fromUtf8(ex.what())), 8000);
+    }
+}
+
+void MainWindow::offerRecovery() {
+    if (!QFileInfo::exists(autosavePath()))
+        return;
+    const auto r = QMessageBox::question(
+        this, tr("Recover"),
+        tr("Lucent did not exit cleanly last time. Recover the autosaved project?"),
+        QMessageBox::Yes | QMessageBox::No);
+    if (r == QMessageBox::Yes) {
+        try {
+            m_doc->open(autosavePath());
+            m_doc->setScene(std::move(m_doc->scene()), QString());
+            m_doc->noteSceneEdited();  // recovered work is unsaved
+        } catch (const std::exception& ex) {
+            reportError(tr("Recover"), ex);
+        }
+    }
+    QFile::remove(autosavePath());
+}
+
+void MainWindow::closeEvent(QCloseEvent* e) {
+    if (m_exporting || !maybeSave()) {
+        e->ignore();
+        return;
+    }
+    if (m_useSettings) {
+        QSettings s;
+        s.setValue("window/geometry", saveGeometry());
+        s.setValue("window/state", saveState());
+        QFile::remove(autosavePath());  // clean exit: nothing to recover
+    }
+    e->accept();
+}
+
+void MainWindow::dragEnterEvent(QDragEnterEvent* e) {
+    if (e->mimeData()->hasUrls())
+        e->acceptProposedAction();
+}
+
+void MainWindow::dropEvent(QDropEvent* e) {
+    for (const QUrl& url : e->mimeData()->urls()) {
+        if (!url.isLocalFile())
+            continue;
+        if (maybeSave())
+            openFile(url.toLocalFile());
+        break;  // one project at a time
+    }
+}
+
+}  // namespace lucent::app

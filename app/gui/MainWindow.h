@@ -1,0 +1,102 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief The main window: viewport, docks, menus and shortcuts, file operations (projects,
+/// VDB export, render export), recent files, drag and drop, autosave and crash recovery.
+
+#include <QMainWindow>
+#include <QStringList>
+#include <QTimer>
+
+class QAction;
+class QLabel;
+class QMenu;
+
+namespace lucent::app {
+
+class BrushPanel;
+class ReferencePanel;
+class Document;
+class SliceView;
+class StatsPanel;
+class Viewport;
+
+class MainWindow : public QMainWindow {
+    Q_OBJECT
+public:
+    /// @param restoreSettings false for tests and scripted runs: ignore saved layout and recent
+    ///        files, no autosave, no recovery prompt, errors to stderr instead of dialogs.
+    explicit MainWindow(bool restoreSettings = true, QWidget* parent = nullptr);
+    ~MainWindow() override;
+
+    Document* document() { return m_doc; }
+    Viewport* viewport() { return m_viewport; }
+    SliceView* sliceView() { return m_slice; }
+    BrushPanel* brushPanel() { return m_brush; }
+    ReferencePanel* referencePanel() { return m_reference; }
+
+    //! @{ \name File operations; each reports errors in a message box and returns false
+    bool openFile(const QString& path);
+    bool saveTo(const QString& path);
+    /// Exports the painted volume as OpenVDB on a worker thread with a progress dialog.
+    /// @param wait block (running the event loop) until the export finished.
+    bool exportVdbTo(const QString& path, bool wait = false);
+    /// Writes the current viewport image (PNG: display sRGB; EXR: linearised display values).
+    bool exportRenderTo(const QString& path);
+    //! @}
+
+    /// Message of the last failed operation (also shown to the user).
+    [[nodiscard]] const QString& lastError() const { return m_lastError; }
+
+    /// Mesh edits of the Mesh menu (engine lucent/mesh/MeshEdit.h).
+    enum class MeshEditKind { Decimate, Subdivide, Smooth, FillHoles };
+    /// Replaces the object's mesh by the edited one and re-voxelises it into the same grid, so
+    /// the paint inside is kept (voxels that become inside get the base material). Clears the
+    /// undo history. Reports errors like the file operations. @return false on failure.
+    bool applyMeshEdit(MeshEditKind kind);
+    static bool hasMeshEdit();
+
+    /// True when VDB export/import is compiled in (the io module is present).
+    static bool hasVdbSupport();
+    /// True when mesh import is compiled in (mesh/MeshIO).
+    static bool hasMeshImport();
+    /// Path of the autosave project (AppLocalDataLocation/autosave/autosave.json).
+    static QString autosavePath();
+    /// Writes the autosave copy now when the document has unsaved changes.
+    void autosaveNow();
+
+protected:
+    void closeEvent(QCloseEvent* e) override;
+    void dragEnterEvent(QDragEnterEvent* e) override;
+    void dropEvent(QDropEvent* e) override;
+
+private:
+    void createActions();
+    void createDocks();
+    bool maybeSave();
+    void addRecent(const QString& path);
+    void rebuildRecentMenu();
+    void updateTitle();
+    bool importMesh(const QString& path);
+    bool importVdb(const QString& path);
+    void offerRecovery();
+    void reportError(const QString& what, const std::exception& ex);
+
+    Document* m_doc;
+    Viewport* m_viewport;
+    SliceView* m_slice = nullptr;
+    BrushPanel* m_brush = nullptr;
+    StatsPanel* m_stats = nullptr;
+    ReferencePanel* m_reference = nullptr;  // null when the reference module is absent
+    QMenu* m_recentMenu = nullptr;
+    QMenu* m_viewMenu = nullptr;
+    QLabel* m_hoverLabel = nullptr;
+    QStringList m_recent;
+    QString m_lastError;
+    QTimer m_autosave;
+    bool m_useSettings;
+    bool m_exporting = false;
+    bool m_layoutRestored = false;
+};
+
+}  // namespace lucent::app

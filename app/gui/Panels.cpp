@@ -1,0 +1,472 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief Dock panels of the main window.
+
+#include "Panels.h"
+
+#include "Document.h"
+#include "Viewport.h"
+
+#include <lucent/core/Error.h>
+#include <lucent/material/Presets.h>
+
+#include <QCheckBox>
+#include <QColorDialog>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QFormLayout>
+#include <QGroupBox>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QListWidget>
+#include <QMessageBox>
+#include <QPushButton>
+#include <QRadioButton>
+#include <QSpinBox>
+#include <QVBoxLayout>
+
+namespace lucent::app {
+
+namespace {
+
+QDoubleSpinBox* spin(double lo, double hi, double value, int decimals, const QString& suffix,
+                     double step = 0.1) {
+    auto* s = new QDoubleSpinBox;
+    s->setRange(lo, hi);
+    s->setDecimals(decimals);
+    s->setSingleStep(step);
+    s->setValue(value);
+    s->setSuffix(suffix);
+    s->setKeyboardTracking(false);
+    // Narrow by default so three RGB fields fit a slim dock; they grow with the dock.
+    s->setMinimumWidth(56);
+    s->setSizePolicy(QSizePolicy::Ignored, QSizePolicy::Fixed);
+    return s;
+}
+
+QWidget* row(std::initializer_list<QWidget*> widgets) {
+    auto* w = new QWidget;
+    auto* l = new QHBoxLayout(w);
+    l->setContentsMargins(0, 0, 0, 0);
+    for (QWidget* x : widgets)
+        l->addWidget(x);
+    return w;
+}
+
+void reportError(QWidget* parent, const QString& what, const std::exception& ex) {
+    QMessageBox::warning(parent, what, QString::fromUtf8(ex.what()));
+}
+
+}  // namespace
+
+// ---- BrushPanel -----------------------------------------------------------------------------
+
+BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
+    : QWidget(parent), m_doc(doc), m_viewport(viewport) {
+    auto* outer = new QVBoxLayout(this);
+    auto* form = new QFormLayout;
+    outer->addLayout(form);
+    m_paintTool = new QRadioButton(tr("Paint"));
+    m_eyedropTool = new QRadioButton(tr("Eyedropper"));
+    m_paintTool->setChecked(true);
+    form->addRow(tr("Tool"), row({m_paintTool, m_eyedropTool}));
+    const BrushSettings defaults;
+    m_radius = spin(0.05, 500.0, 3.0, 2, tr(" mm"), 0.5);
+    m_depth = spin(0.0, 500.0, 0.0, 2, tr(" mm"), 0.5);
+    m_falloff = new QComboBox;
+    m_falloff->addItems({tr("Constant"), tr("Linear"), tr("Smooth"), tr("Gaussian")});
+    m_falloff->setCurrentIndex(int(defaults.falloff));
+    m_strength = spin(0.0, 1.0, 0.5, 2, QString(), 0.05);
+    m_spacing = spin(BrushSettings::MIN_SPACING, BrushSettings::MAX_SPACING, defaults.spacing, 2,
+                     tr(" × radius"), 0.05);
+    m_mode = new QComboBox;
+    m_mode->addItems(
+        {tr("Set"), tr("Add"), tr("Subtract"), tr("Multiply"), tr("Smooth"), tr("Reset to base")});
+    form->addRow(tr("Radius"), m_radius);
+    form->addRow(tr("Depth below surface"), m_depth);
+    form->addRow(tr("Falloff"), m_falloff);
+    form->addRow(tr("Strength"), m_strength);
+    form->addRow(tr("Spacing"), m_spacing);
+    form->addRow(tr("Mode"), m_mode);
+    m_chSigmaT = new QCheckBox(QStringLiteral("σt"));
+    m_chSigmaS = new QCheckBox(QStringLiteral("σs′"));
+    m_chG = new QCheckBox(QStringLiteral("g"));
+    for (QCheckBox* c : {m_chSigmaT, m_chSigmaS, m_chG})
+        c->setChecked(true);
+    form->addRow(tr("Channels"), row({m_chSigmaT, m_chSigmaS, m_chG}));
+    for (int c = 0; c < 3; ++c) {
+        m_sigmaT[size_t(c)] = spin(0.0, 1000.0, 1.0, 3, QString(), 0.1);
+        m_sigmaS[size_t(c)] = spin(0.0, 1000.0, 0.8, 3, QString(), 0.1);
+    }
+    form->addRow(tr("σt R G B (mm⁻¹)"), row({m_sigmaT[0], m_sigmaT[1], m_sigmaT[2]}));
+    form->addRow(tr("σs′ R G B (mm⁻¹)"), row({m_sigmaS[0], m_sigmaS[1], m_sigmaS[2]}));
+    m_g = spin(-double(G_MAX), double(G_MAX), 0.0, 2, QString(), 0.05);
+    form->addRow(tr("g"), m_g);
+    m_swatch = new QPushButton(tr("Albedo colour…"));
+    m_swatch->setToolTip(
+        tr("Pick the single-scattering albedo σs′/σt as a colour; σt is kept "
+           "and σs′ = albedo × σt per channel."));
+    form->addRow(tr("Albedo"), m_swatch);
+
+    auto* fills = new QGroupBox(tr("Fills (undoable)"));
+    auto* fl = new QFormLayout(fills);
+    auto* fillButton = new QPushButton(tr("Fill interior with brush value"));
+    fl->addRow(fillButton);
+    m_pattern = new QComboBox;
+    m_pattern->addItems({tr("Turbulence"), tr("Marble")});
+    m_patternScale = spin(0.1, 1e4, 10.0, 1, tr(" mm"), 1.0);
+    auto* procButton = new QPushButton(tr("Procedural fill (base → brush)"));
+    fl->addRow(tr("Pattern"), m_pattern);
+    fl->addRow(tr("Scale"), m_patternScale);
+    fl->addRow(procButton);
+    outer->addWidget(fills);
+    outer->addStretch(1);
+
+    const auto applyLater = [this] { apply(); };
+    for (QDoubleSpinBox* s : {m_radius, m_depth, m_strength, m_spacing, m_g})
+        connect(s, &QDoubleSpinBox::valueChanged, this, applyLater);
+    for (int c = 0; c < 3; ++c) {
+        connect(m_sigmaT[size_t(c)], &QDoubleSpinBox::valueChanged, this, applyLater);
+        connect(m_sigmaS[size_t(c)], &QDoubleSpinBox::valueChanged, this, applyLater);
+    }
+    for (QComboBox* c : {m_falloff, m_mode})
+        connect(c, &QComboBox::currentIndexChanged, this, applyLater);
+    for (QCheckBox* c : {m_chSigmaT, m_chSigmaS, m_chG})
+        connect(c, &QCheckBox::toggled, this, applyLater);
+    connect(m_paintTool, &QRadioButton::toggled, this, applyLater);
+    connect(m_swatch, &QPushButton::clicked, this, [this] {
+        const MaterialSample s = m_viewport->brush().engine.value;
+        const Rgb a = reducedAlbedo(s);
+        const QColor initial = QColor::fromRgbF(float(a.r), float(a.g), float(a.b));
+        const QColor c = QColorDialog::getColor(initial, this, tr("Brush albedo σs′/σt"));
+        if (!c.isValid())
+            return;
+        const float rgb[3] = {float(c.redF()), float(c.greenF()), float(c.blueF())};
+        for (int i = 0; i < 3; ++i)
+            m_sigmaS[size_t(i)]->setValue(double(rgb[i]) * m_sigmaT[size_t(i)]->value());
+        apply();
+    });
+    connect(m_viewport, &Viewport::eyedropped, this, [this](const MaterialSample& s) {
+        setBrushValue(s);
+        m_paintTool->setChecked(true);
+    });
+    connect(fillButton, &QPushButton::clicked, this, [this] {
+        try {
+            apply();
+            m_doc->fill(m_viewport->brush().engine.value, m_viewport->brush().engine.channels);
+        } catch (const std::exception& ex) {
+            reportError(this, tr("Fill"), ex);
+        }
+    });
+    connect(procButton, &QPushButton::clicked, this, [this] {
+        try {
+            apply();
+            ProceduralFill f;
+            f.pattern = m_pattern->currentIndex() == 0 ? ProceduralPattern::Turbulence
+                                                       : ProceduralPattern::Marble;
+            f.materialA = m_doc->material() ? m_doc->material()->base() : MaterialSample{};
+            f.materialB = m_viewport->brush().engine.value;
+            f.scale = float(m_patternScale->value());
+            f.channels = m_viewport->brush().engine.channels;
+            m_doc->fillProcedural(f);
+        } catch (const std::exception& ex) {
+            reportError(this, tr("Procedural fill"), ex);
+        }
+    });
+    apply();
+}
+
+void BrushPanel::setBrushValue(const MaterialSample& s) {
+    for (int c = 0; c < 3; ++c) {
+        QSignalBlocker b1(m_sigmaT[size_t(c)]), b2(m_sigmaS[size_t(c)]);
+        m_sigmaT[size_t(c)]->setValue(double(s.sigma_t[c]));
+        m_sigmaS[size_t(c)]->setValue(double(s.sigma_s[c]));
+    }
+    QSignalBlocker b3(m_g);
+    m_g->setValue(double((s.g.r + s.g.g + s.g.b) / 3.f));
+    apply();
+}
+
+void BrushPanel::apply() {
+    AppBrush& b = m_viewport->brush();
+    b.engine.radius = float(m_radius->value());
+    b.depthMm = float(m_depth->value());
+    b.engine.falloff = Falloff(m_falloff->currentIndex());
+    b.engine.strength = float(m_strength->value());
+    b.engine.spacing = float(m_spacing->value());
+    b.engine.mode = BrushMode(m_mode->currentIndex());
+    b.engine.channels = ChannelMask((m_chSigmaT->isChecked() ? int(Channel::SigmaT) : 0) |
+                                    (m_chSigmaS->isChecked() ? int(Channel::SigmaS) : 0) |
+                                    (m_chG->isChecked() ? int(Channel::G) : 0));
+    for (int c = 0; c < 3; ++c) {
+        b.engine.value.sigma_t[c] = float(m_sigmaT[size_t(c)]->value());
+        // In Set mode σs′ ≤ σt is what the material allows; show the clamp in the fields.
+        b.engine.value.sigma_s[c] = float(m_sigmaS[size_t(c)]->value());
+    }
+    b.engine.value.g = Rgb(float(m_g->value()));
+    m_viewport->setTool(m_paintTool->isChecked() ? Viewport::Tool::Paint
+                                                 : Viewport::Tool::Eyedropper);
+    updateSwatch();
+}
+
+void BrushPanel::updateSwatch() {
+    const Rgb a = reducedAlbedo(m_viewport->brush().engine.value);
+    const QColor c = QColor::fromRgbF(std::clamp(a.r, 0.f, 1.f), std::clamp(a.g, 0.f, 1.f),
+                                      std::clamp(a.b, 0.f, 1.f));
+    m_swatch->setStyleSheet(QStringLiteral("background-color: %1; color: %2")
+                                .arg(c.name(), c.lightnessF() > 0.5 ? "black" : "white"));
+}
+
+// ---- PresetPanel ----------------------------------------------------------------------------
+
+PresetPanel::PresetPanel(Document* doc, BrushPanel* brush, QWidget* parent)
+    : QWidget(parent), m_doc(doc) {
+    auto* layout = new QVBoxLayout(this);
+    m_list = new QListWidget;
+    for (const MaterialPreset& p : allPresets()) {
+        auto* item = new QListWidgetItem(QString::fromStdString(p.name));
+        item->setToolTip(QStringLiteral("σs′ = %1 %2 %3 mm⁻¹, σa = %4 %5 %6 mm⁻¹, η = %7\n%8")
+                             .arg(double(p.sigma_s_reduced.r))
+                             .arg(double(p.sigma_s_reduced.g))
+                             .arg(double(p.sigma_s_reduced.b))
+                             .arg(double(p.sigma_a.r))
+                             .arg(double(p.sigma_a.g))
+                             .arg(double(p.sigma_a.b))
+                             .arg(double(p.eta))
+                             .arg(QString::fromStdString(p.source)));
+        m_list->addItem(item);
+    }
+    layout->addWidget(m_list);
+    auto* toBrush = new QPushButton(tr("Use as brush value"));
+    auto* toObject = new QPushButton(tr("Fill object with preset"));
+    layout->addWidget(row({toBrush, toObject}));
+    auto current = [this]() -> const MaterialPreset* {
+        const int i = m_list->currentRow();
+        return i >= 0 && i < int(allPresets().size()) ? &allPresets()[size_t(i)] : nullptr;
+    };
+    connect(toBrush, &QPushButton::clicked, this, [brush, current] {
+        if (const MaterialPreset* p = current())
+            brush->setBrushValue(p->sample());
+    });
+    connect(m_list, &QListWidget::itemDoubleClicked, this, [brush, current] {
+        if (const MaterialPreset* p = current())
+            brush->setBrushValue(p->sample());
+    });
+    connect(toObject, &QPushButton::clicked, this, [this, current] {
+        const MaterialPreset* p = current();
+        if (!p)
+            return;
+        try {
+            m_doc->fill(p->sample(), ALL_CHANNELS);
+        } catch (const std::exception& ex) {
+            reportError(this, tr("Preset"), ex);
+        }
+    });
+}
+
+// ---- LightPanel -----------------------------------------------------------------------------
+
+LightPanel::LightPanel(Document* doc, QWidget* parent) : QWidget(parent), m_doc(doc) {
+    auto* form = new QFormLayout(this);
+    m_light = new QComboBox;
+    m_type = new QLabel;
+    form->addRow(tr("Light"), m_light);
+    form->addRow(tr("Type"), m_type);
+    for (int c = 0; c < 3; ++c) {
+        m_pos[size_t(c)] = spin(-1e5, 1e5, 0.0, 1, QString(), 1.0);
+        m_intensity[size_t(c)] = spin(0.0, 1e9, 0.0, 3, QString(), 10.0);
+    }
+    form->addRow(tr("Position x y z (mm)"), row({m_pos[0], m_pos[1], m_pos[2]}));
+    form->addRow(tr("Intensity R G B"), row({m_intensity[0], m_intensity[1], m_intensity[2]}));
+    form->addRow(new QLabel(tr("Units: point/spot W/sr, directional W/mm², sphere W/(mm²·sr)")));
+    m_eta = spin(1.0, 3.0, 1.3, 3, QString(), 0.01);
+    form->addRow(tr("η (relative IOR)"), m_eta);
+    connect(m_light, &QComboBox::currentIndexChanged, this, [this] { load(); });
+    for (int c = 0; c < 3; ++c) {
+        connect(m_pos[size_t(c)], &QDoubleSpinBox::valueChanged, this, [this] { store(); });
+        connect(m_intensity[size_t(c)], &QDoubleSpinBox::valueChanged, this, [this] { store(); });
+    }
+    connect(m_eta, &QDoubleSpinBox::valueChanged, this, [this] { store(); });
+    connect(m_doc, &Document::sceneReplaced, this, [this] {
+        m_loading = true;
+        m_light->clear();
+        for (size_t i = 0; i < m_doc->scene().lights.size(); ++i)
+            m_light->addItem(tr("Light %1").arg(i));
+        m_loading = false;
+        load();
+    });
+    for (size_t i = 0; i < m_doc->scene().lights.size(); ++i)
+        m_light->addItem(tr("Light %1").arg(i));
+    load();
+}
+
+void LightPanel::load() {
+    m_loading = true;
+    const auto& lights = m_doc->scene().lights;
+    const int i = m_light->currentIndex();
+    const bool valid = i >= 0 && i < int(lights.size());
+    for (int c = 0; c < 3; ++c) {
+        m_pos[size_t(c)]->setEnabled(valid);
+        m_intensity[size_t(c)]->setEnabled(valid);
+    }
+    if (valid) {
+        const Light& l = lights[size_t(i)];
+        static const char* names[] = {"point", "spot", "directional", "sphere"};
+        m_type->setText(QString::fromLatin1(names[int(l.type)]));
+        for (int c = 0; c < 3; ++c) {
+            m_pos[size_t(c)]->setValue(double(l.position[c]));
+            m_intensity[size_t(c)]->setValue(double(l.intensity[c]));
+        }
+    } else {
+        m_type->setText(tr("(no lights)"));
+    }
+    m_eta->setValue(double(m_doc->scene().eta));
+    m_loading = false;
+}
+
+void LightPanel::store() {
+    if (m_loading)
+        return;
+    auto& lights = m_doc->scene().lights;
+    const int i = m_light->currentIndex();
+    if (i >= 0 && i < int(lights.size())) {
+        Light& l = lights[size_t(i)];
+        for (int c = 0; c < 3; ++c) {
+            l.position[c] = float(m_pos[size_t(c)]->value());
+            l.intensity[c] = float(m_intensity[size_t(c)]->value());
+        }
+    }
+    m_doc->scene().eta = float(m_eta->value());
+    if (MaterialVolume* v = m_doc->material())
+        v->setEta(float(m_eta->value()));
+    m_doc->noteSceneEdited();
+}
+
+// ---- RenderPanel ----------------------------------------------------------------------------
+
+RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
+    : QWidget(parent), m_viewport(viewport) {
+    auto* form = new QFormLayout(this);
+    const RenderSettings d;
+    m_method = new QComboBox;
+    m_method->addItems({tr("Direct (surface albedo)"), tr("Single scattering (ray-marched)")});
+    m_method->setCurrentIndex(int(d.method));
+    m_method->setToolTip(tr("Only the methods available in this build are listed."));
+    m_steps = new QSpinBox;
+    m_steps->setRange(1, 512);
+    m_steps->setValue(d.steps);
+    m_lightSteps = new QSpinBox;
+    m_lightSteps->setRange(1, 128);
+    m_lightSteps->setValue(d.lightSteps);
+    m_exposure = spin(-20.0, 20.0, double(d.exposureStops), 1, tr(" stops"), 0.5);
+    m_ambient = spin(0.0, 1e6, double(d.ambient), 4, tr(" W/mm²"), 0.001);
+    m_turntable = new QCheckBox(tr("Turntable (30°/s)"));
+    m_smooth = new QCheckBox(tr("Smooth voxels (trilinear, display only)"));
+    form->addRow(tr("Method"), m_method);
+    m_scale = new QComboBox;
+    m_scale->addItems({tr("Full"), tr("Half"), tr("Quarter")});
+    m_scale->setCurrentIndex(d.resolutionScale >= 1.f ? 0 : d.resolutionScale >= 0.5f ? 1 : 2);
+    m_scale->setToolTip(tr("Preview resolution; lower is faster on software OpenGL."));
+    form->addRow(tr("Resolution"), m_scale);
+    connect(m_scale, &QComboBox::currentIndexChanged, this, [this] { apply(); });
+    form->addRow(tr("View steps"), m_steps);
+    form->addRow(tr("Shadow steps"), m_lightSteps);
+    form->addRow(tr("Exposure"), m_exposure);
+    form->addRow(tr("Ambient"), m_ambient);
+    form->addRow(m_turntable);
+    form->addRow(m_smooth);
+    if (Viewport::hasDeformation()) {
+        m_deform = new QCheckBox(tr("Deformation animation (twist; pauses painting)"));
+        form->addRow(m_deform);
+        connect(m_deform, &QCheckBox::toggled, this, [this] { apply(); });
+    }
+    m_bookmarks = new QComboBox;
+    auto* save = new QPushButton(tr("Save view"));
+    auto* go = new QPushButton(tr("Go"));
+    form->addRow(tr("Camera bookmarks"), row({m_bookmarks, save, go}));
+    connect(m_method, &QComboBox::currentIndexChanged, this, [this] { apply(); });
+    connect(m_steps, &QSpinBox::valueChanged, this, [this] { apply(); });
+    connect(m_lightSteps, &QSpinBox::valueChanged, this, [this] { apply(); });
+    connect(m_exposure, &QDoubleSpinBox::valueChanged, this, [this] { apply(); });
+    connect(m_ambient, &QDoubleSpinBox::valueChanged, this, [this] { apply(); });
+    connect(m_turntable, &QCheckBox::toggled, this, [this] { apply(); });
+    connect(m_smooth, &QCheckBox::toggled, this, [this] { apply(); });
+    connect(save, &QPushButton::clicked, this, [this] {
+        const OrbitCamera& c = m_viewport->camera();
+        m_bookmarks->addItem(
+            tr("View %1").arg(m_bookmarks->count() + 1),
+            QVariantList{double(c.target.x), double(c.target.y), double(c.target.z),
+                         double(c.distance), double(c.yawDeg), double(c.pitchDeg)});
+        m_bookmarks->setCurrentIndex(m_bookmarks->count() - 1);
+    });
+    connect(go, &QPushButton::clicked, this, [this] {
+        const QVariantList v = m_bookmarks->currentData().toList();
+        if (v.size() != 6)
+            return;
+        OrbitCamera& c = m_viewport->camera();
+        c.target = Point3f(v[0].toFloat(), v[1].toFloat(), v[2].toFloat());
+        c.distance = v[3].toFloat();
+        c.yawDeg = v[4].toFloat();
+        c.pitchDeg = v[5].toFloat();
+        m_viewport->update();
+    });
+    connect(doc, &Document::sceneReplaced, m_bookmarks, &QComboBox::clear);
+    apply();
+}
+
+void RenderPanel::apply() {
+    RenderSettings s;
+    s.method = RenderSettings::Method(m_method->currentIndex());
+    s.steps = m_steps->value();
+    s.lightSteps = m_lightSteps->value();
+    s.exposureStops = float(m_exposure->value());
+    s.ambient = float(m_ambient->value());
+    s.turntable = m_turntable->isChecked();
+    s.smoothVoxels = m_smooth->isChecked();
+    s.deform = m_deform && m_deform->isChecked();
+    s.resolutionScale = m_scale->currentIndex() == 0   ? 1.f
+                        : m_scale->currentIndex() == 1 ? 0.5f
+                                                       : 0.25f;
+    m_steps->setEnabled(s.method == RenderSettings::Method::SingleScattering);
+    m_lightSteps->setEnabled(s.method == RenderSettings::Method::SingleScattering);
+    m_viewport->setRenderSettings(s);
+}
+
+// ---- StatsPanel -----------------------------------------------------------------------------
+
+StatsPanel::StatsPanel(Document* doc, Viewport* viewport, QWidget* parent)
+    : QWidget(parent), m_doc(doc), m_viewport(viewport) {
+    auto* layout = new QVBoxLayout(this);
+    m_text = new QLabel;
+    m_text->setTextInteractionFlags(Qt::TextSelectableByMouse);
+    m_text->setWordWrap(true);
+    layout->addWidget(m_text);
+    layout->addStretch(1);
+    connect(viewport, &Viewport::frameRendered, this, &StatsPanel::refresh);
+    refresh();
+}
+
+void StatsPanel::refresh() {
+    if (!isVisible())
+        return;
+    const ViewportStats& s = m_viewport->stats();
+    QString t;
+    t += tr("<b>GL</b>: %1<br>").arg(s.initError.isEmpty() ? s.glRenderer : s.initError);
+    t += tr("frame: %1 ms (%2 fps)<br>")
+             .arg(s.frameMs, 0, 'f', 1)
+             .arg(s.frameMs > 0 ? 1000.0 / s.frameMs : 0.0, 0, 'f', 1);
+    t += tr("last upload: %1 bricks in %2 ms<br>").arg(s.bricksUploaded).arg(s.uploadMs, 0, 'f', 2);
+    t += tr("frames: %1, GL errors: %2<br>").arg(s.frames).arg(s.glErrors);
+    if (const MaterialVolume* v = m_doc->material())
+        t += tr("volume: %1^3 voxels of %2 mm<br>")
+                 .arg(v->resolution())
+                 .arg(double(v->spec().voxelSize), 0, 'g', 3);
+    if (const TriangleMesh* m = m_doc->mesh())
+        t += tr("mesh: %1 triangles<br>").arg(m->triangleCount());
+    t += tr("undo: %1 steps, %2 MiB")
+             .arg(m_doc->history().undoCount())
+             .arg(double(m_doc->history().bytesUsed()) / (1024.0 * 1024.0), 0, 'f', 1);
+    m_text->setText(t);
+}
+
+}  // namespace lucent::app

@@ -1,0 +1,123 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief Dock panels: Tools (brush), Presets, Lights, Render settings, Statistics.
+/// Each edits the Document / Viewport directly; values are in physical units (mm, mm⁻¹, W/sr).
+
+#include <lucent/material/Medium.h>
+
+#include <QWidget>
+
+#include <array>
+
+class QCheckBox;
+class QComboBox;
+class QDoubleSpinBox;
+class QLabel;
+class QListWidget;
+class QPushButton;
+class QRadioButton;
+class QSpinBox;
+
+namespace lucent::app {
+
+class Document;
+class Viewport;
+
+/// Brush tool panel.
+class BrushPanel : public QWidget {
+    Q_OBJECT
+public:
+    BrushPanel(Document* doc, Viewport* viewport, QWidget* parent = nullptr);
+    /// Shows `s` as the brush value (σt, σs′, g) and applies it to the viewport brush.
+    void setBrushValue(const MaterialSample& s);
+    /// Pushes every widget value into the viewport's brush.
+    void apply();
+
+private:
+    void updateSwatch();
+    Document* m_doc;
+    Viewport* m_viewport;
+    QRadioButton* m_paintTool;
+    QRadioButton* m_eyedropTool;
+    QDoubleSpinBox* m_radius;
+    QDoubleSpinBox* m_depth;
+    QComboBox* m_falloff;
+    QDoubleSpinBox* m_strength;
+    QDoubleSpinBox* m_spacing;
+    QComboBox* m_mode;
+    QCheckBox* m_chSigmaT;
+    QCheckBox* m_chSigmaS;
+    QCheckBox* m_chG;
+    std::array<QDoubleSpinBox*, 3> m_sigmaT{};
+    std::array<QDoubleSpinBox*, 3> m_sigmaS{};
+    QDoubleSpinBox* m_g;
+    QPushButton* m_swatch;
+    QComboBox* m_pattern;
+    QDoubleSpinBox* m_patternScale;
+};
+
+/// Material presets (Jensen et al. 2001 measured, plus artist presets).
+class PresetPanel : public QWidget {
+    Q_OBJECT
+public:
+    PresetPanel(Document* doc, BrushPanel* brush, QWidget* parent = nullptr);
+
+private:
+    Document* m_doc;
+    QListWidget* m_list;
+};
+
+/// Lights and η of the scene.
+class LightPanel : public QWidget {
+    Q_OBJECT
+public:
+    explicit LightPanel(Document* doc, QWidget* parent = nullptr);
+
+private:
+    void load();
+    void store();
+    Document* m_doc;
+    QComboBox* m_light;
+    QLabel* m_type;
+    std::array<QDoubleSpinBox*, 3> m_pos{};
+    std::array<QDoubleSpinBox*, 3> m_intensity{};
+    QDoubleSpinBox* m_eta;
+    bool m_loading = false;
+};
+
+/// Preview method and camera bookmarks.
+class RenderPanel : public QWidget {
+    Q_OBJECT
+public:
+    RenderPanel(Document* doc, Viewport* viewport, QWidget* parent = nullptr);
+
+private:
+    void apply();
+    Viewport* m_viewport;
+    QComboBox* m_method;
+    QSpinBox* m_steps;
+    QSpinBox* m_lightSteps;
+    QDoubleSpinBox* m_exposure;
+    QDoubleSpinBox* m_ambient;
+    QCheckBox* m_turntable;
+    QCheckBox* m_smooth;
+    QComboBox* m_scale;
+    QCheckBox* m_deform = nullptr;
+    QComboBox* m_bookmarks;
+};
+
+/// Frame timings, upload sizes, GL state, volume and history sizes.
+class StatsPanel : public QWidget {
+    Q_OBJECT
+public:
+    StatsPanel(Document* doc, Viewport* viewport, QWidget* parent = nullptr);
+    void refresh();
+
+private:
+    Document* m_doc;
+    Viewport* m_viewport;
+    QLabel* m_text;
+};
+
+}  // namespace lucent::app

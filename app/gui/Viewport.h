@@ -1,0 +1,156 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief The central 3-D viewport: OpenGL 4.5 core rendering of the painted object with the
+/// selected preview method, orbit/pan/zoom camera, ray-picked brush painting and eyedropper.
+///
+/// Only dirty 8³ bricks of the material are re-uploaded after a stroke (glTexSubImage3D per
+/// brick); the whole volume is uploaded only when the scene is replaced.
+
+#include "BrushTool.h"
+#include "MeshPicker.h"
+
+#include <QOpenGLFunctions_4_5_Core>
+#include <QOpenGLWidget>
+#include <QElapsedTimer>
+#include <QTimer>
+
+#include <memory>
+#include <optional>
+
+namespace lucent::app {
+
+class Document;
+
+/// Orbit camera around a target point; +y is up.
+struct OrbitCamera {
+    Point3f target{0.f};
+    float distance = 60.f;  ///< mm
+    float yawDeg = 0.f;     ///< about +y, 0 looks along −z
+    float pitchDeg = 0.f;   ///< elevation, clamped to ±89°
+    float fovYDeg = 40.f;
+
+    [[nodiscard]] Point3f eye() const;
+    [[nodiscard]] Mat4f viewFromWorld() const;
+    [[nodiscard]] Mat4f clipFromView(float aspect) const;
+    /// Places the camera at `eye` looking at `target`.
+    void lookAt(const Point3f& eye, const Point3f& target);
+};
+
+/// Preview method and its parameters.
+struct RenderSettings {
+    enum class Method { Direct = 0, SingleScattering = 1 } method = Method::SingleScattering;
+    int steps = 24;             ///< view-ray march steps (single scattering)
+    int lightSteps = 6;         ///< shadow-ray march steps per view step
+    float exposureStops = 4.f;  ///< log2 of the exposure multiplier (single scattering alone
+                                ///< is dim: it leaves out multiple scattering)
+    float ambient = 0.f;        ///< uniform ambient irradiance, W/mm² (display aid)
+    bool turntable = false;     ///< rotate the camera at 30°/s
+    /// Trilinear texture filtering of σ (display only; the engine's lookup rule is nearest).
+    bool smoothVoxels = false;
+    /// Preview pixels per widget pixel per axis (1, ½, ¼); the image is upscaled bilinearly.
+    float resolutionScale = 0.5f;
+    /// Animated twist of the mesh (engine lucent/mesh/Deform.h), display only: the material
+    /// stays in rest space and is looked up at each surface point's rest position. Painting is
+    /// paused while it runs.
+    bool deform = false;
+};
+
+/// Per-frame timings shown in the Statistics dock.
+struct ViewportStats {
+    double frameMs = 0.0;    ///< last paintGL, GPU work included (glFinish)
+    double uploadMs = 0.0;   ///< last brick upload
+    int bricksUploaded = 0;  ///< bricks in the last upload
+    long long frames = 0;    ///< frames rendered since start
+    int glErrors = 0;        ///< glGetError() != GL_NO_ERROR count since start
+    QString glRenderer;      ///< GL_RENDERER / GL_VERSION
+    QString initError;       ///< non-empty when GL set-up failed
+};
+
+class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_4_5_Core {
+    Q_OBJECT
+public:
+    enum class Tool { Paint, Eyedropper };
+
+    explicit Viewport(Document* doc, QWidget* parent = nullptr);
+    ~Viewport() override;
+
+    OrbitCamera& camera() { return m_camera; }
+    [[nodiscard]] const RenderSettings& renderSettings() const { return m_render; }
+    void setRenderSettings(const RenderSettings& s);
+    AppBrush& brush() { return m_brush; }
+    void setTool(Tool t) { m_tool = t; }
+    [[nodiscard]] Tool tool() const { return m_tool; }
+    [[nodiscard]] const ViewportStats& stats() const { return m_stats; }
+
+    /// Frames the object (F key): target at its centre, distance to fit its bounds.
+    void frameObject();
+    /// Camera ray through widget position `pos` (logical pixels, origin top-left).
+    void cameraRay(const QPointF& pos, Point3f& origin, Vector3f& direction) const;
+    /// True when the deformation animation is compiled in (mesh/Deform).
+    static bool hasDeformation();
+    /// Mesh hit under widget position `pos`.
+    [[nodiscard]] std::optional<PickHit> pickAt(const QPointF& pos) const;
+    /// Paints a straight stroke from a to b (widget positions) as one undoable command, the
+    /// way a mouse drag does; used by scripted tests and benchmarks. @return undo steps added
+    /// (1 when the stroke changed voxels, else 0).
+    int strokeBetween(const QPointF& a, const QPointF& b);
+
+Q_SIGNALS:
+    void frameRendered();
+    void eyedropped(const lucent::MaterialSample& sample);
+    void hoverVoxel(const QString& text);
+    void paintError(const QString& message);
+
+protected:
+    void initializeGL() override;
+    void resizeGL(int w, int h) override;
+    void paintGL() override;
+    void mousePressEvent(QMouseEvent* e) override;
+    void mouseMoveEvent(QMouseEvent* e) override;
+    void mouseReleaseEvent(QMouseEvent* e) override;
+    void wheelEvent(QWheelEvent* e) override;
+    void keyPressEvent(QKeyEvent* e) override;
+    void leaveEvent(QEvent* e) override;
+
+private:
+    void onSceneReplaced();
+    void cleanupGL();
+    void uploadMesh();
+    void uploadVolume(bool full);
+    void beginStroke(const PickHit& hit);
+    void continueStroke(const PickHit& hit);
+    void endStroke();
+    [[nodiscard]] Point3f stampCenter(const PickHit& hit) const;
+    void updateHover(const QPointF& pos);
+    unsigned compileProgram();
+
+    Document* m_doc;
+    OrbitCamera m_camera;
+    RenderSettings m_render;
+    AppBrush m_brush;
+    Tool m_tool = Tool::Paint;
+    ViewportStats m_stats;
+
+    // Interaction state.
+    enum class Drag { None, Paint, Orbit, Pan } m_drag = Drag::None;
+    QPointF m_lastMouse;
+    bool m_stroking = false;
+    Point3f m_lastStamp{0.f};
+    std::optional<Point3f> m_cursor;
+    QTimer m_turntable;
+    QTimer m_animation;
+    QElapsedTimer m_clock;
+
+    // GL objects (valid while the context lives).
+    bool m_glReady = false;
+    unsigned m_program = 0, m_vao = 0, m_vbo = 0, m_ebo = 0;
+    unsigned m_texSigmaT = 0, m_texSigmaS = 0;
+    int m_texResolution = 0;
+    int m_indexCount = 0;
+    unsigned m_lowFbo = 0, m_lowRb[2] = {0, 0};  // reduced-resolution target
+    QSize m_lowSize;
+    bool m_meshDirty = true, m_volumeFull = true;
+};
+
+}  // namespace lucent::app

@@ -1,0 +1,412 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief SslpvSubsurfaceProvider: incremental CPU solve, grid upload to 3-D textures and the
+/// per-pixel sample pass (SslpvProvider.h, docs/methods/sslpv.md "Live preview").
+
+#include <lucent/sslpv/SslpvProvider.h>
+
+#include <lucent/core/Error.h>
+#include <lucent/core/Timer.h>
+#include <lucent/gpu/GlResources.h>
+#include <lucent/gpu/Shader.h>
+#include <lucent/mesh/Voxelize.h>
+
+#include <epoxy/gl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+namespace lucent {
+
+namespace {
+
+// SH normalisation constants of Eq. 7, the values SslpvSolver::radiance uses (real orthonormal
+// basis, docs/conventions.md): Y00 = 1/(2√π), K1 = √(3/(4π)).
+constexpr float SH_Y00 = 0.282094791773878f;
+constexpr float SH_K1 = 0.488602511902920f;
+
+/// Coefficients of bands 0–1 uploaded (band 2 integrates to zero over the hemisphere, Eq. 7).
+constexpr int UPLOADED_COEFFS = 4;
+
+void validateOptions(const SslpvProviderOptions& o) {
+    LUCENT_CHECK(o.meshId >= -1, "SSLPV provider option 'meshId' must be >= -1, got ", o.meshId);
+    // Everything else is checked by SslpvRenderer::setOptions / SslpvSolver::setOptions.
+    SslpvRenderer probe(o.render);
+}
+
+/// A tiny homogeneous volume around the mesh: the internal RSM renderer needs a material to
+/// run, but the injection texels depend only on mesh, lights and injectionResolution.
+MaterialVolume rsmDummyVolume(const TriangleMesh& mesh) {
+    return MaterialVolume(GridSpec::around(mesh.bounds(), GridSpec::MIN_RESOLUTION),
+                          {Rgb(1.f), Rgb(0.5f), Rgb(0.f)});
+}
+
+}  // namespace
+
+struct SslpvSubsurfaceProvider::Impl {
+    SslpvProviderOptions opt;
+    SslpvSolver solver;
+    SslpvRenderer rsm;  ///< RSM injection texels (shared code with the CPU image path)
+    TriangleMesh mesh;
+    bool hasMesh = false;
+    std::vector<Light> lights;
+    Mat4f objectFromWorld{1.f};
+
+    CoarseMaterial coarse;  ///< unmasked, incrementally updated
+    std::vector<uint8_t> meshInside;
+    GridSpec meshInsideSpec;
+    bool meshInsideValid = false;
+    float eta = 1.3f;
+    bool hasMaterial = false;
+    GridSpec volumeSpec;  ///< fine grid the coarse material was resampled from
+
+    bool materialDirty = true;  ///< solver needs the (masked) coarse material
+    bool rsmDirty = true;
+    bool glPropagateDirty = false;
+    bool uploadDirty = true;
+
+    // GL
+    bool created = false;
+    gpu::GlProgram program;
+    gpu::GlObject coeffTex[UPLOADED_COEFFS];
+    int texRes = 0;
+    gpu::GlObject timeQuery;
+    bool queryPending = false;
+    std::unique_ptr<SslpvGlPropagator> gl;
+    std::vector<float> staging;
+
+    SslpvProviderTimings timings;
+    SslpvProviderStats stats;
+
+    explicit Impl(const SslpvProviderOptions& o) : opt(o), solver(o.render.solver) {
+        SslpvRenderOptions ro = o.render;
+        ro.gridResolution = 4;  // the RSM renderer's own grid is irrelevant: keep it tiny
+        ro.solver.maxSteps = 0;
+        rsm.setOptions(ro);
+    }
+
+    [[nodiscard]] int gridResolution(const MaterialVolume& v) const {
+        return std::min(opt.render.gridResolution, v.resolution());
+    }
+
+    [[nodiscard]] const SslpvGrid& sampledGrid() const {
+        if (opt.backend == SslpvBackend::Gl && gl && !glPropagateDirty)
+            return gl->accumulation();
+        return solver.accumulation();
+    }
+};
+
+SslpvSubsurfaceProvider::SslpvSubsurfaceProvider(const SslpvProviderOptions& options) {
+    validateOptions(options);
+    m = std::make_unique<Impl>(options);
+}
+
+SslpvSubsurfaceProvider::~SslpvSubsurfaceProvider() = default;
+
+void SslpvSubsurfaceProvider::create() {
+    create(gpu::ShaderLibrary());
+}
+
+void SslpvSubsurfaceProvider::create(const gpu::ShaderLibrary& library) {
+    if (m->created)
+        return;
+    m->program = gpu::GlProgram::compute(library, "sslpv_sample.comp");
+    m->timeQuery = gpu::GlObject::create(gpu::GlObjectKind::Query, GL_TIME_ELAPSED);
+    m->created = true;
+    m->uploadDirty = true;
+    if (m->opt.backend == SslpvBackend::Gl) {
+        m->gl = std::make_unique<SslpvGlPropagator>(m->opt.glStorage);
+        m->glPropagateDirty = true;
+    }
+}
+
+void SslpvSubsurfaceProvider::destroy() {
+    m->program.destroy();
+    for (auto& t : m->coeffTex)
+        t.destroy();
+    m->texRes = 0;
+    if (m->queryPending) {
+        GLuint64 ns = 0;
+        glGetQueryObjectui64v(m->timeQuery.id(), GL_QUERY_RESULT, &ns);
+        m->queryPending = false;
+    }
+    m->timeQuery.destroy();
+    if (m->gl) {
+        m->gl->destroy();
+        m->gl.reset();
+    }
+    m->created = false;
+}
+
+bool SslpvSubsurfaceProvider::isCreated() const {
+    return m->created;
+}
+
+void SslpvSubsurfaceProvider::setOptions(const SslpvProviderOptions& o) {
+    validateOptions(o);
+    const SslpvProviderOptions old = m->opt;
+    m->opt = o;
+    // Any solver setting (order, steps, sinks, attenuation, mode, calibration) re-propagates.
+    m->solver.setOptions(o.render.solver);
+    m->glPropagateDirty = o.backend == SslpvBackend::Gl;
+    m->uploadDirty = true;
+    if (o.render.injectionResolution != old.render.injectionResolution) {
+        SslpvRenderOptions ro = m->rsm.options();
+        ro.injectionResolution = o.render.injectionResolution;
+        m->rsm.setOptions(ro);
+        m->rsmDirty = true;
+    }
+    if (o.render.gridResolution != old.render.gridResolution)
+        m->hasMaterial = false;  // needs setMaterial() again (a new coarse grid)
+    if (o.backend != old.backend || o.glStorage != old.glStorage) {
+        if (m->gl && m->created) {
+            m->gl->destroy();
+            m->gl.reset();
+        }
+        if (o.backend == SslpvBackend::Gl && m->created)
+            m->gl = std::make_unique<SslpvGlPropagator>(o.glStorage);
+        m->glPropagateDirty = o.backend == SslpvBackend::Gl;
+        m->uploadDirty = true;
+    }
+}
+
+const SslpvProviderOptions& SslpvSubsurfaceProvider::options() const {
+    return m->opt;
+}
+
+void SslpvSubsurfaceProvider::setMesh(const TriangleMesh& mesh) {
+    m->rsm.setMesh(mesh);  // validates and builds the ray caster
+    m->mesh = mesh;
+    m->hasMesh = true;
+    m->meshInsideValid = false;
+    m->materialDirty = true;
+    m->rsmDirty = true;
+}
+
+void SslpvSubsurfaceProvider::setLights(const std::vector<Light>& lights) {
+    m->rsm.setLights(lights);
+    m->lights = lights;
+    m->rsmDirty = true;
+}
+
+void SslpvSubsurfaceProvider::setObjectFromWorld(const Mat4f& objectFromWorld) {
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r)
+            LUCENT_CHECK(std::isfinite(objectFromWorld[c][r]),
+                         "SSLPV provider: objectFromWorld is not finite");
+    LUCENT_CHECK(std::abs(glm::determinant(Mat3f(objectFromWorld))) > 1e-12f,
+                 "SSLPV provider: objectFromWorld is not invertible");
+    m->objectFromWorld = objectFromWorld;
+}
+
+void SslpvSubsurfaceProvider::setMaterial(const MaterialVolume& volume, float eta) {
+    LUCENT_CHECK(std::isfinite(eta) && eta >= 1.f && eta <= 3.f,
+                 "SSLPV provider: eta must be in [1, 3], got ", eta);
+    const Timer t;
+    m->coarse = resampleForPropagation(volume, m->gridResolution(volume));
+    m->timings.resampleMs = t.elapsedMs();
+    m->stats.lastResampledCells = m->coarse.spec.voxelCount();
+    ++m->stats.fullResamples;
+    if (eta != m->eta)
+        m->rsmDirty = true;  // the injection's Fresnel transmission depends on η
+    m->eta = eta;
+    m->volumeSpec = volume.spec();
+    m->hasMaterial = true;
+    m->materialDirty = true;
+}
+
+void SslpvSubsurfaceProvider::updateMaterial(const MaterialVolume& volume,
+                                             const std::vector<int>& dirtyBricks) {
+    if (!m->hasMaterial || !(volume.spec() == m->volumeSpec) ||
+        m->coarse.spec.resolution != m->gridResolution(volume)) {
+        setMaterial(volume, m->hasMaterial ? m->eta : volume.eta());
+        return;
+    }
+    if (dirtyBricks.empty())
+        return;
+    const Timer t;
+    m->stats.lastResampledCells = updateCoarseMaterial(m->coarse, volume, dirtyBricks);
+    m->timings.resampleMs = t.elapsedMs();
+    ++m->stats.incrementalUpdates;
+    m->materialDirty = true;
+}
+
+const SslpvStats& SslpvSubsurfaceProvider::update() {
+    LUCENT_CHECK(m->hasMesh, "SSLPV provider: no mesh (call setMesh first)");
+    LUCENT_CHECK(m->hasMaterial, "SSLPV provider: no material (call setMaterial first)");
+    Impl& s = *m;
+    const bool wasDirty = s.materialDirty || s.rsmDirty || s.solver.isDirty();
+    if (s.materialDirty) {
+        // Cells count as inside only where the mesh voxelisation agrees (as SslpvRenderer).
+        if (!s.meshInsideValid || !(s.meshInsideSpec == s.coarse.spec)) {
+            s.meshInside = voxelizeSolid(s.mesh, s.coarse.spec);
+            s.meshInsideSpec = s.coarse.spec;
+            s.meshInsideValid = true;
+        }
+        CoarseMaterial masked = s.coarse;
+        for (size_t k = 0; k < s.meshInside.size(); ++k)
+            if (!s.meshInside[k])
+                masked.insideFraction[k] = 0.f;
+        s.solver.setMaterial(masked, s.eta);
+        s.materialDirty = false;
+    }
+    if (s.rsmDirty) {
+        // The internal renderer's tiny material only lets it run; its RSM texels are reused.
+        SslpvRenderOptions ro = s.rsm.options();
+        if (ro.injectionResolution != s.opt.render.injectionResolution) {
+            ro.injectionResolution = s.opt.render.injectionResolution;
+            s.rsm.setOptions(ro);
+        }
+        s.rsm.setMaterial(rsmDummyVolume(s.mesh), s.eta);
+        s.rsm.update();
+        s.timings.rsmMs = s.rsm.timings().rsmMs;
+        s.solver.setInjectionSamples(s.rsm.solver().injectionSamples());
+        s.rsmDirty = false;
+    }
+    const SslpvStats& st = s.solver.solve();
+    if (wasDirty) {
+        ++s.stats.solves;
+        if (st.reinjected)
+            s.timings.injectMs = st.injectMs;
+        if (st.repropagated) {
+            if (s.opt.backend == SslpvBackend::Cpu)
+                s.timings.propagateMs = st.propagateMs;
+            s.glPropagateDirty = s.opt.backend == SslpvBackend::Gl;
+        }
+        s.uploadDirty = true;
+        s.timings.lastUpdateMs = s.timings.resampleMs + (st.reinjected ? s.timings.rsmMs : 0.0) +
+                                 (st.reinjected ? st.injectMs : 0.0) +
+                                 (st.repropagated ? st.propagateMs : 0.0);
+    }
+    return st;
+}
+
+bool SslpvSubsurfaceProvider::isDirty() const {
+    return m->materialDirty || m->rsmDirty || m->solver.isDirty() || m->uploadDirty ||
+           m->glPropagateDirty;
+}
+
+void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsigned target) {
+    LUCENT_CHECK(m->created, "SSLPV provider: create() was not called");
+    Impl& s = *m;
+    update();
+    if (s.opt.backend == SslpvBackend::Gl && s.glPropagateDirty) {
+        if (!s.gl)
+            s.gl = std::make_unique<SslpvGlPropagator>(s.opt.glStorage);
+        const Timer t;
+        s.gl->propagate(s.solver);
+        s.timings.propagateMs = t.elapsedMs();
+        s.glPropagateDirty = false;
+        s.uploadDirty = true;
+    }
+    const SslpvGrid& grid = s.sampledGrid();
+    const GridSpec& spec = s.solver.spec();
+    const int N = spec.resolution;
+    if (s.uploadDirty || s.texRes != N) {
+        const Timer t;
+        if (s.texRes != N) {
+            for (auto& tex : s.coeffTex) {
+                tex.destroy();
+                tex = gpu::createTexture3D(GL_RGBA32F, N, N, N, /*linear=*/false);
+            }
+            s.texRes = N;
+        }
+        const size_t cells = spec.voxelCount();
+        s.staging.resize(4 * cells);
+        for (int i = 0; i < UPLOADED_COEFFS; ++i) {
+            const float* planes[3] = {grid.plane(0, i), grid.plane(1, i), grid.plane(2, i)};
+            size_t k = 0;
+            for (int z = 0; z < N; ++z)
+                for (int y = 0; y < N; ++y)
+                    for (int x = 0; x < N; ++x, ++k) {
+                        const size_t pi = grid.index({x, y, z});
+                        float* dst = &s.staging[4 * k];
+                        dst[0] = planes[0][pi];
+                        dst[1] = planes[1][pi];
+                        dst[2] = planes[2][pi];
+                        dst[3] = i == 0 && s.solver.isInside({x, y, z}) ? 1.f : 0.f;
+                    }
+            glTextureSubImage3D(s.coeffTex[i].id(), 0, 0, 0, 0, N, N, N, GL_RGBA, GL_FLOAT,
+                                s.staging.data());
+        }
+        s.timings.uploadMs = t.elapsedMs();
+        s.timings.lastUpdateMs += s.timings.uploadMs;
+        s.uploadDirty = false;
+        ++s.stats.uploads;
+    }
+
+    // GPU time of the previous sample pass, when available (no stall).
+    if (s.queryPending) {
+        GLint available = 0;
+        glGetQueryObjectiv(s.timeQuery.id(), GL_QUERY_RESULT_AVAILABLE, &available);
+        if (available) {
+            GLuint64 ns = 0;
+            glGetQueryObjectui64v(s.timeQuery.id(), GL_QUERY_RESULT, &ns);
+            s.timings.sampleGpuMs = double(ns) * 1e-6;
+            s.queryPending = false;
+        }
+    }
+    const Timer t;
+    const bool query = !s.queryPending;
+    if (query)
+        glBeginQuery(GL_TIME_ELAPSED, s.timeQuery.id());
+    const GLuint p = s.program.id();
+    glUseProgram(p);
+    glBindTextureUnit(0, g.positionTexture);
+    glBindTextureUnit(1, g.normalTexture);
+    for (int i = 0; i < UPLOADED_COEFFS; ++i)
+        glBindTextureUnit(GLuint(2 + i), s.coeffTex[i].id());
+    glBindImageTexture(0, target, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    // Perspective unless the clip matrix's w row ignores the position (orthographic).
+    const Mat4f& clip = g.clipFromWorld;
+    const bool ortho = clip[0][3] == 0.f && clip[1][3] == 0.f && clip[2][3] == 0.f;
+    const Mat4f& v = g.viewFromWorld;
+    const Vector3f forward = -Vector3f(v[0][2], v[1][2], v[2][2]);  // −(view z) in world
+    glProgramUniformMatrix4fv(p, s.program.uniformLocation("u_objectFromWorld"), 1, GL_FALSE,
+                              &s.objectFromWorld[0][0]);
+    glProgramUniform3f(p, s.program.uniformLocation("u_eye"), g.cameraPosition.x,
+                       g.cameraPosition.y, g.cameraPosition.z);
+    glProgramUniform3f(p, s.program.uniformLocation("u_forward"), forward.x, forward.y, forward.z);
+    glProgramUniform1i(p, s.program.uniformLocation("u_ortho"), ortho ? 1 : 0);
+    glProgramUniform2i(p, s.program.uniformLocation("u_size"), g.width, g.height);
+    glProgramUniform1i(p, s.program.uniformLocation("u_meshId"), s.opt.meshId);
+    glProgramUniform3f(p, s.program.uniformLocation("u_origin"), spec.origin.x, spec.origin.y,
+                       spec.origin.z);
+    glProgramUniform1f(p, s.program.uniformLocation("u_h"), spec.voxelSize);
+    glProgramUniform1i(p, s.program.uniformLocation("u_res"), N);
+    glProgramUniform1f(p, s.program.uniformLocation("u_eta"), s.eta);
+    glProgramUniform1f(p, s.program.uniformLocation("u_exitScale"), s.solver.exitScale());
+    glProgramUniform1f(p, s.program.uniformLocation("u_Y00"), SH_Y00);
+    glProgramUniform1f(p, s.program.uniformLocation("u_K1"), SH_K1);
+    glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+    glUseProgram(0);
+    if (query) {
+        glEndQuery(GL_TIME_ELAPSED);
+        s.queryPending = true;
+    }
+    s.timings.sampleCpuMs = t.elapsedMs();
+    ++s.stats.frames;
+}
+
+const SslpvSolver& SslpvSubsurfaceProvider::solver() const {
+    return m->solver;
+}
+const SslpvGrid& SslpvSubsurfaceProvider::accumulation() const {
+    return m->sampledGrid();
+}
+const CoarseMaterial& SslpvSubsurfaceProvider::coarseMaterial() const {
+    return m->coarse;
+}
+float SslpvSubsurfaceProvider::eta() const {
+    return m->eta;
+}
+const SslpvProviderTimings& SslpvSubsurfaceProvider::timings() const {
+    return m->timings;
+}
+const SslpvProviderStats& SslpvSubsurfaceProvider::stats() const {
+    return m->stats;
+}
+
+}  // namespace lucent

@@ -1,0 +1,83 @@
+#version 450 core
+// SPDX-License-Identifier: MIT
+// Irradiance pass of the GPU image-space dipole (dipole::DipoleSubsurfaceProvider; seed 004 §5):
+// per covered G-buffer pixel, the Fresnel-transmitted irradiance of Eq. 5,
+//   E = Σ_lights F_t(η, cos θ_i) · E⊥ · cos θ_i · V,   F_t = 1 − F_r,
+// with E⊥ and V exactly as the renderer's shading pass (common/lighting.glsl, common/shadow.glsl),
+// and the painted material just inside the surface (same lookup as dipole::buildSurfaceBuffers:
+// nearest voxel half a voxel inside, stepping further in, up to 3 voxels, past masked voxels).
+// Also the radius R′ of the uniform disc samples (the discQuantile quantile of the widest
+// channel's virtual source, as the CPU gather's PixelMaterial), so the per-frame gather does not
+// repeat the three Newton solves. Outputs (GL rows, bottom first): E (W/mm²), σt and σs′ (mm⁻¹),
+// R′ (mm) in the σs′ image's alpha.
+#include "common/lighting.glsl"
+#include "common/shadow.glsl"
+#include "dipole_fresnel.glsl"
+#include "dipole_profiles.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(binding = 0) uniform sampler2D u_position;  // G-buffer: xyz mm, a coverage
+layout(binding = 1) uniform sampler2D u_normal;    // G-buffer: unit normal facing the camera
+layout(binding = 2) uniform sampler2DArrayShadow u_shadowMaps;
+layout(binding = 3) uniform sampler3D u_volumeSigmaT;  // rgb σt (mm⁻¹), a inside
+layout(binding = 4) uniform sampler3D u_volumeSigmaS;  // rgb σs′ (mm⁻¹)
+
+layout(rgba32f, binding = 0) writeonly uniform image2D o_irradiance;
+layout(rgba32f, binding = 1) writeonly uniform image2D o_sigmaT;
+layout(rgba32f, binding = 2) writeonly uniform image2D o_sigmaS;
+
+uniform ivec2 u_size;
+uniform int u_lightCount;
+uniform int u_shadows;
+uniform float u_eta;
+uniform int u_hasMaterial;
+uniform vec3 u_gridOrigin;   // mm
+uniform float u_voxelSize;   // mm
+uniform int u_resolution;
+uniform int u_model;  // 0 dipole, 1 better dipole
+uniform vec3 u_boundary;  // F_dr, C1, C2
+uniform float u_discQuantile;
+
+void main() {
+    ivec2 xy = ivec2(gl_GlobalInvocationID.xy);
+    if (xy.x >= u_size.x || xy.y >= u_size.y) return;
+    vec4 pos = texelFetch(u_position, xy, 0);
+    vec3 E = vec3(0.0), sigT = vec3(0.0), sigS = vec3(0.0);
+    if (pos.w != 0.0) {
+        vec3 p = pos.xyz;
+        vec3 n = normalize(texelFetch(u_normal, xy, 0).xyz);
+        for (int i = 0; i < u_lightCount; ++i) {
+            vec3 wi, incident;
+            float dist;
+            lightIncidence(lights[i], p, wi, incident, dist);
+            float cosI = dot(n, wi);
+            if (cosI <= 0.0) continue;
+            float V = u_shadows != 0 ? shadowVisibility(u_shadowMaps, lights[i], p, n) : 1.0;
+            E += incident * ((1.0 - dipoleFresnelReflectance(cosI, u_eta)) * cosI * V);
+        }
+        if (u_hasMaterial != 0) {
+            float inset = 0.5 * u_voxelSize;
+            for (int step = 1; step <= 6; ++step) {
+                vec3 q = p - float(step) * inset * n;
+                ivec3 c = ivec3(floor((q - u_gridOrigin) / u_voxelSize));
+                if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(u_resolution))))
+                    continue;
+                vec3 t = texelFetch(u_volumeSigmaT, c, 0).rgb;
+                if (t != vec3(0.0)) {
+                    sigT = t;
+                    sigS = texelFetch(u_volumeSigmaS, c, 0).rgb;
+                    break;
+                }
+            }
+        }
+    }
+    float R = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        Profile prof = makeProfile(u_model, max(sigT[c] - sigS[c], 0.0), sigS[c], u_boundary);
+        if (prof.zr > 0.0) R = max(R, sampleSourceRadius(prof.sigma, prof.zv, u_discQuantile));
+    }
+    imageStore(o_irradiance, xy, vec4(E, pos.w));
+    imageStore(o_sigmaT, xy, vec4(sigT, 0.0));
+    imageStore(o_sigmaS, xy, vec4(sigS, R));
+}

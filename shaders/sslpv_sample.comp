@@ -1,0 +1,107 @@
+#version 450 core
+// SPDX-License-Identifier: MIT
+// SSLPV per-pixel sample pass of SslpvSubsurfaceProvider (Børlum et al. 2011, seed 000, §3.3):
+// at every covered G-buffer pixel, the exitant radiance estimate of the CPU SslpvRenderer
+// (engine/src/sslpv/SslpvRenderer.cpp + SslpvSolver::radiance), line for line:
+//   L_i = (2/A)(c00·Y00 + ½·K1·c10^(n)),  A = Δx²,  c10^(n) = n·(c11, c1−1, c10)   (Eq. 5–7)
+//   L_o = S·(1 − F_r(cos θ_o, η))·max(0, L_i)                                     (Eq. 4/7)
+// S = SslpvSolver::exitScale(): 1 in Paper mode, gain/η² in Calibrated mode.
+// with the coefficients read at p − d·Δx·n, d = ½, 1, 3⁄2 (first depth whose inside weight
+// exceeds 1e-4), trilinear over the 8 nearest cell centres that are inside, renormalised.
+// Only bands 0 and 1 are read: band 2's hemisphere integral vanishes (Eq. 7).
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(binding = 0) uniform sampler2D u_position;  // world position (mm), a = coverage
+layout(binding = 1) uniform sampler2D u_normal;    // unit normal facing the camera, a = id + 1
+layout(binding = 2) uniform sampler3D u_c0;  // rgb: coefficient Y00 per channel, a: 1 inside
+layout(binding = 3) uniform sampler3D u_c1;  // rgb: Y1-1
+layout(binding = 4) uniform sampler3D u_c2;  // rgb: Y10
+layout(binding = 5) uniform sampler3D u_c3;  // rgb: Y11
+
+layout(rgba32f, binding = 0) writeonly uniform image2D u_target;  // W/(mm²·sr)
+
+uniform mat4 u_objectFromWorld;  // rigid: rest space of the object
+uniform vec3 u_eye;              // camera position, world (perspective)
+uniform vec3 u_forward;          // camera forward, world (orthographic)
+uniform int u_ortho;
+uniform ivec2 u_size;
+uniform int u_meshId;      // −1: every covered pixel
+uniform vec3 u_origin;     // LPV grid origin (rest space, mm)
+uniform float u_h;         // LPV cell size Δx, mm
+uniform int u_res;         // LPV cells per axis
+uniform float u_eta;       // relative index of refraction
+uniform float u_exitScale; // SslpvSolver::exitScale()
+uniform float u_Y00;       // 1/(2√π)
+uniform float u_K1;        // √(3/(4π))
+
+// Exact unpolarised Fresnel reflectance (Born & Wolf §1.5), as lucent::dielectricReflectance.
+float dielectricReflectance(float cosThetaI, float eta) {
+    cosThetaI = clamp(cosThetaI, 0.0, 1.0);
+    if (!(eta > 0.0)) return 1.0;
+    float sin2T = (1.0 - cosThetaI * cosThetaI) / (eta * eta);
+    if (sin2T >= 1.0) return 1.0;
+    float cosT = sqrt(1.0 - sin2T);
+    float rParl = (eta * cosThetaI - cosT) / (eta * cosThetaI + cosT);
+    float rPerp = (cosThetaI - eta * cosT) / (cosThetaI + eta * cosT);
+    return clamp(0.5 * (rParl * rParl + rPerp * rPerp), 0.0, 1.0);
+}
+
+bool isInside(ivec3 c) {
+    if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(u_res)))) return false;
+    return texelFetch(u_c0, c, 0).a >= 0.5;
+}
+
+vec3 radianceInside(vec3 p, vec3 n) {
+    const float depths[3] = float[3](0.5, 1.0, 1.5);
+    for (int d = 0; d < 3; ++d) {
+        vec3 u = (p - depths[d] * u_h * n - u_origin) / u_h - vec3(0.5);
+        ivec3 i0 = ivec3(floor(u));
+        vec3 f = u - vec3(i0);
+        float wsum = 0.0;
+        vec3 c0 = vec3(0.0), c1 = vec3(0.0), c2 = vec3(0.0), c3 = vec3(0.0);
+        for (int corner = 0; corner < 8; ++corner) {
+            ivec3 o = ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+            ivec3 cell = i0 + o;
+            if (!isInside(cell)) continue;
+            float w = (o.x != 0 ? f.x : 1.0 - f.x) * (o.y != 0 ? f.y : 1.0 - f.y) *
+                      (o.z != 0 ? f.z : 1.0 - f.z);
+            if (w <= 0.0) continue;
+            wsum += w;
+            c0 += w * texelFetch(u_c0, cell, 0).rgb;
+            c1 += w * texelFetch(u_c1, cell, 0).rgb;
+            c2 += w * texelFetch(u_c2, cell, 0).rgb;
+            c3 += w * texelFetch(u_c3, cell, 0).rgb;
+        }
+        if (wsum > 1e-4) {
+            c0 /= wsum;
+            c1 /= wsum;
+            c2 /= wsum;
+            c3 /= wsum;
+            float invA = 1.0 / (u_h * u_h);
+            vec3 c10n = n.x * c3 + n.y * c1 + n.z * c2;
+            return max(vec3(0.0), 2.0 * invA * (u_Y00 * c0 + 0.5 * u_K1 * c10n));
+        }
+    }
+    return vec3(0.0);
+}
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (px.x >= u_size.x || px.y >= u_size.y) return;
+    vec4 pos = texelFetch(u_position, px, 0);
+    vec4 nrm = texelFetch(u_normal, px, 0);
+    vec3 L = vec3(0.0);
+    bool mine = u_meshId < 0 || int(nrm.a + 0.5) == u_meshId + 1;
+    if (pos.a > 0.5 && mine) {
+        vec3 wo = u_ortho != 0 ? -normalize(u_forward) : normalize(u_eye - pos.xyz);
+        vec3 nw = normalize(nrm.xyz);
+        float cosO = dot(nw, wo);
+        if (cosO > 0.0) {
+            vec3 p = (u_objectFromWorld * vec4(pos.xyz, 1.0)).xyz;
+            vec3 n = normalize(mat3(u_objectFromWorld) * nw);
+            L = (u_exitScale * (1.0 - dielectricReflectance(cosO, u_eta))) * radianceInside(p, n);
+        }
+    }
+    imageStore(u_target, px, vec4(L, 1.0));
+}

@@ -1,0 +1,241 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief Calibrated SSLPV mode: folded factors follow the documented model, thick-slab
+/// reflectance stays within the fit's residual band against the classical dipole, energy never
+/// grows, extreme inputs stay finite (docs/methods/sslpv.md, "Calibrated mode").
+
+#include <lucent/sslpv/SslpvSolver.h>
+
+#include <lucent/core/Error.h>
+#include <lucent/dipole/Profiles.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace lucent;
+
+namespace {
+
+/// Thick slab exactly as `lucent-cli bench sslpv-fit` builds it (app/cli/Command_bench.cpp,
+/// slabResponse): N³ grid, slab in cells [1, N−2]³, σt = 1 mm⁻¹, σs′ = α′, g = 0, Δx = cell
+/// size in mean free paths; 16×16 unit-flux texels at normal incidence on the central 8×8
+/// cells of the top face. Returns Σ_top L_i·exitScale·Δx²/Φ (sr⁻¹) and the solver stats.
+double slabResponse(float albedo, float cellMfp, const SslpvOptions& opt, float eta, int n,
+                    SslpvStats* stats) {
+    const float h = cellMfp;
+    CoarseMaterial m;
+    m.spec.resolution = n;
+    m.spec.voxelSize = h;
+    m.spec.origin = Point3f(0.f);
+    const size_t count = m.spec.voxelCount();
+    m.insideFraction.assign(count, 0.f);
+    for (int c = 0; c < 3; ++c) {
+        m.sigma_t[c].assign(count, 1.f);
+        m.sigma_s[c].assign(count, albedo);
+        m.g[c].assign(count, 0.f);
+    }
+    for (int z = 1; z < n - 1; ++z)
+        for (int y = 1; y < n - 1; ++y)
+            for (int x = 1; x < n - 1; ++x)
+                m.insideFraction[m.spec.linearIndex({x, y, z})] = 1.f;
+    m.homogeneous = true;
+    const float zTop = float(n - 1) * h;
+    const int lo = n / 2 - 4;
+    std::vector<SslpvInjectionSample> texels;
+    for (int j = 0; j < 16; ++j)
+        for (int i = 0; i < 16; ++i)
+            texels.push_back(
+                {Point3f((lo + 0.25f + 0.5f * i) * h, (lo + 0.25f + 0.5f * j) * h, zTop),
+                 Normal3f(0, 0, 1), Vector3f(0, 0, -1), Rgb(1.f)});
+    const double phi = double(texels.size());
+    SslpvSolver solver(opt);
+    solver.setMaterial(m, eta);
+    solver.setInjectionSamples(std::move(texels));
+    *stats = solver.solve();
+    double sum = 0.0;
+    for (int y = 1; y < n - 1; ++y)
+        for (int x = 1; x < n - 1; ++x)
+            sum += double(
+                solver.radiance(Point3f((x + 0.5f) * h, (y + 0.5f) * h, zTop), Normal3f(0, 0, 1))
+                    .y);
+    return sum * double(solver.exitScale()) * double(h) * double(h) / phi;
+}
+
+/// Target of the fit: F_t(0)·R_d/π of the classical dipole (Jensen et al. 2001; see
+/// slabTarget in app/cli/Command_bench.cpp).
+double slabTarget(float albedo, float eta) {
+    const double rd =
+        dipole::totalReflectance(dipole::Model::Dipole, dipole::fromReduced(1.f, albedo, eta));
+    return (1.0 - dipole::fresnelReflectance(1.0, eta)) * rd / 3.14159265358979323846;
+}
+
+CoarseMaterial ball(int n, float h, float st, float ss, float g) {
+    CoarseMaterial m;
+    m.spec.resolution = n;
+    m.spec.voxelSize = h;
+    m.spec.origin = Point3f(-0.5f * n * h);
+    const size_t count = m.spec.voxelCount();
+    m.insideFraction.assign(count, 0.f);
+    for (int c = 0; c < 3; ++c) {
+        m.sigma_t[c].assign(count, st);
+        m.sigma_s[c].assign(count, ss);
+        m.g[c].assign(count, g);
+    }
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x)
+                if (glm::length(m.spec.cellCenter({x, y, z})) <= 0.35f * n * h)
+                    m.insideFraction[m.spec.linearIndex({x, y, z})] = 1.f;
+    m.homogeneous = true;
+    return m;
+}
+
+std::vector<SslpvInjectionSample> topTexels(const CoarseMaterial& m) {
+    const float r = 0.35f * m.spec.resolution * m.spec.voxelSize;
+    std::vector<SslpvInjectionSample> out;
+    for (int j = -6; j <= 6; ++j)
+        for (int i = -6; i <= 6; ++i) {
+            const float s = i * r / 7.f, t = j * r / 7.f;
+            if (s * s + t * t >= r * r)
+                continue;
+            const Point3f p(s, t, std::sqrt(r * r - s * s - t * t));
+            out.push_back({p, glm::normalize(p), Vector3f(0, 0, -1), Rgb(1.f)});
+        }
+    return out;
+}
+
+SslpvOptions calibrated(int order, int steps) {
+    SslpvOptions o;
+    o.order = order;
+    o.maxSteps = steps;
+    o.mode = SslpvMode::Calibrated;
+    return o;
+}
+
+}  // namespace
+
+TEST(SslpvCalibrated, FoldedFactorsFollowTheModel) {
+    // Band-l factor exp(−β)·((1 − s′) + s′g^l), β = U σaΔx + T σ_trΔx + K (σ_trΔx)²,
+    // σ_tr = √(3σaσt), s′ = 1 − exp(−σs′Δx); polynomial exp ~2e-7 relative.
+    for (float h : {0.1f, 1.f, 7.f}) {
+        CoarseMaterial m = ball(16, h, 0.8f, 0.5f, 0.3f);
+        m.sigma_t[1][m.spec.linearIndex({8, 8, 8})] = 3.f;  // heterogeneous path
+        m.homogeneous = false;
+        SslpvOptions o = calibrated(1, 1);
+        o.calibration.linear = 0.3f;
+        o.calibration.transport = 0.7f;
+        o.calibration.diffusion = 0.05f;
+        SslpvSolver solver(o);
+        solver.setMaterial(m, 1.3f);
+        solver.solve();
+        for (int c = 0; c < 3; ++c) {
+            const Coord cell = (c == 1) ? Coord(8, 8, 8) : Coord(7, 8, 8);
+            const size_t k = m.spec.linearIndex(cell);
+            const double st = m.sigma_t[c][k], ss = m.sigma_s[c][k], g = m.g[c][k];
+            const double sa = st - ss, tr = std::sqrt(3.0 * sa * st);
+            const double beta = 0.3 * sa * h + 0.7 * tr * h + 0.05 * tr * tr * h * h;
+            const double a = std::exp(-beta), s = 1.0 - std::exp(-ss * h);
+            const size_t pk = solver.injection().index(cell);
+            for (int l = 0; l < 3; ++l) {
+                const double expected = a * ((1.0 - s) + s * std::pow(g, l));
+                EXPECT_NEAR(solver.foldedFactorPlane(c, l)[pk], expected,
+                            1e-6 * std::abs(expected) + 1e-12)
+                    << "h " << h << " channel " << c << " band " << l;
+            }
+        }
+    }
+}
+
+TEST(SslpvCalibrated, ExitScaleIsGainOverEtaSquared) {
+    const CoarseMaterial m = ball(8, 1.f, 1.f, 0.9f, 0.f);
+    SslpvSolver paper({.order = 1, .maxSteps = 2});
+    paper.setMaterial(m, 1.5f);
+    EXPECT_EQ(paper.exitScale(), 1.f);  // Eq. 4: no 1/η² in the paper's convention
+    for (int order : {1, 2}) {
+        SslpvSolver cal(calibrated(order, 2));
+        cal.setMaterial(m, 1.5f);
+        const SslpvCalibration d = defaultSslpvCalibration();
+        EXPECT_FLOAT_EQ(cal.exitScale(), d.gain[order - 1] / (1.5f * 1.5f));
+    }
+}
+
+TEST(SslpvCalibrated, RejectsBadCalibration) {
+    SslpvOptions o = calibrated(1, 4);
+    o.calibration.transport = -1.f;
+    EXPECT_THROW(SslpvSolver{o}, ValueError);
+    o = calibrated(1, 4);
+    o.calibration.gain[1] = 0.f;
+    EXPECT_THROW(SslpvSolver{o}, ValueError);
+    o = calibrated(1, 4);
+    o.calibration.diffusion = std::nanf("");
+    EXPECT_THROW(SslpvSolver{o}, ValueError);
+}
+
+TEST(SslpvCalibrated, ThickSlabWithinFitResidualBand) {
+    // The documented fit (docs/methods/sslpv.md, "Calibrated mode", `lucent-cli bench
+    // sslpv-fit`, 48³, η = 1.3): its largest |residual| over α′ ∈ [0.3, 0.99] and
+    // Δx·σt ∈ {0.5, 1, 2, 4} is FIT_MAX_RESIDUAL for SH order 1. These cases must stay inside
+    // that band (the defaults are the fit's constants) and reproduce their printed residual to
+    // RESIDUAL_REPRO (float sums in a different order than the fit's run: ~1e-5; 0.5 % allows
+    // for the stop criterion's step count moving by one).
+    struct Case {
+        float albedo, cellMfp;
+        double fitResidual;  ///< printed by `lucent-cli bench sslpv-fit`
+    };
+    constexpr double FIT_MAX_RESIDUAL = 0.0;
+    constexpr double RESIDUAL_REPRO = 0.005;
+    const Case cases[] = {{0.5f, 1.f, 0.0}, {0.8f, 1.f, 0.0}, {0.95f, 2.f, 0.0}};
+    SslpvOptions o = calibrated(1, 4096);
+    o.stopEpsilon = 1e-4f;
+    for (const Case& c : cases) {
+        SslpvStats st;
+        const double resp = slabResponse(c.albedo, c.cellMfp, o, 1.3f, 48, &st);
+        const double residual = resp / slabTarget(c.albedo, 1.3f) - 1.0;
+        SCOPED_TRACE("albedo " + std::to_string(c.albedo) + " cell " + std::to_string(c.cellMfp));
+        EXPECT_LE(std::abs(residual), FIT_MAX_RESIDUAL);
+        EXPECT_NEAR(residual, c.fitResidual, RESIDUAL_REPRO);
+        // Energy never grows: all flux is accounted for and none is created.
+        EXPECT_LE(st.exitant.y + st.remaining.y, st.injected.y * (1.f + 2e-4f));
+    }
+}
+
+TEST(SslpvCalibrated, EnergyNeverGrowsAndStressCasesStayFinite) {
+    struct Stress {
+        const char* name;
+        float st, ss, g, eta, cell;
+        int steps;
+    };
+    const Stress cases[] = {
+        {"sigma_t->0", 1e-9f, 0.f, 0.f, 1.3f, 1.f, 64},
+        {"sigma_a=0", 2.f, 2.f, 0.f, 1.3f, 1.f, 64},
+        {"sigma_t=1e4", 1e4f, 5e3f, 0.f, 1.3f, 1.f, 16},
+        {"g=+0.99", 1.f, 0.99f, 0.99f, 1.3f, 1.f, 64},
+        {"g=-0.99", 1.f, 0.99f, -0.99f, 1.3f, 1.f, 64},
+        {"eta=1", 1.f, 0.5f, 0.f, 1.f, 1.f, 32},
+        {"eta=3", 1.f, 0.5f, 0.f, 3.f, 1.f, 32},
+        {"cell=1e-3mm", 1.f, 0.9f, 0.f, 1.3f, 1e-3f, 32},
+        {"cell=1e3mm", 1.f, 0.9f, 0.f, 1.3f, 1e3f, 32},
+        {"512 steps", 1.f, 0.999f, 0.f, 1.3f, 1.f, 512},
+    };
+    for (const Stress& sc : cases)
+        for (int order : {1, 2}) {
+            SCOPED_TRACE(std::string(sc.name) + " order " + std::to_string(order));
+            const CoarseMaterial m = ball(16, sc.cell, sc.st, sc.ss, sc.g);
+            SslpvSolver solver(calibrated(order, sc.steps));
+            solver.setMaterial(m, sc.eta);
+            solver.setInjectionSamples(topTexels(m));
+            const SslpvStats& st = solver.solve();
+            EXPECT_TRUE(solver.accumulation().isFinite());
+            EXPECT_TRUE(solver.propagation().isFinite());
+            EXPECT_TRUE(solver.exitant().isFinite());
+            EXPECT_GT(st.injected.x, 0.f);
+            // Per-step factors are ≤ 1 (β ≥ 0), so the balance holds with absorbed ≥ 0.
+            EXPECT_GE(st.absorbed.x, 0.f);
+            const float sum = st.remaining.x + st.exitant.x + st.absorbed.x;
+            EXPECT_NEAR(sum, st.injected.x, 2e-4f * st.injected.x);
+            EXPECT_LE(st.remaining.x + st.exitant.x, st.injected.x * (1.f + 2e-4f));
+            const Rgb L = solver.radiance(Point3f(0, 0, 0.3f * 16 * sc.cell), Normal3f(0, 0, 1));
+            EXPECT_TRUE(isFinite(L * solver.exitScale()));
+        }
+}
