@@ -42,7 +42,7 @@ if [ "$mode" = test ]; then
     exec ctest --preset ci
 fi
 
-app=build/$preset/app/lucent
+app=build/$preset/app/gui/lucent
 if [ -z "${DISPLAY:-}" ] && [ -z "${WAYLAND_DISPLAY:-}" ]; then
     echo "lucent: no display found, launching under xvfb-run"
     exec xvfb-run -a -s "-screen 0 1600x1000x24" env QT_QPA_PLATFORM=xcb "$app" "${@:2}"

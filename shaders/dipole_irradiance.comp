@@ -38,15 +38,18 @@ uniform int u_resolution;
 uniform int u_model;  // 0 dipole, 1 better dipole
 uniform vec3 u_boundary;  // F_dr, C1, C2
 uniform float u_discQuantile;
+uniform int u_meshId;  // −1: every mesh; else only pixels of this mesh (G-buffer normal.a − 1)
 
 void main() {
     ivec2 xy = ivec2(gl_GlobalInvocationID.xy);
     if (xy.x >= u_size.x || xy.y >= u_size.y) return;
     vec4 pos = texelFetch(u_position, xy, 0);
+    vec4 normalId = texelFetch(u_normal, xy, 0);
+    bool ours = u_meshId < 0 || int(normalId.a + 0.5) - 1 == u_meshId;
     vec3 E = vec3(0.0), sigT = vec3(0.0), sigS = vec3(0.0);
-    if (pos.w != 0.0) {
+    if (pos.w != 0.0 && ours) {
         vec3 p = pos.xyz;
-        vec3 n = normalize(texelFetch(u_normal, xy, 0).xyz);
+        vec3 n = normalize(normalId.xyz);
         for (int i = 0; i < u_lightCount; ++i) {
             vec3 wi, incident;
             float dist;

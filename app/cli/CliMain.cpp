@@ -36,6 +36,9 @@ LUCENT_DECLARE(bench)
 #ifdef LUCENT_CLI_HAS_PROFILE
 LUCENT_DECLARE(profile)
 #endif
+#ifdef LUCENT_CLI_HAS_EVALUATE
+LUCENT_DECLARE(evaluate)
+#endif
 #undef LUCENT_DECLARE
 
 static std::vector<const Command*> commands() {
@@ -60,6 +63,9 @@ static std::vector<const Command*> commands() {
 #endif
 #ifdef LUCENT_CLI_HAS_PROFILE
         &profileCommand,
+#endif
+#ifdef LUCENT_CLI_HAS_EVALUATE
+        &evaluateCommand,
 #endif
     };
 }

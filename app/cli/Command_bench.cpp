@@ -72,8 +72,8 @@ int runFit(const Args& args);
 int runBench(const std::vector<std::string>& argv) {
     const Args args(argv,
                     {"grid", "steps", "sh", "threads", "repeats", "eta", "linear", "diffusion",
-                     "iterations", "transport", "fit"},
-                    {"heterogeneous", "gl", "fp16", "dense", "json", "search"});
+                     "iterations", "transport", "fit", "gain", "per-step", "per-step-transport"},
+                    {"heterogeneous", "gl", "fp16", "dense", "json", "search", "solve-beta"});
     if (args.positional().size() == 1 && args.positional().front() == "sslpv-fit")
         return runFit(args);
     if (args.positional().size() != 1 || args.positional().front() != "sslpv")
@@ -327,8 +327,8 @@ int runFit(const Args& args) {
     const int n = args.intOr("grid", 48, 16, 128);
     const int order = args.intOr("sh", 1, 1, 2);
     const float eta = args.floatOr("eta", 1.3f, 1.f, 3.f);
-    std::vector<float> albedos = {0.3f, 0.5f, 0.7f, 0.8f, 0.9f, 0.95f, 0.99f};
-    std::vector<float> cells = {0.5f, 1.f, 2.f, 4.f};
+    const std::vector<float> albedos = {0.3f, 0.5f, 0.7f, 0.8f, 0.9f, 0.95f, 0.99f};
+    const std::vector<float> cells = {0.5f, 1.f, 2.f, 4.f};
     std::vector<FitCase> cases;
     for (float c : cells)
         for (float a : albedos)
@@ -348,6 +348,10 @@ int runFit(const Args& args) {
         base.calibration.diffusion = args.floatOr("diffusion", 0.f, 0.f, 100.f);
     if (args.value("transport"))
         base.calibration.transport = args.floatOr("transport", 0.f, 0.f, 100.f);
+    if (args.value("per-step"))
+        base.calibration.perStep = args.floatOr("per-step", 0.f, 0.f, 100.f);
+    if (args.value("per-step-transport"))
+        base.calibration.perStepTransport = args.floatOr("per-step-transport", 0.f, 0.f, 100.f);
     // Which weight --search fits (the others stay as given).
     const std::string param = args.valueOr("fit", "transport");
     float SslpvCalibration::*fitted = &SslpvCalibration::transport;
@@ -358,6 +362,36 @@ int runFit(const Args& args) {
     else if (param != "transport")
         LUCENT_THROW(ValueError, "--fit: '", param, "' is not linear, transport or diffusion");
 
+    if (args.has("solve-beta")) {
+        // Per case, the per-step absorption β* at which the SSLPV response equals the target
+        // with the gain given (default 1): bisection in log β over [1e-4, 20] (the response
+        // falls monotonically with β). β is imposed through the linear weight alone,
+        // linear = β/(σa·Δx). The table is what the calibration formula is fitted to.
+        const float gain = args.floatOr("gain", 1.f, 1e-3f, 1e3f);
+        std::printf(
+            "| dx*sigma_t | alpha' | beta* | beta*/(1-alpha') | sigma_tr dx | steps |\n"
+            "|---|---|---|---|---|---|\n");
+        for (const FitCase& fc : cases) {
+            const double target = slabTarget(fc.albedo, eta);
+            double lo = std::log(1e-4), hi = std::log(20.0);
+            int steps = 0;
+            for (int it = 0; it < args.intOr("iterations", 10, 1, 40); ++it) {
+                const double mid = 0.5 * (lo + hi);
+                SslpvOptions o = base;
+                o.calibration = SslpvCalibration{};
+                o.calibration.linear =
+                    float(std::exp(mid) / ((1.0 - fc.albedo) * double(fc.cellMfp)));
+                const double resp = gain * slabResponse(fc, n, o, eta, &steps);
+                (resp > target ? lo : hi) = mid;
+            }
+            const double beta = std::exp(0.5 * (lo + hi));
+            std::printf("| %.2f | %.3f | %.5f | %.4f | %.4f | %d |\n", double(fc.cellMfp),
+                        double(fc.albedo), beta, beta / (1.0 - fc.albedo),
+                        std::sqrt(3.0 * (1.0 - fc.albedo)) * fc.cellMfp, steps);
+            std::fflush(stdout);
+        }
+        return 0;
+    }
     if (search) {
         // Golden-section search of the diffusion weight (log scale) at fixed linear weight: the
         // objective is the RMS log residual after the optimal gain.
@@ -397,10 +431,11 @@ int runFit(const Args& args) {
         "g = 0\n",
         n, order, double(eta));
     std::printf(
-        "  model: beta = %.5f sigma_a dx + %.5f sigma_tr dx + %.5f (sigma_tr dx)^2, "
-        "gain G = %.5f\n",
+        "  model: beta = %.5f sigma_a dx + %.5f sigma_tr dx + %.5f (sigma_tr dx)^2 + "
+        "%.5f sigma_a/sigma_t + %.5f sigma_tr/sigma_t, gain G = %.5f\n",
         double(base.calibration.linear), double(base.calibration.transport),
-        double(base.calibration.diffusion), r.gain);
+        double(base.calibration.diffusion), double(base.calibration.perStep),
+        double(base.calibration.perStepTransport), r.gain);
     std::printf("  target: classical dipole F_t(0) R_d / pi (Jensen 2001)\n");
     std::printf(
         "| dx*sigma_t | alpha' | dipole R_d | target L/E (1/sr) | SSLPV G*L/E | "
@@ -545,17 +580,20 @@ const Command benchCommand{
     "--gl)\n"
     "\n"
     "usage: lucent-cli bench sslpv-fit [--grid N] [--sh 1|2] [--eta E] [--linear U]\n"
-    "                                  [--transport T] [--diffusion K]\n"
-    "                                  [--search [--fit linear|transport|diffusion]\n"
-    "                                  [--iterations I]]\n"
+    "                                  [--transport T] [--diffusion K] [--per-step P]\n"
+    "                                  [--per-step-transport Q]\n"
+    "                                  [--search [--fit linear|transport|diffusion]]\n"
+    "                                  [--solve-beta [--gain G]] [--iterations I]\n"
     "\n"
     "Fit of the calibrated SSLPV mode (docs/methods/sslpv.md): thick slabs (N^3 grid, default\n"
     "48) for alpha' in {0.3 .. 0.99} and cell sizes {0.5, 1, 2, 4} mean free paths; per-step\n"
-    "absorption beta = U sigma_a dx + T sigma_tr dx + K (sigma_tr dx)^2 (defaults: the\n"
-    "fitted constants); prints the optimal radiance gain G and the residual of each case\n"
-    "against the classical dipole. --search fits one weight (default transport) by\n"
-    "golden-section search (log scale over [0.02, 5], I iterations, default 12) minimising\n"
-    "the RMS log residual.\n",
+    "absorption beta = U sigma_a dx + T sigma_tr dx + K (sigma_tr dx)^2 + P sigma_a/sigma_t\n"
+    "+ Q sigma_tr/sigma_t (each weight defaults to the shipped constant); prints the optimal\n"
+    "radiance gain G and the residual of each case against the classical dipole.\n"
+    "  --search       fit one weight (default transport) by golden-section search (log scale\n"
+    "                 over [0.02, 5], I iterations, default 12) minimising the RMS log residual\n"
+    "  --solve-beta   per case, bisect the per-step absorption beta* that matches the dipole\n"
+    "                 with gain G (default 1), I iterations (default 10): the fit data\n",
     &runBench};
 
 }  // namespace lucent::cli

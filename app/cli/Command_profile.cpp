@@ -196,8 +196,12 @@ ImageRgb renderDipoleGl(const Scene& scene, Model model, bool subsurfaceOnly, in
         gpu::SurfaceMaterial surface;
         surface.diffuseAlbedo = Rgb(0.f);
         surface.specularAlbedo = Rgb(float(dipole::fresnelReflectance(1.0, scene.eta)));
-        for (const SceneObject& object : scene.objects)
-            renderer.addMesh(object.mesh, surface);
+        int materialMesh = -1;
+        for (const SceneObject& object : scene.objects) {
+            const int id = renderer.addMesh(object.mesh, surface);
+            if (materialMesh < 0)
+                materialMesh = id;  // the volume belongs to objects[0]
+        }
         renderer.setLights(scene.lights);
         renderer.setCamera(scene.camera);
         gpu::DirectSettings settings;
@@ -209,6 +213,7 @@ ImageRgb renderDipoleGl(const Scene& scene, Model model, bool subsurfaceOnly, in
         ps.samplesPerFrame = std::min(sppFrame, spp);
         ps.maxFrames = (spp + ps.samplesPerFrame - 1) / ps.samplesPerFrame;
         ps.seed = seed;
+        ps.meshId = materialMesh;
         provider.setSettings(ps);
         provider.setMaterial(scene.objects[0].material.get());
         renderer.setSubsurfaceProvider(&provider);

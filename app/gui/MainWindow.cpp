@@ -153,6 +153,10 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
            "pans, wheel zooms, F frames the object."));
 }
 
+void MainWindow::setRenderMethod(int method) {
+    m_render->setMethod(method);
+}
+
 MainWindow::~MainWindow() = default;
 
 void MainWindow::reportError(const QString& what, const std::exception& ex) {
@@ -180,8 +184,8 @@ void MainWindow::createDocks() {
     m_slice = new SliceView(m_doc);
     auto* channels =
         addDock(tr("Material channels"), "dockChannels", m_slice, Qt::RightDockWidgetArea);
-    auto* render = addDock(tr("Render settings"), "dockRender", new RenderPanel(m_doc, m_viewport),
-                           Qt::RightDockWidgetArea);
+    m_render = new RenderPanel(m_doc, m_viewport);
+    auto* render = addDock(tr("Render settings"), "dockRender", m_render, Qt::RightDockWidgetArea);
     auto* lights =
         addDock(tr("Lights"), "dockLights", new LightPanel(m_doc), Qt::RightDockWidgetArea);
     m_stats = new StatsPanel(m_doc, m_viewport);

@@ -16,6 +16,7 @@ namespace lucent::app {
 
 class BrushPanel;
 class ReferencePanel;
+class RenderPanel;
 class Document;
 class SliceView;
 class StatsPanel;
@@ -34,6 +35,8 @@ public:
     SliceView* sliceView() { return m_slice; }
     BrushPanel* brushPanel() { return m_brush; }
     ReferencePanel* referencePanel() { return m_reference; }
+    /// Selects the preview method (RenderSettings::Method) through the Render settings dock.
+    void setRenderMethod(int method);
 
     //! @{ \name File operations; each reports errors in a message box and returns false
     bool openFile(const QString& path);
@@ -87,6 +90,7 @@ private:
     SliceView* m_slice = nullptr;
     BrushPanel* m_brush = nullptr;
     StatsPanel* m_stats = nullptr;
+    RenderPanel* m_render = nullptr;
     ReferencePanel* m_reference = nullptr;  // null when the reference module is absent
     QMenu* m_recentMenu = nullptr;
     QMenu* m_viewMenu = nullptr;

@@ -25,6 +25,8 @@
 #include <QSpinBox>
 #include <QVBoxLayout>
 
+#include <initializer_list>
+
 namespace lucent::app {
 
 namespace {
@@ -349,9 +351,33 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     auto* form = new QFormLayout(this);
     const RenderSettings d;
     m_method = new QComboBox;
-    m_method->addItems({tr("Direct (surface albedo)"), tr("Single scattering (ray-marched)")});
+    // Order = RenderSettings::Method.
+    m_method->addItems({tr("Direct (opaque surface)"), tr("Single scattering (ray-marched)"),
+                        tr("SSLPV (live translucency)"), tr("Dipole (progressive)"),
+                        tr("Better dipole (progressive)")});
     m_method->setCurrentIndex(int(d.method));
-    m_method->setToolTip(tr("Only the methods available in this build are listed."));
+    m_method->setToolTip(
+        tr("Subsurface method added to the direct lighting of gpu::SceneRenderer."));
+    m_sslpvMode = new QComboBox;
+    m_sslpvMode->addItems({tr("Paper"), tr("Calibrated")});
+    m_sslpvMode->setCurrentIndex(d.sslpvCalibrated ? 1 : 0);
+    m_sslpvGrid = new QComboBox;
+    m_sslpvGrid->addItems({QStringLiteral("16³"), QStringLiteral("32³"), QStringLiteral("64³")});
+    m_sslpvGrid->setCurrentIndex(d.sslpvGrid <= 16 ? 0 : d.sslpvGrid <= 32 ? 1 : 2);
+    m_sslpvSteps = new QSpinBox;
+    m_sslpvSteps->setRange(1, 512);
+    m_sslpvSteps->setValue(d.sslpvSteps);
+    m_sslpvOrder = new QComboBox;
+    m_sslpvOrder->addItems({tr("1 (4 coefficients)"), tr("2 (9 coefficients)")});
+    m_sslpvOrder->setCurrentIndex(d.sslpvOrder == 2 ? 1 : 0);
+    m_sslpvSolve = new QComboBox;
+    m_sslpvSolve->addItems({tr("CPU"), tr("GPU (GL compute)")});
+    m_sslpvSolve->setCurrentIndex(d.sslpvGlSolve ? 1 : 0);
+    m_dipoleSpp = new QSpinBox;
+    m_dipoleSpp->setRange(1, 4096);
+    m_dipoleSpp->setValue(d.dipoleSpp);
+    m_dipoleSpp->setToolTip(
+        tr("Samples per pixel added each frame; refinement goes on while idle."));
     m_steps = new QSpinBox;
     m_steps->setRange(1, 512);
     m_steps->setValue(d.steps);
@@ -369,6 +395,16 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     m_scale->setToolTip(tr("Preview resolution; lower is faster on software OpenGL."));
     form->addRow(tr("Resolution"), m_scale);
     connect(m_scale, &QComboBox::currentIndexChanged, this, [this] { apply(); });
+    form->addRow(tr("SSLPV mode"), m_sslpvMode);
+    form->addRow(tr("SSLPV grid"), m_sslpvGrid);
+    form->addRow(tr("SSLPV steps"), m_sslpvSteps);
+    form->addRow(tr("SSLPV SH order"), m_sslpvOrder);
+    form->addRow(tr("SSLPV solve"), m_sslpvSolve);
+    form->addRow(tr("Dipole spp/frame"), m_dipoleSpp);
+    for (QComboBox* c : {m_sslpvMode, m_sslpvGrid, m_sslpvOrder, m_sslpvSolve})
+        connect(c, &QComboBox::currentIndexChanged, this, [this] { apply(); });
+    connect(m_sslpvSteps, &QSpinBox::valueChanged, this, [this] { apply(); });
+    connect(m_dipoleSpp, &QSpinBox::valueChanged, this, [this] { apply(); });
     form->addRow(tr("View steps"), m_steps);
     form->addRow(tr("Shadow steps"), m_lightSteps);
     form->addRow(tr("Exposure"), m_exposure);
@@ -427,9 +463,27 @@ void RenderPanel::apply() {
     s.resolutionScale = m_scale->currentIndex() == 0   ? 1.f
                         : m_scale->currentIndex() == 1 ? 0.5f
                                                        : 0.25f;
-    m_steps->setEnabled(s.method == RenderSettings::Method::SingleScattering);
-    m_lightSteps->setEnabled(s.method == RenderSettings::Method::SingleScattering);
+    s.sslpvCalibrated = m_sslpvMode->currentIndex() == 1;
+    s.sslpvGrid = 16 << m_sslpvGrid->currentIndex();
+    s.sslpvSteps = m_sslpvSteps->value();
+    s.sslpvOrder = m_sslpvOrder->currentIndex() + 1;
+    s.sslpvGlSolve = m_sslpvSolve->currentIndex() == 1;
+    s.dipoleSpp = m_dipoleSpp->value();
+    using M = RenderSettings::Method;
+    const bool single = s.method == M::SingleScattering, sslpv = s.method == M::Sslpv;
+    m_steps->setEnabled(single);
+    m_lightSteps->setEnabled(single);
+    m_ambient->setEnabled(single);
+    m_smooth->setEnabled(single);
+    for (QWidget* w : std::initializer_list<QWidget*>{m_sslpvMode, m_sslpvGrid, m_sslpvSteps,
+                                                      m_sslpvOrder, m_sslpvSolve})
+        w->setEnabled(sslpv);
+    m_dipoleSpp->setEnabled(s.method == M::Dipole || s.method == M::BetterDipole);
     m_viewport->setRenderSettings(s);
+}
+
+void RenderPanel::setMethod(int method) {
+    m_method->setCurrentIndex(method);
 }
 
 // ---- StatsPanel -----------------------------------------------------------------------------
@@ -457,6 +511,14 @@ void StatsPanel::refresh() {
              .arg(s.frameMs > 0 ? 1000.0 / s.frameMs : 0.0, 0, 'f', 1);
     t += tr("last upload: %1 bricks in %2 ms<br>").arg(s.bricksUploaded).arg(s.uploadMs, 0, 'f', 2);
     t += tr("frames: %1, GL errors: %2<br>").arg(s.frames).arg(s.glErrors);
+    for (const PreviewStats::Pass& p : s.preview.passes)
+        t += tr("&nbsp;&nbsp;%1: %2 ms GPU, %3 ms CPU<br>")
+                 .arg(QString::fromStdString(p.name))
+                 .arg(p.gpuMs, 0, 'f', 2)
+                 .arg(p.cpuMs, 0, 'f', 2);
+    if (!s.preview.methodDetail.empty())
+        t +=
+            QString::fromStdString(s.preview.methodDetail).toHtmlEscaped() + QStringLiteral("<br>");
     if (const MaterialVolume* v = m_doc->material())
         t += tr("volume: %1^3 voxels of %2 mm<br>")
                  .arg(v->resolution())

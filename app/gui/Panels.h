@@ -91,6 +91,8 @@ class RenderPanel : public QWidget {
     Q_OBJECT
 public:
     RenderPanel(Document* doc, Viewport* viewport, QWidget* parent = nullptr);
+    /// Selects a preview method (index = RenderSettings::Method) as the combo box does.
+    void setMethod(int method);
 
 private:
     void apply();
@@ -105,6 +107,14 @@ private:
     QComboBox* m_scale;
     QCheckBox* m_deform = nullptr;
     QComboBox* m_bookmarks;
+    // SSLPV
+    QComboBox* m_sslpvMode;
+    QComboBox* m_sslpvGrid;
+    QSpinBox* m_sslpvSteps;
+    QComboBox* m_sslpvOrder;
+    QComboBox* m_sslpvSolve;
+    // Dipoles
+    QSpinBox* m_dipoleSpp;
 };
 
 /// Frame timings, upload sizes, GL state, volume and history sizes.

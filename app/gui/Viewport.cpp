@@ -5,7 +5,6 @@
 #include "Viewport.h"
 
 #include "Document.h"
-#include "GuiShaders.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Timer.h>
@@ -93,6 +92,10 @@ void Viewport::setRenderSettings(const RenderSettings& s) {
     m_render = s;
     m_render.steps = std::clamp(m_render.steps, 1, 512);
     m_render.lightSteps = std::clamp(m_render.lightSteps, 1, 128);
+    m_render.sslpvGrid = m_render.sslpvGrid <= 16 ? 16 : m_render.sslpvGrid <= 32 ? 32 : 64;
+    m_render.sslpvSteps = std::clamp(m_render.sslpvSteps, 1, 512);
+    m_render.sslpvOrder = m_render.sslpvOrder == 2 ? 2 : 1;
+    m_render.dipoleSpp = std::clamp(m_render.dipoleSpp, 1, 4096);
     if (s.turntable && !m_turntable.isActive())
         m_turntable.start();
     if (!s.turntable)
@@ -112,7 +115,7 @@ void Viewport::onSceneReplaced() {
     m_camera.lookAt(scene.camera.position, scene.camera.target);
     m_camera.fovYDeg = scene.camera.fovYDeg;
     m_meshDirty = true;
-    m_volumeFull = true;
+    m_sceneReplaced = true;
     m_stroking = false;
     m_drag = Drag::None;
     update();
@@ -327,46 +330,6 @@ void Viewport::leaveEvent(QEvent*) {
 
 // ---- GL -------------------------------------------------------------------------------------
 
-namespace {
-
-unsigned compileStage(QOpenGLFunctions_4_5_Core* gl, GLenum type, const char* src,
-                      const char* name) {
-    const GLuint s = gl->glCreateShader(type);
-    gl->glShaderSource(s, 1, &src, nullptr);
-    gl->glCompileShader(s);
-    GLint ok = 0;
-    gl->glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {};
-        gl->glGetShaderInfoLog(s, sizeof log, nullptr, log);
-        gl->glDeleteShader(s);
-        LUCENT_THROW(GpuError, "shader ", name, " failed to compile: ", log);
-    }
-    return s;
-}
-
-}  // namespace
-
-unsigned Viewport::compileProgram() {
-    const GLuint vs = compileStage(this, GL_VERTEX_SHADER, shaders::SURFACE_VERT, "surface.vert");
-    const GLuint fs = compileStage(this, GL_FRAGMENT_SHADER, shaders::SURFACE_FRAG, "surface.frag");
-    const GLuint p = glCreateProgram();
-    glAttachShader(p, vs);
-    glAttachShader(p, fs);
-    glLinkProgram(p);
-    glDeleteShader(vs);
-    glDeleteShader(fs);
-    GLint ok = 0;
-    glGetProgramiv(p, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {};
-        glGetProgramInfoLog(p, sizeof log, nullptr, log);
-        glDeleteProgram(p);
-        LUCENT_THROW(GpuError, "surface program failed to link: ", log);
-    }
-    return p;
-}
-
 void Viewport::initializeGL() {
     try {
         if (!initializeOpenGLFunctions())
@@ -376,14 +339,9 @@ void Viewport::initializeGL() {
         m_stats.glRenderer =
             QStringLiteral("%1 — %2").arg(reinterpret_cast<const char*>(glGetString(GL_RENDERER)),
                                           reinterpret_cast<const char*>(glGetString(GL_VERSION)));
-        m_program = compileProgram();
-        glGenVertexArrays(1, &m_vao);
-        glGenBuffers(1, &m_vbo);
-        glGenBuffers(1, &m_ebo);
-        glGenTextures(1, &m_texSigmaT);
-        glGenTextures(1, &m_texSigmaS);
+        m_preview.create();  // programs from the engine's shader library (shaders/)
         m_glReady = true;
-        m_meshDirty = m_volumeFull = true;
+        m_meshDirty = m_sceneReplaced = true;
         connect(context(), &QOpenGLContext::aboutToBeDestroyed, this, [this] {
             makeCurrent();
             cleanupGL();
@@ -399,255 +357,88 @@ void Viewport::initializeGL() {
 void Viewport::cleanupGL() {
     if (!m_glReady)
         return;
-    glDeleteProgram(m_program);
-    glDeleteVertexArrays(1, &m_vao);
-    glDeleteBuffers(1, &m_vbo);
-    glDeleteBuffers(1, &m_ebo);
-    glDeleteTextures(1, &m_texSigmaT);
-    glDeleteTextures(1, &m_texSigmaS);
-    glDeleteFramebuffers(1, &m_lowFbo);
-    glDeleteRenderbuffers(2, m_lowRb);
-    m_lowFbo = m_lowRb[0] = m_lowRb[1] = 0;
-    m_lowSize = QSize();
-    m_program = m_vao = m_vbo = m_ebo = m_texSigmaT = m_texSigmaS = 0;
-    m_texResolution = 0;
+    m_preview.destroy();
     m_glReady = false;
 }
 
 void Viewport::resizeGL(int, int) {}
 
-void Viewport::uploadMesh() {
+const TriangleMesh* Viewport::shownMesh() {
     const TriangleMesh* mesh = m_doc->mesh();
-    std::vector<float> interleaved;  // posed position, posed normal, rest position
-    std::vector<uint32_t> indices;
-    if (mesh) {
-        const TriangleMesh* shown = mesh;
 #if LUCENT_APP_HAS_DEFORM
-        TriangleMesh posed;
-        if (m_render.deform && !mesh->isEmpty()) {
-            // A twist about the vertical axis through the object's centre: ±0.6 rad over its
-            // height, oscillating at 0.5 Hz (Deform.h: amount·sin(2π·rate·t)).
-            const Bounds3f b = mesh->bounds();
-            Deformer twist;
-            twist.type = DeformerType::Twist;
-            twist.center = b.center();
-            twist.axis = Vector3f(0.f, 1.f, 0.f);
-            twist.amount = 0.6f / std::max(b.extent().y, 1e-3f);
-            twist.rateHz = 0.5f;
-            posed = deform(*mesh, {twist}, float(m_clock.elapsed()) * 1e-3f);
-            shown = &posed;
-        }
+    if (mesh && m_render.deform && !mesh->isEmpty()) {
+        // A twist about the vertical axis through the object's centre: ±0.6 rad over its
+        // height, oscillating at 0.5 Hz (Deform.h: amount·sin(2π·rate·t)).
+        const Bounds3f b = mesh->bounds();
+        Deformer twist;
+        twist.type = DeformerType::Twist;
+        twist.center = b.center();
+        twist.axis = Vector3f(0.f, 1.f, 0.f);
+        twist.amount = 0.6f / std::max(b.extent().y, 1e-3f);
+        twist.rateHz = 0.5f;
+        m_posed = deform(*mesh, {twist}, float(m_clock.elapsed()) * 1e-3f);
+        return &m_posed;
+    }
 #endif
-        interleaved.reserve(mesh->positions.size() * 9);
-        for (size_t i = 0; i < mesh->positions.size(); ++i) {
-            const Point3f& p = shown->positions[i];
-            const Point3f& r = mesh->positions[i];
-            const Normal3f n =
-                i < shown->normals.size() ? shown->normals[i] : Normal3f(0.f, 1.f, 0.f);
-            interleaved.insert(interleaved.end(), {p.x, p.y, p.z, n.x, n.y, n.z, r.x, r.y, r.z});
-        }
-        for (const auto& t : mesh->triangles)
-            indices.insert(indices.end(), {t[0], t[1], t[2]});
-    }
-    glBindVertexArray(m_vao);
-    glBindBuffer(GL_ARRAY_BUFFER, m_vbo);
-    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(interleaved.size() * sizeof(float)),
-                 interleaved.data(), GL_STATIC_DRAW);
-    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m_ebo);
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(indices.size() * sizeof(uint32_t)),
-                 indices.data(), GL_STATIC_DRAW);
-    glEnableVertexAttribArray(0);
-    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float), nullptr);
-    glEnableVertexAttribArray(1);
-    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float),
-                          reinterpret_cast<const void*>(3 * sizeof(float)));
-    glEnableVertexAttribArray(2);
-    glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float),
-                          reinterpret_cast<const void*>(6 * sizeof(float)));
-    glBindVertexArray(0);
-    m_indexCount = int(indices.size());
-    m_meshDirty = false;
-}
-
-void Viewport::uploadVolume(bool full) {
-    MaterialVolume* vol = m_doc->material();
-    if (!vol)
-        return;
-    Timer timer;
-    const int res = vol->resolution();
-    constexpr int B = MaterialVolume::BRICK, BV = MaterialVolume::BRICK_VOXELS;
-    std::vector<int> bricks = vol->takeDirtyBricks();
-    if (full || res != m_texResolution) {
-        // (Re)allocate both textures at the grid resolution; texels are voxels (GL_NEAREST:
-        // the piecewise-constant lookup rule of MaterialVolume).
-        for (GLuint tex : {m_texSigmaT, m_texSigmaS}) {
-            glDeleteTextures(1, &tex);
-        }
-        glGenTextures(1, &m_texSigmaT);
-        glGenTextures(1, &m_texSigmaS);
-        for (GLuint tex : {m_texSigmaT, m_texSigmaS}) {
-            glBindTexture(GL_TEXTURE_3D, tex);
-            glTexStorage3D(GL_TEXTURE_3D, 1, GL_RGBA32F, res, res, res);
-            glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-            glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-            for (GLenum w : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R})
-                glTexParameteri(GL_TEXTURE_3D, w, GL_CLAMP_TO_BORDER);
-            const float zero[4] = {0.f, 0.f, 0.f, 0.f};
-            glTexParameterfv(GL_TEXTURE_3D, GL_TEXTURE_BORDER_COLOR, zero);
-        }
-        m_texResolution = res;
-        bricks.clear();
-        for (int b = 0; b < vol->brickCount(); ++b)
-            bricks.push_back(b);
-    }
-    std::vector<float> st(size_t(BV) * 4), ss(size_t(BV) * 4);
-    for (int b : bricks) {
-        const float* d = vol->brickData(b);
-        for (int v = 0; v < BV; ++v)
-            for (int c = 0; c < 3; ++c) {
-                st[size_t(v) * 4 + c] =
-                    d[size_t(MaterialVolume::component(Channel::SigmaT, c)) * BV + v];
-                ss[size_t(v) * 4 + c] =
-                    d[size_t(MaterialVolume::component(Channel::SigmaS, c)) * BV + v];
-            }
-        const Coord o = vol->brickOrigin(b);
-        const Coord size = glm::min(Coord(B), Coord(res) - o);
-        if (size != Coord(B)) {  // partial brick at the grid's far edge: compact the rows
-            std::vector<float> cst, css;
-            for (int z = 0; z < size.z; ++z)
-                for (int y = 0; y < size.y; ++y)
-                    for (int x = 0; x < size.x; ++x) {
-                        const size_t v = size_t(MaterialVolume::voxelInBrick(x, y, z)) * 4;
-                        cst.insert(cst.end(), st.begin() + long(v), st.begin() + long(v) + 4);
-                        css.insert(css.end(), ss.begin() + long(v), ss.begin() + long(v) + 4);
-                    }
-            glTextureSubImage3D(m_texSigmaT, 0, o.x, o.y, o.z, size.x, size.y, size.z, GL_RGBA,
-                                GL_FLOAT, cst.data());
-            glTextureSubImage3D(m_texSigmaS, 0, o.x, o.y, o.z, size.x, size.y, size.z, GL_RGBA,
-                                GL_FLOAT, css.data());
-        } else {
-            glTextureSubImage3D(m_texSigmaT, 0, o.x, o.y, o.z, B, B, B, GL_RGBA, GL_FLOAT,
-                                st.data());
-            glTextureSubImage3D(m_texSigmaS, 0, o.x, o.y, o.z, B, B, B, GL_RGBA, GL_FLOAT,
-                                ss.data());
-        }
-    }
-    m_volumeFull = false;
-    if (!bricks.empty()) {
-        m_stats.uploadMs = timer.elapsedMs();
-        m_stats.bricksUploaded = int(bricks.size());
-    }
+    return mesh;
 }
 
 void Viewport::paintGL() {
     Timer timer;
     const qreal dpr = devicePixelRatioF();
-    glViewport(0, 0, GLsizei(width() * dpr), GLsizei(height() * dpr));
+    const int fullW = std::max(1, int(width() * dpr)), fullH = std::max(1, int(height() * dpr));
+    glBindFramebuffer(GL_FRAMEBUFFER, defaultFramebufferObject());
+    glViewport(0, 0, fullW, fullH);
     glClearColor(0.16f, 0.17f, 0.19f, 1.f);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     if (!m_glReady || !m_doc->hasObject())
         return;
-    if (m_meshDirty)
-        uploadMesh();
-    uploadVolume(m_volumeFull);
 
-    // Reduced-resolution preview: render into an offscreen target of scale × the widget's
-    // pixels, then upscale (bilinear blit) into the widget's framebuffer.
-    const int fullW = int(width() * dpr), fullH = int(height() * dpr);
+    PreviewFrame f;
+    f.scene = &m_doc->scene();
+    f.volume = m_doc->material();
+    f.shownMesh = shownMesh();
+    f.meshChanged = m_meshDirty;
+    f.sceneReplaced = m_sceneReplaced;
+    f.dirtyBricks = f.volume->takeDirtyBricks();
+    // Reduced-resolution preview: the renderer works at scale × the widget's pixels and its
+    // tone-map pass upscales (bilinear) into the widget's framebuffer.
     const float scale = std::clamp(m_render.resolutionScale, 0.125f, 1.f);
-    const bool reduced = scale < 1.f;
-    const int lowW = std::max(1, int(std::ceil(float(fullW) * scale)));
-    const int lowH = std::max(1, int(std::ceil(float(fullH) * scale)));
-    if (reduced) {
-        if (lowW != m_lowSize.width() || lowH != m_lowSize.height()) {
-            glDeleteFramebuffers(1, &m_lowFbo);
-            glDeleteRenderbuffers(2, m_lowRb);
-            glCreateFramebuffers(1, &m_lowFbo);
-            glCreateRenderbuffers(2, m_lowRb);
-            glNamedRenderbufferStorage(m_lowRb[0], GL_RGBA8, lowW, lowH);
-            glNamedRenderbufferStorage(m_lowRb[1], GL_DEPTH_COMPONENT24, lowW, lowH);
-            glNamedFramebufferRenderbuffer(m_lowFbo, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
-                                           m_lowRb[0]);
-            glNamedFramebufferRenderbuffer(m_lowFbo, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
-                                           m_lowRb[1]);
-            m_lowSize = QSize(lowW, lowH);
-        }
-        glBindFramebuffer(GL_FRAMEBUFFER, m_lowFbo);
-        glViewport(0, 0, lowW, lowH);
-        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    }
-
-    const Scene& scene = m_doc->scene();
-    const MaterialVolume& vol = *scene.objects[0].material;
-    const Mat4f clipFromWorld =
-        m_camera.clipFromView(float(width()) / float(std::max(height(), 1))) *
-        m_camera.viewFromWorld();
-
-    glEnable(GL_DEPTH_TEST);
-    glEnable(GL_CULL_FACE);
-    glCullFace(GL_BACK);
-    glUseProgram(m_program);
-    auto loc = [this](const char* n) { return glGetUniformLocation(m_program, n); };
-    glUniformMatrix4fv(loc("u_clipFromWorld"), 1, GL_FALSE, glm::value_ptr(clipFromWorld));
-    const Point3f eye = m_camera.eye();
-    glUniform3f(loc("u_eye"), eye.x, eye.y, eye.z);
-    glUniform1i(loc("u_method"), int(m_render.method));
-    glUniform1i(loc("u_steps"), m_render.steps);
-    glUniform1i(loc("u_lightSteps"), m_render.lightSteps);
-    glUniform1f(loc("u_exposure"), std::exp2(m_render.exposureStops));
-    glUniform1f(loc("u_eta"), scene.eta);
-    glUniform3f(loc("u_ambient"), m_render.ambient, m_render.ambient, m_render.ambient);
-    const int lightCount = std::min<int>(int(scene.lights.size()), 4);
-    glUniform1i(loc("u_lightCount"), lightCount);
-    for (int i = 0; i < lightCount; ++i) {
-        const Light& l = scene.lights[size_t(i)];
-        char name[40];
-        const auto uni = [&](const char* base) {
-            std::snprintf(name, sizeof name, "%s[%d]", base, i);
-            return loc(name);
-        };
-        Rgb intensity = l.intensity;
-        // Sphere light of radiance L, radius R: intensity L·πR² W/sr seen from afar.
-        if (l.type == Light::Type::Sphere)
-            intensity *= PI * l.radius * l.radius;
-        glUniform1i(uni("u_lightType"), int(l.type));
-        glUniform3f(uni("u_lightPos"), l.position.x, l.position.y, l.position.z);
-        glUniform3f(uni("u_lightDir"), l.direction.x, l.direction.y, l.direction.z);
-        glUniform3f(uni("u_lightI"), intensity.r, intensity.g, intensity.b);
-        glUniform2f(uni("u_spotCos"), std::cos(glm::radians(l.spotOuterDeg)),
-                    std::cos(glm::radians(l.spotInnerDeg)));
-    }
-    const GridSpec& spec = vol.spec();
-    glUniform3f(loc("u_gridOrigin"), spec.origin.x, spec.origin.y, spec.origin.z);
-    glUniform1f(loc("u_gridSize"), spec.voxelSize * float(spec.resolution));
-    glUniform1f(loc("u_voxelSize"), spec.voxelSize);
+    Camera& cam = f.camera;
+    cam.position = m_camera.eye();
+    cam.target = m_camera.target;
+    cam.up = Vector3f(0.f, 1.f, 0.f);
+    cam.fovYDeg = m_camera.fovYDeg;
+    cam.width = std::max(1, int(std::ceil(float(fullW) * scale)));
+    cam.height = std::max(1, int(std::ceil(float(fullH) * scale)));
+    cam.nearPlane = std::max(1e-3f, m_camera.distance * 0.01f);  // as OrbitCamera::clipFromView
+    cam.farPlane = m_camera.distance * 100.f + 1.f;
+    f.settings = m_render;
     if (m_cursor && m_tool == Tool::Paint)
-        glUniform4f(loc("u_brush"), m_cursor->x, m_cursor->y, m_cursor->z, m_brush.engine.radius);
-    else
-        glUniform4f(loc("u_brush"), 0.f, 0.f, 0.f, -1.f);
-    const GLint filter = m_render.smoothVoxels ? GL_LINEAR : GL_NEAREST;
-    for (GLuint tex : {m_texSigmaT, m_texSigmaS}) {
-        glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, filter);
-        glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, filter);
+        f.cursor = m_cursor;
+    f.brushRadius = m_brush.engine.radius;
+    f.framebuffer = defaultFramebufferObject();
+    f.framebufferWidth = fullW;
+    f.framebufferHeight = fullH;
+    try {
+        m_preview.render(f);
+        m_meshDirty = m_sceneReplaced = false;
+    } catch (const std::exception& ex) {
+        // Shown in the Statistics dock; the frame stays cleared.
+        m_stats.initError = QString::fromUtf8(ex.what());
+        ++m_stats.glErrors;
     }
-    glBindTextureUnit(0, m_texSigmaT);
-    glBindTextureUnit(1, m_texSigmaS);
-    glUniform1i(loc("u_sigmaT"), 0);
-    glUniform1i(loc("u_sigmaS"), 1);
-    glBindVertexArray(m_vao);
-    glDrawElements(GL_TRIANGLES, m_indexCount, GL_UNSIGNED_INT, nullptr);
-    glBindVertexArray(0);
-    glUseProgram(0);
-    if (reduced) {
-        glBlitNamedFramebuffer(m_lowFbo, defaultFramebufferObject(), 0, 0, lowW, lowH, 0, 0, fullW,
-                               fullH, GL_COLOR_BUFFER_BIT, GL_LINEAR);
-        glBindFramebuffer(GL_FRAMEBUFFER, defaultFramebufferObject());
-    }
+    m_stats.preview = m_preview.stats();
+    m_stats.uploadMs = m_stats.preview.uploadMs;
+    m_stats.bricksUploaded = m_stats.preview.bricksUploaded;
     glFinish();  // so the frame time includes the (software) rasterisation
     while (glGetError() != GL_NO_ERROR)
         ++m_stats.glErrors;
     m_stats.frameMs = timer.elapsedMs();
     ++m_stats.frames;
+    // Progressive methods (dipoles) refine while the user is idle.
+    if (m_preview.wantsAnotherFrame())
+        QTimer::singleShot(0, this, qOverload<>(&QWidget::update));
     Q_EMIT frameRendered();
 }
 

@@ -1,14 +1,16 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief The central 3-D viewport: OpenGL 4.5 core rendering of the painted object with the
-/// selected preview method, orbit/pan/zoom camera, ray-picked brush painting and eyedropper.
+/// @brief The central 3-D viewport: hosts the OpenGL 4.5 core context in which PreviewRenderer
+/// (gpu::SceneRenderer + the selected subsurface provider) draws the painted object; orbit/pan/
+/// zoom camera, ray-picked brush painting and eyedropper.
 ///
-/// Only dirty 8³ bricks of the material are re-uploaded after a stroke (glTexSubImage3D per
-/// brick); the whole volume is uploaded only when the scene is replaced.
+/// After a stroke only the volume's dirty 8³ bricks are handed to the renderer (SSLPV
+/// re-resamples and re-propagates only them, the texture-based passes re-upload only them).
 
 #include "BrushTool.h"
 #include "MeshPicker.h"
+#include "PreviewRenderer.h"
 
 #include <QOpenGLFunctions_4_5_Core>
 #include <QOpenGLWidget>
@@ -37,30 +39,12 @@ struct OrbitCamera {
     void lookAt(const Point3f& eye, const Point3f& target);
 };
 
-/// Preview method and its parameters.
-struct RenderSettings {
-    enum class Method { Direct = 0, SingleScattering = 1 } method = Method::SingleScattering;
-    int steps = 24;             ///< view-ray march steps (single scattering)
-    int lightSteps = 6;         ///< shadow-ray march steps per view step
-    float exposureStops = 4.f;  ///< log2 of the exposure multiplier (single scattering alone
-                                ///< is dim: it leaves out multiple scattering)
-    float ambient = 0.f;        ///< uniform ambient irradiance, W/mm² (display aid)
-    bool turntable = false;     ///< rotate the camera at 30°/s
-    /// Trilinear texture filtering of σ (display only; the engine's lookup rule is nearest).
-    bool smoothVoxels = false;
-    /// Preview pixels per widget pixel per axis (1, ½, ¼); the image is upscaled bilinearly.
-    float resolutionScale = 0.5f;
-    /// Animated twist of the mesh (engine lucent/mesh/Deform.h), display only: the material
-    /// stays in rest space and is looked up at each surface point's rest position. Painting is
-    /// paused while it runs.
-    bool deform = false;
-};
-
 /// Per-frame timings shown in the Statistics dock.
 struct ViewportStats {
     double frameMs = 0.0;    ///< last paintGL, GPU work included (glFinish)
-    double uploadMs = 0.0;   ///< last brick upload
-    int bricksUploaded = 0;  ///< bricks in the last upload
+    double uploadMs = 0.0;   ///< last material update (brick upload / incremental resample)
+    int bricksUploaded = 0;  ///< bricks in the last material update
+    PreviewStats preview;    ///< per-pass timings and method details of the last frame
     long long frames = 0;    ///< frames rendered since start
     int glErrors = 0;        ///< glGetError() != GL_NO_ERROR count since start
     QString glRenderer;      ///< GL_RENDERER / GL_VERSION
@@ -116,14 +100,13 @@ protected:
 private:
     void onSceneReplaced();
     void cleanupGL();
-    void uploadMesh();
-    void uploadVolume(bool full);
     void beginStroke(const PickHit& hit);
     void continueStroke(const PickHit& hit);
     void endStroke();
     [[nodiscard]] Point3f stampCenter(const PickHit& hit) const;
     void updateHover(const QPointF& pos);
-    unsigned compileProgram();
+    /// The rest mesh, or the twisted one while the deformation animation runs (into m_posed).
+    const TriangleMesh* shownMesh();
 
     Document* m_doc;
     OrbitCamera m_camera;
@@ -142,15 +125,11 @@ private:
     QTimer m_animation;
     QElapsedTimer m_clock;
 
-    // GL objects (valid while the context lives).
+    // Rendering (GL objects valid while the context lives).
     bool m_glReady = false;
-    unsigned m_program = 0, m_vao = 0, m_vbo = 0, m_ebo = 0;
-    unsigned m_texSigmaT = 0, m_texSigmaS = 0;
-    int m_texResolution = 0;
-    int m_indexCount = 0;
-    unsigned m_lowFbo = 0, m_lowRb[2] = {0, 0};  // reduced-resolution target
-    QSize m_lowSize;
-    bool m_meshDirty = true, m_volumeFull = true;
+    PreviewRenderer m_preview;
+    TriangleMesh m_posed;
+    bool m_meshDirty = true, m_sceneReplaced = true;
 };
 
 }  // namespace lucent::app

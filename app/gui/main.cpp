@@ -3,7 +3,8 @@
 /// @brief Entry point of the `lucent` app.
 ///
 ///     lucent [PROJECT|MESH|VDB] [--screenshot PATH] [--frames N] [--benchmark]
-///            [--benchmark-json PATH] [--viewport WxH] [--method direct|single]
+///            [--benchmark-json PATH] [--viewport WxH]
+///            [--method direct|single|sslpv|dipole|better-dipole]
 ///            [--paint-demo] [--reference SPP] [--raise DOCKS] [--no-settings]
 /// --screenshot grabs the whole window after N rendered frames (default 3) and exits;
 /// --benchmark measures start-up to first frame, idle frame time and stroke-to-frame latency.
@@ -26,6 +27,7 @@
 #include <QTimer>
 
 #include <algorithm>
+#include <utility>
 #include <cstdio>
 #include <vector>
 
@@ -33,6 +35,22 @@ namespace {
 
 using lucent::Timer;
 using lucent::app::MainWindow;
+
+/// Preview method from its command-line name. @return false for an unknown name.
+bool parseMethod(const QString& name, lucent::app::RenderSettings::Method& out) {
+    using M = lucent::app::RenderSettings::Method;
+    const std::pair<const char*, M> names[] = {{"direct", M::Direct},
+                                               {"single", M::SingleScattering},
+                                               {"sslpv", M::Sslpv},
+                                               {"dipole", M::Dipole},
+                                               {"better-dipole", M::BetterDipole}};
+    for (const auto& [n, m] : names)
+        if (name == QLatin1String(n)) {
+            out = m;
+            return true;
+        }
+    return false;
+}
 
 /// Median of a sample (robust to the odd slow frame on a shared machine).
 double median(std::vector<double> v) {
@@ -79,7 +97,8 @@ MethodTiming timeMethod(lucent::app::Viewport* vp) {
 }
 
 /// Runs the latency harness on a shown window whose first frame has been rendered.
-void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath) {
+void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath,
+                  const QString& methodFilter) {
     using Method = lucent::app::RenderSettings::Method;
     lucent::app::Viewport* vp = w.viewport();
     lucent::app::RenderSettings rs = vp->renderSettings();
@@ -89,11 +108,20 @@ void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath) {
         float scale;
         MethodTiming t;
     };
-    std::vector<Row> rows = {
-        {"direct, full res", Method::Direct, 1.f, {}},
-        {"direct, half res", Method::Direct, 0.5f, {}},
-        {"single-scatter, full res", Method::SingleScattering, 1.f, {}},
-        {"single-scatter, half res (default)", Method::SingleScattering, 0.5f, {}}};
+    // Stroke latency of the live methods at the viewport's full resolution (SSLPV at 32³, CPU
+    // solve; dipoles at their default samples per frame), plus the direct baseline.
+    std::vector<Row> rows = {{"direct, full res (baseline)", Method::Direct, 1.f, {}},
+                             {"single-scatter, full res", Method::SingleScattering, 1.f, {}},
+                             {"sslpv 32^3, full res", Method::Sslpv, 1.f, {}},
+                             {"dipole, full res", Method::Dipole, 1.f, {}},
+                             {"better dipole, full res", Method::BetterDipole, 1.f, {}},
+                             {"sslpv 32^3, half res", Method::Sslpv, 0.5f, {}}};
+    Method only = Method::Direct;
+    if (!methodFilter.isEmpty() && parseMethod(methodFilter, only))  // baseline + that method
+        std::erase_if(rows,
+                      [&](const Row& r) { return r.method != Method::Direct && r.method != only; });
+    rs.sslpvGrid = 32;
+    rs.sslpvGlSolve = false;
     for (Row& r : rows) {
         rs.method = r.method;
         rs.resolutionScale = r.scale;
@@ -111,22 +139,24 @@ void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath) {
                     r.t.strokeMs, r.t.strokePaintGlMs,
                     r.t.idleMs > 0 ? r.t.strokeMs / r.t.idleMs : 0.0,
                     base > 0 ? r.t.idleMs / base : 0.0);
-    std::printf("(single-scatter: %d view steps, %d shadow steps)\n", rs.steps, rs.lightSteps);
-    const MethodTiming direct = rows[0].t, single = rows[3].t;
+    std::printf(
+        "(single-scatter: %d view steps, %d shadow steps; sslpv: %d steps, order %d; "
+        "dipole: %d spp/frame)\n",
+        rs.steps, rs.lightSteps, rs.sslpvSteps, rs.sslpvOrder, rs.dipoleSpp);
     if (!jsonPath.isEmpty()) {
         QFile f(jsonPath);
         if (f.open(QIODevice::WriteOnly)) {
-            f.write(QStringLiteral("{\"viewport\":[%1,%2],\"startup_ms\":%3,"
-                                   "\"direct\":{\"idle_ms\":%4,\"stroke_ms\":%5},"
-                                   "\"single_scatter\":{\"idle_ms\":%6,\"stroke_ms\":%7}}\n")
-                        .arg(vp->width())
-                        .arg(vp->height())
-                        .arg(startupMs)
-                        .arg(direct.idleMs)
-                        .arg(direct.strokeMs)
-                        .arg(single.idleMs)
-                        .arg(single.strokeMs)
-                        .toUtf8());
+            QString json = QStringLiteral("{\"viewport\":[%1,%2],\"startup_ms\":%3,\"methods\":[")
+                               .arg(vp->width())
+                               .arg(vp->height())
+                               .arg(startupMs);
+            for (size_t i = 0; i < rows.size(); ++i)
+                json += QStringLiteral("%1{\"name\":\"%2\",\"idle_ms\":%3,\"stroke_ms\":%4}")
+                            .arg(i ? QStringLiteral(",") : QString())
+                            .arg(QLatin1String(rows[i].name))
+                            .arg(rows[i].t.idleMs)
+                            .arg(rows[i].t.strokeMs);
+            f.write((json + QStringLiteral("]}\n")).toUtf8());
         }
     }
 }
@@ -181,9 +211,10 @@ int main(int argc, char** argv) {
                                  QStringLiteral("Before the screenshot, run a reference render "
                                                 "of SPP samples per pixel in the Reference dock."),
                                  QStringLiteral("SPP"));
-    QCommandLineOption method(QStringLiteral("method"),
-                              QStringLiteral("Preview method: direct or single."),
-                              QStringLiteral("M"));
+    QCommandLineOption method(
+        QStringLiteral("method"),
+        QStringLiteral("Preview method: direct, single, sslpv, dipole or better-dipole."),
+        QStringLiteral("M"));
     parser.addOptions({shot, frames, bench, benchJson, viewportSize, noSettings, paintDemo,
                        raiseDock, method, reference});
     parser.process(app);
@@ -203,10 +234,14 @@ int main(int argc, char** argv) {
         return scripted ? 1 : 0;
     if (parser.isSet(method)) {
         lucent::app::RenderSettings rs = window.viewport()->renderSettings();
-        rs.method = parser.value(method) == QLatin1String("direct")
-                        ? lucent::app::RenderSettings::Method::Direct
-                        : lucent::app::RenderSettings::Method::SingleScattering;
-        window.viewport()->setRenderSettings(rs);
+        if (!parseMethod(parser.value(method), rs.method)) {
+            std::fprintf(stderr,
+                         "lucent: --method expects direct, single, sslpv, dipole or "
+                         "better-dipole (got '%s')\n",
+                         qPrintable(parser.value(method)));
+            return 2;
+        }
+        window.setRenderMethod(int(rs.method));
     }
     window.show();
     for (const QString& name : parser.value(raiseDock).split(QLatin1Char(','), Qt::SkipEmptyParts))
@@ -233,7 +268,8 @@ int main(int argc, char** argv) {
             done = true;
             const double startupMs = startup.elapsedMs();
             QTimer::singleShot(0, &window, [&, startupMs] {
-                runBenchmark(window, startupMs, parser.value(benchJson));
+                runBenchmark(window, startupMs, parser.value(benchJson),
+                             parser.isSet(method) ? parser.value(method) : QString());
                 QApplication::exit(window.viewport()->stats().glErrors == 0 ? 0 : 3);
             });
         } else if (!demoPainted) {

@@ -58,6 +58,7 @@ void validateSettings(const ProviderSettings& s) {
                  "ProviderSettings.maxJacobian must be finite and >= 1");
     LUCENT_CHECK(s.interleave >= 1 && s.interleave <= 64,
                  "ProviderSettings.interleave must be in [1, 64]");
+    LUCENT_CHECK(s.meshId >= -1, "ProviderSettings.meshId must be >= -1 (got ", s.meshId, ")");
 }
 
 bool sameSettings(const ProviderSettings& a, const ProviderSettings& b) {
@@ -65,7 +66,7 @@ bool sameSettings(const ProviderSettings& a, const ProviderSettings& b) {
            a.maxFrames == b.maxFrames && a.convergenceThreshold == b.convergenceThreshold &&
            a.discQuantile == b.discQuantile && a.jacobian == b.jacobian &&
            a.maxJacobian == b.maxJacobian && a.interleave == b.interleave && a.seed == b.seed &&
-           a.shadows == b.shadows;
+           a.shadows == b.shadows && a.meshId == b.meshId;
 }
 
 /// Seed of frame f's Cranley–Patterson table: frame 0 uses the settings' seed (so it equals the
@@ -231,6 +232,7 @@ struct DipoleSubsurfaceProvider::Impl {
         glUniform3f(p.uniformLocation("u_boundary"), float(boundary.fdr), float(boundary.c1),
                     float(boundary.c2));
         glUniform1f(p.uniformLocation("u_discQuantile"), settings.discQuantile);
+        glUniform1i(p.uniformLocation("u_meshId"), settings.meshId);
         glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
         glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }

@@ -37,11 +37,19 @@ double logMeanTransmittance(const double* tau, const double* w, size_t count) {
     return -tmin + std::log(num / den);
 }
 
+/// Per-thread buffers of CellEvaluator::evaluate.
+struct Scratch {
+    std::vector<double> tau, w;
+    std::vector<float> window;  ///< masked σt of the cell's fine window, 3 channels
+};
+
 /// Everything the per-cell evaluation needs: overlap lists and brick-address tables.
 class CellEvaluator {
 public:
-    CellEvaluator(const MaterialVolume& volume, int resolution)
-        : m_n(volume.resolution()) {
+    /// Largest fine window (voxels) copied to Scratch::window; larger ones read the bricks.
+    static constexpr size_t MAX_WINDOW = size_t(1) << 15;
+
+    CellEvaluator(const MaterialVolume& volume, int resolution) : m_n(volume.resolution()) {
         const int n = m_n;
         m_ratio = double(n) / double(resolution);
         m_h = volume.spec().voxelSize;
@@ -95,8 +103,9 @@ public:
 
     /// Evaluates coarse cell (I,J,K) into `out` (the arithmetic, its order included, of the
     /// original dense implementation: results are bit-identical to it).
-    void evaluate(int I, int J, int K, CoarseMaterial& out, std::vector<double>& tau,
-                  std::vector<double>& w) const {
+    void evaluate(int I, int J, int K, CoarseMaterial& out, Scratch& scratch) const {
+        std::vector<double>& tau = scratch.tau;
+        std::vector<double>& w = scratch.w;
         const auto& LX = m_lists[size_t(I)];
         const auto& LY = m_lists[size_t(J)];
         const auto& LZ = m_lists[size_t(K)];
@@ -104,13 +113,23 @@ public:
         const int cST = MaterialVolume::component(Channel::SigmaT, 0);
         const int cSS = MaterialVolume::component(Channel::SigmaS, 0);
         const int cG = MaterialVolume::component(Channel::G, 0);
-        // Volume-weighted sums for inside fraction, albedo and g.
+        // Volume-weighted sums for inside fraction, albedo and g. The same sweep copies the
+        // window's masked σt into scratch.window (x fastest) for the column sums below, when
+        // the window is small (it always is for the LPV grids: ⌈n/res⌉+1 voxels per axis).
+        const size_t nx = LX.size(), ny = LY.size(), nz = LZ.size();
+        const size_t windowVoxels = nx * ny * nz;
+        const bool gathered = windowVoxels <= MAX_WINDOW;
+        if (gathered)
+            scratch.window.assign(3 * windowVoxels, 0.f);
+        float* win = scratch.window.data();
         double insideVol = 0.0, sumSt[3] = {}, sumSs[3] = {}, sumSsG[3] = {};
+        size_t k = 0;
         for (const Overlap& z : LZ)
             for (const Overlap& y : LY) {
                 const size_t row = (size_t(z.fine) * m_n + size_t(y.fine)) * m_n;
                 const size_t rowAddr = m_addr[1][size_t(y.fine)] + m_addr[2][size_t(z.fine)];
                 for (const Overlap& x : LX) {
+                    const size_t wk = k++;
                     if (!m_inside[row + size_t(x.fine)])
                         continue;
                     const float* v = m_data + rowAddr + m_addr[0][size_t(x.fine)];
@@ -120,6 +139,8 @@ public:
                         const float st = v[size_t(cST + c) * MaterialVolume::BRICK_VOXELS];
                         const float ss = v[size_t(cSS + c) * MaterialVolume::BRICK_VOXELS];
                         const float gg = v[size_t(cG + c) * MaterialVolume::BRICK_VOXELS];
+                        if (gathered)
+                            win[size_t(c) * windowVoxels + wk] = st;
                         sumSt[c] += wv * st;
                         sumSs[c] += wv * ss;
                         sumSsG[c] += wv * ss * gg;
@@ -145,19 +166,33 @@ public:
                 const auto& LV = axis == 2 ? LY : LZ;                   // across 2
                 tau.clear();
                 w.clear();
-                for (const Overlap& v : LV)
-                    for (const Overlap& u : LU) {
+                // Window strides of the along/across axes (x fastest, then y, then z).
+                const size_t stride[3] = {1, nx, nx * ny};
+                const size_t sA = stride[axis], sU = stride[axis == 0 ? 1 : 0],
+                             sV = stride[axis == 2 ? 1 : 2];
+                const float* wc = win + size_t(c) * windowVoxels;
+                for (size_t iv = 0; iv < LV.size(); ++iv) {
+                    const Overlap& v = LV[iv];
+                    for (size_t iu = 0; iu < LU.size(); ++iu) {
+                        const Overlap& u = LU[iu];
                         double t = 0.0;
-                        for (const Overlap& a : LA) {
-                            Coord q;
-                            q[axis] = a.fine;
-                            q[axis == 0 ? 1 : 0] = u.fine;
-                            q[axis == 2 ? 1 : 2] = v.fine;
-                            t += double(fine(cST + c, q.x, q.y, q.z)) * a.length;
+                        if (gathered) {
+                            const float* col = wc + iu * sU + iv * sV;
+                            for (size_t ia = 0; ia < LA.size(); ++ia)
+                                t += double(col[ia * sA]) * LA[ia].length;
+                        } else {
+                            for (const Overlap& a : LA) {
+                                Coord q;
+                                q[axis] = a.fine;
+                                q[axis == 0 ? 1 : 0] = u.fine;
+                                q[axis == 2 ? 1 : 2] = v.fine;
+                                t += double(fine(cST + c, q.x, q.y, q.z)) * a.length;
+                            }
                         }
                         tau.push_back(t * m_h);
                         w.push_back(u.length * v.length);
                     }
+                }
                 logT[axis] = logMeanTransmittance(tau.data(), w.data(), tau.size());
             }
             // Mean of the three axes' transmittances, again in log space.
@@ -239,11 +274,11 @@ CoarseMaterial resampleForPropagation(const MaterialVolume& volume, int resoluti
     parallelFor(
         0, rows,
         [&](int64_t rb, int64_t re) {
-            std::vector<double> tau, w;
+            Scratch scratch;
             for (int64_t r = rb; r < re; ++r) {
                 const int J = int(r % resolution), K = int(r / resolution);
                 for (int I = 0; I < resolution; ++I)
-                    eval.evaluate(I, J, K, out, tau, w);
+                    eval.evaluate(I, J, K, out, scratch);
             }
         },
         4);
@@ -297,10 +332,10 @@ size_t updateCoarseMaterial(CoarseMaterial& coarse, const MaterialVolume& volume
     parallelFor(
         0, int64_t(list.size()),
         [&](int64_t b, int64_t e) {
-            std::vector<double> tau, w;
+            Scratch scratch;
             for (int64_t k = b; k < e; ++k) {
                 const int ci = list[size_t(k)];
-                eval.evaluate(ci % res, (ci / res) % res, ci / (res * res), coarse, tau, w);
+                eval.evaluate(ci % res, (ci / res) % res, ci / (res * res), coarse, scratch);
             }
         },
         64);

@@ -58,6 +58,7 @@ struct SslpvSubsurfaceProvider::Impl {
     GridSpec meshInsideSpec;
     bool meshInsideValid = false;
     float eta = 1.3f;
+    bool etaSet = false;  ///< eta came from setMaterial (else updateMaterial uses volume.eta())
     bool hasMaterial = false;
     GridSpec volumeSpec;  ///< fine grid the coarse material was resampled from
 
@@ -211,6 +212,7 @@ void SslpvSubsurfaceProvider::setMaterial(const MaterialVolume& volume, float et
     if (eta != m->eta)
         m->rsmDirty = true;  // the injection's Fresnel transmission depends on η
     m->eta = eta;
+    m->etaSet = true;
     m->volumeSpec = volume.spec();
     m->hasMaterial = true;
     m->materialDirty = true;
@@ -220,7 +222,7 @@ void SslpvSubsurfaceProvider::updateMaterial(const MaterialVolume& volume,
                                              const std::vector<int>& dirtyBricks) {
     if (!m->hasMaterial || !(volume.spec() == m->volumeSpec) ||
         m->coarse.spec.resolution != m->gridResolution(volume)) {
-        setMaterial(volume, m->hasMaterial ? m->eta : volume.eta());
+        setMaterial(volume, m->etaSet ? m->eta : volume.eta());
         return;
     }
     if (dirtyBricks.empty())

@@ -143,7 +143,14 @@ void SslpvRenderer::setOptions(const SslpvRenderOptions& o) {
     if (a.order != b.order || a.maxSteps != b.maxSteps ||
         a.skipAccumulateSteps != b.skipAccumulateSteps || a.removeExitant != b.removeExitant ||
         a.attenuation != b.attenuation || a.stopEpsilon != b.stopEpsilon ||
-        a.skipEmptySlices != b.skipEmptySlices)
+        a.skipEmptySlices != b.skipEmptySlices || a.mode != b.mode ||
+        a.calibration.linear != b.calibration.linear ||
+        a.calibration.transport != b.calibration.transport ||
+        a.calibration.diffusion != b.calibration.diffusion ||
+        a.calibration.perStep != b.calibration.perStep ||
+        a.calibration.perStepTransport != b.calibration.perStepTransport ||
+        a.calibration.gain[0] != b.calibration.gain[0] ||
+        a.calibration.gain[1] != b.calibration.gain[1])
         m_solver.setOptions(a);
     if (o.injectionResolution != m_opt.injectionResolution)
         m_rsmDirty = true;

@@ -441,3 +441,43 @@ TEST_F(ProviderFixture, DirtyBrickUploadWritesOnlyThoseBricks) {
     EXPECT_EQ(Rgb(texels[vol.spec().linearIndex(voxel)]), Rgb(9.f, 8.f, 7.f));
     EXPECT_THROW(provider.uploadBricks({vol.brickCount()}), ValueError);
 }
+
+// ProviderSettings::meshId: a second mesh (a ground box) gets neither irradiance nor material,
+// so it has no subsurface term and lends no light to the object's gather.
+TEST_F(ProviderFixture, OtherMeshesAreExcludedByMeshId) {
+    Scene s = litSphere();
+    s.camera.width = 64;
+    s.camera.height = 48;
+    s.camera.position = {0.f, 10.f, 40.f};
+    ProviderSettings ps;
+    ps.samplesPerFrame = 4;
+    ps.meshId = 0;
+    load(s, ps);
+    TriangleMesh ground = makeBox({80.f, 2.f, 80.f});
+    for (Point3f& p : ground.positions)
+        p.y -= 11.f;
+    ASSERT_EQ(renderer.addMesh(ground), 1);
+    renderer.render();
+    const gpu::GBufferView g = renderer.gbuffer();
+    const auto nrm = readRgba(g.normalTexture, g.width, g.height);
+    const auto E = readRgba(provider.debugTextures().irradiance, g.width, g.height);
+    const ImageRgb L = renderer.readRadiance();
+    int groundPixels = 0, litObject = 0;
+    for (int y = 0; y < g.height; ++y)
+        for (int x = 0; x < g.width; ++x) {
+            const size_t i = size_t(y) * size_t(g.width) + size_t(x);
+            const int mesh = int(nrm[i].w + 0.5f) - 1;
+            const Rgb l = L.at(x, g.height - 1 - y);
+            if (mesh == 1) {
+                ++groundPixels;
+                ASSERT_EQ(Rgb(E[i]), Rgb(0.f));
+                ASSERT_EQ(l, Rgb(0.f));
+            } else if (mesh == 0 && E[i].y > 0.f) {
+                ++litObject;
+            }
+        }
+    EXPECT_GT(groundPixels, 100);
+    EXPECT_GT(litObject, 100);
+    ps.meshId = -2;
+    EXPECT_THROW(provider.setSettings(ps), ValueError);
+}

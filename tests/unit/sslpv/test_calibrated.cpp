@@ -116,8 +116,8 @@ SslpvOptions calibrated(int order, int steps) {
 }  // namespace
 
 TEST(SslpvCalibrated, FoldedFactorsFollowTheModel) {
-    // Band-l factor exp(−β)·((1 − s′) + s′g^l), β = U σaΔx + T σ_trΔx + K (σ_trΔx)²,
-    // σ_tr = √(3σaσt), s′ = 1 − exp(−σs′Δx); polynomial exp ~2e-7 relative.
+    // Band-l factor exp(−β)·((1 − s′) + s′g^l), β = U σaΔx + T σ_trΔx + K (σ_trΔx)² + P σa/σt + Q
+    // σ_tr/σt, σ_tr = √(3σaσt), s′ = 1 − exp(−σs′Δx); polynomial exp ~2e-7 relative.
     for (float h : {0.1f, 1.f, 7.f}) {
         CoarseMaterial m = ball(16, h, 0.8f, 0.5f, 0.3f);
         m.sigma_t[1][m.spec.linearIndex({8, 8, 8})] = 3.f;  // heterogeneous path
@@ -126,6 +126,8 @@ TEST(SslpvCalibrated, FoldedFactorsFollowTheModel) {
         o.calibration.linear = 0.3f;
         o.calibration.transport = 0.7f;
         o.calibration.diffusion = 0.05f;
+        o.calibration.perStep = 0.4f;
+        o.calibration.perStepTransport = 0.2f;
         SslpvSolver solver(o);
         solver.setMaterial(m, 1.3f);
         solver.solve();
@@ -134,7 +136,8 @@ TEST(SslpvCalibrated, FoldedFactorsFollowTheModel) {
             const size_t k = m.spec.linearIndex(cell);
             const double st = m.sigma_t[c][k], ss = m.sigma_s[c][k], g = m.g[c][k];
             const double sa = st - ss, tr = std::sqrt(3.0 * sa * st);
-            const double beta = 0.3 * sa * h + 0.7 * tr * h + 0.05 * tr * tr * h * h;
+            const double beta = 0.3 * sa * h + 0.7 * tr * h + 0.05 * tr * tr * h * h +
+                                0.4 * sa / st + 0.2 * tr / st;
             const double a = std::exp(-beta), s = 1.0 - std::exp(-ss * h);
             const size_t pk = solver.injection().index(cell);
             for (int l = 0; l < 3; ++l) {
@@ -175,25 +178,30 @@ TEST(SslpvCalibrated, RejectsBadCalibration) {
 TEST(SslpvCalibrated, ThickSlabWithinFitResidualBand) {
     // The documented fit (docs/methods/sslpv.md, "Calibrated mode", `lucent-cli bench
     // sslpv-fit`, 48³, η = 1.3): its largest |residual| over α′ ∈ [0.3, 0.99] and
-    // Δx·σt ∈ {0.5, 1, 2, 4} is FIT_MAX_RESIDUAL for SH order 1. These cases must stay inside
-    // that band (the defaults are the fit's constants) and reproduce their printed residual to
-    // RESIDUAL_REPRO (float sums in a different order than the fit's run: ~1e-5; 0.5 % allows
-    // for the stop criterion's step count moving by one).
+    // Δx·σt ∈ {0.5, 1, 2, 4} is 26.1 % for SH order 1 and 17.7 % for order 2 (bench
+    // sslpv-fit --sh 2). These cases must stay inside that band (the defaults are the fit's
+    // constants) and reproduce their printed residual to RESIDUAL_REPRO (float sums in a
+    // different order than the fit's run: ~1e-5; 0.5 % allows for the stop criterion's step
+    // count moving by one).
     struct Case {
+        int order;
         float albedo, cellMfp;
-        double fitResidual;  ///< printed by `lucent-cli bench sslpv-fit`
+        double fitResidual;  ///< printed by `lucent-cli bench sslpv-fit [--sh 2]`
     };
-    constexpr double FIT_MAX_RESIDUAL = 0.0;
+    constexpr double FIT_MAX_RESIDUAL[2] = {0.261, 0.177};
     constexpr double RESIDUAL_REPRO = 0.005;
-    const Case cases[] = {{0.5f, 1.f, 0.0}, {0.8f, 1.f, 0.0}, {0.95f, 2.f, 0.0}};
-    SslpvOptions o = calibrated(1, 4096);
-    o.stopEpsilon = 1e-4f;
+    const Case cases[] = {{1, 0.3f, 1.f, +0.247},  {1, 0.5f, 1.f, -0.015},  {1, 0.8f, 1.f, -0.036},
+                          {1, 0.95f, 2.f, -0.037}, {1, 0.99f, 1.f, +0.034}, {2, 0.5f, 1.f, -0.077},
+                          {2, 0.9f, 2.f, -0.003}};
     for (const Case& c : cases) {
+        SslpvOptions o = calibrated(c.order, 4096);
+        o.stopEpsilon = 1e-4f;
         SslpvStats st;
         const double resp = slabResponse(c.albedo, c.cellMfp, o, 1.3f, 48, &st);
         const double residual = resp / slabTarget(c.albedo, 1.3f) - 1.0;
-        SCOPED_TRACE("albedo " + std::to_string(c.albedo) + " cell " + std::to_string(c.cellMfp));
-        EXPECT_LE(std::abs(residual), FIT_MAX_RESIDUAL);
+        SCOPED_TRACE("order " + std::to_string(c.order) + " albedo " + std::to_string(c.albedo) +
+                     " cell " + std::to_string(c.cellMfp));
+        EXPECT_LE(std::abs(residual), FIT_MAX_RESIDUAL[c.order - 1]);
         EXPECT_NEAR(residual, c.fitResidual, RESIDUAL_REPRO);
         // Energy never grows: all flux is accounted for and none is created.
         EXPECT_LE(st.exitant.y + st.remaining.y, st.injected.y * (1.f + 2e-4f));

@@ -111,6 +111,23 @@ TEST_F(SslpvGl, Fp32MatchesCpu) {
     }
 }
 
+TEST_F(SslpvGl, Fp32MatchesCpuInCalibratedMode) {
+    // The GL path reads the CPU solver's folded factors, so the calibrated mode's per-step
+    // absorption carries over unchanged; same fp32 tolerance as Fp32MatchesCpu.
+    SslpvOptions o{.order = 1, .maxSteps = 12, .skipAccumulateSteps = 2};
+    o.mode = SslpvMode::Calibrated;
+    SslpvSolver cpu(o);
+    cpu.setMaterial(hetBall(20), 1.3f);
+    cpu.setInjectionSamples(topTexels(20));
+    cpu.solve();
+    SslpvGlPropagator gl(SslpvGlStorage::Float32);
+    gl.propagate(cpu);
+    const float peak = cpu.accumulation().maxAbs();
+    ASSERT_GT(peak, 0.f);
+    EXPECT_LT(maxDiff(gl.accumulation(), cpu.accumulation()), 1e-4f * peak);
+    gl.destroy();
+}
+
 TEST_F(SslpvGl, Fp16WithinDerivedBound) {
     // Error model: every fp16 store rounds with relative error u = 2⁻¹¹. Let P be the largest
     // |value| any propagation grid holds in steps 1..K and ρ = max_i Σ_j |M_i,j| summed over

@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -307,4 +308,47 @@ TEST_F(SslpvProviderGl, GlBackendMatchesCpuBackend) {
     EXPECT_LT(maxAbsDiff(a, b), 2e-4f * peak);
     gl.destroy();
     cpu.destroy();
+}
+
+TEST_F(SslpvProviderGl, StrokeToFrameTimingsAt32) {
+    // The live-preview configuration: 128³ painted volume, 32³ LPV, 32 steps, 256² pixels.
+    // Prints the per-pass breakdown recorded in docs/benchmarks.md (SSLPV section).
+    TestScene s = makeScene();
+    const GridSpec spec = GridSpec::around(s.mesh.bounds(), 128);
+    s.volume = MaterialVolume(spec, {Rgb(1.2f, 1.3f, 1.5f), Rgb(1.1f, 1.15f, 1.2f), Rgb(0.f)});
+    s.volume.setInsideMask(voxelizeSolid(s.mesh, spec));
+    (void)s.volume.takeDirtyBricks();
+    s.camera.width = s.camera.height = 256;
+    SslpvProviderOptions o;
+    o.render.gridResolution = 32;
+    o.render.injectionResolution = 128;
+    o.render.solver.maxSteps = 32;
+    SslpvSubsurfaceProvider p(o);
+    p.create();
+    setUp(p, s);
+    const double fullResampleMs = p.timings().resampleMs;
+    const ImageRgb before = render(p, s);
+    BrushSettings brush;
+    brush.radius = 3.f;  // mm: ≈ 2.4 LPV cells
+    brush.value = {Rgb(6.f), Rgb(0.5f), Rgb(0.f)};
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
+    paintStroke(s.volume, brush, {Point3f(-5, 5, 4), Point3f(-2, 7, 3)});
+    p.updateMaterial(s.volume, s.volume.takeDirtyBricks());
+    m_renderer.render();
+    glFinish();
+    const double frameMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    m_renderer.render();  // picks up the GPU time of the previous sample pass
+    glFinish();
+    const SslpvProviderTimings& t = p.timings();
+    std::printf(
+        "[sslpv provider 32^3] full resample %.1f ms | stroke: %zu cells resampled "
+        "%.2f ms, propagate %.2f ms (%d steps), upload %.2f ms, sample %.2f ms CPU "
+        "%.2f ms GPU; stroke->frame %.1f ms (incl. brush, G-buffer, shading)\n",
+        fullResampleMs, p.stats().lastResampledCells, t.resampleMs, t.propagateMs,
+        p.solver().stats().stepsUsed, t.uploadMs, t.sampleCpuMs, t.sampleGpuMs, frameMs);
+    EXPECT_EQ(p.stats().fullResamples, 1);
+    EXPECT_EQ(p.stats().incrementalUpdates, 1);
+    EXPECT_GT(maxAbsDiff(before, m_renderer.readRadiance()), 0.f);
+    p.destroy();
 }

@@ -20,7 +20,8 @@
 /// @code
 ///   dipole::DipoleSubsurfaceProvider dp;
 ///   dp.create();                                   // compiles the compute programs
-///   dipole::ProviderSettings ps; ps.model = Model::BetterDipole; ps.eta = volume.eta();
+///   int id = renderer.addMesh(mesh, {Rgb(0.f), Rgb(fresnelReflectance(1.0, eta)), 64.f});
+///   dipole::ProviderSettings ps; ps.model = Model::BetterDipole; ps.eta = eta; ps.meshId = id;
 ///   dp.setSettings(ps);
 ///   dp.setMaterial(&volume);                       // non-owning; full upload at the next frame
 ///   renderer.setSubsurfaceProvider(&dp);
@@ -57,6 +58,9 @@ struct ProviderSettings {
     int interleave = 4;          ///< GatherSettings::interleave (k×k shift table)
     uint32_t seed = 1;           ///< frame 0 uses exactly gatherImageSpace()'s table for `seed`
     bool shadows = true;  ///< irradiance shadowed by the renderer's shadow maps (when it has them)
+    /// SceneRenderer mesh id (addMesh's return) the material belongs to: other meshes (a ground
+    /// plane) get no subsurface term and lend no irradiance to the gather. −1: every mesh.
+    int meshId = -1;
 
     /// The CPU gather settings of frame 0 (importance = samplesPerFrame − uniform).
     [[nodiscard]] GatherSettings gatherSettings() const;

@@ -116,8 +116,9 @@ public:
     /// @throw ValueError for eta out of range or an empty volume.
     void setMaterial(const MaterialVolume& volume, float eta);
     /// Painted bricks (e.g. volume.takeDirtyBricks()): updateCoarseMaterial on the coarse
-    /// cells they overlap, then re-propagation. Falls back to setMaterial() when no material
-    /// was set or the volume's grid changed. Bit-identical to a from-scratch setMaterial().
+    /// cells they overlap, then re-propagation. Falls back to setMaterial() (η of the last
+    /// setMaterial, else volume.eta()) when no material was set, the volume's grid or
+    /// gridResolution changed. Bit-identical to a from-scratch setMaterial().
     void updateMaterial(const MaterialVolume& volume, const std::vector<int>& dirtyBricks);
     //! @}
 

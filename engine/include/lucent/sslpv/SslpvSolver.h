@@ -89,16 +89,19 @@ enum class SslpvMode {
 };
 
 /// Constants of the calibrated mode (docs/methods/sslpv.md, "Calibrated mode"). Per step and
-/// cell: absorption exp(−β), β = linear·σa·Δx + transport·σ_tr·Δx + diffusion·(σ_tr·Δx)²,
-/// σ_tr = √(3σa·σt) (σt, σa reduced, mm⁻¹; Jensen et al. 2001, Eq. 5), and the fraction
-/// s′ = 1 − exp(−σs′·Δx) of Eq. 3; exitant radiance scaled by gain[order − 1]/η². Defaults: the
-/// least-squares fit against the classical dipole's thick-slab reflectance printed by
-/// `lucent-cli bench sslpv-fit` (tests/unit/sslpv/test_calibrated.cpp checks the residuals).
+/// cell: absorption exp(−β), β = linear·σa·Δx + transport·σ_tr·Δx + diffusion·(σ_tr·Δx)²
+/// + perStep·σa/σt + perStepTransport·σ_tr/σt, σ_tr = √(3σa·σt) (σt, σa reduced, mm⁻¹; Jensen et
+/// al. 2001, Eq. 5), and the scattering fraction s′ = 1 − exp(−σs′·Δx) of Eq. 3; exitant radiance
+/// scaled by gain[order − 1]/η². Defaults: the least-squares fit against the classical dipole's
+/// thick-slab reflectance printed by `lucent-cli bench sslpv-fit`
+/// (tests/unit/sslpv/test_calibrated.cpp checks the residuals).
 struct SslpvCalibration {
-    float linear = 0.f;          ///< weight of σa·Δx in β, ≥ 0
-    float transport = 0.f;       ///< weight of σ_tr·Δx in β, ≥ 0
-    float diffusion = 0.f;       ///< weight of (σ_tr·Δx)² in β, ≥ 0
-    float gain[2] = {1.f, 1.f};  ///< radiance normalisation G for SH order 1 and 2, > 0
+    float linear = 0.f;            ///< weight of σa·Δx in β, ≥ 0
+    float transport = 0.f;         ///< weight of σ_tr·Δx in β, ≥ 0
+    float diffusion = 0.f;         ///< weight of (σ_tr·Δx)² in β, ≥ 0
+    float perStep = 0.f;           ///< weight of σa/σt = 1 − α′ in β, ≥ 0
+    float perStepTransport = 0.f;  ///< weight of σ_tr/σt = √(3(1 − α′)) in β, ≥ 0
+    float gain[2] = {1.f, 1.f};    ///< radiance normalisation G for SH order 1 and 2, > 0
 };
 
 /// The fitted calibration (values from `lucent-cli bench sslpv-fit`, docs/methods/sslpv.md).

@@ -1,0 +1,137 @@
+# SPDX-License-Identifier: MIT
+# cmake -DCLI=<lucent-cli> -DOUT=<dir> -DSCENE=<scene.json> -P RunEvaluate.cmake
+# End-to-end test of `lucent-cli evaluate` on a tiny render (32x32, reference 64 spp, two CPU
+# methods with two quality settings each, so no GL is needed): checks the CSV rows and columns,
+# that every error is finite and non-negative, results.json, the PNG chart, the reference cache
+# and the errors for unknown method names. Fails (FATAL_ERROR) with the reason.
+
+function(run prefix)
+    execute_process(COMMAND ${CLI} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+    set(${prefix}_RC "${rc}" PARENT_SCOPE)
+    set(${prefix}_OUT "${out}" PARENT_SCOPE)
+    set(${prefix}_ERR "${err}" PARENT_SCOPE)
+    message(STATUS "lucent-cli ${ARGN} -> ${rc}\n${out}${err}")
+endfunction()
+
+function(expect_contains prefix text needle)
+    string(FIND "${text}" "${needle}" pos)
+    if(pos EQUAL -1)
+        message(FATAL_ERROR "${prefix}: output lacks '${needle}':\n${text}")
+    endif()
+endfunction()
+
+# A finite, non-negative decimal as printed by %.6g (no nan, inf or minus sign).
+set(nonneg "^[0-9]+(\\.[0-9]*)?(e[-+][0-9]+)?$")
+
+set(dir ${OUT}/evaluate)
+file(REMOVE_RECURSE ${dir})
+set(common ${SCENE} --methods sslpv:paper,dirpole --levels 2 --repeats 1 --width 32 --height 32
+    --ref-spp 64 --out ${dir})
+
+run(ev evaluate ${common})
+if(NOT ev_RC STREQUAL "0")
+    message(FATAL_ERROR "evaluate: expected exit 0, got '${ev_RC}': ${ev_ERR}")
+endif()
+expect_contains(ev "${ev_OUT}" "4 results, 0 skipped")
+
+# results.csv: the header and 2 methods x 2 settings = 4 rows of 14 columns.
+file(STRINGS ${dir}/results.csv lines)
+list(LENGTH lines n)
+if(NOT n EQUAL 5)
+    message(FATAL_ERROR "results.csv: expected a header and 4 rows, got ${n} lines")
+endif()
+list(GET lines 0 header)
+set(expected_header "scene,method,setting,quality,ms_median,ms_min,runs,rel_rmse,rel_rmse_floor,rmse,mean_rel_error,mean_reference,mean_ratio,pixels")
+if(NOT header STREQUAL expected_header)
+    message(FATAL_ERROR "results.csv: header is '${header}'")
+endif()
+list(SUBLIST lines 1 4 rows)
+set(methods_seen)
+foreach(row IN LISTS rows)
+    # The setting may be quoted ("grid 16, 16 steps"): replace quoted fields before splitting.
+    string(REGEX REPLACE "\"[^\"]*\"" "Q" flat "${row}")
+    string(REPLACE "," ";" cols "${flat}")
+    list(LENGTH cols ncols)
+    if(NOT ncols EQUAL 14)
+        message(FATAL_ERROR "results.csv: row '${row}' has ${ncols} columns, expected 14")
+    endif()
+    list(GET cols 0 scene)
+    list(GET cols 1 method)
+    list(GET cols 4 ms)
+    list(GET cols 7 rel)
+    list(GET cols 8 floor)
+    list(GET cols 9 rmse)
+    list(GET cols 13 pixels)
+    list(GET cols 12 ratio)
+    if(NOT scene STREQUAL "skin_sphere")
+        message(FATAL_ERROR "results.csv: row '${row}': scene '${scene}'")
+    endif()
+    list(APPEND methods_seen ${method})
+    foreach(v IN ITEMS ms rel floor rmse ratio)
+        if(NOT "${${v}}" MATCHES "${nonneg}")
+            message(FATAL_ERROR "results.csv: row '${row}': ${v} = '${${v}}' is not a finite non-negative number")
+        endif()
+    endforeach()
+    # The sphere covers part of the 32x32 image: some, but not all, pixels are compared.
+    if(pixels LESS 20 OR pixels GREATER_EQUAL 1024)
+        message(FATAL_ERROR "results.csv: row '${row}': ${pixels} compared pixels")
+    endif()
+    # With 64 spp the reference noise floor of this scene is well above 0 (variance layer read).
+    if(floor STREQUAL "0")
+        message(FATAL_ERROR "results.csv: row '${row}': zero noise floor (variance layer lost?)")
+    endif()
+endforeach()
+list(REMOVE_DUPLICATES methods_seen)
+if(NOT methods_seen STREQUAL "sslpv:paper;dirpole")
+    message(FATAL_ERROR "results.csv: methods '${methods_seen}', expected sslpv:paper;dirpole")
+endif()
+
+# results.json: 4 results with the same fields.
+file(READ ${dir}/results.json json)
+string(JSON nres LENGTH "${json}" results)
+if(NOT nres EQUAL 4)
+    message(FATAL_ERROR "results.json: ${nres} results, expected 4")
+endif()
+string(JSON rel0 GET "${json}" results 0 rel_rmse)
+if(NOT rel0 MATCHES "${nonneg}")
+    message(FATAL_ERROR "results.json: rel_rmse '${rel0}'")
+endif()
+
+# The chart: a PNG file (signature) of a plausible size.
+if(NOT EXISTS ${dir}/runtime_vs_error.png)
+    message(FATAL_ERROR "runtime_vs_error.png was not written")
+endif()
+file(READ ${dir}/runtime_vs_error.png sig LIMIT 8 HEX)
+if(NOT sig STREQUAL "89504e470d0a1a0a")
+    message(FATAL_ERROR "runtime_vs_error.png is not a PNG (signature ${sig})")
+endif()
+file(SIZE ${dir}/runtime_vs_error.png png_size)
+if(png_size LESS 2000)
+    message(FATAL_ERROR "runtime_vs_error.png: only ${png_size} bytes")
+endif()
+
+# Second run: the reference comes from the cache; --json prints the same document.
+run(again evaluate ${common} --json)
+if(NOT again_RC STREQUAL "0")
+    message(FATAL_ERROR "evaluate (cached): exit '${again_RC}': ${again_ERR}")
+endif()
+expect_contains(again "${again_ERR}" "cached")
+string(JSON nres2 LENGTH "${again_OUT}" results)
+if(NOT nres2 EQUAL 4)
+    message(FATAL_ERROR "evaluate --json: ${nres2} results, expected 4")
+endif()
+
+# Unknown method and unknown variant: usage error (exit 2) naming the entry, nothing written.
+run(bad evaluate ${SCENE} --methods direct,phong --out ${dir}/bad)
+if(NOT bad_RC STREQUAL "2")
+    message(FATAL_ERROR "unknown method: expected exit 2, got '${bad_RC}'")
+endif()
+expect_contains(bad "${bad_ERR}" "unknown method 'phong'")
+run(badv evaluate ${SCENE} --methods sslpv:fast --out ${dir}/bad)
+if(NOT badv_RC STREQUAL "2")
+    message(FATAL_ERROR "unknown variant: expected exit 2, got '${badv_RC}'")
+endif()
+expect_contains(badv "${badv_ERR}" "unknown variant 'fast'")
+if(EXISTS ${dir}/bad/results.csv)
+    message(FATAL_ERROR "a failed evaluate wrote results")
+endif()
