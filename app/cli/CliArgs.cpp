@@ -24,13 +24,15 @@ Args::Args(const std::vector<std::string>& argv, const std::vector<std::string>&
                 name = name.substr(0, eq);
             }
             if (isIn(flagOptions, name)) {
-                if (inlineValue) LUCENT_THROW(ValueError, "option --", name, " takes no value");
+                if (inlineValue)
+                    LUCENT_THROW(ValueError, "option --", name, " takes no value");
                 m_flags.push_back(name);
             } else if (isIn(valueOptions, name)) {
                 if (inlineValue) {
                     m_values[name] = *inlineValue;
                 } else {
-                    if (i + 1 >= argv.size()) LUCENT_THROW(ValueError, "option --", name, " needs a value");
+                    if (i + 1 >= argv.size())
+                        LUCENT_THROW(ValueError, "option --", name, " needs a value");
                     m_values[name] = argv[++i];
                 }
             } else {
@@ -48,7 +50,8 @@ bool Args::has(const std::string& name) const {
 
 std::optional<std::string> Args::value(const std::string& name) const {
     auto it = m_values.find(name);
-    if (it == m_values.end()) return std::nullopt;
+    if (it == m_values.end())
+        return std::nullopt;
     return it->second;
 }
 
@@ -58,7 +61,8 @@ std::string Args::valueOr(const std::string& name, const std::string& fallback) 
 
 int Args::intOr(const std::string& name, int fallback, int lo, int hi) const {
     auto v = value(name);
-    if (!v) return fallback;
+    if (!v)
+        return fallback;
     size_t used = 0;
     long long r = 0;
     try {
@@ -66,8 +70,10 @@ int Args::intOr(const std::string& name, int fallback, int lo, int hi) const {
     } catch (...) {
         used = 0;
     }
-    if (used != v->size()) LUCENT_THROW(ValueError, "--", name, ": '", *v, "' is not an integer");
-    if (r < lo || r > hi) LUCENT_THROW(ValueError, "--", name, ": ", r, " is outside [", lo, ", ", hi, "]");
+    if (used != v->size())
+        LUCENT_THROW(ValueError, "--", name, ": '", *v, "' is not an integer");
+    if (r < lo || r > hi)
+        LUCENT_THROW(ValueError, "--", name, ": ", r, " is outside [", lo, ", ", hi, "]");
     return int(r);
 }
 
@@ -82,7 +88,8 @@ float parseFloat(const std::string& name, const std::string& text, float lo, flo
     }
     if (used != text.size() || !std::isfinite(r))
         LUCENT_THROW(ValueError, "--", name, ": '", text, "' is not a finite number");
-    if (r < lo || r > hi) LUCENT_THROW(ValueError, "--", name, ": ", r, " is outside [", lo, ", ", hi, "]");
+    if (r < lo || r > hi)
+        LUCENT_THROW(ValueError, "--", name, ": ", r, " is outside [", lo, ", ", hi, "]");
     return r;
 }
 }  // namespace
@@ -94,12 +101,16 @@ float Args::floatOr(const std::string& name, float fallback, float lo, float hi)
 
 std::optional<Rgb> Args::rgb(const std::string& name, float lo, float hi) const {
     auto v = value(name);
-    if (!v) return std::nullopt;
+    if (!v)
+        return std::nullopt;
     std::vector<std::string> parts;
     std::stringstream ss(*v);
-    for (std::string p; std::getline(ss, p, ',');) parts.push_back(p);
-    if (parts.size() == 1) return Rgb(parseFloat(name, parts[0], lo, hi));
-    if (parts.size() != 3) LUCENT_THROW(ValueError, "--", name, ": expected R,G,B, got '", *v, "'");
+    for (std::string p; std::getline(ss, p, ',');)
+        parts.push_back(p);
+    if (parts.size() == 1)
+        return Rgb(parseFloat(name, parts[0], lo, hi));
+    if (parts.size() != 3)
+        LUCENT_THROW(ValueError, "--", name, ": expected R,G,B, got '", *v, "'");
     return Rgb(parseFloat(name, parts[0], lo, hi), parseFloat(name, parts[1], lo, hi),
                parseFloat(name, parts[2], lo, hi));
 }

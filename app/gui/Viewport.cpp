@@ -424,9 +424,11 @@ void Viewport::paintGL() {
         m_preview.render(f);
         m_meshDirty = m_sceneReplaced = false;
     } catch (const std::exception& ex) {
-        // Shown in the Statistics dock; the frame stays cleared.
+        // Shown in the Statistics dock; the frame stays cleared. The dirty bricks taken above
+        // may be lost: the next frame re-synchronises everything.
         m_stats.initError = QString::fromUtf8(ex.what());
         ++m_stats.glErrors;
+        m_sceneReplaced = true;
     }
     m_stats.preview = m_preview.stats();
     m_stats.uploadMs = m_stats.preview.uploadMs;

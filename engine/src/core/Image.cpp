@@ -18,8 +18,8 @@
 namespace lucent {
 
 ImageRgb::ImageRgb(int width, int height, Rgb fill) : m_width(width), m_height(height) {
-    LUCENT_CHECK(width > 0 && height > 0 && width <= 32768 && height <= 32768,
-                 "image size ", width, "x", height, " is out of range (1..32768)");
+    LUCENT_CHECK(width > 0 && height > 0 && width <= 32768 && height <= 32768, "image size ", width,
+                 "x", height, " is out of range (1..32768)");
     m_pixels.assign(size_t(width) * height, fill);
 }
 
@@ -46,9 +46,14 @@ Rgb toneMapToDisplay(const Rgb& linear, const ToneMap& tm) {
     for (int c = 0; c < 3; ++c) {
         float v = std::isfinite(linear[c]) ? std::max(linear[c], 0.f) * tm.exposure : 0.f;
         switch (tm.curve) {
-            case ToneMap::Curve::Clamp: break;
-            case ToneMap::Curve::Reinhard: v = v / (1.f + v); break;
-            case ToneMap::Curve::Aces: v = acesFit(v); break;
+            case ToneMap::Curve::Clamp:
+                break;
+            case ToneMap::Curve::Reinhard:
+                v = v / (1.f + v);
+                break;
+            case ToneMap::Curve::Aces:
+                v = acesFit(v);
+                break;
         }
         out[c] = srgbOetf(v);
     }
@@ -60,13 +65,14 @@ void writeFileAtomically(const std::string& path,
     namespace fs = std::filesystem;
     const fs::path target(path);
     std::random_device rd;
-    const fs::path tmp = target.parent_path() /
-                         (target.filename().string() + ".tmp-" + std::to_string(rd()));
+    const fs::path tmp =
+        target.parent_path() / (target.filename().string() + ".tmp-" + std::to_string(rd()));
     try {
         writer(tmp.string());
         std::error_code ec;
         fs::rename(tmp, target, ec);
-        if (ec) LUCENT_THROW(IoError, "cannot write '", path, "': ", ec.message());
+        if (ec)
+            LUCENT_THROW(IoError, "cannot write '", path, "': ", ec.message());
     } catch (...) {
         std::error_code ignored;
         fs::remove(tmp, ignored);
@@ -78,7 +84,8 @@ void writePng(const ImageRgb& image, const std::string& path, const ToneMap& tm)
     LUCENT_CHECK(!image.isEmpty(), "cannot write an empty image to '", path, "'");
     writeFileAtomically(path, [&](const std::string& tmp) {
         std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(tmp.c_str(), "wb"), &std::fclose);
-        if (!file) LUCENT_THROW(IoError, "cannot open '", path, "' for writing");
+        if (!file)
+            LUCENT_THROW(IoError, "cannot open '", path, "' for writing");
         png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
         png_infop info = png ? png_create_info_struct(png) : nullptr;
         if (!png || !info) {
@@ -97,7 +104,8 @@ void writePng(const ImageRgb& image, const std::string& path, const ToneMap& tm)
         for (int y = 0; y < image.height(); ++y) {
             for (int x = 0; x < image.width(); ++x) {
                 const Rgb d = toneMapToDisplay(image.at(x, y), tm);
-                for (int c = 0; c < 3; ++c) row[size_t(x) * 3 + c] = uint8_t(d[c] * 255.f + 0.5f);
+                for (int c = 0; c < 3; ++c)
+                    row[size_t(x) * 3 + c] = uint8_t(d[c] * 255.f + 0.5f);
             }
             png_write_row(png, row.data());
         }
@@ -117,7 +125,8 @@ ImageRgb readPng(const std::string& path) {
         LUCENT_THROW(IoError, "cannot decode PNG '", path, "': ", img.message);
     ImageRgb out(int(img.width), int(img.height));
     for (size_t i = 0; i < out.pixels().size(); ++i)
-        for (int c = 0; c < 3; ++c) out.pixels()[i][c] = srgbEotf(buf[i * 3 + c] / 255.f);
+        for (int c = 0; c < 3; ++c)
+            out.pixels()[i][c] = srgbEotf(buf[i * 3 + c] / 255.f);
     return out;
 }
 
@@ -138,13 +147,15 @@ void writeExrLayers(const ImageRgb& image,
                 for (int c = 0; c < 3; ++c) {
                     const std::string ch = prefix.empty() ? names[c] : prefix + "." + names[c];
                     header.channels().insert(ch, Imf::Channel(Imf::FLOAT));
-                    char* base = const_cast<char*>(reinterpret_cast<const char*>(img.pixels().data())) +
-                                 c * sizeof(float);
+                    char* base =
+                        const_cast<char*>(reinterpret_cast<const char*>(img.pixels().data())) +
+                        c * sizeof(float);
                     fb.insert(ch, Imf::Slice(Imf::FLOAT, base, xs, ys));
                 }
             };
             addLayer("", image);
-            for (const auto& [name, layer] : layers) addLayer(name, *layer);
+            for (const auto& [name, layer] : layers)
+                addLayer(name, *layer);
             Imf::OutputFile file(tmp.c_str(), header);
             file.setFrameBuffer(fb);
             file.writePixels(image.height());
@@ -154,10 +165,13 @@ void writeExrLayers(const ImageRgb& image,
     });
 }
 
-void writeExr(const ImageRgb& image, const std::string& path) { writeExrLayers(image, {}, path); }
+void writeExr(const ImageRgb& image, const std::string& path) {
+    writeExrLayers(image, {}, path);
+}
 
 ImageRgb readExr(const std::string& path, const std::string& layer) {
-    if (!std::filesystem::exists(path)) LUCENT_THROW(IoError, "EXR file '", path, "' does not exist");
+    if (!std::filesystem::exists(path))
+        LUCENT_THROW(IoError, "EXR file '", path, "' does not exist");
     try {
         Imf::InputFile file(path.c_str());
         const Imath::Box2i dw = file.header().dataWindow();

@@ -11,7 +11,8 @@ namespace lucent {
 
 void parallelFor(int64_t begin, int64_t end, const std::function<void(int64_t, int64_t)>& body,
                  int64_t grain) {
-    if (end <= begin) return;
+    if (end <= begin)
+        return;
     if (end - begin <= grain || maxThreads() == 1) {
         body(begin, end);
         return;

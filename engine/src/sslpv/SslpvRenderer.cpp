@@ -4,12 +4,11 @@
 
 #include <lucent/sslpv/SslpvRenderer.h>
 
-#include "RayMesh.h"
-
 #include <lucent/core/Error.h>
 #include <lucent/core/Parallel.h>
 #include <lucent/core/Timer.h>
 #include <lucent/material/Resample.h>
+#include <lucent/mesh/RayCaster.h>
 #include <lucent/mesh/Voxelize.h>
 
 #include <algorithm>
@@ -17,9 +16,6 @@
 
 namespace lucent {
 namespace {
-
-using sslpv_detail::RayHit;
-using sslpv_detail::RayMesh;
 
 /// Orthonormal basis (right, up) of the plane perpendicular to `forward`.
 void planeBasis(const Vector3f& forward, Vector3f& right, Vector3f& up) {
@@ -30,7 +26,7 @@ void planeBasis(const Vector3f& forward, Vector3f& right, Vector3f& up) {
 
 /// Perspective RSM from `origin` along `forward` (§3.1): Φ_p = I(ω_p)·Δω_p with Δω_p from
 /// rsmTexelSolidAngle (the near-plane-corrected formula of seed 003).
-void perspectiveRsm(const RayMesh& mesh, const Light& light, const Point3f& origin,
+void perspectiveRsm(const RayCaster& mesh, const Light& light, const Point3f& origin,
                     const Vector3f& forward, float tanHalf, int res, const Rgb& scale,
                     std::vector<SslpvInjectionSample>& out) {
     Vector3f right, up;
@@ -63,7 +59,7 @@ void perspectiveRsm(const RayMesh& mesh, const Light& light, const Point3f& orig
         out.insert(out.end(), r.begin(), r.end());
 }
 
-std::vector<SslpvInjectionSample> buildRsmSamples(const RayMesh& mesh, const Light& light,
+std::vector<SslpvInjectionSample> buildRsmSamples(const RayCaster& mesh, const Light& light,
                                                   int res) {
     std::vector<SslpvInjectionSample> out;
     LUCENT_CHECK(isFinite(light.intensity) && light.intensity.x >= 0.f &&
@@ -160,7 +156,7 @@ void SslpvRenderer::setOptions(const SslpvRenderOptions& o) {
 }
 
 void SslpvRenderer::setMesh(const TriangleMesh& mesh) {
-    m_rays = std::make_unique<RayMesh>(mesh);
+    m_rays = std::make_unique<RayCaster>(mesh);
     m_mesh = mesh;
     m_rsmDirty = true;
     m_materialDirty = true;  // the inside mask follows the mesh
@@ -225,7 +221,7 @@ ImageRgb SslpvRenderer::render(const Camera& camera) {
     update();
     const Timer timer;
     ImageRgb img(camera.width, camera.height);
-    const RayMesh& rays = *m_rays;
+    const RayCaster& rays = *m_rays;
     const float eps = 1e-4f * std::max(1.f, glm::length(rays.bounds().extent()));
     const float shininess = m_opt.shininess;
     const float specNorm = (shininess + 8.f) / (8.f * PI);  // energy-normalised Blinn–Phong

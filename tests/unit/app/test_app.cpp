@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
 /// @file
 /// @brief GUI tests of the `lucent` app under Xvfb: start-up and rendering without GL errors,
-/// a non-blank viewport, simulated mouse strokes changing the expected voxels, undo/redo
+/// a non-blank viewport with every preview method (direct, single scattering, SSLPV, dipoles),
+/// a stroke changing the SSLPV preview near it through an incremental (dirty-brick) update,
+/// simulated mouse strokes changing the expected voxels, undo/redo
 /// through the UI actions, eyedropper, slice view, and the save/open/export round trips.
 
 #include "Document.h"

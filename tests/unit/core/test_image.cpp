@@ -27,13 +27,15 @@ TEST(Image, ExrRoundTripIsExact) {
 
 TEST(Image, PngRoundTripWithin8BitQuantisation) {
     ImageRgb img(4, 4);
-    for (int i = 0; i < 16; ++i) img.pixels()[i] = Rgb(i / 15.f, 0.5f, 0.f);
+    for (int i = 0; i < 16; ++i)
+        img.pixels()[i] = Rgb(i / 15.f, 0.5f, 0.f);
     const std::string path = std::string(LUCENT_TEST_OUTPUT_DIR) + "/roundtrip.png";
     writePng(img, path);
     const ImageRgb back = readPng(path);
     // 8-bit sRGB steps are at most 1/255 in display space; in linear space the step is at most
     // (d/dv EOTF ≤ 2.4·1.055^-2.4... ≈ 3) × 1/510 ≈ 6e-3 at the top end.
-    for (int i = 0; i < 16; ++i) EXPECT_NEAR(back.pixels()[i].r, img.pixels()[i].r, 6e-3f);
+    for (int i = 0; i < 16; ++i)
+        EXPECT_NEAR(back.pixels()[i].r, img.pixels()[i].r, 6e-3f);
 }
 
 TEST(Image, MalformedExrIsAClearError) {
@@ -46,10 +48,12 @@ TEST(Image, MalformedExrIsAClearError) {
 TEST(Image, FailedWriteLeavesTargetUntouched) {
     const std::string path = std::string(LUCENT_TEST_OUTPUT_DIR) + "/keep.txt";
     std::ofstream(path) << "precious";
-    EXPECT_THROW(writeFileAtomically(path, [](const std::string& tmp) {
-        std::ofstream(tmp) << "partial";
-        LUCENT_THROW(IoError, "disk full");
-    }), IoError);
+    EXPECT_THROW(writeFileAtomically(path,
+                                     [](const std::string& tmp) {
+                                         std::ofstream(tmp) << "partial";
+                                         LUCENT_THROW(IoError, "disk full");
+                                     }),
+                 IoError);
     std::ifstream in(path);
     std::string s;
     in >> s;

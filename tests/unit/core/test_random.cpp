@@ -49,10 +49,15 @@ TEST(Sampling, HenyeyGreensteinMeanCosineIsG) {
 
 TEST(Parallel, CoversRangeExactlyOnce) {
     std::vector<std::atomic<int>> hits(10000);
-    parallelFor(0, 10000, [&](int64_t b, int64_t e) {
-        for (int64_t i = b; i < e; ++i) hits[i]++;
-    }, 64);
-    for (auto& h : hits) EXPECT_EQ(h.load(), 1);
+    parallelFor(
+        0, 10000,
+        [&](int64_t b, int64_t e) {
+            for (int64_t i = b; i < e; ++i)
+                hits[i]++;
+        },
+        64);
+    for (auto& h : hits)
+        EXPECT_EQ(h.load(), 1);
     ThreadLimit one(1);
     EXPECT_EQ(maxThreads(), 1);
 }

@@ -40,9 +40,10 @@ TEST(SphericalHarmonics, RotatedLobeEqualsProjectionOfRotatedFunction) {
     for (int t = 0; t < 10; ++t) {
         const Vector3f axis = sampleUniformSphere({rng.uniform(), rng.uniform()});
         const auto rotated = clampedCosineLobe<2>(axis);
-        const auto projected =
-            shProject<2>([&](const Vector3f& w) { return std::max(0.f, glm::dot(w, axis)); }, 200000);
-        for (int i = 0; i < 9; ++i) EXPECT_NEAR(rotated.c[i], projected.c[i], 2e-4f) << i;
+        const auto projected = shProject<2>(
+            [&](const Vector3f& w) { return std::max(0.f, glm::dot(w, axis)); }, 200000);
+        for (int i = 0; i < 9; ++i)
+            EXPECT_NEAR(rotated.c[i], projected.c[i], 2e-4f) << i;
     }
 }
 
@@ -53,7 +54,8 @@ TEST(SphericalHarmonics, BandEnergyIsRotationInvariant) {
     for (int t = 0; t < 50; ++t) {
         const Vector3f axis = sampleUniformSphere({rng.uniform(), rng.uniform()});
         const auto r = rotateZonal<2>(z, axis);
-        for (int l = 0; l <= 2; ++l) EXPECT_NEAR(shBandEnergy(r, l), shBandEnergy(ref, l), 1e-5f);
+        for (int l = 0; l <= 2; ++l)
+            EXPECT_NEAR(shBandEnergy(r, l), shBandEnergy(ref, l), 1e-5f);
     }
 }
 

@@ -604,8 +604,8 @@ TEST(Transport, SingleScatteringBelowDielectricCarriesRadianceScaling) {
         Pcg32 rng(eta > 1.5f ? 51 : 52);
         MeanSe l;
         for (int i = 0; i < 40000; ++i)
-            l.add(estimateRadiance(scene, Point3f(0.f, 0.f, 10.f), Vector3f(0.f, 0.f, -1.f), 0,
-                                   rng, to));
+            l.add(estimateRadiance(scene, Point3f(0.f, 0.f, 10.f), Vector3f(0.f, 0.f, -1.f), 0, rng,
+                                   to));
         EXPECT_NEAR(l.mean(), expected, Z * l.se()) << "eta = " << eta;
     }
 }

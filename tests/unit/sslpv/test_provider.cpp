@@ -217,9 +217,12 @@ TEST_F(SslpvProviderGl, PixelsMatchCpuFormulaAndCpuImage) {
             worst);
 
         // (2) Against the CPU SslpvRenderer's image (ray cast, subsurface term only). Raster and
-        // ray hits lie on the same triangles, so positions agree to float rounding of the
-        // attribute interpolation (~1e-6·60 mm) and the bound of (1) applies; pixels at the
-        // silhouette are skipped (coverage differs there: pixel centre vs ray).
+        // ray hits lie on the same triangles; they differ by the precision of the hardware's
+        // attribute interpolation, which GL leaves to the implementation: llvmpipe matches to
+        // ~1e-6 of the scene size, an NVIDIA H100 to ~1e-4 (measured). A position error ε
+        // changes the trilinearly blended grid radiance by at most |L|·ε/h (h = cell size =
+        // extent/32), so ε = 1e-4·extent gives 3.2e-3·|L|; bound 4e-3·|L| + 1e-5·peak. Pixels
+        // at the silhouette are skipped (coverage differs there: pixel centre vs ray).
         SslpvRenderer cpu(providerOptions(mode).render);
         cpu.setMesh(s.mesh);
         cpu.setLights(s.lights);
@@ -237,7 +240,7 @@ TEST_F(SslpvProviderGl, PixelsMatchCpuFormulaAndCpuImage) {
                 ++compared;
                 for (int c = 0; c < 3; ++c)
                     ASSERT_NEAR(gl.at(x, y)[c], ref.at(x, y)[c],
-                                1e-3f * std::abs(ref.at(x, y)[c]) + 1e-5f * peak)
+                                4e-3f * std::abs(ref.at(x, y)[c]) + 1e-5f * peak)
                         << "pixel " << x << "," << y << " channel " << c;
             }
         EXPECT_GT(compared, PIXELS * PIXELS / 5);

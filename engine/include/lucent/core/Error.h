@@ -56,16 +56,18 @@ std::string concat(const Args&... args) {
 #define LUCENT_THROW(Type, ...) throw Type(::lucent::detail::concat(__VA_ARGS__))
 
 /// Public API precondition: throws lucent::ValueError with the message when `cond` is false.
-#define LUCENT_CHECK(cond, ...)                                       \
-    do {                                                              \
-        if (!(cond)) LUCENT_THROW(::lucent::ValueError, __VA_ARGS__); \
+#define LUCENT_CHECK(cond, ...)                              \
+    do {                                                     \
+        if (!(cond))                                         \
+            LUCENT_THROW(::lucent::ValueError, __VA_ARGS__); \
     } while (false)
 
 #if defined(LUCENT_ENABLE_ASSERTS) || !defined(NDEBUG)
 /// Internal invariant; aborts with file and line when violated (debug / asserts builds only).
-#define LUCENT_ASSERT(cond)                                                          \
-    do {                                                                             \
-        if (!(cond)) ::lucent::detail::assertionFailed(#cond, __FILE__, __LINE__);   \
+#define LUCENT_ASSERT(cond)                                               \
+    do {                                                                  \
+        if (!(cond))                                                      \
+            ::lucent::detail::assertionFailed(#cond, __FILE__, __LINE__); \
     } while (false)
 #else
 #define LUCENT_ASSERT(cond) \

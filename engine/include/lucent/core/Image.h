@@ -64,6 +64,7 @@ ImageRgb readPng(const std::string& path);
 
 /// Writes `path` atomically: `writer(tmpPath)` writes a sibling temporary file which is then
 /// renamed over `path`; on any exception the temporary is removed and `path` is untouched.
-void writeFileAtomically(const std::string& path, const std::function<void(const std::string&)>& writer);
+void writeFileAtomically(const std::string& path,
+                         const std::function<void(const std::string&)>& writer);
 
 }  // namespace lucent

@@ -34,7 +34,8 @@ inline Vector3f sampleUniformSphere(Point2f u) {
 /// Concentric map of [0,1)² to the unit disc (Shirley–Chiu); uniform in area.
 inline Point2f sampleConcentricDisc(Point2f u) {
     const Point2f o = 2.f * u - Point2f(1.f);
-    if (o.x == 0.f && o.y == 0.f) return {0.f, 0.f};
+    if (o.x == 0.f && o.y == 0.f)
+        return {0.f, 0.f};
     float r, theta;
     if (std::abs(o.x) > std::abs(o.y)) {
         r = o.x;

@@ -19,9 +19,13 @@
 namespace lucent {
 
 /// Number of coefficients for SH with bands 0..order (order 1 → 4, order 2 → 9).
-constexpr int shCount(int order) { return (order + 1) * (order + 1); }
+constexpr int shCount(int order) {
+    return (order + 1) * (order + 1);
+}
 /// Flat index of coefficient (l, m).
-constexpr int shIndex(int l, int m) { return l * (l + 1) + m; }
+constexpr int shIndex(int l, int m) {
+    return l * (l + 1) + m;
+}
 
 /// Evaluates all real SH basis functions of bands 0..order in unit direction `w`.
 /// @param order 1 or 2. @param out receives shCount(order) values.
@@ -34,7 +38,8 @@ float clampedCosineZonal(int l);
 /// Henyey–Greenstein phase function moment for band l: its Legendre coefficient is g^l.
 inline float hgMoment(float g, int l) {
     float r = 1.f;
-    for (int i = 0; i < l; ++i) r *= g;
+    for (int i = 0; i < l; ++i)
+        r *= g;
     return r;
 }
 
@@ -56,15 +61,18 @@ struct ShCoeffs {
         float y[COUNT];
         shEvaluate(Order, w, y);
         float s = 0.f;
-        for (int i = 0; i < COUNT; ++i) s += c[i] * y[i];
+        for (int i = 0; i < COUNT; ++i)
+            s += c[i] * y[i];
         return s;
     }
     ShCoeffs& operator+=(const ShCoeffs& o) {
-        for (int i = 0; i < COUNT; ++i) c[i] += o.c[i];
+        for (int i = 0; i < COUNT; ++i)
+            c[i] += o.c[i];
         return *this;
     }
     ShCoeffs& operator*=(float s) {
-        for (float& v : c) v *= s;
+        for (float& v : c)
+            v *= s;
         return *this;
     }
 };
@@ -78,7 +86,8 @@ ShCoeffs<Order> rotateZonal(const float* zonal, const Vector3f& axis) {
     shEvaluate(Order, axis, y);
     for (int l = 0; l <= Order; ++l) {
         const float k = std::sqrt(4.f * PI / float(2 * l + 1)) * zonal[l];
-        for (int m = -l; m <= l; ++m) r.c[shIndex(l, m)] = k * y[shIndex(l, m)];
+        for (int m = -l; m <= l; ++m)
+            r.c[shIndex(l, m)] = k * y[shIndex(l, m)];
     }
     return r;
 }
@@ -107,9 +116,11 @@ ShCoeffs<Order> shProject(F&& f, int samples = 20000) {
         const Vector3f d(rad * std::cos(phi), rad * std::sin(phi), z);
         const float v = f(d);
         shEvaluate(Order, d, y);
-        for (int k = 0; k < shCount(Order); ++k) acc[k] += double(v) * y[k];
+        for (int k = 0; k < shCount(Order); ++k)
+            acc[k] += double(v) * y[k];
     }
-    for (int k = 0; k < shCount(Order); ++k) r.c[k] = float(acc[k] * w);
+    for (int k = 0; k < shCount(Order); ++k)
+        r.c[k] = float(acc[k] * w);
     return r;
 }
 
@@ -117,7 +128,8 @@ ShCoeffs<Order> shProject(F&& f, int samples = 20000) {
 template <int Order>
 float shBandEnergy(const ShCoeffs<Order>& s, int l) {
     float e = 0.f;
-    for (int m = -l; m <= l; ++m) e += s.c[shIndex(l, m)] * s.c[shIndex(l, m)];
+    for (int m = -l; m <= l; ++m)
+        e += s.c[shIndex(l, m)] * s.c[shIndex(l, m)];
     return e;
 }
 

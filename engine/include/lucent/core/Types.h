@@ -67,6 +67,8 @@ inline bool isFinite(const glm::vec3& v) {
 }
 
 /// Rec. 709 luminance of a linear RGB value.
-inline float luminance(const Rgb& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+inline float luminance(const Rgb& c) {
+    return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b;
+}
 
 }  // namespace lucent

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief The object's surface for the path tracer: ray–triangle queries through Embree
-/// (RTC_SCENE_FLAG_ROBUST, kept out of this header).
+/// @brief The object's surface for the path tracer: ray–triangle queries through the mesh
+/// module's RayCaster (Embree, RTC_SCENE_FLAG_ROBUST, kept out of this header).
 ///
 ///     MeshBoundary boundary(mesh);
 ///     if (auto hit = boundary.intersect(o, d, 0.f, INF)) { ... hit->t, hit->normal ... }

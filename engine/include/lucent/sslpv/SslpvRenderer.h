@@ -24,9 +24,7 @@
 
 namespace lucent {
 
-namespace sslpv_detail {
-class RayMesh;
-}
+class RayCaster;
 
 /// Renderer settings. Injection texels come from one reflective shadow map per light (§3.1):
 /// point and spot lights outside the mesh's bounding sphere use one perspective map aimed at
@@ -88,7 +86,7 @@ private:
 
     SslpvRenderOptions m_opt;
     SslpvSolver m_solver;
-    std::unique_ptr<sslpv_detail::RayMesh> m_rays;
+    std::unique_ptr<RayCaster> m_rays;
     TriangleMesh m_mesh;
     std::vector<Light> m_lights;
     CoarseMaterial m_coarse;
