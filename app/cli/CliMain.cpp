@@ -71,8 +71,11 @@ static std::vector<const Command*> commands() {
 }
 
 static void printUsage(std::FILE* out) {
-    std::fprintf(out, "usage: lucent-cli <command> [options]   (lucent-cli <command> --help)\n\ncommands:\n");
-    for (const Command* c : commands()) std::fprintf(out, "  %-10s %s\n", c->name, c->summary);
+    std::fprintf(
+        out,
+        "usage: lucent-cli <command> [options]   (lucent-cli <command> --help)\n\ncommands:\n");
+    for (const Command* c : commands())
+        std::fprintf(out, "  %-10s %s\n", c->name, c->summary);
 }
 
 }  // namespace lucent::cli
@@ -84,7 +87,8 @@ int main(int argc, char** argv) {
         return argc < 2 ? 2 : 0;
     }
     for (const Command* c : commands()) {
-        if (std::strcmp(argv[1], c->name) != 0) continue;
+        if (std::strcmp(argv[1], c->name) != 0)
+            continue;
         std::vector<std::string> args(argv + 2, argv + argc);
         for (const auto& a : args)
             if (a == "--help" || a == "-h") {

@@ -161,11 +161,11 @@ bool endsWith(const std::string& s, const std::string& suffix) {
 }
 
 int runRender(const std::vector<std::string>& argv) {
-    const Args args(argv,
-                    {"method", "o", "output", "width", "height", "exposure", "tonemap", "spp",
-                     "seed", "threads", "boundary", "grid", "steps", "sh",
-                     "attenuation", "spp-frame", "mode"},
-                    {"subsurface-only", "cpu", "gl"});
+    const Args args(
+        argv,
+        {"method", "o", "output", "width", "height", "exposure", "tonemap", "spp", "seed",
+         "threads", "boundary", "grid", "steps", "sh", "attenuation", "spp-frame", "mode"},
+        {"subsurface-only", "cpu", "gl"});
     if (args.positional().size() != 1)
         LUCENT_THROW(ValueError, "expected exactly one SCENE.json (see --help)");
     const std::string out = args.value("o").value_or(args.valueOr("output", ""));

@@ -76,57 +76,74 @@ bool roulette(float& weight, Pcg32& rng) {
     return true;
 }
 
+/// A light sampled from a point x inside the medium (next-event estimation): direction wi
+/// towards the light, distance (INF for directional) and the radiance-over-pdf term per
+/// channel (irradiance-like, W/mm²). Shared by the per-channel and spectral-MIS estimators so
+/// both consume the random numbers identically.
+struct LightSample {
+    Vector3f wi{0.f};
+    float dist = 0.f;
+    Rgb le{0.f};
+};
+
+std::optional<LightSample> sampleLightFrom(const Light& light, const Point3f& x, Pcg32& rng) {
+    Vector3f wi(0.f);
+    float dist = 0.f;
+    Rgb le(0.f);
+    switch (light.type) {
+        case Light::Type::Point:
+        case Light::Type::Spot: {
+            const Vector3f toLight = light.position - x;
+            const float d2 = glm::dot(toLight, toLight);
+            if (!(d2 > 0.f))
+                return std::nullopt;
+            dist = std::sqrt(d2);
+            wi = toLight / dist;
+            le = light.intensityToward(-wi) / d2;  // I/r² (inverse square law)
+            break;
+        }
+        case Light::Type::Directional:
+            wi = -glm::normalize(light.direction);
+            dist = INF;
+            le = light.intensity;
+            break;
+        case Light::Type::Sphere: {
+            const Vector3f toC = light.position - x;
+            const float d2 = glm::dot(toC, toC);
+            const float r2 = light.radius * light.radius;
+            if (d2 <= r2)
+                return std::nullopt;
+            // Cone sampling, pdf 1/(2π(1 − cos θmax)) (pbrt-v3 Sec. 14.2.3).
+            const float cosMax = std::sqrt(std::max(0.f, 1.f - r2 / d2));
+            const float u0 = rng.uniform(), u1 = rng.uniform();
+            const float cosT = 1.f - u0 * (1.f - cosMax);
+            const float sinT = std::sqrt(std::max(0.f, 1.f - cosT * cosT));
+            const float phi = 2.f * PI * u1;
+            const Frame frame(toC / std::sqrt(d2));
+            wi = glm::normalize(frame.toWorld({sinT * std::cos(phi), sinT * std::sin(phi), cosT}));
+            dist = intersectSphere(x, wi, light.position, light.radius);
+            if (!std::isfinite(dist))
+                dist = std::sqrt(d2);
+            le = light.intensity * (2.f * PI * (1.f - cosMax));
+            break;
+        }
+        default:
+            return std::nullopt;
+    }
+    return LightSample{wi, dist, le};
+}
+
 /// Next-event estimation from a real collision at x (inside the object): Σ over lights of
 /// phase · transmittance · radiance / pdf. `dirIn` is the path's travel direction at x.
 float directLighting(const VolumeScene& scene, const Point3f& x, const Vector3f& dirIn, float g,
                      int ch, Pcg32& rng, const TransportOptions& options, TrackingStats* stats) {
     float sum = 0.f;
     for (const Light& light : scene.lights()) {
-        Vector3f wi(0.f);
-        float dist = 0.f, le = 0.f;
-        switch (light.type) {
-            case Light::Type::Point:
-            case Light::Type::Spot: {
-                const Vector3f toLight = light.position - x;
-                const float d2 = glm::dot(toLight, toLight);
-                if (!(d2 > 0.f))
-                    continue;
-                dist = std::sqrt(d2);
-                wi = toLight / dist;
-                // Radiant intensity I (W/sr) at distance r gives irradiance I/r² (inverse square).
-                le = light.intensityToward(-wi)[ch] / d2;
-                break;
-            }
-            case Light::Type::Directional:
-                wi = -glm::normalize(light.direction);
-                dist = INF;
-                le = light.intensity[ch];  // irradiance W/mm² normal to the beam
-                break;
-            case Light::Type::Sphere: {
-                const Vector3f toC = light.position - x;
-                const float d2 = glm::dot(toC, toC);
-                const float r2 = light.radius * light.radius;
-                if (d2 <= r2)
-                    continue;
-                // Uniform sampling of the cone subtended by the sphere: pdf = 1/(2π(1 − cos θmax))
-                // (pbrt-v3 Sec. 14.2.3, Eq. 14.9 solid angle of a sphere).
-                const float cosMax = std::sqrt(std::max(0.f, 1.f - r2 / d2));
-                const float u0 = rng.uniform(), u1 = rng.uniform();
-                const float cosT = 1.f - u0 * (1.f - cosMax);
-                const float sinT = std::sqrt(std::max(0.f, 1.f - cosT * cosT));
-                const float phi = 2.f * PI * u1;
-                const Frame frame(toC / std::sqrt(d2));
-                wi = glm::normalize(
-                    frame.toWorld({sinT * std::cos(phi), sinT * std::sin(phi), cosT}));
-                dist = intersectSphere(x, wi, light.position, light.radius);
-                if (!std::isfinite(dist))
-                    dist = std::sqrt(d2);  // grazing rounding
-                le = light.intensity[ch] * 2.f * PI * (1.f - cosMax);
-                break;
-            }
-            default:
-                continue;
-        }
+        const std::optional<LightSample> ls = sampleLightFrom(light, x, rng);
+        if (!ls)
+            continue;
+        const Vector3f wi = ls->wi;
+        const float dist = ls->dist, le = ls->le[ch];
         if (!(le > 0.f))
             continue;
         // HG phase value for the angle between the path's travel direction and wi (the
@@ -574,50 +591,12 @@ Rgb directLightingRgb(const VolumeScene& scene, const Point3f& x, const Vector3f
                       TrackingStats* stats) {
     Rgb sum(0.f);
     for (const Light& light : scene.lights()) {
-        Vector3f wi(0.f);
-        float dist = 0.f;
-        Rgb le(0.f);
-        switch (light.type) {
-            case Light::Type::Point:
-            case Light::Type::Spot: {
-                const Vector3f toLight = light.position - x;
-                const float d2 = glm::dot(toLight, toLight);
-                if (!(d2 > 0.f))
-                    continue;
-                dist = std::sqrt(d2);
-                wi = toLight / dist;
-                le = light.intensityToward(-wi) / d2;  // I/r² (inverse square law)
-                break;
-            }
-            case Light::Type::Directional:
-                wi = -glm::normalize(light.direction);
-                dist = INF;
-                le = light.intensity;
-                break;
-            case Light::Type::Sphere: {
-                const Vector3f toC = light.position - x;
-                const float d2 = glm::dot(toC, toC);
-                const float r2 = light.radius * light.radius;
-                if (d2 <= r2)
-                    continue;
-                // Cone sampling, pdf 1/(2π(1 − cos θmax)) (pbrt-v3 Sec. 14.2.3).
-                const float cosMax = std::sqrt(std::max(0.f, 1.f - r2 / d2));
-                const float u0 = rng.uniform(), u1 = rng.uniform();
-                const float cosT = 1.f - u0 * (1.f - cosMax);
-                const float sinT = std::sqrt(std::max(0.f, 1.f - cosT * cosT));
-                const float phi = 2.f * PI * u1;
-                const Frame frame(toC / std::sqrt(d2));
-                wi = glm::normalize(
-                    frame.toWorld({sinT * std::cos(phi), sinT * std::sin(phi), cosT}));
-                dist = intersectSphere(x, wi, light.position, light.radius);
-                if (!std::isfinite(dist))
-                    dist = std::sqrt(d2);
-                le = light.intensity * (2.f * PI * (1.f - cosMax));
-                break;
-            }
-            default:
-                continue;
-        }
+        const std::optional<LightSample> ls = sampleLightFrom(light, x, rng);
+        if (!ls)
+            continue;
+        const Vector3f wi = ls->wi;
+        const float dist = ls->dist;
+        const Rgb le = ls->le;
         if (!(std::max({le.r, le.g, le.b}) > 0.f))
             continue;
         const float cosT = glm::dot(dirIn, wi);
