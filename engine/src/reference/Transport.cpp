@@ -355,11 +355,74 @@ float shadowTransmittance(const VolumeScene& scene, const Point3f& p, const Vect
     return tr;
 }
 
+namespace {
+
+/// A camera path at point x of the surface (outward normal n), arriving from outside along
+/// `dir`. Moves it across (or off) the surface: updates pos/dir/inside and multiplies `weight`
+/// by the deterministic Fresnel split (subsurface-only first event) and the radiance scaling.
+/// Returns false when the path ends. Shared by the per-channel and spectral-MIS estimators.
+bool enterSurface(const Point3f& x, const Normal3f& n, float off, bool specularChain, Point3f& pos,
+                  Vector3f& dir, bool& inside, double& weight, Pcg32& rng,
+                  const TransportOptions& options) {
+    const float cosI = -glm::dot(dir, n);
+    if (cosI < 0.f) {  // reached the surface from inside (camera inside the object)
+        inside = true;
+        return true;
+    }
+    if (options.boundary != BoundaryModel::Dielectric) {
+        pos = x - n * off;
+        inside = true;
+        return true;
+    }
+    const float f = fresnelDielectric(cosI, options.eta);
+    if (specularChain && options.subsurfaceOnly) {
+        weight *= 1.0 - f;  // deterministic split: keep only the transmitted part
+    } else if (rng.uniform() < f) {
+        dir = glm::normalize(reflect(dir, n));
+        pos = x + n * off;
+        return true;
+    }
+    const std::optional<Vector3f> t = refract(dir, n, options.eta);
+    if (!t)
+        return false;  // impossible entering a denser medium; rounding guard
+    // Radiance is not symmetric under refraction: L_outside = T·L_inside/η²
+    // (Veach 1997 §5.2; pbrt-v3 §8.2.3), so a camera path entering the object
+    // carries 1/η². The straight shadow connections need no factor: for a point
+    // light the refracted fluence equals T·I/d² to first order in depth/d.
+    weight /= double(options.eta) * options.eta;
+    dir = *t;
+    pos = x - n * off;
+    inside = true;
+    return true;
+}
+
+/// A camera path inside the object reaching the surface at x (outward normal n): Fresnel
+/// reflection back inside, or refraction out with the inverse radiance scaling η².
+void exitSurface(const Point3f& x, const Normal3f& n, float off, Point3f& pos, Vector3f& dir,
+                 bool& inside, double& weight, Pcg32& rng, const TransportOptions& options) {
+    if (options.boundary == BoundaryModel::Dielectric) {
+        const float cosO = std::abs(glm::dot(dir, n));
+        const float f = fresnelDielectric(cosO, 1.f / options.eta);
+        const std::optional<Vector3f> t =
+            rng.uniform() < f ? std::nullopt : refract(dir, -n, 1.f / options.eta);
+        if (!t) {
+            dir = glm::normalize(reflect(dir, n));
+            pos = x - n * off;
+            return;
+        }
+        weight *= double(options.eta) * options.eta;
+        dir = *t;
+    }
+    pos = x + n * off;
+    inside = false;
+}
+
+}  // namespace
+
 float estimateRadiance(const VolumeScene& scene, const Point3f& o, const Vector3f& d, int ch,
                        Pcg32& rng, const TransportOptions& options, TrackingStats* stats) {
     const MeshBoundary& boundary = scene.boundary();
     const GridMedium& medium = scene.medium();
-    const bool dielectric = options.boundary == BoundaryModel::Dielectric;
     float radiance = 0.f;
     float beta = 1.f;
     Point3f pos = o;
@@ -394,35 +457,12 @@ float estimateRadiance(const VolumeScene& scene, const Point3f& o, const Vector3
             const Point3f x = pos + dir * tHit;
             const Normal3f n = hit->normal;
             const float off = boundary.offsetAt(x);
-            const float cosI = -glm::dot(dir, n);
-            if (cosI < 0.f) {  // reached the surface from inside (camera inside the object)
-                inside = true;
-                continue;
-            }
-            if (!dielectric) {
-                pos = x - n * off;
-                inside = true;
-                continue;
-            }
-            const float f = fresnelDielectric(cosI, options.eta);
-            if (specularChain && options.subsurfaceOnly) {
-                beta *= 1.f - f;  // deterministic split: keep only the transmitted part
-            } else if (rng.uniform() < f) {
-                dir = glm::normalize(reflect(dir, n));
-                pos = x + n * off;
-                continue;
-            }
-            const std::optional<Vector3f> t = refract(dir, n, options.eta);
-            if (!t)
-                break;  // impossible entering a denser medium; rounding guard
-            // Radiance is not symmetric under refraction: L_outside = T·L_inside/η²
-            // (Veach 1997 §5.2; pbrt-v3 §8.2.3), so a camera path entering the object
-            // carries 1/η². The straight shadow connections need no factor: for a point
-            // light the refracted fluence equals T·I/d² to first order in depth/d.
-            beta /= options.eta * options.eta;
-            dir = *t;
-            pos = x - n * off;
-            inside = true;
+            double w = 1.0;
+            const bool alive =
+                enterSurface(x, n, off, specularChain, pos, dir, inside, w, rng, options);
+            beta *= float(w);
+            if (!alive)
+                break;
             continue;
         }
         const std::optional<SurfaceHit> exit = boundary.intersect(pos, dir, 0.f, INF);
@@ -450,21 +490,9 @@ float estimateRadiance(const VolumeScene& scene, const Point3f& o, const Vector3
         const Point3f x = pos + dir * exit->t;
         const Normal3f n = exit->normal;
         const float off = boundary.offsetAt(x);
-        if (dielectric) {
-            const float cosO = std::abs(glm::dot(dir, n));
-            const float f = fresnelDielectric(cosO, 1.f / options.eta);
-            const std::optional<Vector3f> t =
-                rng.uniform() < f ? std::nullopt : refract(dir, -n, 1.f / options.eta);
-            if (!t) {
-                dir = glm::normalize(reflect(dir, n));
-                pos = x - n * off;
-                continue;
-            }
-            beta *= options.eta * options.eta;  // leaving: the inverse radiance scaling
-            dir = *t;
-        }
-        pos = x + n * off;
-        inside = false;
+        double w = 1.0;
+        exitSurface(x, n, off, pos, dir, inside, w, rng, options);
+        beta *= float(w);
     }
     return std::isfinite(radiance) ? radiance : 0.f;
 }
@@ -652,7 +680,6 @@ Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector
                         Pcg32& rng, const TransportOptions& options, TrackingStats* stats) {
     const MeshBoundary& boundary = scene.boundary();
     const GridMedium& medium = scene.medium();
-    const bool dielectric = options.boundary == BoundaryModel::Dielectric;
     hero = std::clamp(hero, 0, 2);
     Rgb radiance(0.f);
     SpectralWeights sw;
@@ -688,31 +715,8 @@ Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector
             const Point3f x = pos + dir * tHit;
             const Normal3f n = hit->normal;
             const float off = boundary.offsetAt(x);
-            const float cosI = -glm::dot(dir, n);
-            if (cosI < 0.f) {
-                inside = true;
-                continue;
-            }
-            if (!dielectric) {
-                pos = x - n * off;
-                inside = true;
-                continue;
-            }
-            const float f = fresnelDielectric(cosI, options.eta);
-            if (specularChain && options.subsurfaceOnly) {
-                scale *= 1.0 - f;
-            } else if (rng.uniform() < f) {
-                dir = glm::normalize(reflect(dir, n));
-                pos = x + n * off;
-                continue;
-            }
-            const std::optional<Vector3f> t = refract(dir, n, options.eta);
-            if (!t)
+            if (!enterSurface(x, n, off, specularChain, pos, dir, inside, scale, rng, options))
                 break;
-            scale /= double(options.eta) * options.eta;  // radiance scaling, see estimateRadiance
-            dir = *t;
-            pos = x - n * off;
-            inside = true;
             continue;
         }
         const std::optional<SurfaceHit> exit = boundary.intersect(pos, dir, 0.f, INF);
@@ -755,21 +759,7 @@ Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector
         const Point3f x = pos + dir * exit->t;
         const Normal3f n = exit->normal;
         const float off = boundary.offsetAt(x);
-        if (dielectric) {
-            const float cosO = std::abs(glm::dot(dir, n));
-            const float f = fresnelDielectric(cosO, 1.f / options.eta);
-            const std::optional<Vector3f> t =
-                rng.uniform() < f ? std::nullopt : refract(dir, -n, 1.f / options.eta);
-            if (!t) {
-                dir = glm::normalize(reflect(dir, n));
-                pos = x - n * off;
-                continue;
-            }
-            scale *= double(options.eta) * options.eta;  // leaving: inverse radiance scaling
-            dir = *t;
-        }
-        pos = x + n * off;
-        inside = false;
+        exitSurface(x, n, off, pos, dir, inside, scale, rng, options);
     }
     return isFinite(radiance) ? radiance : Rgb(0.f);
 }
