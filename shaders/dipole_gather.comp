@@ -27,6 +27,7 @@ uniform vec3 u_boundary;    // F_dr, C1, C2
 uniform int u_nImp;
 uniform int u_nUni;
 uniform float u_discQuantile;
+uniform float u_maxRadius;  // mm; > 0: only r ≤ u_maxRadius (GatherSettings::maxRadius)
 uniform int u_jacobian;
 uniform float u_maxJacobian;
 uniform int u_interleave;
@@ -77,16 +78,19 @@ void main() {
 
     vec3 sigT = b_material[2 * idx].xyz, sigS = b_material[2 * idx + 1].xyz;
     Profile prof[3];
+    vec3 masses[3];
     int channels[3];
     int channelCount = 0;
     float R = 0.0;
     for (int c = 0; c < 3; ++c) {
         prof[c] = makeProfile(u_model, max(sigT[c] - sigS[c], 0.0), sigS[c], u_boundary);
+        masses[c] = windowMasses(prof[c], u_maxRadius);
         if (prof[c].zr > 0.0) {
             channels[channelCount++] = c;
             R = max(R, sampleSourceRadius(prof[c].sigma, prof[c].zv, u_discQuantile));
         }
     }
+    if (u_maxRadius > 0.0) R = min(R, u_maxRadius);
     if (channelCount == 0) {
         b_exitance[idx] = vec4(0.0);
         return;
@@ -105,9 +109,8 @@ void main() {
             vec2 h = hammersley(uint(i), uint(u_nImp));
             float uSrc = fract(halton3(uint(i)) + s0.x);
             float uR = fract(h.x + s0.y), uPhi = fract(h.y + s0.z);
-            Profile p = prof[channels[i % channelCount]];
-            float z = uSrc < p.pReal ? p.zr : p.zv;
-            rPlane = sampleSourceRadius(p.sigma, z, uR);
+            int c = channels[i % channelCount];
+            rPlane = sampleWindowed(prof[c], masses[c], u_maxRadius, uSrc, uR);
             phi = 2.0 * PI * uPhi;
         } else {
             int j = i - u_nImp;
@@ -128,6 +131,7 @@ void main() {
         float denom = dot(dir, np);
         if (abs(denom) > 0.1) p = origin + dir * (dot(p - origin, np) / denom);
         float r = length(p - xo);
+        if (u_maxRadius > 0.0 && r > u_maxRadius) continue;  // outside the local-radius window
         float J = 1.0;
         if (u_jacobian != 0) {
             float cosA = abs(dot(np, towardEye(p)));
@@ -141,7 +145,8 @@ void main() {
         }
         float denomPdf = rPlane <= R ? float(u_nUni) * pUniform : 0.0;
         for (int c = 0; c < 3; ++c)
-            if (nChan[c] > 0) denomPdf += float(nChan[c]) * pdfArea(prof[c], rPlane);
+            if (nChan[c] > 0)
+                denomPdf += float(nChan[c]) * pdfWindowed(prof[c], masses[c], u_maxRadius, rPlane);
         if (!(denomPdf > 0.0)) continue;
         vec3 E = b_irradiance[j].xyz;
         float w = J / denomPdf;

@@ -26,6 +26,8 @@ layout(binding = 4) uniform sampler3D u_volumeSigmaS;  // rgb σs′ (mm⁻¹)
 layout(rgba32f, binding = 0) writeonly uniform image2D o_irradiance;
 layout(rgba32f, binding = 1) writeonly uniform image2D o_sigmaT;
 layout(rgba32f, binding = 2) writeonly uniform image2D o_sigmaS;
+// min and max of R′ over the object's pixels (floats ≥ 0 order like their bit patterns).
+layout(std430, binding = 3) buffer RadiusBlock { uint b_minRadius; uint b_maxRadius; };
 
 uniform ivec2 u_size;
 uniform int u_lightCount;
@@ -38,6 +40,7 @@ uniform int u_resolution;
 uniform int u_model;  // 0 dipole, 1 better dipole
 uniform vec3 u_boundary;  // F_dr, C1, C2
 uniform float u_discQuantile;
+uniform float u_maxRadius;  // mm; > 0: R′ is capped at the local-radius window
 uniform int u_meshId;  // −1: every mesh; else only pixels of this mesh (G-buffer normal.a − 1)
 
 void main() {
@@ -79,6 +82,11 @@ void main() {
     for (int c = 0; c < 3; ++c) {
         Profile prof = makeProfile(u_model, max(sigT[c] - sigS[c], 0.0), sigS[c], u_boundary);
         if (prof.zr > 0.0) R = max(R, sampleSourceRadius(prof.sigma, prof.zv, u_discQuantile));
+    }
+    if (u_maxRadius > 0.0) R = min(R, u_maxRadius);
+    if (R > 0.0) {
+        atomicMin(b_minRadius, floatBitsToUint(R));
+        atomicMax(b_maxRadius, floatBitsToUint(R));
     }
     imageStore(o_irradiance, xy, vec4(E, pos.w));
     imageStore(o_sigmaT, xy, vec4(sigT, 0.0));

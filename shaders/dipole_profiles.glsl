@@ -79,3 +79,95 @@ float solveLogU(float c, float xi) {
 float sampleSourceRadius(float sigma, float z, float xi) {
     return z * sqrt(expm1Safe(2.0 * solveLogU(sigma * z, xi)));
 }
+
+// Frisvad, Hachisuka & Kjeldsen 2014 directional dipole S_d (ACM TOG 34(1):5), float mirror of
+// lucent::dipole::DirectionalDipole (Profiles.cpp; equations and clamps documented there).
+// moments = (C₁(η), C₂(η), C₁(1/η)) (Fresnel moments, η-only: computed once on the CPU).
+struct Dirpole {
+    float D, sigmaTr, sigmaTp, de, A, cPhi, cE, norm;
+    bool zero;
+};
+
+Dirpole makeDirpole(float sigma_a, float sigma_s, vec3 moments) {
+    Dirpole d = Dirpole(0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, true);
+    float st = sigma_a + sigma_s;
+    if (!(st > 0.0) || !(sigma_s > 0.0)) return d;  // zero profile (documented clamp)
+    d.zero = false;
+    d.sigmaTp = st;
+    d.D = (2.0 * sigma_a + sigma_s) / (3.0 * st * st);  // paper Sec. 4
+    d.sigmaTr = sqrt(sigma_a / d.D);
+    d.cPhi = 0.25 * (1.0 - 2.0 * moments.x);  // C_φ(η)
+    d.cE = 0.5 * (1.0 - 3.0 * moments.y);     // C_E(η)
+    d.A = (1.0 - d.cE) / (2.0 * d.cPhi);
+    d.de = 2.131 * d.D / sqrt(sigma_s / st);  // paper Eq. 21
+    float cPhiInv = 0.25 * (1.0 - 2.0 * moments.z);  // C_φ(1/η)
+    d.norm = 1.0 / (4.0 * cPhiInv) / (4.0 * 3.14159265358979 * 3.14159265358979);
+    return d;
+}
+
+// S′_d(x, ω, r): the ray-source diffusion term of Frisvad et al. 2014.
+float dirpoleSdPrime(Dirpole d, vec3 x, vec3 w, float r, vec3 no) {
+    float s = d.sigmaTr * r;
+    if (s > 80.0) return 0.0;  // e^{−s} underflows float
+    float r2 = r * r;
+    float xw = dot(x, w), wn = dot(w, no), xn = dot(x, no);
+    float fluence = d.cPhi * (r2 / d.D + 3.0 * (1.0 + s) * xw);
+    float flux = d.cE * (3.0 * d.D * (1.0 + s) * wn -
+                         ((1.0 + s) + 3.0 * d.D * (3.0 * (1.0 + s) + s * s) / r2 * xw) * xn);
+    return d.norm * exp(-s) / (r2 * r) * (fluence - flux);
+}
+
+// S_d(x_i, ω₁₂; x_o) in mm⁻² sr⁻¹ (ω₁₂ refracted direction of travel, n_i, n_o outward).
+float dirpoleSd(Dirpole d, vec3 xi, vec3 ni, vec3 w12, vec3 xo, vec3 no) {
+    if (d.zero) return 0.0;
+    vec3 x = xo - xi;
+    float r2 = dot(x, x);
+    // Modified tangent plane normal n_i* = x × (n_i × x)/|·| (n_i when x ∥ n_i or x = 0).
+    vec3 niStar = cross(x, cross(ni, x));
+    float len = length(niStar);
+    niStar = len > 1e-6 * max(r2, 1e-30) ? niStar / len : ni;
+    vec3 xv = xi + 2.0 * d.A * d.de * niStar;  // virtual source in the extrapolated plane
+    vec3 wv = w12 - 2.0 * dot(w12, niStar) * niStar;
+    float dv = length(xo - xv);
+    float mu0 = -dot(no, w12);
+    float dr2;
+    if (mu0 > 0.0) {
+        float xw = dot(x, w12);
+        float cosBeta = -sqrt(max(0.0, r2 - xw * xw) / (r2 + d.de * d.de));
+        dr2 = r2 + d.D * mu0 * (d.D * mu0 - 2.0 * d.de * cosBeta);
+    } else {
+        float l = 1.0 / (3.0 * d.sigmaTp);
+        dr2 = r2 + l * l;
+    }
+    float v = dirpoleSdPrime(d, x, w12, sqrt(dr2), no) - dirpoleSdPrime(d, xo - xv, wv, dv, no);
+    return (v > 0.0 && !isinf(v)) ? v : 0.0;  // clamp as the paper's §6.1 (NaN fails v > 0)
+}
+
+// P(radius ≤ r) of one source, 1 − (z/d)e^{−σ(d − z)} (seed 004 Eq. 6–7; Sampling.cpp).
+float sourceRadiusCdf(float sigma, float z, float r) {
+    float d = sqrt(r * r + z * z);
+    return 1.0 - (z / d) * exp(-sigma * (d - z));
+}
+
+// Local-radius window r ≤ R of the sampler (DipoleSampler::truncated; R ≤ 0: no window):
+// (F_real(R), F_virtual(R), F(R)) — the per-source kept masses and the mixture's.
+vec3 windowMasses(Profile p, float R) {
+    if (!(R > 0.0) || p.zr <= 0.0) return vec3(1.0);
+    float fr = sourceRadiusCdf(p.sigma, p.zr, R), fv = sourceRadiusCdf(p.sigma, p.zv, R);
+    return vec3(fr, fv, p.pReal * fr + (1.0 - p.pReal) * fv);
+}
+
+// A radius of the sampler conditioned on r ≤ R (masses from windowMasses; R ≤ 0: no window):
+// source s with P(s)F_s(R)/F(R), then F_s inverted on [0, F_s(R)).
+float sampleWindowed(Profile p, vec3 masses, float R, float uSrc, float uR) {
+    bool real = uSrc < p.pReal * masses.x / masses.z;
+    float z = real ? p.zr : p.zv;
+    float r = sampleSourceRadius(p.sigma, z, uR * (real ? masses.x : masses.y));
+    return R > 0.0 ? min(r, R) : r;
+}
+
+// The renormalised area density of sampleWindowed at radius r (0 beyond the window).
+float pdfWindowed(Profile p, vec3 masses, float R, float r) {
+    if (R > 0.0 && r > R) return 0.0;
+    return pdfArea(p, r) / masses.z;
+}

@@ -9,8 +9,20 @@
 // Each frame adds one estimate B_f (a new shift table) to a running sum; the output is the mean:
 //   L = F_t(η, ω_o) · (Σ_f B_f / N) / π   (Eq. 3), W/(mm²·sr).
 // Convergence statistics: atomic max of |B̄_N − B̄_{N−1}| and of B̄_N over pixels and channels.
+// Light views (seed 004 §7.1): the camera and the gathered light views split the pixel's sample
+// budget (viewSamples) and are combined by the balance heuristic with sample counts in
+// surface-area measure (dipole_lightview.glsl; docs/methods/dipole.md §3d); maxRadius > 0
+// truncates the samplers to the local window.
+// MULTI_VIEW 0 (a second program of the provider, used when no light view is gathered): the
+// camera gather alone, without the code of the view combination: on llvmpipe that code slowed
+// even the camera-only loop ≈ 2× (23 → 12 ms per frame on the back-lit scene at 256×192; a
+// branch on the view count did not avoid it, the cause was not isolated further).
+#ifndef MULTI_VIEW
+#define MULTI_VIEW 1
+#endif
 #include "dipole_profiles.glsl"
 #include "dipole_fresnel.glsl"
+#include "dipole_lightview.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -26,6 +38,17 @@ layout(rgba32f, binding = 1) writeonly uniform image2D u_target;  // renderer's 
 layout(std430, binding = 0) readonly buffer ShiftBlock { vec4 b_shift[]; };  // 2 per cell
 layout(std430, binding = 1) buffer StatsBlock { uint b_maxChange; uint b_maxMean; };
 
+// Light views gathered besides the camera (seed 004 §7.1), one array layer each.
+layout(binding = 5) uniform sampler2DArray u_lvPosition;    // xyz mm, a covered
+layout(binding = 6) uniform sampler2DArray u_lvNormal;      // outward unit normal
+layout(binding = 7) uniform sampler2DArray u_lvIrradiance;  // E (W/mm²), all lights, shadowed
+struct LightView {
+    mat4 clipFromWorld;
+    vec4 eyeOrtho;  // xyz centre of projection (mm); w 1 orthographic
+    vec4 viewDir;   // xyz unit direction the view looks
+};
+layout(std430, binding = 2) readonly buffer LightViewBlock { LightView b_views[]; };
+
 uniform mat4 u_clipFromWorld;
 uniform vec3 u_eye;
 uniform vec3 u_viewDir;
@@ -39,24 +62,34 @@ uniform int u_nUni;
 uniform int u_jacobian;
 uniform float u_maxJacobian;
 uniform int u_interleave;
+uniform float u_maxRadius;  // mm; > 0: only r ≤ u_maxRadius (ProviderSettings::maxRadius)
+uniform int u_lightViews;     // light views gathered (layers of u_lv*), 0: camera only
+uniform int u_lightViewSize;  // texels per side of each light view
 uniform int u_gather;      // 1: add one frame of samples; 0: only resolve the stored mean
 uniform int u_framesBefore;  // frames already in u_accum
 
 const float PI = 3.14159265358979;
 
-vec3 towardEye(vec3 p) { return u_ortho != 0 ? -normalize(u_viewDir) : normalize(u_eye - p); }
-
-// Pixel (GL rows, bottom first) containing p, computed like SurfaceBuffers::project (top-first).
-bool projectToPixel(vec3 p, out ivec2 pix) {
-    vec4 clip = u_clipFromWorld * vec4(p, 1.0);
-    if (!(clip.w > 0.0)) return false;
-    vec2 ndc = clip.xy / clip.w;
-    vec2 px = vec2((ndc.x * 0.5 + 0.5) * float(u_size.x), (0.5 - ndc.y * 0.5) * float(u_size.y));
-    if (px.x < 0.0 || px.y < 0.0 || px.x >= float(u_size.x) || px.y >= float(u_size.y)) return false;
-    ivec2 top = ivec2(px);
-    pix = ivec2(top.x, u_size.y - 1 - top.y);
-    return true;
+// Views (dipole_lightview.glsl): 0 the camera (G-buffer + the irradiance pass's E), 1.. the
+// light views gathered (seed 004 §7.1; layers of the u_lv* arrays, descriptors in b_views).
+mat4 viewClip(int v) { return v == 0 ? u_clipFromWorld : b_views[v - 1].clipFromWorld; }
+bool viewOrtho(int v) { return v == 0 ? u_ortho != 0 : b_views[v - 1].eyeOrtho.w > 0.5; }
+vec3 viewEye(int v) { return v == 0 ? u_eye : b_views[v - 1].eyeOrtho.xyz; }
+vec3 viewDirection(int v) { return v == 0 ? u_viewDir : b_views[v - 1].viewDir.xyz; }
+ivec2 viewSize(int v) { return v == 0 ? u_size : ivec2(u_lightViewSize); }
+vec4 viewPosition(int v, ivec2 pix) {
+    return v == 0 ? texelFetch(u_position, pix, 0) : texelFetch(u_lvPosition, ivec3(pix, v - 1), 0);
 }
+vec3 viewNormal(int v, ivec2 pix) {
+    return v == 0 ? texelFetch(u_normal, pix, 0).xyz
+                  : texelFetch(u_lvNormal, ivec3(pix, v - 1), 0).xyz;
+}
+vec3 viewIrradiance(int v, ivec2 pix) {
+    return v == 0 ? texelFetch(u_irradiance, pix, 0).rgb
+                  : texelFetch(u_lvIrradiance, ivec3(pix, v - 1), 0).rgb;
+}
+
+vec3 towardEye(vec3 p) { return towardEyeOf(0, p); }
 
 float radicalInverse2(uint i) { return float(bitfieldReverse(i)) * 2.3283064365386963e-10; }
 vec2 hammersley(uint i, uint n) { return vec2((float(i) + 0.5) / float(n), radicalInverse2(i)); }
@@ -70,6 +103,38 @@ float halton3(uint i) {
     return r;
 }
 
+// The pixel's sampling techniques (set by gatherExitance). Channel arrays are indexed by
+// constants only where it matters (llvmpipe lowers dynamic indices of private arrays to
+// per-lane selects).
+Profile g_prof[3];
+vec3 g_masses[3];
+int g_channels[3];  // the valid channels, in order
+int g_slot[3];      // channel → its round-robin slot in g_channels (−1: invalid)
+int g_channelCount;
+float g_R, g_pUniform;
+
+// View v's share of the pixel's budget (dipole::viewSamples, docs/methods/dipole.md §3d): the
+// nImp + nUni samples (importance first) go to view g mod views; a view left with none draws one
+// importance sample. Returns (importance, uniform).
+ivec2 viewSamples(int nImp, int nUni, int views, int v) {
+    int imp = nImp > v ? (nImp - v - 1) / views + 1 : 0;
+    int total = nImp + nUni > v ? (nImp + nUni - v - 1) / views + 1 : 0;
+    return total == 0 ? ivec2(1, 0) : ivec2(imp, total - imp);
+}
+
+// Multi-sample balance heuristic over the techniques of a view with `counts` samples
+// (Veach 1997 Eq. 9.13; seed 004 §6.1): Σ_t n_t p_t at tangent-plane radius r′, the importance
+// samples assigned to the valid channels round robin.
+float techniquePdf(ivec2 counts, float rPlane) {
+    float sum = rPlane <= g_R ? float(counts.y) * g_pUniform : 0.0;
+    for (int c = 0; c < 3; ++c) {
+        int s = g_slot[c];
+        int n = s >= 0 && counts.x > s ? (counts.x - s - 1) / g_channelCount + 1 : 0;
+        if (n > 0) sum += float(n) * pdfWindowed(g_prof[c], g_masses[c], u_maxRadius, rPlane);
+    }
+    return sum;
+}
+
 // One estimate of B(x_o) (Eq. 4, W/mm²) at pixel xy with the shifts of its interleave cell.
 vec3 gatherExitance(ivec2 xy, vec3 xo, vec3 no) {
     float sgn = no.z >= 0.0 ? 1.0 : -1.0;  // Duff et al. 2017 basis (lucent::Frame)
@@ -79,74 +144,76 @@ vec3 gatherExitance(ivec2 xy, vec3 xo, vec3 no) {
     vec3 ft = vec3(bb, sgn + no.y * no.y * a, -no.y);
 
     vec3 sigT = texelFetch(u_sigmaT, xy, 0).rgb, sigS = texelFetch(u_sigmaS, xy, 0).rgb;
-    Profile prof[3];
-    int channels[3];
-    int channelCount = 0;
-    float R = texelFetch(u_sigmaS, xy, 0).a;  // disc radius R′, from the irradiance pass
+    g_channelCount = 0;
+    g_R = texelFetch(u_sigmaS, xy, 0).a;  // min(R′, maxRadius), from the irradiance pass
     for (int c = 0; c < 3; ++c) {
-        prof[c] = makeProfile(u_model, max(sigT[c] - sigS[c], 0.0), sigS[c], u_boundary);
-        if (prof[c].zr > 0.0) channels[channelCount++] = c;
+        g_prof[c] = makeProfile(u_model, max(sigT[c] - sigS[c], 0.0), sigS[c], u_boundary);
+        g_masses[c] = windowMasses(g_prof[c], u_maxRadius);
+        g_slot[c] = -1;
+        if (g_prof[c].zr > 0.0) {
+            g_slot[c] = g_channelCount;
+            g_channels[g_channelCount++] = c;
+        }
     }
-    if (channelCount == 0) return vec3(0.0);
-    int nChan[3] = int[3](0, 0, 0);
-    for (int i = 0; i < u_nImp; ++i) nChan[channels[i % channelCount]]++;
-    float pUniform = (u_nUni > 0 && R > 0.0) ? 1.0 / (PI * R * R) : 0.0;
+    if (g_channelCount == 0) return vec3(0.0);
+    g_pUniform = g_R > 0.0 ? 1.0 / (PI * g_R * g_R) : 0.0;
     int k = u_interleave;
     int cell = ((u_size.y - 1 - xy.y) % k) * k + (xy.x % k);
     vec4 s0 = b_shift[2 * cell], s1 = b_shift[2 * cell + 1];
+    bool jac = u_jacobian != 0;
 
     vec3 B = vec3(0.0);
-    int total = u_nImp + (R > 0.0 ? u_nUni : 0);
-    for (int i = 0; i < total; ++i) {
-        float rPlane, phi;
-        if (i < u_nImp) {
-            vec2 h = hammersley(uint(i), uint(u_nImp));
-            float uSrc = fract(halton3(uint(i)) + s0.x);
-            float uR = fract(h.x + s0.y), uPhi = fract(h.y + s0.z);
-            Profile p = prof[channels[i % channelCount]];
-            float z = uSrc < p.pReal ? p.zr : p.zv;
-            rPlane = sampleSourceRadius(p.sigma, z, uR);
-            phi = 2.0 * PI * uPhi;
-        } else {
-            int j = i - u_nImp;
-            vec2 h = hammersley(uint(j), uint(u_nUni));
-            rPlane = R * sqrt(fract(h.x + s0.w));
-            phi = 2.0 * PI * fract(h.y + s1.x);
-        }
-        vec3 pPlane = xo + rPlane * (cos(phi) * fs + sin(phi) * ft);
-        ivec2 pix;
-        if (!projectToPixel(pPlane, pix)) continue;
-        vec4 q = texelFetch(u_position, pix, 0);
-        if (q.w == 0.0) continue;
-        vec3 E = texelFetch(u_irradiance, pix, 0).rgb;
-        if (E == vec3(0.0)) continue;  // unlit sample: contributes exactly 0
-        // The eye ray through p′ meets the fetched pixel's tangent plane (§6.2).
-        vec3 p = q.xyz;
-        vec3 np = normalize(texelFetch(u_normal, pix, 0).xyz);
-        vec3 origin = u_ortho != 0 ? pPlane : u_eye;
-        vec3 dir = u_ortho != 0 ? normalize(u_viewDir) : normalize(pPlane - u_eye);
-        float denom = dot(dir, np);
-        if (abs(denom) > 0.1) p = origin + dir * (dot(p - origin, np) / denom);
-        float r = length(p - xo);
-        // Eq. 8–9: |dA_p/dA_p′| = (cos α′/cos α)(d²/d′²), clamped.
-        float J = 1.0;
-        if (u_jacobian != 0) {
-            float cosA = abs(dot(np, towardEye(p)));
-            float cosAp = abs(dot(no, towardEye(pPlane)));
-            float ratio = 1.0;
-            if (u_ortho == 0) {
-                float d = length(u_eye - p), dp = length(u_eye - pPlane);
-                ratio = dp > 0.0 ? (d * d) / (dp * dp) : 1.0;
+    int views = MULTI_VIEW != 0 ? 1 + u_lightViews : 1;
+    int nUni = g_R > 0.0 ? u_nUni : 0;
+    for (int v = 0; v < views; ++v) {
+        // View v's share of the budget: its own points, rotated by v times the golden ratio.
+        ivec2 counts = viewSamples(u_nImp, nUni, views, v);
+        float rot = float(v) * 0.61803398875;
+        for (int i = 0; i < counts.x + counts.y; ++i) {
+            float rPlane, phi;
+            if (i < counts.x) {
+                vec2 h = hammersley(uint(i), uint(counts.x));
+                float uSrc = fract(halton3(uint(i)) + s0.x + rot);
+                float uR = fract(h.x + s0.y + rot), uPhi = fract(h.y + s0.z + rot);
+                int c = g_channels[i % g_channelCount];
+                rPlane = sampleWindowed(g_prof[c], g_masses[c], u_maxRadius, uSrc, uR);
+                phi = 2.0 * PI * uPhi;
+            } else {
+                int j = i - counts.x;
+                vec2 h = hammersley(uint(j), uint(counts.y));
+                rPlane = g_R * sqrt(fract(h.x + s0.w + rot));
+                phi = 2.0 * PI * fract(h.y + s1.x + rot);
             }
-            J = cosA > 1e-6 ? min(u_maxJacobian, cosAp / cosA * ratio) : u_maxJacobian;
+            vec3 pPlane = xo + rPlane * (cos(phi) * fs + sin(phi) * ft);
+            ViewHit hit;
+            if (!lookUp(v, pPlane, hit)) continue;
+            vec3 E = viewIrradiance(v, hit.pix);
+            if (E == vec3(0.0)) continue;  // unlit sample: contributes exactly 0
+            float r = length(hit.p - xo);
+            if (u_maxRadius > 0.0 && r > u_maxRadius) continue;  // outside the local window
+            float J = areaJacobian(v, hit.p, hit.n, pPlane, no, jac, u_maxJacobian);
+            if (!(J > 0.0)) continue;
+            float own = techniquePdf(counts, rPlane);
+            if (!(own > 0.0)) continue;
+            // Balance heuristic across the views' techniques in surface-area measure (seed 004
+            // §7.1): w = 1/Σ_j q_j, q_j = Σ_t n_jt p_t(r′_j)/J_j over the views j in which hit.p
+            // is visible (q_v = own/J); one view: J/Σ_t n_t p_t. The MULTI_VIEW 0 program has
+            // no code for the other views (see the top of the file).
+            float sum = own / J;
+#if MULTI_VIEW
+            float fp = pixelFootprint(v, hit.p);
+            for (int m = 1; m < views; ++m) {
+                int j = (v + m) % views;
+                vec3 pj;
+                if (!visibleIn(j, hit.p, fp) || !tangentPlanePoint(j, hit.p, xo, no, pj)) continue;
+                float Jj = areaJacobian(j, hit.p, hit.n, pj, no, jac, u_maxJacobian);
+                ivec2 countsJ = viewSamples(u_nImp, nUni, views, j);
+                if (Jj > 0.0) sum += techniquePdf(countsJ, length(pj - xo)) / Jj;
+            }
+#endif
+            float w = 1.0 / sum;
+            for (int c = 0; c < 3; ++c) B[c] += rd(g_prof[c], r) * E[c] * w;
         }
-        // Balance heuristic over channel techniques and the disc: weight/pdf = 1/Σ_t n_t p_t.
-        float denomPdf = rPlane <= R ? float(u_nUni) * pUniform : 0.0;
-        for (int c = 0; c < 3; ++c)
-            if (nChan[c] > 0) denomPdf += float(nChan[c]) * pdfArea(prof[c], rPlane);
-        if (!(denomPdf > 0.0)) continue;
-        float w = J / denomPdf;
-        for (int c = 0; c < 3; ++c) B[c] += rd(prof[c], r) * E[c] * w;
     }
     return B;
 }

@@ -7,10 +7,10 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Parallel.h>
-#include <lucent/core/Random.h>
 #include <lucent/core/Timer.h>
 #include <lucent/dipole/Profiles.h>
 #include <lucent/gpu/GlContext.h>
+#include <lucent/sslpv/SslpvBench.h>
 #include <lucent/sslpv/SslpvGl.h>
 #include <lucent/sslpv/SslpvProvider.h>
 #include <lucent/sslpv/SslpvRenderer.h>
@@ -20,7 +20,6 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
-#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,38 +41,14 @@ double median(std::vector<double> v) {
     return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
-/// The paper's configuration (§5, Table 1): every cell of the N³ grid is material and is
-/// propagated (no sinks), light injected on the top face. Heterogeneous: per-cell σt, σs′, g
-/// drawn from a seeded RNG, so the per-cell factor arrays are read every step.
-CoarseMaterial benchMaterial(int n, bool heterogeneous) {
-    CoarseMaterial m;
-    m.spec.resolution = n;
-    m.spec.voxelSize = 1.f;
-    const size_t count = m.spec.voxelCount();
-    m.insideFraction.assign(count, 1.f);
-    Pcg32 rng(1234);
-    for (int c = 0; c < 3; ++c) {
-        m.sigma_t[c].assign(count, 1.f);
-        m.sigma_s[c].assign(count, 0.8f);
-        m.g[c].assign(count, 0.2f);
-        if (heterogeneous)
-            for (size_t k = 0; k < count; ++k) {
-                m.sigma_t[c][k] = 0.5f + 1.5f * rng.uniform();
-                m.sigma_s[c][k] = m.sigma_t[c][k] * rng.uniform();
-                m.g[c][k] = 1.6f * rng.uniform() - 0.8f;
-            }
-    }
-    m.homogeneous = !heterogeneous;
-    return m;
-}
-
 int runFit(const Args& args);
 
 int runBench(const std::vector<std::string>& argv) {
-    const Args args(argv,
-                    {"grid", "steps", "sh", "threads", "repeats", "eta", "linear", "diffusion",
-                     "iterations", "transport", "fit", "gain", "per-step", "per-step-transport"},
-                    {"heterogeneous", "gl", "fp16", "dense", "json", "search", "solve-beta"});
+    const Args args(
+        argv,
+        {"grid", "steps", "sh", "threads", "repeats", "eta", "linear", "diffusion", "iterations",
+         "transport", "fit", "gain", "per-step", "per-step-transport", "scene"},
+        {"heterogeneous", "gl", "fp16", "dense", "json", "search", "solve-beta"});
     if (args.positional().size() == 1 && args.positional().front() == "sslpv-fit")
         return runFit(args);
     if (args.positional().size() != 1 || args.positional().front() != "sslpv")
@@ -88,19 +63,16 @@ int runBench(const std::vector<std::string>& argv) {
     if (args.has("fp16") && !gl)
         LUCENT_THROW(ValueError, "--fp16 needs --gl");
     const ThreadLimit limit(threads);
+    const SslpvBenchScene scene = parseSslpvBenchScene(args.valueOr("scene", "cube"));
 
+    SslpvBenchSetup setup = makeSslpvBenchSetup(scene, n, het);
     SslpvSolver solver({.order = order,
                         .maxSteps = steps,
                         .skipAccumulateSteps = 0,
-                        .removeExitant = false,
+                        .removeExitant = setup.sinks,
                         .skipEmptySlices = !args.has("dense")});
-    solver.setMaterial(benchMaterial(n, het), 1.3f);
-    std::vector<SslpvInjectionSample> texels;
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x)
-            texels.push_back({Point3f(x + 0.5f, y + 0.5f, float(n)), Normal3f(0, 0, 1),
-                              glm::normalize(Vector3f(0.3f, 0.1f, -1.f)), Rgb(1.f)});
-    solver.setInjectionSamples(std::move(texels));
+    solver.setMaterial(setup.material, setup.eta);
+    solver.setInjectionSamples(std::move(setup.texels));
 
     // Warm-up, then repeated re-propagations (what a paint stroke triggers).
     for (int i = 0; i < 3; ++i) {
@@ -118,48 +90,19 @@ int runBench(const std::vector<std::string>& argv) {
     }
     const double cpuPerSolve = (cpuMs() - cpu0) / repeats;
 
-    // Bandwidth floor, same run, same threads: the least traffic one step can have without the
-    // stencil — stream the source planes into the destination (read + write) and add them into
-    // the accumulation planes (read + read + write), plus reading the factor planes when
-    // heterogeneous. Same plane sizes as the solver's grids.
-    const size_t plane = size_t(n + 2) * (n + 2) * (n + 2);
-    const size_t planes = size_t(3) * shCount(order);
-    const size_t factorPlanes = het ? 3 * (order + 1) : 0;
-    std::vector<float> src(plane * planes, 1.f), dst(plane * planes), acc(plane * planes),
-        fac(std::max<size_t>(plane * factorPlanes, 1), 0.5f);
-    std::vector<double> floorMs;
-    volatile float sink = 0.f;
-    for (int i = 0; i < repeats + 3; ++i) {
-        const Timer t;
-        for (int s = 0; s < steps; ++s) {
-            parallelFor(
-                0, int64_t(planes),
-                [&](int64_t b, int64_t e) {
-                    for (int64_t p = b; p < e; ++p) {
-                        const float* __restrict a = &src[size_t(p) * plane];
-                        float* __restrict d = &dst[size_t(p) * plane];
-                        float* __restrict c = &acc[size_t(p) * plane];
-                        std::memcpy(d, a, plane * sizeof(float));
-                        for (size_t k = 0; k < plane; ++k)
-                            c[k] += a[k];
-                    }
-                },
-                1);
-            if (het) {
-                float f = 0.f;
-                for (size_t k = 0; k < fac.size(); k += 16)
-                    f += fac[k];  // one read per line
-                sink = sink + f;
-            }
-            std::swap(src, dst);
-        }
-        if (i >= 3)
-            floorMs.push_back(t.elapsedMs());
-    }
-    (void)sink;
+    // Bandwidth floor, same run, same threads: the least traffic one dense step can have
+    // without the stencil (SslpvBench.h: stream the source planes into the destination and
+    // add them into the accumulation planes, plus the factor planes when heterogeneous).
+    const double floorMs = sslpvBandwidthFloorMs(n, order, het, steps, repeats);
+    const SslpvStats& st = solver.stats();
+    double activeMean = 0.0;
+    for (int a : st.activeBricksPerStep)
+        activeMean += a;
+    activeMean /= std::max<size_t>(st.activeBricksPerStep.size(), 1);
+    const double cellsPerStep = double(st.cellsComputed) / std::max(st.stepsUsed, 1);
 
     // GL compute path: the same propagation on the GPU (injection and factors from the CPU).
-    double glGpuMs = 0.0, glCpuMs = 0.0;
+    double glGpuMs = 0.0, glCpuMs = 0.0, glReadbackMs = 0.0;
     if (gl) {
         std::string reason;
         if (!gpu::GlContext::isHeadlessAvailable(&reason))
@@ -169,44 +112,60 @@ int runBench(const std::vector<std::string>& argv) {
                                                 : SslpvGlStorage::Float32);
         const int glRepeats = std::max(3, std::min(repeats, 10));  // llvmpipe is slow
         prop.propagate(solver);                                    // warm-up (shader JIT)
-        std::vector<double> g, c;
+        // Steady state: persistent buffers, nothing changed to upload, no read-back; then the
+        // read-back a CPU consumer would add, timed separately.
+        std::vector<double> g, c, r, u;
         for (int i = 0; i < glRepeats; ++i) {
+            const Timer wall;
             prop.propagate(solver);
+            c.push_back(wall.elapsedMs());
             g.push_back(prop.timings().propagateGpuMs);
-            c.push_back(prop.timings().uploadCpuMs + prop.timings().propagateCpuMs +
-                        prop.timings().readbackCpuMs);
+            u.push_back(prop.timings().uploadCpuMs);
+            (void)prop.accumulation();
+            r.push_back(prop.timings().readbackCpuMs);
         }
         glGpuMs = median(g);
         glCpuMs = median(c);
+        glReadbackMs = median(r);
         prop.destroy();
-        std::printf("%sGL %s (%s): propagation %.3f ms GPU timer, %.3f ms with upload + readback\n",
-                    args.has("json") ? "# " : "", ctx->renderer().c_str(),
-                    args.has("fp16") ? "fp16" : "fp32", glGpuMs, glCpuMs);
+        std::printf(
+            "%sGL %s (%s): propagation %.3f ms GPU timer, %.3f ms wall per propagate (input "
+            "diff/upload %.3f ms), read-back when asked %.3f ms\n",
+            args.has("json") ? "# " : "", ctx->renderer().c_str(),
+            args.has("fp16") ? "fp16" : "fp32", glGpuMs, glCpuMs, median(u), glReadbackMs);
     }
 
     const double msSolve = median(solveMs);
     const double msSteps = median(stepsMs);
     const double msPerStep = msSteps / steps;
-    const double floorPerStep = median(floorMs) / steps;
+    const double floorPerStep = floorMs / steps;
     const double paperMs = 1.67;  // GTX 580, 32³, 8 steps, heterogeneous (Table 1, Fig. 6)
     if (args.has("json")) {
         std::printf(
-            "{\"benchmark\": \"sslpv\", \"grid\": %d, \"steps\": %d, \"sh_order\": %d, "
+            "{\"benchmark\": \"sslpv\", \"scene\": \"%s\", \"grid\": %d, \"steps\": %d, "
+            "\"sh_order\": %d, "
             "\"heterogeneous\": %s, \"dense\": %s, \"threads\": %d, \"repeats\": %d, "
+            "\"brick_count\": %d, \"active_bricks_per_step\": %.1f, "
+            "\"cells_per_step\": %.0f, "
             "\"ms_per_solve\": %.4f, "
             "\"cpu_ms_per_solve\": %.4f, "
             "\"ms_propagation\": %.4f, \"ms_per_step\": %.5f, \"floor_ms_per_step\": %.5f, "
             "\"ratio_to_floor\": %.3f, \"gl_gpu_ms\": %.4f, \"gl_total_ms\": %.4f, "
+            "\"gl_readback_ms\": %.4f, "
             "\"paper_ms_gtx580_32_8_het\": %.2f}\n",
-            n, steps, order, het ? "true" : "false", args.has("dense") ? "true" : "false", threads,
-            repeats, msSolve, cpuPerSolve, msSteps, msPerStep, floorPerStep,
-            msPerStep / floorPerStep, glGpuMs, glCpuMs, paperMs);
+            sslpvBenchSceneName(scene), n, steps, order, het ? "true" : "false",
+            args.has("dense") ? "true" : "false", threads, repeats, st.brickCount, activeMean,
+            cellsPerStep, msSolve, cpuPerSolve, msSteps, msPerStep, floorPerStep,
+            msPerStep / floorPerStep, glGpuMs, glCpuMs, glReadbackMs, paperMs);
     } else {
         std::printf(
-            "SSLPV CPU propagation: %d^3 cells, %d steps, SH order %d, %s, %s, %d "
+            "SSLPV CPU propagation: scene %s, %d^3 cells, %d steps, SH order %d, %s, %s, %d "
             "thread(s)\n",
-            n, steps, order, het ? "heterogeneous" : "homogeneous",
-            args.has("dense") ? "dense" : "empty slices skipped", threads);
+            sslpvBenchSceneName(scene), n, steps, order, het ? "heterogeneous" : "homogeneous",
+            args.has("dense") ? "dense" : "active bricks", threads);
+        std::printf("  bricks (%dx%dx%d cells) per step: %.1f of %d active, %.0f cells computed\n",
+                    SSLPV_BRICK_X, SSLPV_BRICK_Y, SSLPV_BRICK_Z, activeMean, st.brickCount,
+                    cellsPerStep);
         std::printf("  median over %d solves after warm-up\n", repeats);
         std::printf("  solve (factors + propagation): %.3f ms wall, %.3f ms CPU (all threads)\n",
                     msSolve, cpuPerSolve);
@@ -555,29 +514,33 @@ ImageRgb renderSslpvMethod(const Scene& scene, bool subsurfaceOnly, const Args& 
 extern const Command benchCommand;
 const Command benchCommand{
     "bench", "time the SSLPV propagation against a bandwidth floor; fit its calibrated mode",
-    "usage: lucent-cli bench sslpv [--grid N] [--steps K] [--sh 1|2] [--heterogeneous]\n"
-    "                              [--dense] [--threads T] [--repeats R] [--gl [--fp16]]\n"
-    "                              [--json]\n"
+    "usage: lucent-cli bench sslpv [--scene cube|sphere|shell|spot] [--grid N] [--steps K]\n"
+    "                              [--sh 1|2] [--heterogeneous] [--dense] [--threads T]\n"
+    "                              [--repeats R] [--gl [--fp16]] [--json]\n"
     "\n"
-    "Times repeated SSLPV solves (per-cell factors + propagation) on an N^3 grid whose cells\n"
-    "are all material (the paper's set-up, light injected on one face), after 3 warm-up\n"
-    "solves, and prints medians next to a memory-bandwidth floor measured in the same run\n"
-    "(streaming the same planes: copy + accumulate, per step).\n"
+    "Times repeated SSLPV solves (per-cell factors + propagation) on an N^3 grid of 1 mm\n"
+    "cells after 3 warm-up solves, and prints medians next to a memory-bandwidth floor\n"
+    "measured in the same run (streaming the same planes: copy + accumulate, per step).\n"
     "\n"
+    "  --scene S         cube: every cell material, top face lit (the paper's set-up,\n"
+    "                    default); sphere: ball of radius 0.45 N with sinks lit from above;\n"
+    "                    shell: hollow ball 0.38-0.45 N; spot: cube lit on a 4x4-cell spot\n"
     "  --grid N          cells per axis, [4, 256] (default 32)\n"
     "  --steps K         propagation steps, [1, 4096] (default 8)\n"
     "  --sh 1|2          spherical-harmonics order: 4 or 9 coefficients (default 1)\n"
     "  --heterogeneous   random per-cell material (per-cell factor arrays)\n"
-    "  --dense           compute every cell every step (no empty-slice skipping: the\n"
-    "                    paper's dense GPU work)\n"
+    "  --dense           compute every cell of the object's box every step (no active-brick\n"
+    "                    skipping: the paper's dense GPU work)\n"
     "  --threads T       worker threads (default: all)\n"
     "  --repeats R       timed solves (default 50)\n"
     "  --gl              also time the GL 4.5 compute propagation (headless EGL context;\n"
-    "                    GPU timer queries), fp32 grids\n"
+    "                    GPU timer queries; persistent buffers, so repeats upload nothing;\n"
+    "                    the read-back is timed separately), fp32 grids\n"
     "  --fp16            with --gl: fp16 grids\n"
     "  --json            one JSON object: ms_per_solve, ms_propagation, ms_per_step,\n"
-    "                    floor_ms_per_step, ratio_to_floor (gl_gpu_ms, gl_total_ms: 0 without "
-    "--gl)\n"
+    "                    floor_ms_per_step, ratio_to_floor, brick_count,\n"
+    "                    active_bricks_per_step, cells_per_step (gl_gpu_ms, gl_total_ms,\n"
+    "                    gl_readback_ms: 0 without --gl)\n"
     "\n"
     "usage: lucent-cli bench sslpv-fit [--grid N] [--sh 1|2] [--eta E] [--linear U]\n"
     "                                  [--transport T] [--diffusion K] [--per-step P]\n"

@@ -41,6 +41,8 @@ namespace lucent::cli {
 ImageRgb renderDipoleMethod(const Scene& scene, const std::string& model, bool subsurfaceOnly,
                             const Args& args);
 #endif
+/// Defined in Command_render.cpp: dipole + SSLPV (as `lucent-cli render --method combined`).
+ImageRgb renderCombinedMethod(const Scene& scene, bool subsurfaceOnly, const Args& args);
 #ifdef LUCENT_CLI_HAS_BENCH
 /// Defined in Command_bench.cpp: SSLPV (as `lucent-cli render --method sslpv`).
 ImageRgb renderSslpvMethod(const Scene& scene, bool subsurfaceOnly, const Args& args);
@@ -123,6 +125,12 @@ Variant parseVariant(const std::string& entry) {
         if (!v.suffix.empty())
             badSuffix("none");
         v.settings = sppSettings({8, 32, 128});
+    } else if (v.method == "combined") {
+        if (v.suffix == "cpu")
+            v.extraArgv = {"--cpu"};
+        else if (!v.suffix.empty())
+            badSuffix("cpu");
+        v.settings = sppSettings({8, 32, 128});
     } else if (v.method == "reference") {
         if (!v.suffix.empty())
             badSuffix("none");
@@ -130,7 +138,7 @@ Variant parseVariant(const std::string& entry) {
     } else {
         LUCENT_THROW(ValueError, "--methods: unknown method '", v.method, "' in '", entry,
                      "' (known: direct, sslpv[:paper|:calibrated|:gl], dipole[:cpu|:gl], "
-                     "better-dipole[:cpu|:gl], dirpole, reference)");
+                     "better-dipole[:cpu|:gl], dirpole, combined[:cpu], reference)");
     }
     return v;
 }
@@ -184,6 +192,8 @@ ImageRgb renderVariant(const Scene& scene, const Variant& v, const Setting& s,
     if (v.method == "dipole" || v.method == "better-dipole" || v.method == "dirpole")
         return renderDipoleMethod(scene, v.method, subsurfaceOnly, args);
 #endif
+    if (v.method == "combined")
+        return renderCombinedMethod(scene, subsurfaceOnly, args);
     LUCENT_THROW(ValueError, "method ", v.method, " is not built into this lucent-cli");
 }
 
@@ -784,7 +794,7 @@ int runEvaluate(const std::vector<std::string>& argv) {
     for (const std::string& name :
          splitComma(args.valueOr("methods",
                                  "direct,sslpv:paper,sslpv:calibrated,dipole,"
-                                 "better-dipole,dirpole")))
+                                 "better-dipole,dirpole,combined")))
         variants.push_back(parseVariant(name));
     if (variants.empty())
         LUCENT_THROW(ValueError, "--methods: no method given");
@@ -957,7 +967,8 @@ const Command evaluateCommand{
     "                      direct                  one setting\n"
     "                      sslpv[:paper|:calibrated|:gl]   grid 16/32/64, steps = grid\n"
     "                      dipole, better-dipole [:cpu|:gl]   8/32/128 spp\n"
-    "                      dirpole                 8/32/128 spp (directional lights only)\n"
+    "                      dirpole                 8/32/128 spp\n"
+    "                      combined[:cpu]          dipole + SSLPV 32^3, 8/32/128 spp\n"
     "                      reference               path tracer, seed 7, 4/16/64 spp\n"
     "                    A variant this binary or scene cannot render is skipped with a message.\n"
     "  --ref-spp N       reference samples per pixel (default 256)\n"

@@ -10,6 +10,7 @@
 #include <lucent/core/Image.h>
 #include <lucent/dipole/DipoleProvider.h>
 #include <lucent/dipole/DirectionalPipeline.h>
+#include <lucent/dipole/DirpoleProvider.h>
 #include <lucent/dipole/IrradiancePass.h>
 #include <lucent/dipole/Profiles.h>
 #include <lucent/dipole/Sampling.h>
@@ -31,14 +32,25 @@ namespace {
 using dipole::Model;
 
 /// The directional dipole is implemented as published (verified against the authors' reference
-/// program), but the published model is not energy-conserving and its measured error
-/// (docs/methods/dipole.md §1 and §4) is large, so every use says so.
+/// program), but the published model is not energy-conserving (docs/methods/dipole.md §1 and
+/// §4), so every use of it says so.
 void warnExperimentalDirpole() {
     std::fprintf(stderr,
-                 "warning: dirpole is experimental: the published Frisvad et al. 2014 model "
-                 "overestimates total reflectance (1.34 at sigma_a = 0) and is +48..131%% "
-                 "against the reference path tracer (docs/methods/dipole.md, sections 1 and "
-                 "4)\n");
+                 "warning: the published Frisvad et al. 2014 directional dipole overestimates "
+                 "total reflectance (1.34 at sigma_a = 0) and is +48..131%% against the "
+                 "reference path tracer (docs/methods/dipole.md, sections 1 and 4)\n");
+}
+
+/// `--dirpole-normalise on|off` (default on): S_d scaled so that its normal-incidence total
+/// equals the better dipole's (docs/methods/dipole.md §1, "Energy-normalised directional
+/// dipole"); off selects the published model, with the warning above.
+bool dirpoleNormalised(const Args& args) {
+    const std::string norm = args.valueOr("dirpole-normalise", "on");
+    LUCENT_CHECK(norm == "on" || norm == "off", "--dirpole-normalise: '", norm,
+                 "' is not on or off");
+    if (norm == "off")
+        warnExperimentalDirpole();
+    return norm == "on";
 }
 
 /// Radius holding 99% of the widest channel's profile (Jensen-shaped sampler of the better
@@ -180,7 +192,7 @@ namespace {
 /// diffuse 0 (the dipole replaces it) and a normalised Blinn-Phong lobe of albedo
 /// F_r(η, normal incidence) with shadow maps.
 ImageRgb renderDipoleGl(const Scene& scene, Model model, bool subsurfaceOnly, int spp, int sppFrame,
-                        uint32_t seed) {
+                        uint32_t seed, float maxRadius, bool lightViews, int lightViewRes) {
     LUCENT_CHECK(!scene.objects.empty() && scene.objects[0].material != nullptr, "--method ",
                  dipole::modelName(model), ": the scene needs an object with a material volume");
     auto ctx = gpu::GlContext::createHeadless();
@@ -214,6 +226,9 @@ ImageRgb renderDipoleGl(const Scene& scene, Model model, bool subsurfaceOnly, in
         ps.maxFrames = (spp + ps.samplesPerFrame - 1) / ps.samplesPerFrame;
         ps.seed = seed;
         ps.meshId = materialMesh;
+        ps.maxRadius = maxRadius;
+        ps.lightViews = lightViews;
+        ps.lightViewResolution = lightViewRes;
         provider.setSettings(ps);
         provider.setMaterial(scene.objects[0].material.get());
         renderer.setSubsurfaceProvider(&provider);
@@ -237,6 +252,17 @@ ImageRgb renderDipoleGl(const Scene& scene, Model model, bool subsurfaceOnly, in
                  "%.1f ms per frame\n",
                  st.frames, provider.settings().samplesPerFrame, st.samplesPerPixel,
                  double(st.lastChange), totalMs / std::max(st.frames, 1));
+    std::fprintf(stderr,
+                 "  gather: eps = %.3g (discQuantile %.4g), disc radius %.3g..%.3g mm, %d of %d "
+                 "light view(s) gathered\n",
+                 double(st.epsilon), 1.0 - double(st.epsilon), double(st.minRadius),
+                 double(st.maxRadius), st.lightViewsGathered, st.lightViewsRendered);
+    for (size_t l = 0; l < st.backlitFractions.size(); ++l)
+        std::fprintf(stderr, "  light %zu view: %s (back-lit flux fraction %.3g)\n", l,
+                     st.backlitFractions[l] < 0.f ? "not rendered"
+                     : st.backlitFractions[l] > provider.settings().lightViewThreshold ? "gathered"
+                                                                                       : "skipped",
+                     double(st.backlitFractions[l]));
     for (const gpu::PassTiming& t : renderer.profiler().latest())
         std::fprintf(stderr, "  %-12s %8.2f ms GPU %8.2f ms CPU (last frame)\n", t.name.c_str(),
                      t.gpuMs, t.cpuMs);
@@ -250,22 +276,123 @@ ImageRgb renderDipoleGl(const Scene& scene, Model model, bool subsurfaceOnly, in
 
 }  // namespace
 
+namespace {
+
+/// `--method dirpole` on the GPU: seed 001 §4 through dipole::DirpoleSubsurfaceProvider (any
+/// light type), frames of `--spp-frame` disc samples per cube texel and light until `--spp` or
+/// convergence; the direct surface reflection as renderDipoleGl unless subsurface-only.
+ImageRgb renderDirpoleGl(const Scene& scene, bool subsurfaceOnly, const Args& args, uint32_t seed) {
+    LUCENT_CHECK(!scene.objects.empty() && scene.objects[0].material != nullptr,
+                 "--method dirpole: the scene needs an object with a material volume");
+    const int spp = args.intOr("spp", 256, 1, 1 << 24);
+    dipole::DirpoleSettings ds;
+    ds.eta = scene.eta;
+    ds.samplesPerFrame = std::min(args.intOr("spp-frame", 16, 1, 4096), spp);
+    ds.maxFrames = (spp + ds.samplesPerFrame - 1) / ds.samplesPerFrame;
+    ds.seed = seed;
+    ds.energyNormalised = dirpoleNormalised(args);
+    auto ctx = gpu::GlContext::createHeadless();
+    std::fprintf(stderr, "render: %s (%s, EGL %s), GPU directional-dipole pipeline\n",
+                 ctx->renderer().c_str(), ctx->version().c_str(), ctx->platform().c_str());
+    gpu::SceneRenderer renderer;
+    dipole::DirpoleSubsurfaceProvider provider;
+    ImageRgb image;
+    const auto start = std::chrono::steady_clock::now();
+    try {
+        renderer.create();
+        provider.create();
+        const gpu::SurfaceMaterial surface{
+            Rgb(0.f), Rgb(float(dipole::fresnelReflectance(1.0, scene.eta))), 64.f};
+        for (size_t i = 0; i < scene.objects.size(); ++i) {
+            const int id = renderer.addMesh(scene.objects[i].mesh, surface);
+            if (i == 0)
+                ds.meshId = id;  // the volume belongs to objects[0]
+        }
+        renderer.setLights(scene.lights);
+        renderer.setCamera(scene.camera);
+        gpu::DirectSettings direct;
+        direct.subsurfaceOnly = subsurfaceOnly;
+        renderer.setSettings(direct);
+        provider.setSettings(ds);
+        provider.setMaterial(scene.objects[0].material.get());
+        renderer.setSubsurfaceProvider(&provider);
+        while (!provider.stats().converged)
+            renderer.render();
+        image = renderer.readRadiance();
+        renderer.profiler().collect(/*wait=*/true);
+    } catch (...) {
+        renderer.setSubsurfaceProvider(nullptr);
+        provider.destroy();
+        renderer.destroy();
+        throw;
+    }
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const dipole::ProviderStats& st = provider.stats();
+    std::fprintf(stderr,
+                 "  %d frames x %d disc samples per cube texel and light, last change %.2e of "
+                 "the peak, %.1f ms per frame (first frame builds the light and cube G-buffers)\n",
+                 st.frames, ds.samplesPerFrame, double(st.lastChange), ms / std::max(st.frames, 1));
+    for (const gpu::PassTiming& t : renderer.profiler().latest())
+        std::fprintf(stderr, "  %-12s %8.2f ms GPU %8.2f ms CPU (last frame)\n", t.name.c_str(),
+                     t.gpuMs, t.cpuMs);
+    renderer.setSubsurfaceProvider(nullptr);
+    provider.destroy();
+    renderer.destroy();
+    for (const std::string& e : ctx->debugLog().takeErrors())
+        std::fprintf(stderr, "%s\n", e.c_str());
+    return image;
+}
+
+}  // namespace
+
+/// The CPU gather's ε, sample radius and light-view decisions, to stderr.
+void printGatherStats(const dipole::GatherStats& st,
+                      const std::vector<dipole::LightViewReport>& reports) {
+    std::fprintf(stderr,
+                 "  gather: %d pixels, eps = %.3g (discQuantile %.4g), disc radius %.3g..%.3g mm, "
+                 "%d light view(s) gathered\n",
+                 st.pixels, st.epsilon, 1.0 - st.epsilon, st.minRadius, st.maxRadius,
+                 st.lightViews);
+    for (const dipole::LightViewReport& r : reports)
+        std::fprintf(stderr, "  light %d view: %s (back-lit flux fraction %.3g)%s%s\n", r.light,
+                     r.used ? "gathered" : (r.built ? "skipped" : "not built"), r.backlitFraction,
+                     r.note.empty() ? "" : ": ", r.note.c_str());
+}
+
 /// `lucent-cli render --method dipole|better-dipole|dirpole` (declared in Command_render.cpp).
 /// dipole, better-dipole: GPU image-space gather through gpu::SceneRenderer when a headless GL
 /// context can be created (--spp N total samples per pixel, default 256; --spp-frame M per
 /// frame, default 16; --seed S), with the direct surface reflection unless subsurface-only;
 /// otherwise, or with --cpu, the CPU image-space gather (--spp N, default 32; subsurface only).
-/// dirpole: the CPU directional-dipole pipeline (--spp N disc samples per pixel, directional
-/// lights only), subsurface term only. Radiance W/(mm²·sr).
+/// dirpole: the GPU directional-dipole pipeline (dipole::DirpoleSubsurfaceProvider; --spp N disc
+/// samples per cube texel and light, default 256; --spp-frame M per frame, default 16; any light
+/// type) when a headless GL context can be created; otherwise, or with --cpu, the CPU pipeline
+/// (--spp N disc samples per pixel, directional lights only, subsurface term only).
+/// Radiance W/(mm²·sr).
 ImageRgb renderDipoleMethod(const Scene& scene, const std::string& model, bool subsurfaceOnly,
                             const Args& args) {
     const Model m = dipole::parseModel(model);
     const int seed = args.intOr("seed", 1, 0, 1 << 30);
+    // Light-view irradiance images (seed 004 §7.1): --light-views on|off; --max-radius MM.
+    const std::string lightViews = args.valueOr("light-views", "on");
+    LUCENT_CHECK(lightViews == "on" || lightViews == "off",
+                 "--light-views must be on or off (got '", lightViews, "')");
+    const float maxRadius = args.floatOr("max-radius", 0.f, 0.f, 1e6f);
+    const int lightViewRes = args.intOr("light-view-res", 512, 16, 4096);
+    if (m == Model::Directional && !args.has("cpu")) {
+        std::string reason;
+        if (gpu::GlContext::isHeadlessAvailable(&reason))
+            return renderDirpoleGl(scene, subsurfaceOnly, args, uint32_t(seed));
+        std::fprintf(stderr, "render: no headless GL (%s); using the CPU directional pipeline\n",
+                     reason.c_str());
+    }
     if (m != Model::Directional && !args.has("cpu")) {
         std::string reason;
         if (gpu::GlContext::isHeadlessAvailable(&reason))
             return renderDipoleGl(scene, m, subsurfaceOnly, args.intOr("spp", 256, 1, 1 << 24),
-                                  args.intOr("spp-frame", 16, 1, 4096), uint32_t(seed));
+                                  args.intOr("spp-frame", 16, 1, 4096), uint32_t(seed), maxRadius,
+                                  lightViews == "on", lightViewRes);
         std::fprintf(stderr, "render: no headless GL (%s); using the CPU gather\n", reason.c_str());
     }
     const int spp = args.intOr("spp", 32, 1, 65536);
@@ -275,10 +402,10 @@ ImageRgb renderDipoleMethod(const Scene& scene, const std::string& model, bool s
                      "reflection)\n",
                      model.c_str());
     if (m == Model::Directional) {
-        warnExperimentalDirpole();
         dipole::DirectionalSettings ds;
         ds.samplesPerPass = spp;
         ds.seed = uint32_t(seed);
+        ds.energyNormalised = dirpoleNormalised(args);
         // The directional pipeline handles directional lights only: drop the others, loudly.
         Scene directional = scene;
         directional.lights.clear();
@@ -300,7 +427,14 @@ ImageRgb renderDipoleMethod(const Scene& scene, const std::string& model, bool s
     gs.uniformSamples = spp / 4;
     gs.importanceSamples = spp - gs.uniformSamples;
     gs.seed = uint32_t(seed);
-    return dipole::renderImageSpaceDipole(scene, gs).radiance;
+    gs.maxRadius = maxRadius;
+    dipole::LightViewSettings lv;
+    lv.enabled = lightViews == "on";
+    lv.resolution = lightViewRes;
+    std::vector<dipole::LightViewReport> reports;
+    const dipole::GatherResult g = dipole::renderImageSpaceDipole(scene, gs, lv, &reports);
+    printGatherStats(g.stats, reports);
+    return g.radiance;
 }
 
 extern const Command profileCommand;

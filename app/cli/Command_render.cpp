@@ -7,6 +7,8 @@
 
 #include "CliArgs.h"
 
+#include <lucent/combined/Combined.h>
+#include <lucent/combined/CombinedProvider.h>
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
 #include <lucent/gpu/GlContext.h>
@@ -116,6 +118,69 @@ ImageRgb renderSslpvCpu(const RenderRequest& req) {
 }
 #endif
 
+}  // namespace
+
+/// Combined mode (docs/methods/combined.md): windowed dipole + late-step SSLPV, on the GL
+/// providers (or the CPU with --cpu / without EGL; subsurface term only). Also used by
+/// `lucent-cli evaluate`.
+ImageRgb renderCombinedMethod(const Scene& scene, bool subsurfaceOnly, const Args& a) {
+    const float rs = a.has("split-radius") ? a.floatOr("split-radius", 0.f, 0.f, 1e30f) : -1.f;
+    const std::string model = a.valueOr("model", "dipole");
+    const dipole::Model m = dipole::parseModel(model);
+    LUCENT_CHECK(m != dipole::Model::Directional,
+                 "--model: combined uses dipole or better-dipole (got '", model, "')");
+    SslpvRenderOptions so = combined::CombinedSettings::defaultSslpvOptions();
+    so.gridResolution = a.intOr("grid", 32, 4, 256);
+    so.solver.maxSteps = a.intOr("steps", 32, 0, 4096);
+    so.solver.order = a.intOr("sh", 1, 1, 2);
+    const uint32_t seed = uint32_t(a.intOr("seed", 1, 0, 1 << 30));
+    const std::string split = a.valueOr("split", "kernel");
+    LUCENT_CHECK(split == "kernel" || split == "steps", "--split: '", split,
+                 "' is not kernel or steps");
+    const combined::SplitMode mode =
+        split == "kernel" ? combined::SplitMode::Kernel : combined::SplitMode::Steps;
+    const std::string lightViews = a.valueOr("light-views", "off");
+    LUCENT_CHECK(lightViews == "on" || lightViews == "off",
+                 "--light-views must be on or off (got '", lightViews, "')");
+    std::string reason;
+    if (!a.has("cpu") && gpu::GlContext::isHeadlessAvailable(&reason)) {
+        combined::CombinedProviderSettings ps;
+        ps.splitRadius = rs;
+        ps.mode = mode;
+        ps.dipole.model = m;
+        ps.dipole.seed = seed;
+        ps.dipole.samplesPerFrame = a.intOr("spp-frame", 16, 1, 4096);
+        ps.dipole.lightViews = lightViews == "on";
+        ps.sslpv.render = so;
+        return combined::renderCombinedGl(scene, ps, a.intOr("spp", 256, 1, 1 << 24),
+                                          subsurfaceOnly);
+    }
+    if (!a.has("cpu"))
+        std::fprintf(stderr, "render: no headless GL (%s); combined on the CPU\n", reason.c_str());
+    combined::CombinedSettings cs;
+    cs.splitRadius = rs;
+    cs.mode = mode;
+    cs.dipoleLightViews = lightViews == "on";
+    cs.sslpv = so;
+    cs.dipole.model = m;
+    const int spp = a.intOr("spp", 32, 1, 65536);
+    cs.dipole.uniformSamples = spp / 4;
+    cs.dipole.importanceSamples = spp - cs.dipole.uniformSamples;
+    cs.dipole.seed = seed;
+    const combined::CombinedResult r = combined::renderCombined(scene, cs);
+    std::fprintf(stderr,
+                 "combined (CPU, subsurface only): r_s %.3g mm = %.2f cells of %.3g mm, SSLPV "
+                 "skips %d of %d steps\n",
+                 double(r.plan.splitRadius), double(r.plan.splitRadius / r.plan.cellSize),
+                 double(r.plan.cellSize), r.plan.skipSteps, so.solver.maxSteps);
+    return r.radiance;
+}
+
+namespace {
+ImageRgb renderCombinedMode(const RenderRequest& req) {
+    return renderCombinedMethod(req.scene, req.subsurfaceOnly, req.args);
+}
+
 struct RenderMethod {
     const char* name;
     const char* summary;
@@ -136,13 +201,18 @@ const RenderMethod METHODS[] = {
      &renderDipole},
     {"better-dipole", "image-space better dipole (d'Eon 2012; GL, or --cpu; --spp, --seed)",
      &renderBetterDipole},
-    {"dirpole", "CPU directional dipole pipeline (Frisvad 2014; directional lights; --spp)",
+    {"dirpole",
+     "directional dipole pipeline (Frisvad 2014, seed 001 §4; GL, or --cpu: directional lights "
+     "only; --spp, --spp-frame, --seed)",
      &renderDirpole},
 #endif
 #ifdef LUCENT_CLI_HAS_BENCH
     {"sslpv", "CPU subsurface light propagation volumes (Borlum 2011; --grid, --steps, --sh)",
      &renderSslpvCpu},
 #endif
+    {"combined",
+     "local dipole (r <= r_s) + SSLPV beyond (GL, or --cpu; --split-radius, --spp, --grid)",
+     &renderCombinedMode},
 };
 
 const RenderMethod& findMethod(const std::string& name) {
@@ -163,8 +233,10 @@ bool endsWith(const std::string& s, const std::string& suffix) {
 int runRender(const std::vector<std::string>& argv) {
     const Args args(
         argv,
-        {"method", "o", "output", "width", "height", "exposure", "tonemap", "spp", "seed",
-         "threads", "boundary", "grid", "steps", "sh", "attenuation", "spp-frame", "mode"},
+        {"method",  "o",     "output",      "width",       "height",         "exposure",
+         "tonemap", "spp",   "seed",        "threads",     "boundary",       "grid",
+         "steps",   "sh",    "attenuation", "spp-frame",   "mode",           "split-radius",
+         "model",   "split", "max-radius",  "light-views", "light-view-res", "dirpole-normalise"},
         {"subsurface-only", "cpu", "gl"});
     if (args.positional().size() != 1)
         LUCENT_THROW(ValueError, "expected exactly one SCENE.json (see --help)");
@@ -219,13 +291,29 @@ const Command renderCommand{
     "                     frames of --spp-frame M (16) up to --spp N (256) samples per pixel,\n"
     "                     --seed S, plus the specular surface reflection; --cpu (or no EGL):\n"
     "                     CPU gather, subsurface term only, --spp N (32)\n"
-    "                     dirpole: CPU directional dipole, subsurface term only, --spp N (32)\n"
-    "                     (docs/methods/dipole.md)\n"
+    "                     (camera + light-view irradiance images, --light-views on|off,\n"
+    "                     --light-view-res N (512); --max-radius MM: only r <= MM)\n"
+    "                     dirpole: GPU directional-dipole pipeline (light G-buffers, cube\n"
+    "                     faces) over frames of --spp-frame M (16) up to --spp N (256) disc\n"
+    "                     samples per cube texel and light, --seed S, plus the specular\n"
+    "                     reflection; --cpu (or no EGL): CPU pipeline, directional lights,\n"
+    "                     subsurface term only, --spp N (32) (docs/methods/dipole.md),\n"
+    "                     --dirpole-normalise on|off (on: S_d scaled to the better\n"
+    "                     dipole's total, docs/methods/dipole.md §1)\n"
     "                     sslpv: CPU SSLPV with --grid N (32), --steps K (32), --sh 1|2,\n"
     "                     --mode calibrated|paper (calibrated), with paper:\n"
     "                     --attenuation absorption|extinction (absorption); --gl: the GL\n"
     "                     live-preview provider through the GPU scene renderer\n"
     "                     (docs/methods/sslpv.md)\n"
+    "                     combined: dipole for r <= --split-radius MM (default 4 SSLPV\n"
+    "                     cells), calibrated SSLPV (--grid N, --steps K, --sh) beyond it;\n"
+    "                     --split kernel (default: SSLPV minus its own local kernel) or\n"
+    "                     steps (SSLPV skips its first r_s/cell steps);\n"
+    "                     --model dipole|better-dipole, --spp N, --spp-frame M, --seed S,\n"
+    "                     --light-views on|off (the dipole part's; default off: on\n"
+    "                     counts back-lit light twice);\n"
+    "                     --cpu: CPU gather + CPU SSLPV, subsurface only\n"
+    "                     (docs/methods/combined.md)\n"
     "  -o, --output FILE  .exr: linear radiance W/(mm^2 sr), 32-bit float;\n"
     "                     .png: 8-bit sRGB after --exposure and --tonemap (default aces)\n"
     "  --width, --height  override the scene camera's image size (pixels)\n"

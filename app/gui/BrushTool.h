@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief The app's brush (engine BrushSettings plus the surface-relative depth) and the
-/// QUndoCommand that wraps one stroke of the engine's History (lucent/material/History.h).
+/// @brief The app's brush (engine BrushSettings plus the surface-relative depth and the tablet
+/// pressure mapping) and the QUndoCommand that wraps one stroke of the engine's History
+/// (lucent/material/History.h).
 ///
 /// Edits are applied by the engine when the user paints; pushing the command onto the
 /// QUndoStack does not apply them again. QUndoStack and History stay in lock-step: both are
@@ -12,9 +13,13 @@
 
 #include <QUndoCommand>
 
+#include <algorithm>
 #include <functional>
 
 namespace lucent::app {
+
+/// What the pen pressure of a graphics tablet scales (the mouse always gives pressure 1).
+enum class PressureMode { Off = 0, Radius = 1, Strength = 2, RadiusAndStrength = 3 };
 
 /// Brush as the Tools dock edits it.
 struct AppBrush {
@@ -22,6 +27,23 @@ struct AppBrush {
     /// Stamp centre placed this far below the picked surface point, along −normal (mm): 0 paints
     /// a hemisphere into the surface, radius paints a full sphere just under it.
     float depthMm = 0.f;
+    PressureMode pressureMode = PressureMode::Strength;
+    /// Smallest pressure factor, so a feather-light touch still paints a valid (radius > 0)
+    /// stamp.
+    static constexpr float MIN_PRESSURE = 0.05f;
+
+    /// Factor on the radius of a stamp at tablet pressure `pressure` ∈ [0, 1].
+    [[nodiscard]] float radiusScale(float pressure) const {
+        const bool on =
+            pressureMode == PressureMode::Radius || pressureMode == PressureMode::RadiusAndStrength;
+        return on ? std::clamp(pressure, MIN_PRESSURE, 1.f) : 1.f;
+    }
+    /// Factor on the strength of a stamp at tablet pressure `pressure` ∈ [0, 1].
+    [[nodiscard]] float strengthScale(float pressure) const {
+        const bool on = pressureMode == PressureMode::Strength ||
+                        pressureMode == PressureMode::RadiusAndStrength;
+        return on ? std::clamp(pressure, MIN_PRESSURE, 1.f) : 1.f;
+    }
 };
 
 /// One engine History step (stroke, fill, procedural fill, preset) on the QUndoStack.

@@ -7,6 +7,8 @@
 #include <lucent/core/Error.h>
 #include <lucent/scene/SceneFile.h>
 
+#include <algorithm>
+
 namespace lucent::app {
 
 Document::Document(QObject* parent) : QObject(parent) {
@@ -56,6 +58,47 @@ void Document::noteSceneEdited() {
     Q_EMIT modifiedChanged(true);
 }
 
+namespace {
+bool sameLights(const std::vector<Light>& a, const std::vector<Light>& b) {
+    return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const Light& x, const Light& y) {
+        return x.type == y.type && x.position == y.position && x.direction == y.direction &&
+               x.intensity == y.intensity && x.spotOuterDeg == y.spotOuterDeg &&
+               x.spotInnerDeg == y.spotInnerDeg && x.radius == y.radius;
+    });
+}
+}  // namespace
+
+void Document::setLightLive(int index, const Light& light) {
+    LUCENT_CHECK(index >= 0 && size_t(index) < m_scene.lights.size(), "light ", index,
+                 " does not exist (the scene has ", m_scene.lights.size(), " lights)");
+    m_scene.lights[size_t(index)] = light;
+    Q_EMIT sceneEdited();
+}
+
+void Document::commitLights(const std::vector<Light>& before, const QString& label) {
+    if (sameLights(before, m_scene.lights))
+        return;
+    // Both states are kept by value: a light step costs a few hundred bytes.
+    const std::vector<Light> after = m_scene.lights;
+    m_undo.push(new HistoryCommand(
+        label,
+        [this, before] {
+            m_scene.lights = before;
+            Q_EMIT sceneEdited();
+        },
+        [this, after] {
+            m_scene.lights = after;
+            Q_EMIT sceneEdited();
+        }));
+}
+
+void Document::setLights(std::vector<Light> lights, const QString& label) {
+    const std::vector<Light> before = m_scene.lights;
+    m_scene.lights = std::move(lights);
+    commitLights(before, label);
+    Q_EMIT sceneEdited();
+}
+
 void Document::pushHistoryStep(const QString& label) {
     m_undo.push(new HistoryCommand(
         label,
@@ -81,11 +124,14 @@ void Document::beginStroke(const BrushSettings& brush) {
     m_history.beginStroke(*v);
 }
 
-size_t Document::strokeStamp(const Point3f& center) {
+size_t Document::strokeStamp(const Point3f& center, float radiusScale, float strengthScale) {
     MaterialVolume* v = material();
     if (!v || !m_history.isStrokeOpen())
         return 0;
-    const size_t n = stamp(*v, m_strokeBrush, center, &m_history);
+    BrushSettings b = m_strokeBrush;
+    b.radius *= std::clamp(radiusScale, AppBrush::MIN_PRESSURE, 1.f);
+    b.strength *= std::clamp(strengthScale, 0.f, 1.f);
+    const size_t n = stamp(*v, b, center, &m_history);
     if (n > 0)
         Q_EMIT materialEdited();
     return n;

@@ -57,7 +57,9 @@ public:
     /// Opens a stroke. @throw ValueError for invalid brush settings.
     void beginStroke(const BrushSettings& brush);
     /// One stamp of the open stroke at `center` (mm). @return voxels touched.
-    size_t strokeStamp(const Point3f& center);
+    /// @param radiusScale, strengthScale factors in (0, 1] on the stroke's radius and strength
+    ///        for this stamp (tablet pressure; 1 for the mouse).
+    size_t strokeStamp(const Point3f& center, float radiusScale = 1.f, float strengthScale = 1.f);
     /// Closes the stroke; pushes one undo step if anything changed.
     void endStroke(const QString& label);
     [[nodiscard]] bool isStrokeOpen() const { return m_history.isStrokeOpen(); }
@@ -65,7 +67,19 @@ public:
     void fillProcedural(const ProceduralFill& fill);
     //! @}
 
-    /// Call after changing lights, camera or η (not undoable): marks the document modified.
+    //! @{ \name Lights: undoable edits (gizmo drags, Lights dock)
+    /// Replaces light `index` without an undo step, for live feedback while a gizmo is dragged;
+    /// commitLights() records the whole drag afterwards. Emits sceneEdited.
+    /// @throw ValueError when `index` is not a light of the scene.
+    void setLightLive(int index, const Light& light);
+    /// Records the change from `before` to the current lights as one undo step (the change is
+    /// already applied). Nothing is recorded when the lights did not change.
+    void commitLights(const std::vector<Light>& before, const QString& label);
+    /// Replaces every light (edit, add, remove) as one undo step. Emits sceneEdited.
+    void setLights(std::vector<Light> lights, const QString& label);
+    //! @}
+
+    /// Call after changing the camera or η (not undoable): marks the document modified.
     void noteSceneEdited();
 
 Q_SIGNALS:

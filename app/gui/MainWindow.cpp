@@ -186,8 +186,15 @@ void MainWindow::createDocks() {
         addDock(tr("Material channels"), "dockChannels", m_slice, Qt::RightDockWidgetArea);
     m_render = new RenderPanel(m_doc, m_viewport);
     auto* render = addDock(tr("Render settings"), "dockRender", m_render, Qt::RightDockWidgetArea);
-    auto* lights =
-        addDock(tr("Lights"), "dockLights", new LightPanel(m_doc), Qt::RightDockWidgetArea);
+    m_lights = new LightPanel(m_doc);
+    auto* lights = addDock(tr("Lights"), "dockLights", m_lights, Qt::RightDockWidgetArea);
+    // The dock's list and the viewport's gizmo selection are one selection.
+    connect(m_lights, &LightPanel::currentLightChanged, m_viewport, &Viewport::setSelectedLight);
+    connect(m_viewport, &Viewport::lightSelected, this, [this, lights](int i) {
+        m_lights->setCurrentLight(i);
+        lights->raise();
+    });
+    m_viewport->setSelectedLight(m_lights->currentLight());
     m_stats = new StatsPanel(m_doc, m_viewport);
     auto* stats = addDock(tr("Statistics"), "dockStats", m_stats, Qt::RightDockWidgetArea);
 #if LUCENT_APP_HAS_REFERENCE
@@ -310,6 +317,12 @@ void MainWindow::createActions() {
     m_viewMenu = menuBar()->addMenu(tr("&View"));
     a = m_viewMenu->addAction(tr("&Frame Object"), m_viewport, &Viewport::frameObject);
     a->setShortcut(QKeySequence(Qt::Key_F));
+    a = m_viewMenu->addAction(tr("&Light Gizmos"));
+    a->setObjectName(QStringLiteral("actionLightGizmos"));
+    a->setCheckable(true);
+    a->setChecked(m_viewport->lightGizmosVisible());
+    a->setShortcut(QKeySequence(Qt::Key_G));
+    connect(a, &QAction::toggled, m_viewport, &Viewport::setLightGizmosVisible);
     m_viewMenu->addSeparator();
     for (QDockWidget* d : findChildren<QDockWidget*>())
         m_viewMenu->addAction(d->toggleViewAction());
@@ -367,6 +380,8 @@ bool MainWindow::saveTo(const QString& path) {
     try {
         m_doc->save(path);
         addRecent(path);
+        if (m_useSettings)
+            removeAutosave();  // the saved project holds everything the autosave did
         statusBar()->showMessage(tr("Saved %1").arg(path), 5000);
         return true;
     } catch (const std::exception& ex) {
@@ -487,26 +502,21 @@ bool MainWindow::exportVdbTo(const QString& path, bool wait) {
 
 bool MainWindow::exportRenderTo(const QString& path) {
     try {
-        const QImage img = m_viewport->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
-        if (img.isNull())
-            LUCENT_THROW(GpuError, "the viewport has no image to export");
-        // The viewport holds display (tone-mapped sRGB) values; EXR gets them linearised by the
-        // inverse sRGB OETF (IEC 61966-2-1), so both files show the same picture.
-        ImageRgb out(img.width(), img.height());
-        auto toLinear = [](int v) {
-            const float c = float(v) / 255.f;
-            return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
-        };
-        for (int y = 0; y < img.height(); ++y) {
-            const auto* row = reinterpret_cast<const QRgb*>(img.constScanLine(y));
-            for (int x = 0; x < img.width(); ++x)
-                out.at(x, y) =
-                    Rgb(toLinear(qRed(row[x])), toLinear(qGreen(row[x])), toLinear(qBlue(row[x])));
+        if (QFileInfo(path).suffix().toLower() == QLatin1String("exr")) {
+            // The renderer's linear radiance before exposure and tone curve: what a compositor
+            // or the CLI's `compare` expects.
+            writeExr(m_viewport->linearImage(), path.toStdString());
+        } else {
+            const QImage img = m_viewport->grabRender().convertToFormat(QImage::Format_RGB32);
+            if (img.isNull())
+                LUCENT_THROW(GpuError, "the viewport has no image to export");
+            // Written through QImage so the PNG holds exactly the displayed 8-bit values;
+            // atomically, like every other file the app writes.
+            writeFileAtomically(path.toStdString(), [&img, &path](const std::string& tmp) {
+                if (!img.save(QString::fromStdString(tmp), "PNG"))
+                    LUCENT_THROW(IoError, "cannot write PNG '", path.toStdString(), "'");
+            });
         }
-        if (QFileInfo(path).suffix().toLower() == QLatin1String("exr"))
-            writeExr(out, path.toStdString());
-        else
-            writePng(out, path.toStdString());
         statusBar()->showMessage(tr("Wrote %1").arg(path), 5000);
         return true;
     } catch (const std::exception& ex) {
@@ -551,23 +561,37 @@ void MainWindow::autosaveNow() {
     }
 }
 
+void MainWindow::removeAutosave() {
+    // The project JSON and its sidecar VDB (saveProject: `<stem>.vdb`).
+    QFile::remove(autosavePath());
+    QFile::remove(QFileInfo(autosavePath()).path() + QStringLiteral("/") +
+                  QFileInfo(autosavePath()).completeBaseName() + QStringLiteral(".vdb"));
+}
+
 void MainWindow::offerRecovery() {
     if (!QFileInfo::exists(autosavePath()))
         return;
-    const auto r = QMessageBox::question(
-        this, tr("Recover"),
-        tr("Lucent did not exit cleanly last time. Recover the autosaved project?"),
-        QMessageBox::Yes | QMessageBox::No);
-    if (r == QMessageBox::Yes) {
-        try {
-            m_doc->open(autosavePath());
-            m_doc->setScene(std::move(m_doc->scene()), QString());
-            m_doc->noteSceneEdited();  // recovered work is unsaved
-        } catch (const std::exception& ex) {
-            reportError(tr("Recover"), ex);
-        }
+    const QByteArray answer = qgetenv(RECOVERY_ENV);
+    bool recover = answer == "accept";
+    if (answer != "accept" && answer != "discard")
+        recover = QMessageBox::question(
+                      this, tr("Recover"),
+                      tr("Lucent did not exit cleanly last time. Recover the autosaved project?"),
+                      QMessageBox::Yes | QMessageBox::No) == QMessageBox::Yes;
+    if (!recover) {
+        removeAutosave();
+        return;
     }
-    QFile::remove(autosavePath());
+    try {
+        m_doc->open(autosavePath());
+        m_doc->setScene(std::move(m_doc->scene()), QString());
+        m_doc->noteSceneEdited();  // recovered work is unsaved
+        statusBar()->showMessage(tr("Recovered the autosaved project"), 8000);
+        // The autosave stays until the next autosave replaces it or a clean exit removes it,
+        // so a second crash before then still finds it.
+    } catch (const std::exception& ex) {
+        reportError(tr("Recover"), ex);
+    }
 }
 
 void MainWindow::closeEvent(QCloseEvent* e) {
@@ -579,7 +603,7 @@ void MainWindow::closeEvent(QCloseEvent* e) {
         QSettings s;
         s.setValue("window/geometry", saveGeometry());
         s.setValue("window/state", saveState());
-        QFile::remove(autosavePath());  // clean exit: nothing to recover
+        removeAutosave();  // clean exit: nothing to recover
     }
     e->accept();
 }

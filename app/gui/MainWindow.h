@@ -15,6 +15,7 @@ class QMenu;
 namespace lucent::app {
 
 class BrushPanel;
+class LightPanel;
 class ReferencePanel;
 class RenderPanel;
 class Document;
@@ -34,6 +35,8 @@ public:
     Viewport* viewport() { return m_viewport; }
     SliceView* sliceView() { return m_slice; }
     BrushPanel* brushPanel() { return m_brush; }
+    LightPanel* lightPanel() { return m_lights; }
+    RenderPanel* renderPanel() { return m_render; }
     ReferencePanel* referencePanel() { return m_reference; }
     /// Selects the preview method (RenderSettings::Method) through the Render settings dock.
     void setRenderMethod(int method);
@@ -44,7 +47,9 @@ public:
     /// Exports the painted volume as OpenVDB on a worker thread with a progress dialog.
     /// @param wait block (running the event loop) until the export finished.
     bool exportVdbTo(const QString& path, bool wait = false);
-    /// Writes the current viewport image (PNG: display sRGB; EXR: linearised display values).
+    /// Writes the current render without gizmos or brush cursor. PNG: the tone-mapped display
+    /// image at the viewport's size. EXR: the linear radiance W/(mm²·sr) at render resolution
+    /// (Viewport::linearImage), independent of the exposure.
     bool exportRenderTo(const QString& path);
     //! @}
 
@@ -63,10 +68,14 @@ public:
     static bool hasVdbSupport();
     /// True when mesh import is compiled in (mesh/MeshIO).
     static bool hasMeshImport();
-    /// Path of the autosave project (AppLocalDataLocation/autosave/autosave.json).
+    /// Path of the autosave project (AppLocalDataLocation/autosave/autosave.json). Its presence
+    /// at start-up means the last session did not exit cleanly (a clean exit removes it).
     static QString autosavePath();
     /// Writes the autosave copy now when the document has unsaved changes.
     void autosaveNow();
+    /// Environment variable answering the recovery question without a dialog (scripted runs,
+    /// tests): "accept" recovers, "discard" deletes the autosave; unset asks the user.
+    static constexpr const char* RECOVERY_ENV = "LUCENT_RECOVERY";
 
 protected:
     void closeEvent(QCloseEvent* e) override;
@@ -83,6 +92,7 @@ private:
     bool importMesh(const QString& path);
     bool importVdb(const QString& path);
     void offerRecovery();
+    void removeAutosave();
     void reportError(const QString& what, const std::exception& ex);
 
     Document* m_doc;
@@ -91,6 +101,7 @@ private:
     BrushPanel* m_brush = nullptr;
     StatsPanel* m_stats = nullptr;
     RenderPanel* m_render = nullptr;
+    LightPanel* m_lights = nullptr;
     ReferencePanel* m_reference = nullptr;  // null when the reference module is absent
     QMenu* m_recentMenu = nullptr;
     QMenu* m_viewMenu = nullptr;

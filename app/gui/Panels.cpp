@@ -23,6 +23,7 @@
 #include <QPushButton>
 #include <QRadioButton>
 #include <QSpinBox>
+#include <QStandardItemModel>
 #include <QVBoxLayout>
 
 #include <initializer_list>
@@ -90,6 +91,15 @@ BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
     form->addRow(tr("Strength"), m_strength);
     form->addRow(tr("Spacing"), m_spacing);
     form->addRow(tr("Mode"), m_mode);
+    m_pressure = new QComboBox;
+    m_pressure->setObjectName(QStringLiteral("brushPressure"));
+    // Order = PressureMode.
+    m_pressure->addItems({tr("Off"), tr("Radius"), tr("Strength"), tr("Radius and strength")});
+    m_pressure->setCurrentIndex(int(AppBrush{}.pressureMode));
+    m_pressure->setToolTip(
+        tr("What the pen pressure of a graphics tablet scales; the mouse paints at full "
+           "pressure."));
+    form->addRow(tr("Pen pressure →"), m_pressure);
     m_chSigmaT = new QCheckBox(QStringLiteral("σt"));
     m_chSigmaS = new QCheckBox(QStringLiteral("σs′"));
     m_chG = new QCheckBox(QStringLiteral("g"));
@@ -131,7 +141,7 @@ BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
         connect(m_sigmaT[size_t(c)], &QDoubleSpinBox::valueChanged, this, applyLater);
         connect(m_sigmaS[size_t(c)], &QDoubleSpinBox::valueChanged, this, applyLater);
     }
-    for (QComboBox* c : {m_falloff, m_mode})
+    for (QComboBox* c : {m_falloff, m_mode, m_pressure})
         connect(c, &QComboBox::currentIndexChanged, this, applyLater);
     for (QCheckBox* c : {m_chSigmaT, m_chSigmaS, m_chG})
         connect(c, &QCheckBox::toggled, this, applyLater);
@@ -197,6 +207,7 @@ void BrushPanel::apply() {
     b.engine.strength = float(m_strength->value());
     b.engine.spacing = float(m_spacing->value());
     b.engine.mode = BrushMode(m_mode->currentIndex());
+    b.pressureMode = PressureMode(m_pressure->currentIndex());
     b.engine.channels = ChannelMask((m_chSigmaT->isChecked() ? int(Channel::SigmaT) : 0) |
                                     (m_chSigmaS->isChecked() ? int(Channel::SigmaS) : 0) |
                                     (m_chG->isChecked() ? int(Channel::G) : 0));
@@ -271,77 +282,176 @@ PresetPanel::PresetPanel(Document* doc, BrushPanel* brush, QWidget* parent)
 LightPanel::LightPanel(Document* doc, QWidget* parent) : QWidget(parent), m_doc(doc) {
     auto* form = new QFormLayout(this);
     m_light = new QComboBox;
+    m_light->setToolTip(tr("Select a light here or click its handle in the viewport."));
     m_type = new QLabel;
     form->addRow(tr("Light"), m_light);
     form->addRow(tr("Type"), m_type);
     for (int c = 0; c < 3; ++c) {
-        m_pos[size_t(c)] = spin(-1e5, 1e5, 0.0, 1, QString(), 1.0);
+        m_pos[size_t(c)] = spin(-1e5, 1e5, 0.0, 2, QString(), 1.0);
+        m_pos[size_t(c)]->setObjectName(QStringLiteral("lightPos%1").arg(c));
+        m_dir[size_t(c)] = spin(-1.0, 1.0, 0.0, 3, QString(), 0.05);
+        m_dir[size_t(c)]->setObjectName(QStringLiteral("lightDir%1").arg(c));
         m_intensity[size_t(c)] = spin(0.0, 1e9, 0.0, 3, QString(), 10.0);
     }
     form->addRow(tr("Position x y z (mm)"), row({m_pos[0], m_pos[1], m_pos[2]}));
+    form->addRow(tr("Direction x y z"), row({m_dir[0], m_dir[1], m_dir[2]}));
     form->addRow(tr("Intensity R G B"), row({m_intensity[0], m_intensity[1], m_intensity[2]}));
     form->addRow(new QLabel(tr("Units: point/spot W/sr, directional W/mm², sphere W/(mm²·sr)")));
+    auto* addPoint = new QPushButton(tr("Add point"));
+    auto* addDirectional = new QPushButton(tr("Add directional"));
+    addDirectional->setObjectName(QStringLiteral("lightAddDirectional"));
+    m_remove = new QPushButton(tr("Remove"));
+    form->addRow(row({addPoint, addDirectional, m_remove}));
     m_eta = spin(1.0, 3.0, 1.3, 3, QString(), 0.01);
     form->addRow(tr("η (relative IOR)"), m_eta);
-    connect(m_light, &QComboBox::currentIndexChanged, this, [this] { load(); });
+    connect(m_light, &QComboBox::currentIndexChanged, this, [this](int i) {
+        load();
+        if (!m_loading)
+            Q_EMIT currentLightChanged(i);
+    });
     for (int c = 0; c < 3; ++c) {
-        connect(m_pos[size_t(c)], &QDoubleSpinBox::valueChanged, this, [this] { store(); });
-        connect(m_intensity[size_t(c)], &QDoubleSpinBox::valueChanged, this, [this] { store(); });
+        connect(m_pos[size_t(c)], &QDoubleSpinBox::valueChanged, this,
+                [this, c] { store(Field::Position, c); });
+        connect(m_dir[size_t(c)], &QDoubleSpinBox::valueChanged, this,
+                [this, c] { store(Field::Direction, c); });
+        connect(m_intensity[size_t(c)], &QDoubleSpinBox::valueChanged, this,
+                [this, c] { store(Field::Intensity, c); });
     }
-    connect(m_eta, &QDoubleSpinBox::valueChanged, this, [this] { store(); });
-    connect(m_doc, &Document::sceneReplaced, this, [this] {
-        m_loading = true;
-        m_light->clear();
-        for (size_t i = 0; i < m_doc->scene().lights.size(); ++i)
-            m_light->addItem(tr("Light %1").arg(i));
-        m_loading = false;
+    connect(m_eta, &QDoubleSpinBox::valueChanged, this, [this] {
+        if (m_loading)
+            return;
+        m_doc->scene().eta = float(m_eta->value());
+        if (MaterialVolume* v = m_doc->material())
+            v->setEta(float(m_eta->value()));
+        m_doc->noteSceneEdited();
+    });
+    connect(addPoint, &QPushButton::clicked, this, [this] { addLight(Light::Type::Point); });
+    connect(addDirectional, &QPushButton::clicked, this,
+            [this] { addLight(Light::Type::Directional); });
+    connect(m_remove, &QPushButton::clicked, this, [this] {
+        const int i = m_light->currentIndex();
+        std::vector<Light> lights = m_doc->scene().lights;
+        if (i < 0 || i >= int(lights.size()))
+            return;
+        lights.erase(lights.begin() + i);
+        m_doc->setLights(std::move(lights), tr("Remove light %1").arg(i));
+    });
+    // Gizmo drags, undo/redo and other panels change the lights: follow them.
+    connect(m_doc, &Document::sceneEdited, this, [this] {
+        syncList();
         load();
     });
-    for (size_t i = 0; i < m_doc->scene().lights.size(); ++i)
-        m_light->addItem(tr("Light %1").arg(i));
+    connect(m_doc, &Document::sceneReplaced, this, [this] {
+        syncList();
+        load();
+    });
+    syncList();
     load();
 }
 
+int LightPanel::currentLight() const {
+    return m_light->currentIndex();
+}
+
+void LightPanel::setCurrentLight(int index) {
+    if (index >= 0 && index < m_light->count() && index != m_light->currentIndex())
+        m_light->setCurrentIndex(index);
+}
+
+void LightPanel::syncList() {
+    const int n = int(m_doc->scene().lights.size());
+    if (m_light->count() == n)
+        return;
+    const int previous = m_light->currentIndex();
+    m_loading = true;
+    m_light->clear();
+    for (int i = 0; i < n; ++i)
+        m_light->addItem(tr("Light %1").arg(i));
+    m_light->setCurrentIndex(n == 0 ? -1 : std::clamp(previous, 0, n - 1));
+    m_loading = false;
+    Q_EMIT currentLightChanged(m_light->currentIndex());
+}
+
 void LightPanel::load() {
+    const bool wasLoading = m_loading;
     m_loading = true;
     const auto& lights = m_doc->scene().lights;
     const int i = m_light->currentIndex();
     const bool valid = i >= 0 && i < int(lights.size());
+    const bool directed = valid && (lights[size_t(i)].type == Light::Type::Directional ||
+                                    lights[size_t(i)].type == Light::Type::Spot);
+    const bool positioned = valid && lights[size_t(i)].type != Light::Type::Directional;
     for (int c = 0; c < 3; ++c) {
-        m_pos[size_t(c)]->setEnabled(valid);
+        m_pos[size_t(c)]->setEnabled(positioned);
+        m_dir[size_t(c)]->setEnabled(directed);
         m_intensity[size_t(c)]->setEnabled(valid);
     }
+    m_remove->setEnabled(valid);
     if (valid) {
         const Light& l = lights[size_t(i)];
         static const char* names[] = {"point", "spot", "directional", "sphere"};
         m_type->setText(QString::fromLatin1(names[int(l.type)]));
         for (int c = 0; c < 3; ++c) {
             m_pos[size_t(c)]->setValue(double(l.position[c]));
+            m_dir[size_t(c)]->setValue(double(l.direction[c]));
             m_intensity[size_t(c)]->setValue(double(l.intensity[c]));
         }
     } else {
         m_type->setText(tr("(no lights)"));
     }
     m_eta->setValue(double(m_doc->scene().eta));
-    m_loading = false;
+    m_loading = wasLoading;
 }
 
-void LightPanel::store() {
+void LightPanel::store(Field field, int c) {
     if (m_loading)
         return;
-    auto& lights = m_doc->scene().lights;
+    std::vector<Light> lights = m_doc->scene().lights;
     const int i = m_light->currentIndex();
-    if (i >= 0 && i < int(lights.size())) {
-        Light& l = lights[size_t(i)];
-        for (int c = 0; c < 3; ++c) {
+    if (i < 0 || i >= int(lights.size()))
+        return;
+    // Only the edited component changes: the others keep their full precision (the fields
+    // show rounded values).
+    Light& l = lights[size_t(i)];
+    switch (field) {
+        case Field::Position:
             l.position[c] = float(m_pos[size_t(c)]->value());
-            l.intensity[c] = float(m_intensity[size_t(c)]->value());
+            break;
+        case Field::Direction: {
+            Vector3f dir = l.direction;
+            dir[c] = float(m_dir[size_t(c)]->value());
+            if (glm::length(dir) < 1e-6f)
+                return;  // a zero direction is not a direction: keep the light as it was
+            l.direction = glm::normalize(dir);
+            break;
         }
+        case Field::Intensity:
+            l.intensity[c] = float(m_intensity[size_t(c)]->value());
+            break;
     }
-    m_doc->scene().eta = float(m_eta->value());
-    if (MaterialVolume* v = m_doc->material())
-        v->setEta(float(m_eta->value()));
-    m_doc->noteSceneEdited();
+    m_doc->setLights(std::move(lights), tr("Edit light %1").arg(i));
+}
+
+void LightPanel::addLight(Light::Type type) {
+    std::vector<Light> lights = m_doc->scene().lights;
+    Light l;
+    l.type = type;
+    const TriangleMesh* mesh = m_doc->mesh();
+    const Bounds3f b = mesh && !mesh->isEmpty() ? mesh->bounds() : Bounds3f{};
+    const Point3f c = mesh && !mesh->isEmpty() ? b.center() : Point3f(0.f);
+    const float size = mesh && !mesh->isEmpty() ? glm::length(b.extent()) : 40.f;
+    if (type == Light::Type::Directional) {
+        l.direction = glm::normalize(Vector3f(-0.3f, -1.f, -0.4f));  // from above, front right
+        l.intensity = Rgb(1.f);                                      // W/mm²
+    } else {
+        l.position = c + Vector3f(0.f, size, size);  // above and in front of the object
+        // W/sr giving ≈ 1 W/mm² at the object: I / d², d = √2·size mm.
+        l.intensity = Rgb(2.f * size * size);
+    }
+    lights.push_back(l);
+    const int index = int(lights.size()) - 1;
+    m_doc->setLights(std::move(lights), tr("Add light"));
+    setCurrentLight(index);
 }
 
 // ---- RenderPanel ----------------------------------------------------------------------------
@@ -352,9 +462,18 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     const RenderSettings d;
     m_method = new QComboBox;
     // Order = RenderSettings::Method.
+    m_method->setObjectName(QStringLiteral("renderMethod"));
     m_method->addItems({tr("Direct (opaque surface)"), tr("Single scattering (ray-marched)"),
                         tr("SSLPV (live translucency)"), tr("Dipole (progressive)"),
-                        tr("Better dipole (progressive)")});
+                        tr("Better dipole (progressive)"), tr("Directional dipole (progressive)"),
+                        tr("Combined (dipole + SSLPV)")});
+    // Methods this build lacks stay listed (indices = RenderSettings::Method) but disabled.
+    if (auto* model = qobject_cast<QStandardItemModel*>(m_method->model()))
+        for (int i = 0; i < m_method->count(); ++i)
+            if (!PreviewRenderer::hasMethod(RenderSettings::Method(i))) {
+                model->item(i)->setEnabled(false);
+                model->item(i)->setToolTip(tr("Not available in this build"));
+            }
     m_method->setCurrentIndex(int(d.method));
     m_method->setToolTip(
         tr("Subsurface method added to the direct lighting of gpu::SceneRenderer."));
@@ -378,6 +497,20 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     m_dipoleSpp->setValue(d.dipoleSpp);
     m_dipoleSpp->setToolTip(
         tr("Samples per pixel added each frame; refinement goes on while idle."));
+    m_dirpoleSpp = new QSpinBox;
+    m_dirpoleSpp->setObjectName(QStringLiteral("renderDirpoleSpp"));
+    m_dirpoleSpp->setRange(1, 4096);
+    m_dirpoleSpp->setValue(d.dirpoleSpp);
+    m_dirpoleSpp->setToolTip(
+        tr("Directional dipole: disc samples per texel added each frame; "
+           "refinement goes on while idle."));
+    m_splitRadius = spin(-1.0, 500.0, double(d.combinedSplitRadius), 2, tr(" mm"), 0.5);
+    m_splitRadius->setObjectName(QStringLiteral("renderSplitRadius"));
+    m_splitRadius->setSpecialValueText(tr("Auto (4 SSLPV cells)"));  // shown at −1
+    m_splitRadius->setToolTip(
+        tr("Combined: the dipole gathers light that entered within this "
+           "radius; SSLPV carries what travels further."));
+    m_subsurfaceOnly = new QCheckBox(tr("Subsurface term only (debug)"));
     m_steps = new QSpinBox;
     m_steps->setRange(1, 512);
     m_steps->setValue(d.steps);
@@ -401,16 +534,41 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     form->addRow(tr("SSLPV SH order"), m_sslpvOrder);
     form->addRow(tr("SSLPV solve"), m_sslpvSolve);
     form->addRow(tr("Dipole spp/frame"), m_dipoleSpp);
+    form->addRow(tr("Dirpole spp/frame"), m_dirpoleSpp);
+    form->addRow(tr("Split radius"), m_splitRadius);
     for (QComboBox* c : {m_sslpvMode, m_sslpvGrid, m_sslpvOrder, m_sslpvSolve})
         connect(c, &QComboBox::currentIndexChanged, this, [this] { apply(); });
     connect(m_sslpvSteps, &QSpinBox::valueChanged, this, [this] { apply(); });
     connect(m_dipoleSpp, &QSpinBox::valueChanged, this, [this] { apply(); });
+    connect(m_dirpoleSpp, &QSpinBox::valueChanged, this, [this] { apply(); });
+    connect(m_splitRadius, &QDoubleSpinBox::valueChanged, this, [this] { apply(); });
+    connect(m_subsurfaceOnly, &QCheckBox::toggled, this, [this] { apply(); });
+    // Volume overlay: the painted channel ray-marched over the viewport (seeing inside).
+    m_overlay = new QCheckBox(tr("Volume overlay"));
+    m_overlay->setObjectName(QStringLiteral("renderOverlay"));
+    m_overlay->setToolTip(
+        tr("Show a painted channel through the surface, colour-mapped as in "
+           "the Material channels dock."));
+    m_overlayChannel = new QComboBox;
+    m_overlayChannel->setObjectName(QStringLiteral("renderOverlayChannel"));
+    m_overlayChannel->addItems({QStringLiteral("σt"), QStringLiteral("σs′"), QStringLiteral("g")});
+    m_overlayChannel->setCurrentIndex(d.overlayChannel);
+    m_overlayOpacity = spin(0.0, 1.0, double(d.overlayOpacity), 2, QString(), 0.05);
+    m_overlayOpacity->setObjectName(QStringLiteral("renderOverlayOpacity"));
+    m_overlay->setChecked(d.volumeOverlay);
+    m_overlayChannel->setToolTip(tr("Overlay channel"));
+    m_overlayOpacity->setToolTip(tr("Overlay opacity"));
+    form->addRow(row({m_overlay, m_overlayChannel, m_overlayOpacity}));
+    connect(m_overlay, &QCheckBox::toggled, this, [this] { apply(); });
+    connect(m_overlayChannel, &QComboBox::currentIndexChanged, this, [this] { apply(); });
+    connect(m_overlayOpacity, &QDoubleSpinBox::valueChanged, this, [this] { apply(); });
     form->addRow(tr("View steps"), m_steps);
     form->addRow(tr("Shadow steps"), m_lightSteps);
     form->addRow(tr("Exposure"), m_exposure);
     form->addRow(tr("Ambient"), m_ambient);
     form->addRow(m_turntable);
     form->addRow(m_smooth);
+    form->addRow(m_subsurfaceOnly);
     if (Viewport::hasDeformation()) {
         m_deform = new QCheckBox(tr("Deformation animation (twist; pauses painting)"));
         form->addRow(m_deform);
@@ -469,8 +627,19 @@ void RenderPanel::apply() {
     s.sslpvOrder = m_sslpvOrder->currentIndex() + 1;
     s.sslpvGlSolve = m_sslpvSolve->currentIndex() == 1;
     s.dipoleSpp = m_dipoleSpp->value();
+    s.dirpoleSpp = m_dirpoleSpp->value();
+    // Below 0 the special value "Auto": the combined module's default split.
+    s.combinedSplitRadius = m_splitRadius->value() < 0.0 ? -1.f : float(m_splitRadius->value());
+    s.subsurfaceOnly = m_subsurfaceOnly->isChecked();
+    s.volumeOverlay = m_overlay->isChecked();
+    s.overlayChannel = m_overlayChannel->currentIndex();
+    s.overlayOpacity = float(m_overlayOpacity->value());
+    m_overlayChannel->setEnabled(s.volumeOverlay);
+    m_overlayOpacity->setEnabled(s.volumeOverlay);
     using M = RenderSettings::Method;
-    const bool single = s.method == M::SingleScattering, sslpv = s.method == M::Sslpv;
+    const bool single = s.method == M::SingleScattering;
+    const bool combined = s.method == M::Combined;
+    const bool sslpv = s.method == M::Sslpv || combined;  // Combined: SSLPV beyond the split
     m_steps->setEnabled(single);
     m_lightSteps->setEnabled(single);
     m_ambient->setEnabled(single);
@@ -478,7 +647,10 @@ void RenderPanel::apply() {
     for (QWidget* w : std::initializer_list<QWidget*>{m_sslpvMode, m_sslpvGrid, m_sslpvSteps,
                                                       m_sslpvOrder, m_sslpvSolve})
         w->setEnabled(sslpv);
-    m_dipoleSpp->setEnabled(s.method == M::Dipole || s.method == M::BetterDipole);
+    m_dipoleSpp->setEnabled(s.method == M::Dipole || s.method == M::BetterDipole || combined);
+    m_dirpoleSpp->setEnabled(s.method == M::DirectionalDipole);
+    m_splitRadius->setEnabled(combined);
+    m_subsurfaceOnly->setEnabled(s.method != M::Direct);
     m_viewport->setRenderSettings(s);
 }
 

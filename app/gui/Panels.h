@@ -5,6 +5,7 @@
 /// Each edits the Document / Viewport directly; values are in physical units (mm, mm⁻¹, W/sr).
 
 #include <lucent/material/Medium.h>
+#include <lucent/scene/Scene.h>
 
 #include <QWidget>
 
@@ -55,6 +56,7 @@ private:
     QPushButton* m_swatch;
     QComboBox* m_pattern;
     QDoubleSpinBox* m_patternScale;
+    QComboBox* m_pressure;
 };
 
 /// Material presets (Jensen et al. 2001 measured, plus artist presets).
@@ -68,20 +70,33 @@ private:
     QListWidget* m_list;
 };
 
-/// Lights and η of the scene.
+/// Lights and η of the scene. Light edits (fields, add, remove) are undo steps; the fields
+/// follow gizmo drags and undo/redo (Document::sceneEdited).
 class LightPanel : public QWidget {
     Q_OBJECT
 public:
     explicit LightPanel(Document* doc, QWidget* parent = nullptr);
+    /// Shows light `index` (−1: none) in the fields; emits currentLightChanged when it changes.
+    void setCurrentLight(int index);
+    [[nodiscard]] int currentLight() const;
+
+Q_SIGNALS:
+    void currentLightChanged(int index);
 
 private:
+    void syncList();
+    enum class Field { Position, Direction, Intensity };
     void load();
-    void store();
+    /// Writes component `c` of `field` of the current light (one undo step).
+    void store(Field field, int c);
+    void addLight(Light::Type type);
     Document* m_doc;
     QComboBox* m_light;
     QLabel* m_type;
     std::array<QDoubleSpinBox*, 3> m_pos{};
+    std::array<QDoubleSpinBox*, 3> m_dir{};
     std::array<QDoubleSpinBox*, 3> m_intensity{};
+    QPushButton* m_remove;
     QDoubleSpinBox* m_eta;
     bool m_loading = false;
 };
@@ -113,8 +128,15 @@ private:
     QSpinBox* m_sslpvSteps;
     QComboBox* m_sslpvOrder;
     QComboBox* m_sslpvSolve;
-    // Dipoles
+    // Dipoles, directional dipole, combined
     QSpinBox* m_dipoleSpp;
+    QSpinBox* m_dirpoleSpp;
+    QDoubleSpinBox* m_splitRadius;
+    QCheckBox* m_subsurfaceOnly;
+    // Volume overlay
+    QCheckBox* m_overlay;
+    QComboBox* m_overlayChannel;
+    QDoubleSpinBox* m_overlayOpacity;
 };
 
 /// Frame timings, upload sizes, GL state, volume and history sizes.

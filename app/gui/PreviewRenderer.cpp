@@ -7,6 +7,10 @@
 #include <lucent/core/Error.h>
 #include <lucent/core/Timer.h>
 #include <lucent/dipole/DipoleProvider.h>
+#include <lucent/dipole/DirpoleProvider.h>
+#if LUCENT_APP_HAS_COMBINED
+#include <lucent/combined/CombinedProvider.h>
+#endif
 #include <lucent/gpu/SceneRenderer.h>
 #include <lucent/gpu/Shader.h>
 #include <lucent/sslpv/SslpvProvider.h>
@@ -178,6 +182,157 @@ private:
     RenderSettings m_settings;
 };
 
+/// The volume overlay (shaders/preview_volume_overlay.frag): one R32F 3-D texture holding, per
+/// voxel, the selected channel's mean over R, G, B (inside voxels) or −3·10³⁸ (outside), and
+/// the channel's value range over the inside voxels, kept exact under incremental updates with
+/// a per-brick minimum/maximum. Only dirty 8³ bricks are re-uploaded while the channel stays.
+class VolumeOverlay {
+public:
+    static constexpr float OUTSIDE = -3.0e38f;
+
+    void create(const gpu::ShaderLibrary& lib) {
+        m_program =
+            gpu::GlProgram::graphics(lib, "post_fullscreen.vert", "preview_volume_overlay.frag");
+    }
+    void destroy() {
+        m_program.destroy();
+        glDeleteTextures(1, &m_texture);
+        m_texture = 0;
+        m_resolution = 0;
+        m_channel = -1;
+    }
+
+    /// Uploads the whole volume (full, new channel or size) or the given bricks.
+    void sync(const MaterialVolume& vol, int channel, bool full, const std::vector<int>& dirty) {
+        const int res = vol.resolution();
+        constexpr int B = MaterialVolume::BRICK, BV = MaterialVolume::BRICK_VOXELS;
+        std::vector<int> bricks = dirty;
+        if (full || res != m_resolution || channel != m_channel || m_texture == 0) {
+            if (res != m_resolution || m_texture == 0) {
+                glDeleteTextures(1, &m_texture);
+                glCreateTextures(GL_TEXTURE_3D, 1, &m_texture);
+                glTextureStorage3D(m_texture, 1, GL_R32F, res, res, res);
+                glTextureParameteri(m_texture, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+                glTextureParameteri(m_texture, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+                m_resolution = res;
+            }
+            m_channel = channel;
+            bricks.resize(size_t(vol.brickCount()));
+            for (int b = 0; b < vol.brickCount(); ++b)
+                bricks[size_t(b)] = b;
+            m_brickMin.assign(size_t(vol.brickCount()), INF);
+            m_brickMax.assign(size_t(vol.brickCount()), -INF);
+        }
+        const Channel ch = channel == 1   ? Channel::SigmaS
+                           : channel == 2 ? Channel::G
+                                          : Channel::SigmaT;
+        const size_t c0 = size_t(MaterialVolume::component(ch, 0)) * BV;
+        const size_t c1 = size_t(MaterialVolume::component(ch, 1)) * BV;
+        const size_t c2 = size_t(MaterialVolume::component(ch, 2)) * BV;
+        std::vector<float> values;
+        values.reserve(size_t(BV));
+        const std::vector<uint8_t>& inside = vol.insideMask();
+        // Default unpack state, whatever a provider or Qt left: client memory, tight rows.
+        glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+        glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+        glPixelStorei(GL_UNPACK_IMAGE_HEIGHT, 0);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+        for (int b : bricks) {
+            const float* d = vol.brickData(b);
+            const Coord o = vol.brickOrigin(b);
+            const Coord size = glm::min(Coord(B), Coord(res) - o);
+            float lo = INF, hi = -INF;
+            values.clear();
+            for (int z = 0; z < size.z; ++z)
+                for (int y = 0; y < size.y; ++y)
+                    for (int x = 0; x < size.x; ++x) {
+                        const Coord c = o + Coord(x, y, z);
+                        const size_t v = size_t(MaterialVolume::voxelInBrick(x, y, z));
+                        float value = OUTSIDE;
+                        if (inside[vol.spec().linearIndex(c)]) {
+                            value = (d[c0 + v] + d[c1 + v] + d[c2 + v]) / 3.f;
+                            lo = std::min(lo, value);
+                            hi = std::max(hi, value);
+                        }
+                        values.push_back(value);
+                    }
+            m_brickMin[size_t(b)] = lo;
+            m_brickMax[size_t(b)] = hi;
+            glTextureSubImage3D(m_texture, 0, o.x, o.y, o.z, size.x, size.y, size.z, GL_RED,
+                                GL_FLOAT, values.data());
+        }
+        m_range = {INF, -INF};
+        for (size_t b = 0; b < m_brickMin.size(); ++b) {
+            m_range.x = std::min(m_range.x, m_brickMin[b]);
+            m_range.y = std::max(m_range.y, m_brickMax[b]);
+        }
+        if (m_range.x > m_range.y)
+            m_range = {0.f, 0.f};  // nothing inside: as the slice view
+    }
+
+    /// Blends the overlay over `framebuffer` (the tone-mapped image). `box`: the object's box.
+    void draw(unsigned framebuffer, int width, int height, const Camera& camera,
+              const GridSpec& spec, const Bounds3f& box, const RenderSettings& s,
+              unsigned gbufferPosition, GLuint vao) {
+        glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+        glViewport(0, 0, width, height);
+        glDisable(GL_DEPTH_TEST);
+        glDisable(GL_CULL_FACE);
+        glEnable(GL_BLEND);
+        glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+        const GLuint p = m_program.id();
+        glUseProgram(p);
+        const auto loc = [&](const char* n) { return glGetUniformLocation(p, n); };
+        const Mat4f worldFromClip =
+            glm::inverse(gpu::cameraClipFromView(camera) * gpu::cameraViewFromWorld(camera));
+        glUniformMatrix4fv(loc("u_worldFromClip"), 1, GL_FALSE, glm::value_ptr(worldFromClip));
+        glUniform2f(loc("u_viewport"), float(width), float(height));
+        glUniform3fv(loc("u_boxMin"), 1, glm::value_ptr(box.lo));
+        glUniform3fv(loc("u_boxMax"), 1, glm::value_ptr(box.hi));
+        glUniform3fv(loc("u_gridOrigin"), 1, glm::value_ptr(spec.origin));
+        glUniform1f(loc("u_voxelSize"), spec.voxelSize);
+        glUniform1i(loc("u_resolution"), spec.resolution);
+        glUniform2f(loc("u_range"), m_range.x, m_range.y);
+        glUniform1f(loc("u_opacity"), std::clamp(s.overlayOpacity, 0.f, 1.f));
+        // One sample per voxel along the grid's diagonal at most (√3·resolution).
+        glUniform1i(loc("u_maxSteps"), int(std::ceil(1.7321f * float(spec.resolution))));
+        glBindTextureUnit(0, m_texture);
+        glBindTextureUnit(1, gbufferPosition);
+        glBindVertexArray(vao);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        glBindVertexArray(0);
+        glBindTextureUnit(0, 0);
+        glBindTextureUnit(1, 0);
+        glUseProgram(0);
+        glDisable(GL_BLEND);
+    }
+
+private:
+    gpu::GlProgram m_program;
+    GLuint m_texture = 0;
+    int m_resolution = 0;
+    int m_channel = -1;
+    std::vector<float> m_brickMin, m_brickMax;
+    glm::vec2 m_range{0.f};
+};
+
+/// Material hand-over of the brick-uploading providers (dipoles, directional dipole): the whole
+/// volume when not synchronised (uploaded at the next frame), else the dirty bricks.
+/// @return the bricks handed over.
+template <class Provider>
+int syncBricks(Provider& provider, bool& synced, MaterialVolume& vol,
+               const std::vector<int>& dirty) {
+    if (!synced) {
+        provider.setMaterial(nullptr);
+        provider.setMaterial(&vol);
+        synced = true;
+        return vol.brickCount();
+    }
+    if (!dirty.empty())
+        provider.uploadBricks(dirty);
+    return int(dirty.size());
+}
+
 SslpvProviderOptions sslpvOptions(const RenderSettings& s) {
     SslpvProviderOptions o;
     o.render.gridResolution = s.sslpvGrid;
@@ -205,6 +360,16 @@ struct PreviewRenderer::Impl {
     std::unique_ptr<SslpvSubsurfaceProvider> sslpv;
     SslpvProviderOptions sslpvOpts;
     std::unique_ptr<dipole::DipoleSubsurfaceProvider> dipole;
+    std::unique_ptr<dipole::DirpoleSubsurfaceProvider> dirpole;
+    bool dirpoleSynced = false;
+#if LUCENT_APP_HAS_COMBINED
+    std::unique_ptr<combined::CombinedSubsurfaceProvider> combined;
+    bool combinedSynced = false, combinedMeshSet = false;
+    float combinedEta = 0.f;
+    std::vector<float> combinedLights;
+#endif
+    VolumeOverlay overlay;
+    bool overlaySynced = false;
     gpu::GlProgram cursor;
     GLuint emptyVao = 0;
     bool created = false;
@@ -233,6 +398,7 @@ void PreviewRenderer::create() {
     try {
         m->renderer.create(m->library);
         m->single.create(m->library);
+        m->overlay.create(m->library);
         m->cursor = gpu::GlProgram::graphics(m->library, "post_fullscreen.vert",
                                              "preview_brush_cursor.frag");
         glCreateVertexArrays(1, &m->emptyVao);
@@ -241,7 +407,11 @@ void PreviewRenderer::create() {
         throw;
     }
     m->meshUploaded = m->singleSynced = m->sslpvSynced = m->dipoleSynced = false;
-    m->sslpvMeshSet = m->surfaceSet = false;
+    m->sslpvMeshSet = m->surfaceSet = m->overlaySynced = m->dirpoleSynced = false;
+#if LUCENT_APP_HAS_COMBINED
+    m->combinedSynced = m->combinedMeshSet = false;
+    m->combinedLights.clear();
+#endif
     m->lights.clear();
     m->sslpvLights.clear();
 }
@@ -252,12 +422,22 @@ void PreviewRenderer::destroy() {
     m->renderer.setSubsurfaceProvider(nullptr);
     m->renderer.destroy();
     m->single.destroy();
+    m->overlay.destroy();
+    m->overlaySynced = false;
     if (m->sslpv)
         m->sslpv->destroy();
     m->sslpv.reset();
     if (m->dipole)
         m->dipole->destroy();
     m->dipole.reset();
+    if (m->dirpole)
+        m->dirpole->destroy();
+    m->dirpole.reset();
+#if LUCENT_APP_HAS_COMBINED
+    if (m->combined)
+        m->combined->destroy();
+    m->combined.reset();
+#endif
     m->cursor.destroy();
     glDeleteVertexArrays(1, &m->emptyVao);
     m->emptyVao = 0;
@@ -265,12 +445,31 @@ void PreviewRenderer::destroy() {
 }
 
 bool PreviewRenderer::wantsAnotherFrame() const {
-    const bool dipole = m->lastMethod == Method::Dipole || m->lastMethod == Method::BetterDipole;
-    return m->created && dipole && m->dipole && !m->dipole->stats().converged;
+    if (!m->created)
+        return false;
+    const Method last = m->lastMethod;
+    if (last == Method::Dipole || last == Method::BetterDipole)
+        return m->dipole && !m->dipole->stats().converged;
+    if (last == Method::DirectionalDipole)
+        return m->dirpole && !m->dirpole->stats().converged;
+#if LUCENT_APP_HAS_COMBINED
+    if (last == Method::Combined)
+        return m->combined && !m->combined->stats().converged;
+#endif
+    return false;
+}
+
+bool PreviewRenderer::hasMethod(RenderSettings::Method method) {
+    return method != Method::Combined || LUCENT_APP_HAS_COMBINED != 0;
 }
 
 const PreviewStats& PreviewRenderer::stats() const {
     return m->stats;
+}
+
+ImageRgb PreviewRenderer::linearImage() const {
+    LUCENT_CHECK(m->created, "PreviewRenderer::linearImage before create()");
+    return m->renderer.readRadiance();
 }
 
 void PreviewRenderer::render(PreviewFrame& f) {
@@ -282,7 +481,11 @@ void PreviewRenderer::render(PreviewFrame& f) {
     if (f.sceneReplaced) {
         sr.clearMeshes();
         r.meshUploaded = r.singleSynced = r.sslpvSynced = r.dipoleSynced = false;
-        r.sslpvMeshSet = r.surfaceSet = false;
+        r.sslpvMeshSet = r.surfaceSet = r.overlaySynced = r.dirpoleSynced = false;
+#if LUCENT_APP_HAS_COMBINED
+        r.combinedSynced = r.combinedMeshSet = false;
+        r.combinedLights.clear();
+#endif
         r.lights.clear();
         r.sslpvLights.clear();
     }
@@ -307,6 +510,8 @@ void PreviewRenderer::render(PreviewFrame& f) {
     gpu::DirectSettings ds = sr.settings();
     ds.toneMap.exposure = std::exp2(s.exposureStops);
     ds.toneMap.curve = ToneMap::Curve::Reinhard;
+    ds.reuseUnchangedPasses = s.reusePasses;
+    ds.subsurfaceOnly = s.subsurfaceOnly;
     // Background: the radiance that displays as the app's dark grey (0.16, 0.17, 0.19) after
     // this tone map (inverse sRGB OETF, inverse Reinhard c/(1+c), divided by the exposure).
     const auto bg = [&](float display) {
@@ -323,7 +528,7 @@ void PreviewRenderer::render(PreviewFrame& f) {
     int bricksUsed = 0;
     gpu::SubsurfaceProvider* provider = nullptr;
     std::ostringstream detail;
-    const Method method = haveMesh && vol ? s.method : Method::Direct;
+    const Method method = haveMesh && vol && hasMethod(s.method) ? s.method : Method::Direct;
     if (method != Method::SingleScattering && dirty)
         r.singleSynced = false;
     if (method != Method::Sslpv && dirty)
@@ -331,6 +536,13 @@ void PreviewRenderer::render(PreviewFrame& f) {
     const bool isDipole = method == Method::Dipole || method == Method::BetterDipole;
     if (!isDipole && dirty)
         r.dipoleSynced = false;
+    if (method != Method::DirectionalDipole && dirty)
+        r.dirpoleSynced = false;
+#if LUCENT_APP_HAS_COMBINED
+    if (method != Method::Combined && dirty)
+        r.combinedSynced = false;
+#endif
+    const float eta = std::clamp(f.scene->eta, 1.f, 3.f);
 
     switch (method) {
         case Method::Direct:
@@ -385,7 +597,6 @@ void PreviewRenderer::render(PreviewFrame& f) {
             dipole::ProviderSettings ps = r.dipole->settings();
             const dipole::Model model =
                 method == Method::Dipole ? dipole::Model::Dipole : dipole::Model::BetterDipole;
-            const float eta = std::clamp(f.scene->eta, 1.f, 3.f);
             const int spp = std::clamp(s.dipoleSpp, 1, 4096);
             if (ps.model != model || ps.eta != eta || ps.samplesPerFrame != spp) {
                 ps.model = model;
@@ -393,21 +604,78 @@ void PreviewRenderer::render(PreviewFrame& f) {
                 ps.samplesPerFrame = spp;
                 r.dipole->setSettings(ps);
             }
-            if (!r.dipoleSynced) {
-                r.dipole->setMaterial(nullptr);
-                r.dipole->setMaterial(vol);  // whole volume uploaded at the next frame
-                r.dipoleSynced = true;
+            bricksUsed = syncBricks(*r.dipole, r.dipoleSynced, *vol, f.dirtyBricks);
+            provider = r.dipole.get();
+            break;
+        }
+        case Method::DirectionalDipole: {
+            if (!r.dirpole) {
+                r.dirpole = std::make_unique<dipole::DirpoleSubsurfaceProvider>();
+                r.dirpole->create(r.library);
+                r.dirpoleSynced = false;
+            }
+            dipole::DirpoleSettings ps = r.dirpole->settings();
+            const int spp = std::clamp(s.dirpoleSpp, 1, 4096);
+            if (ps.eta != eta || ps.samplesPerFrame != spp || ps.meshId != 0) {
+                ps.eta = eta;
+                ps.samplesPerFrame = spp;
+                ps.meshId = 0;  // object 0: the only mesh uploaded
+                r.dirpole->setSettings(ps);
+            }
+            bricksUsed = syncBricks(*r.dirpole, r.dirpoleSynced, *vol, f.dirtyBricks);
+            provider = r.dirpole.get();
+            break;
+        }
+        case Method::Combined: {
+#if LUCENT_APP_HAS_COMBINED
+            if (!r.combined) {
+                r.combined = std::make_unique<combined::CombinedSubsurfaceProvider>();
+                r.combined->create(r.library);
+                r.combinedSynced = r.combinedMeshSet = false;
+                r.combinedLights.clear();
+            }
+            combined::CombinedProviderSettings cs = r.combined->settings();
+            const int spp = std::clamp(s.dipoleSpp, 1, 4096);
+            if (cs.splitRadius != s.combinedSplitRadius || cs.eta != eta || cs.meshId != 0 ||
+                cs.dipole.samplesPerFrame != spp) {
+                cs.splitRadius = s.combinedSplitRadius;
+                cs.eta = eta;
+                cs.meshId = 0;
+                cs.dipole.samplesPerFrame = spp;
+                r.combined->setSettings(cs);
+            }
+            if (!r.combinedMeshSet) {
+                r.combined->setMesh(f.scene->objects[0].mesh);  // rest space, as SSLPV
+                r.combinedMeshSet = true;
+            }
+            if (key != r.combinedLights) {
+                r.combined->setLights(lights);
+                r.combinedLights = key;
+            }
+            if (!r.combinedSynced || r.combinedEta != eta) {
+                r.combined->setMaterial(*vol, eta);
+                r.combinedSynced = true;
+                r.combinedEta = eta;
                 bricksUsed = vol->brickCount();
             } else if (dirty) {
-                r.dipole->uploadBricks(f.dirtyBricks);
+                r.combined->updateMaterial(*vol, f.dirtyBricks);
                 bricksUsed = int(f.dirtyBricks.size());
             }
-            provider = r.dipole.get();
+            provider = r.combined.get();
+#endif
             break;
         }
     }
     if (f.sceneReplaced && r.dipole && !isDipole)
         r.dipole->setMaterial(nullptr);  // the old volume is gone: never keep a dangling pointer
+    if (f.sceneReplaced && r.dirpole && method != Method::DirectionalDipole)
+        r.dirpole->setMaterial(nullptr);
+#if LUCENT_APP_HAS_COMBINED
+    if (f.sceneReplaced && r.combined && method != Method::Combined) {
+        r.combined->destroy();  // its dipole part points at the old volume
+        r.combined.reset();
+    }
+#endif
     if (haveMesh && (method != r.lastMethod || !r.surfaceSet || r.surfaceEta != f.scene->eta)) {
         r.surfaceEta = f.scene->eta;
         // Direct: an opaque grey Lambert + Blinn-Phong surface. Subsurface methods: the object
@@ -434,6 +702,27 @@ void PreviewRenderer::render(PreviewFrame& f) {
     sr.setSubsurfaceProvider(provider);
     sr.renderToFramebuffer(f.framebuffer, f.framebufferWidth, f.framebufferHeight);
     sr.setSubsurfaceProvider(nullptr);
+    const gpu::PassReuseCounters& reuse = sr.reuseCounters();
+    r.stats.shadowsReused = reuse.shadowsReused;
+    r.stats.gbufferReused = reuse.gbufferReused;
+    r.stats.directReused = reuse.directReused;
+
+    // Volume overlay over the tone-mapped image (its own brick sync: the dirty bricks of this
+    // frame, or everything when it was off while the volume changed).
+    if (dirty && !s.volumeOverlay)
+        r.overlaySynced = false;
+    if (s.volumeOverlay && haveMesh && vol) {
+        const int channel = std::clamp(s.overlayChannel, 0, 2);
+        r.overlay.sync(*vol, channel, !r.overlaySynced, f.dirtyBricks);
+        r.overlaySynced = true;
+        Bounds3f box = vol->spec().bounds();
+        const Bounds3f meshBox = f.shownMesh->bounds();
+        box.lo = glm::max(box.lo, meshBox.lo);
+        box.hi = glm::min(box.hi, meshBox.hi);
+        if (!box.isEmpty())
+            r.overlay.draw(f.framebuffer, f.framebufferWidth, f.framebufferHeight, f.camera,
+                           vol->spec(), box, s, sr.gbuffer().positionTexture, r.emptyVao);
+    }
 
     // Brush cursor over the tone-mapped image.
     if (f.cursor && f.brushRadius > 0.f && haveMesh) {
@@ -454,7 +743,10 @@ void PreviewRenderer::render(PreviewFrame& f) {
         glDisable(GL_BLEND);
     }
 
-    // Statistics.
+    // Statistics of this frame: the caller finishes the frame anyway (the viewport calls
+    // glFinish), so waiting for the timer queries here costs nothing and shows the passes of
+    // the frame just drawn instead of one or two frames back.
+    sr.profiler().collect(/*wait=*/true);
     r.stats.passes.clear();
     for (const gpu::PassTiming& t : sr.profiler().latest())
         r.stats.passes.push_back({t.name, t.gpuMs, t.cpuMs});
@@ -483,7 +775,31 @@ void PreviewRenderer::render(PreviewFrame& f) {
                       st.samplesPerPixel, double(st.lastChange), st.converged ? " (converged)" : "",
                       st.lastUploadBricks);
         detail << line;
+    } else if (method == Method::DirectionalDipole && r.dirpole) {
+        const dipole::ProviderStats& st = r.dirpole->stats();
+        char line[200];
+        std::snprintf(line, sizeof line,
+                      "directional dipole: %d frames, %d samples per texel and light, last "
+                      "change %.2g%s; last upload %d bricks",
+                      st.frames, st.samplesPerPixel, double(st.lastChange),
+                      st.converged ? " (converged)" : "", st.lastUploadBricks);
+        detail << line;
     }
+#if LUCENT_APP_HAS_COMBINED
+    else if (method == Method::Combined && r.combined) {
+        const combined::CombinedProviderStats& st = r.combined->stats();
+        char line[240];
+        std::snprintf(line, sizeof line,
+                      "combined: r_s = %.3g mm (%.3g SSLPV cells), dipole %d frames / %d spp%s, "
+                      "SSLPV %d incremental / %d full updates",
+                      double(st.plan.splitRadius),
+                      st.plan.cellSize > 0.f ? double(st.plan.splitRadius / st.plan.cellSize) : 0.0,
+                      st.dipole.frames, st.dipole.samplesPerPixel,
+                      st.converged ? " (converged)" : "", st.sslpv.incrementalUpdates,
+                      st.sslpv.fullResamples);
+        detail << line;
+    }
+#endif
     r.stats.methodDetail = detail.str();
 }
 

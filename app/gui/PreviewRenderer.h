@@ -3,15 +3,21 @@
 /// @file
 /// @brief The viewport's rendering, outside the widget: gpu::SceneRenderer (direct lighting,
 /// shadow maps, tone map) with one subsurface provider per preview method (single scattering,
-/// SSLPV, dipole / better dipole) and the brush-cursor overlay. Every shader comes from the
-/// engine's shader library (shaders/preview_*.{comp,frag}). Plain C++ and GL (epoxy): the
-/// Qt widget only hands it a current context, its framebuffer and the frame's inputs.
+/// SSLPV, dipole / better dipole, directional dipole, combined), the volume overlay and the
+/// brush-cursor overlay. Every shader comes from the engine's shader library
+/// (shaders/preview_*.{comp,frag}). Plain C++ and GL (epoxy): the Qt widget only hands it a
+/// current context, its framebuffer and the frame's inputs.
+///
+/// Paint strokes: the renderer keeps the shadow maps, the G-buffer and the direct-lighting term
+/// while lights, camera and mesh are unchanged, so a stroke frame runs only the subsurface
+/// provider, a one-fetch shading pass and the tone map (RenderSettings::reusePasses).
 ///
 /// Material edits: the caller passes the volume's dirty bricks (MaterialVolume::takeDirtyBricks)
 /// once per frame; the active method consumes them incrementally (SSLPV re-resamples and
 /// re-propagates only the coarse cells they overlap, the dipole and single-scatter passes
 /// re-upload only those bricks). Inactive methods are fully re-synchronised when selected.
 
+#include <lucent/core/Image.h>
 #include <lucent/core/Types.h>
 #include <lucent/material/MaterialVolume.h>
 #include <lucent/mesh/TriangleMesh.h>
@@ -32,6 +38,12 @@ struct RenderSettings {
         Sslpv = 2,             ///< + SSLPV (Børlum et al. 2011), SslpvSubsurfaceProvider
         Dipole = 3,            ///< + image-space dipole (Jensen et al. 2001), progressive
         BetterDipole = 4,      ///< + image-space better dipole (d'Eon 2012), progressive
+        /// + directional dipole (Frisvad et al. 2014), GPU pipeline, progressive
+        /// (dipole::DirpoleSubsurfaceProvider; needs a build with that provider)
+        DirectionalDipole = 5,
+        /// + windowed dipole and SSLPV beyond the split radius (combined::
+        /// CombinedSubsurfaceProvider; only in builds with the combined module)
+        Combined = 6,
     } method = Method::Sslpv;
     int steps = 24;             ///< view-ray march steps (single scattering)
     int lightSteps = 6;         ///< shadow-ray march steps per view step (single scattering)
@@ -55,7 +67,20 @@ struct RenderSettings {
     int sslpvOrder = 1;            ///< SH order 1 or 2
     bool sslpvGlSolve = false;     ///< propagation on the GPU (SslpvBackend::Gl)
     // Dipoles
-    int dipoleSpp = 16;  ///< samples per pixel and frame, [1, 4096]; refines while idle
+    int dipoleSpp = 16;   ///< samples per pixel and frame, [1, 4096]; refines while idle
+    int dirpoleSpp = 16;  ///< directional dipole: disc samples per texel and frame, [1, 4096]
+    /// Combined: split radius r_s in mm (dipole for r ≤ r_s, SSLPV beyond); < 0 picks the
+    /// module's default (4 SSLPV cells).
+    float combinedSplitRadius = -1.f;
+    /// Show only the subsurface term (debug view; gpu::DirectSettings::subsurfaceOnly).
+    bool subsurfaceOnly = false;
+    /// Reuse the G-buffer and the direct-lighting term while their inputs are unchanged
+    /// (gpu::DirectSettings::reuseUnchangedPasses); false only to measure the gain.
+    bool reusePasses = true;
+    // Volume overlay (drawn over the tone-mapped image, inside the object's box only)
+    bool volumeOverlay = false;   ///< ray-march the painted volume over the viewport
+    int overlayChannel = 0;       ///< 0 σt, 1 σs′, 2 g (the slice view's colour maps)
+    float overlayOpacity = 0.5f;  ///< overlay opacity in [0, 1]
 };
 
 /// Per-frame numbers for the Statistics dock.
@@ -71,6 +96,9 @@ struct PreviewStats {
     int sslpvIncrementalUpdates = 0;  ///< SSLPV updateMaterial calls that did work (dirty bricks)
     int sslpvFullResamples = 0;       ///< SSLPV setMaterial calls
     double uploadMs = 0.0;            ///< CPU ms of the last material update
+    /// Frames since create() that reused the shadow maps, the G-buffer and the direct-lighting
+    /// term (gpu::DirectSettings::reuseUnchangedPasses; a paint stroke reuses all three).
+    long long shadowsReused = 0, gbufferReused = 0, directReused = 0;
 };
 
 /// What one frame needs. Positions in mm; the camera's width/height are the render size.
@@ -107,6 +135,12 @@ public:
     /// True while a progressive method still refines (another frame is useful when idle).
     [[nodiscard]] bool wantsAnotherFrame() const;
     [[nodiscard]] const PreviewStats& stats() const;
+    /// The last frame's linear radiance at render resolution (camera width × height),
+    /// W/(mm²·sr), before tone mapping and overlays, top row first (for EXR export). Reads the
+    /// GPU back on demand (context current). @throw lucent::Error before the first frame.
+    [[nodiscard]] ImageRgb linearImage() const;
+    /// Whether this build has `method` (DirectionalDipole and Combined depend on the modules).
+    [[nodiscard]] static bool hasMethod(RenderSettings::Method method);
 
 private:
     struct Impl;

@@ -15,6 +15,9 @@
 #include <QKeyEvent>
 #include <QMouseEvent>
 #include <QOpenGLContext>
+#include <QOpenGLPaintDevice>
+#include <QPainter>
+#include <QTabletEvent>
 #include <QWheelEvent>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -96,6 +99,13 @@ void Viewport::setRenderSettings(const RenderSettings& s) {
     m_render.sslpvSteps = std::clamp(m_render.sslpvSteps, 1, 512);
     m_render.sslpvOrder = m_render.sslpvOrder == 2 ? 2 : 1;
     m_render.dipoleSpp = std::clamp(m_render.dipoleSpp, 1, 4096);
+    m_render.dirpoleSpp = std::clamp(m_render.dirpoleSpp, 1, 4096);
+    if (!std::isfinite(m_render.combinedSplitRadius))
+        m_render.combinedSplitRadius = -1.f;  // the module's default split
+    m_render.overlayChannel = std::clamp(m_render.overlayChannel, 0, 2);
+    m_render.overlayOpacity = std::isfinite(m_render.overlayOpacity)
+                                  ? std::clamp(m_render.overlayOpacity, 0.f, 1.f)
+                                  : 0.5f;
     if (s.turntable && !m_turntable.isActive())
         m_turntable.start();
     if (!s.turntable)
@@ -117,7 +127,11 @@ void Viewport::onSceneReplaced() {
     m_meshDirty = true;
     m_sceneReplaced = true;
     m_stroking = false;
+    m_tabletStroke = false;
     m_drag = Drag::None;
+    m_lightsBeforeDrag.clear();
+    if (m_selectedLight >= int(scene.lights.size()))
+        m_selectedLight = -1;
     update();
 }
 
@@ -169,7 +183,8 @@ void Viewport::beginStroke(const PickHit& hit) {
     }
     m_stroking = true;
     m_lastStamp = stampCenter(hit);
-    m_doc->strokeStamp(m_lastStamp);
+    m_doc->strokeStamp(m_lastStamp, m_brush.radiusScale(m_pressure),
+                       m_brush.strengthScale(m_pressure));
 }
 
 void Viewport::continueStroke(const PickHit& hit) {
@@ -177,14 +192,17 @@ void Viewport::continueStroke(const PickHit& hit) {
         return;
     // Stamps every spacing·radius mm along the straight path from the last stamp towards the
     // current hit (Brush.h spacing convention), never closer than half a voxel.
+    // The radius is the pressure-scaled one of this stamp.
     const MaterialVolume* vol = m_doc->material();
-    const float spacing = std::max(m_brush.engine.spacing * m_brush.engine.radius,
+    const float radiusScale = m_brush.radiusScale(m_pressure);
+    const float strengthScale = m_brush.strengthScale(m_pressure);
+    const float spacing = std::max(m_brush.engine.spacing * m_brush.engine.radius * radiusScale,
                                    vol ? 0.5f * vol->spec().voxelSize : 0.f);
     const Point3f target = stampCenter(hit);
     for (Vector3f seg = target - m_lastStamp; glm::length(seg) >= spacing && spacing > 0.f;
          seg = target - m_lastStamp) {
         m_lastStamp += glm::normalize(seg) * spacing;
-        m_doc->strokeStamp(m_lastStamp);
+        m_doc->strokeStamp(m_lastStamp, radiusScale, strengthScale);
     }
 }
 
@@ -240,6 +258,231 @@ void Viewport::updateHover(const QPointF& pos) {
     update();
 }
 
+// ---- Light gizmos ---------------------------------------------------------------------------
+
+void Viewport::setSelectedLight(int index) {
+    const int n = int(m_doc->scene().lights.size());
+    m_selectedLight = index >= 0 && index < n ? index : -1;
+    update();
+}
+
+void Viewport::setLightGizmosVisible(bool visible) {
+    m_gizmosVisible = visible;
+    update();
+}
+
+void Viewport::gizmoSphere(Point3f& center, float& radius) const {
+    const TriangleMesh* mesh = m_doc->mesh();
+    if (mesh && !mesh->isEmpty()) {
+        const Bounds3f b = mesh->bounds();
+        center = b.center();
+        radius = 1.5f * 0.5f * std::max(glm::length(b.extent()), 1e-3f);
+    } else {
+        center = m_camera.target;
+        radius = 0.5f * m_camera.distance;
+    }
+}
+
+std::optional<Point3f> Viewport::lightHandleWorld(int index) const {
+    const auto& lights = m_doc->scene().lights;
+    if (index < 0 || size_t(index) >= lights.size())
+        return std::nullopt;
+    const Light& l = lights[size_t(index)];
+    if (l.type != Light::Type::Directional)
+        return l.position;
+    Point3f c;
+    float r = 0.f;
+    gizmoSphere(c, r);
+    const float len = glm::length(l.direction);
+    const Vector3f d = len > 0.f ? l.direction / len : Vector3f(0.f, -1.f, 0.f);
+    return c - r * d;  // the light travels along d, from the handle through the centre
+}
+
+std::optional<QPointF> Viewport::project(const Point3f& p) const {
+    const float w = float(std::max(width(), 1)), h = float(std::max(height(), 1));
+    const glm::vec4 clip =
+        m_camera.clipFromView(w / h) * m_camera.viewFromWorld() * glm::vec4(p, 1.f);
+    if (clip.w <= 1e-6f)
+        return std::nullopt;
+    // Inverse of cameraRay's mapping: NDC x, y ∈ [−1, 1] → widget pixels, y down.
+    const float x = clip.x / clip.w, y = clip.y / clip.w;
+    return QPointF(double(0.5f * (x + 1.f) * w), double(0.5f * (1.f - y) * h));
+}
+
+std::optional<QPointF> Viewport::lightHandle(int index) const {
+    const auto world = lightHandleWorld(index);
+    return world ? project(*world) : std::nullopt;
+}
+
+int Viewport::lightAt(const QPointF& pos) const {
+    if (!m_gizmosVisible)
+        return -1;
+    int best = -1;
+    double bestDist = HANDLE_PICK_PX;
+    // The selected light wins ties: it is drawn on top.
+    for (int i = 0; i < int(m_doc->scene().lights.size()); ++i) {
+        const auto h = lightHandle(i);
+        if (!h)
+            continue;
+        const double d = std::hypot(h->x() - pos.x(), h->y() - pos.y());
+        if (d < bestDist || (d <= bestDist && i == m_selectedLight)) {
+            bestDist = d;
+            best = i;
+        }
+    }
+    return best;
+}
+
+void Viewport::beginLightDrag(int index, const QPointF& pos) {
+    setCursor(Qt::ClosedHandCursor);
+    m_selectedLight = index;
+    Q_EMIT lightSelected(index);
+    m_lightsBeforeDrag = m_doc->scene().lights;
+    m_drag = Drag::Light;
+    const Light& l = m_lightsBeforeDrag[size_t(index)];
+    Point3f o;
+    Vector3f d;
+    cameraRay(pos, o, d);
+    // Point / spot / sphere: the plane through the light facing the camera; the offset keeps
+    // the light from jumping to the cursor when the press was a few pixels off its centre.
+    m_dragPlanePoint = l.position;
+    m_dragPlaneNormal = glm::normalize(m_camera.target - m_camera.eye());
+    const float denom = glm::dot(d, m_dragPlaneNormal);
+    m_dragOffset = Vector3f(0.f);
+    if (std::abs(denom) > 1e-6f) {
+        const float t = glm::dot(m_dragPlanePoint - o, m_dragPlaneNormal) / denom;
+        m_dragOffset = l.position - (o + t * d);
+    }
+    update();
+}
+
+void Viewport::continueLightDrag(const QPointF& pos) {
+    const int i = m_selectedLight;
+    if (i < 0 || size_t(i) >= m_doc->scene().lights.size() ||
+        size_t(i) >= m_lightsBeforeDrag.size())
+        return;
+    Light l = m_doc->scene().lights[size_t(i)];
+    Point3f o;
+    Vector3f d;
+    cameraRay(pos, o, d);
+    if (l.type == Light::Type::Directional) {
+        // Ray–sphere intersection (nearest hit); off the sphere, the closest point of the ray
+        // to the centre pushed out onto the sphere. The light then shines from there.
+        Point3f c;
+        float r = 0.f;
+        gizmoSphere(c, r);
+        const Vector3f oc = o - c;
+        const float b = glm::dot(oc, d), disc = b * b - (glm::dot(oc, oc) - r * r);
+        Point3f p;
+        if (disc >= 0.f && -b - std::sqrt(disc) > 0.f) {
+            p = o + (-b - std::sqrt(disc)) * d;
+        } else {
+            const Point3f closest = o + std::max(-b, 0.f) * d;
+            const Vector3f out = closest - c;
+            p = c + r * (glm::length(out) > 0.f ? glm::normalize(out) : -d);
+        }
+        l.direction = glm::normalize(c - p);
+    } else {
+        const float denom = glm::dot(d, m_dragPlaneNormal);
+        if (std::abs(denom) < 1e-6f)
+            return;  // ray parallel to the plane: keep the last position
+        const float t = glm::dot(m_dragPlanePoint - o, m_dragPlaneNormal) / denom;
+        if (t <= 0.f)
+            return;
+        l.position = o + t * d + m_dragOffset;
+    }
+    m_doc->setLightLive(i, l);
+}
+
+void Viewport::endLightDrag() {
+    setCursor(Qt::OpenHandCursor);
+    m_drag = Drag::None;
+    m_doc->commitLights(m_lightsBeforeDrag, tr("Move light %1").arg(m_selectedLight));
+    m_lightsBeforeDrag.clear();
+}
+
+void Viewport::drawOverlay() {
+    if (!m_gizmosVisible || m_hideOverlays)
+        return;
+    const auto& lights = m_doc->scene().lights;
+    if (lights.empty())
+        return;
+    // A paint device on the widget's framebuffer rather than QPainter(this): QWidget::grab()
+    // redirects widget painters to its pixmap and then draws the framebuffer over them, which
+    // would drop the overlay from window screenshots.
+    const qreal dpr = devicePixelRatioF();
+    glBindFramebuffer(GL_FRAMEBUFFER, defaultFramebufferObject());
+    QOpenGLPaintDevice device(std::max(1, int(width() * dpr)), std::max(1, int(height() * dpr)));
+    device.setDevicePixelRatio(dpr);
+    QPainter painter(&device);
+    painter.setRenderHint(QPainter::Antialiasing);
+    QFont font = painter.font();
+    font.setPointSizeF(8.0);
+    painter.setFont(font);
+    const auto colourOf = [](const Light& l) {
+        // The light's colour: its RGB intensity normalised by the largest channel.
+        const float m = std::max({l.intensity.r, l.intensity.g, l.intensity.b});
+        if (!(m > 0.f))
+            return QColor(128, 128, 128);
+        return QColor::fromRgbF(l.intensity.r / m, l.intensity.g / m, l.intensity.b / m);
+    };
+    Point3f center;
+    float radius = 0.f;
+    gizmoSphere(center, radius);
+    // The selected light last, so it is drawn on top of the others.
+    std::vector<int> order;
+    for (int i = 0; i < int(lights.size()); ++i)
+        if (i != m_selectedLight)
+            order.push_back(i);
+    if (m_selectedLight >= 0 && m_selectedLight < int(lights.size()))
+        order.push_back(m_selectedLight);
+    for (int i : order) {
+        const Light& l = lights[size_t(i)];
+        const auto h = lightHandle(i);
+        if (!h)
+            continue;
+        const bool selected = i == m_selectedLight;
+        const QColor colour = colourOf(l);
+        painter.setPen(QPen(colour, selected ? 2.0 : 1.2));
+        painter.setBrush(Qt::NoBrush);
+        if (l.type == Light::Type::Directional) {
+            // Arrow from the handle towards the object's centre.
+            if (const auto c = project(center)) {
+                const QPointF dir = *c - *h;
+                const double len = std::hypot(dir.x(), dir.y());
+                if (len > 1.0) {
+                    const QPointF u = dir / len, tip = *h + u * std::min(len, 40.0);
+                    const QPointF n(-u.y(), u.x());
+                    painter.drawLine(*h, tip);
+                    painter.drawLine(tip, tip - 7.0 * u + 4.0 * n);
+                    painter.drawLine(tip, tip - 7.0 * u - 4.0 * n);
+                }
+                if (selected) {  // outline of the sphere the handle moves on
+                    const Mat4f v = m_camera.viewFromWorld();
+                    const Vector3f right(v[0][0], v[1][0], v[2][0]);
+                    if (const auto rim = project(center + radius * right)) {
+                        const double rr = std::hypot(rim->x() - c->x(), rim->y() - c->y());
+                        painter.setPen(QPen(colour, 1.0, Qt::DashLine));
+                        painter.drawEllipse(*c, rr, rr);
+                        painter.setPen(QPen(colour, 2.0));
+                    }
+                }
+            }
+        } else if (l.type == Light::Type::Spot) {
+            if (const auto tip = project(l.position + 0.15f * radius * glm::normalize(l.direction)))
+                painter.drawLine(*h, *tip);
+        }
+        const double r = selected ? 7.0 : 5.0;
+        painter.setBrush(colour);
+        painter.setPen(
+            QPen(selected ? QColor(255, 255, 255) : QColor(20, 20, 20), selected ? 2.0 : 1.0));
+        painter.drawEllipse(*h, r, r);
+        painter.setPen(QColor(230, 230, 230));
+        painter.drawText(*h + QPointF(r + 3.0, -r), QStringLiteral("L%1").arg(i));
+    }
+    painter.end();
+}
+
 // ---- Mouse and keys -------------------------------------------------------------------------
 
 void Viewport::mousePressEvent(QMouseEvent* e) {
@@ -250,6 +493,11 @@ void Viewport::mousePressEvent(QMouseEvent* e) {
     } else if (e->button() == Qt::RightButton) {
         m_drag = Drag::Pan;
     } else if (e->button() == Qt::LeftButton) {
+        if (const int light = lightAt(e->position()); light >= 0) {
+            beginLightDrag(light, e->position());
+            return;
+        }
+        m_pressure = 1.f;  // the mouse paints at full pressure
         const auto hit = pickAt(e->position());
         if (!hit)
             return;
@@ -296,16 +544,57 @@ void Viewport::mouseMoveEvent(QMouseEvent* e) {
                 continueStroke(*hit);
             updateHover(e->position());
             break;
+        case Drag::Light:
+            continueLightDrag(e->position());
+            break;
         case Drag::None:
+            // A light handle under the cursor can be grabbed.
+            setCursor(lightAt(e->position()) >= 0 ? Qt::OpenHandCursor : Qt::ArrowCursor);
             updateHover(e->position());
             break;
     }
 }
 
-void Viewport::mouseReleaseEvent(QMouseEvent* e) {
+void Viewport::mouseReleaseEvent(QMouseEvent*) {
     if (m_drag == Drag::Paint)
         endStroke();
+    if (m_drag == Drag::Light)
+        endLightDrag();
     m_drag = Drag::None;
+}
+
+void Viewport::tabletEvent(QTabletEvent* e) {
+    // The pen paints with its pressure. Anything else (eyedropper, gizmo handles, navigation
+    // with modifiers or barrel buttons, hovering) is ignored here and reaches the mouse
+    // handlers as the mouse events Qt synthesises from an ignored tablet event.
+    const float pressure = float(std::clamp(e->pressure(), 0.0, 1.0));
+    bool handled = false;
+    if (e->type() == QEvent::TabletPress) {
+        const bool paints = e->button() == Qt::LeftButton && m_tool == Tool::Paint &&
+                            e->modifiers() == Qt::NoModifier && !m_render.deform &&
+                            lightAt(e->position()) < 0;
+        if (const auto hit = paints ? pickAt(e->position()) : std::nullopt) {
+            m_pressure = pressure;
+            m_drag = Drag::Paint;
+            m_tabletStroke = handled = true;
+            beginStroke(*hit);
+        }
+    } else if (m_tabletStroke && e->type() == QEvent::TabletMove) {
+        m_pressure = pressure;
+        if (const auto hit = pickAt(e->position()))
+            continueStroke(*hit);
+        updateHover(e->position());
+        handled = true;
+    } else if (m_tabletStroke && e->type() == QEvent::TabletRelease) {
+        endStroke();
+        m_drag = Drag::None;
+        m_tabletStroke = false;
+        m_pressure = 1.f;
+        handled = true;
+    }
+    if (handled)
+        m_lastMouse = e->position();
+    e->setAccepted(handled);
 }
 
 void Viewport::wheelEvent(QWheelEvent* e) {
@@ -326,6 +615,25 @@ void Viewport::keyPressEvent(QKeyEvent* e) {
 void Viewport::leaveEvent(QEvent*) {
     m_cursor.reset();
     update();
+}
+
+ImageRgb Viewport::linearImage() {
+    if (!m_glReady || m_stats.frames == 0)
+        LUCENT_THROW(GpuError, "the viewport has not rendered a frame yet");
+    makeCurrent();
+    ImageRgb img = m_preview.linearImage();
+    doneCurrent();
+    if (img.isEmpty())
+        LUCENT_THROW(GpuError, "the preview renderer has no linear image");
+    return img;
+}
+
+QImage Viewport::grabRender() {
+    m_hideOverlays = true;
+    QImage img = grabFramebuffer();
+    m_hideOverlays = false;
+    update();  // the next on-screen frame shows the overlays again
+    return img;
 }
 
 // ---- GL -------------------------------------------------------------------------------------
@@ -414,9 +722,10 @@ void Viewport::paintGL() {
     cam.nearPlane = std::max(1e-3f, m_camera.distance * 0.01f);  // as OrbitCamera::clipFromView
     cam.farPlane = m_camera.distance * 100.f + 1.f;
     f.settings = m_render;
-    if (m_cursor && m_tool == Tool::Paint)
+    f.settings.volumeOverlay = m_render.volumeOverlay && !m_hideOverlays;
+    if (m_cursor && m_tool == Tool::Paint && !m_hideOverlays)
         f.cursor = m_cursor;
-    f.brushRadius = m_brush.engine.radius;
+    f.brushRadius = m_brush.engine.radius * m_brush.radiusScale(m_pressure);
     f.framebuffer = defaultFramebufferObject();
     f.framebufferWidth = fullW;
     f.framebufferHeight = fullH;
@@ -434,6 +743,9 @@ void Viewport::paintGL() {
     m_stats.uploadMs = m_stats.preview.uploadMs;
     m_stats.bricksUploaded = m_stats.preview.bricksUploaded;
     glFinish();  // so the frame time includes the (software) rasterisation
+    while (glGetError() != GL_NO_ERROR)
+        ++m_stats.glErrors;
+    drawOverlay();  // QPainter on the widget's framebuffer, after the frame
     while (glGetError() != GL_NO_ERROR)
         ++m_stats.glErrors;
     m_stats.frameMs = timer.elapsedMs();

@@ -7,6 +7,12 @@
 ///
 /// After a stroke only the volume's dirty 8³ bricks are handed to the renderer (SSLPV
 /// re-resamples and re-propagates only them, the texture-based passes re-upload only them).
+///
+/// Light gizmos: every light has a handle drawn over the frame (QPainter, in the light's
+/// colour). Clicking a handle selects the light and dragging moves it, one undo step per drag:
+/// point, spot and sphere lights move on the view-aligned plane through their position;
+/// directional lights move on a sphere around the object and shine towards its centre.
+/// Tablet pens paint with pressure (AppBrush::pressureMode); the mouse is pressure 1.
 
 #include "BrushTool.h"
 #include "MeshPicker.h"
@@ -55,6 +61,8 @@ class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_4_5_Core {
     Q_OBJECT
 public:
     enum class Tool { Paint, Eyedropper };
+    /// Radius within which a click picks a light handle, logical pixels.
+    static constexpr double HANDLE_PICK_PX = 9.0;
 
     explicit Viewport(Document* doc, QWidget* parent = nullptr);
     ~Viewport() override;
@@ -80,11 +88,38 @@ public:
     /// (1 when the stroke changed voxels, else 0).
     int strokeBetween(const QPointF& a, const QPointF& b);
 
+    //! @{ \name Light gizmos
+    /// Selected light (index into Scene::lights), −1 for none. Selecting emits nothing.
+    [[nodiscard]] int selectedLight() const { return m_selectedLight; }
+    void setSelectedLight(int index);
+    void setLightGizmosVisible(bool visible);
+    [[nodiscard]] bool lightGizmosVisible() const { return m_gizmosVisible; }
+    /// World position of light `index`'s handle (mm): the light's position, or for a
+    /// directional light the point of the gizmo sphere it shines from (centre − R·direction).
+    [[nodiscard]] std::optional<Point3f> lightHandleWorld(int index) const;
+    /// Handle of light `index` in widget coordinates; empty when it is behind the camera.
+    [[nodiscard]] std::optional<QPointF> lightHandle(int index) const;
+    /// Light whose handle is nearest to `pos` within HANDLE_PICK_PX, −1 for none.
+    [[nodiscard]] int lightAt(const QPointF& pos) const;
+    /// Sphere on which directional-light handles move: the object's bounding sphere × 1.5.
+    void gizmoSphere(Point3f& center, float& radius) const;
+    /// Widget position of world point `p`; empty when it is behind the camera.
+    [[nodiscard]] std::optional<QPointF> project(const Point3f& p) const;
+    //! @}
+
+    /// The last frame's linear radiance at render resolution, W/(mm²·sr)
+    /// (PreviewRenderer::linearImage). @throw GpuError when nothing has been rendered.
+    [[nodiscard]] ImageRgb linearImage();
+    /// Renders a frame without gizmos and brush cursor and returns it (display sRGB).
+    [[nodiscard]] QImage grabRender();
+
 Q_SIGNALS:
     void frameRendered();
     void eyedropped(const lucent::MaterialSample& sample);
     void hoverVoxel(const QString& text);
     void paintError(const QString& message);
+    /// The user picked light `index` by clicking its handle.
+    void lightSelected(int index);
 
 protected:
     void initializeGL() override;
@@ -96,6 +131,7 @@ protected:
     void wheelEvent(QWheelEvent* e) override;
     void keyPressEvent(QKeyEvent* e) override;
     void leaveEvent(QEvent* e) override;
+    void tabletEvent(QTabletEvent* e) override;
 
 private:
     void onSceneReplaced();
@@ -105,6 +141,10 @@ private:
     void endStroke();
     [[nodiscard]] Point3f stampCenter(const PickHit& hit) const;
     void updateHover(const QPointF& pos);
+    void beginLightDrag(int index, const QPointF& pos);
+    void continueLightDrag(const QPointF& pos);
+    void endLightDrag();
+    void drawOverlay();
     /// The rest mesh, or the twisted one while the deformation animation runs (into m_posed).
     const TriangleMesh* shownMesh();
 
@@ -116,10 +156,20 @@ private:
     ViewportStats m_stats;
 
     // Interaction state.
-    enum class Drag { None, Paint, Orbit, Pan } m_drag = Drag::None;
+    enum class Drag { None, Paint, Orbit, Pan, Light } m_drag = Drag::None;
     QPointF m_lastMouse;
     bool m_stroking = false;
     Point3f m_lastStamp{0.f};
+    float m_pressure = 1.f;  ///< pen pressure of the current stamp (mouse: 1)
+    bool m_tabletStroke = false;
+    // Light gizmos.
+    int m_selectedLight = -1;
+    bool m_gizmosVisible = true;
+    bool m_hideOverlays = false;  ///< grabRender(): the bare render
+    std::vector<Light> m_lightsBeforeDrag;
+    Point3f m_dragPlanePoint{0.f};  ///< point/spot: the view-aligned plane of the drag
+    Vector3f m_dragPlaneNormal{0.f};
+    Vector3f m_dragOffset{0.f};  ///< light position − plane hit at the press
     std::optional<Point3f> m_cursor;
     QTimer m_turntable;
     QTimer m_animation;

@@ -4,10 +4,12 @@
 ///
 ///     lucent [PROJECT|MESH|VDB] [--screenshot PATH] [--frames N] [--benchmark]
 ///            [--benchmark-json PATH] [--viewport WxH]
-///            [--method direct|single|sslpv|dipole|better-dipole]
+///            [--method direct|single|sslpv|dipole|better-dipole|dirpole|combined]
 ///            [--paint-demo] [--reference SPP] [--raise DOCKS] [--no-settings]
+///            [--swap-interval N] [--compose-experiment]
 /// --screenshot grabs the whole window after N rendered frames (default 3) and exits;
-/// --benchmark measures start-up to first frame, idle frame time and stroke-to-frame latency.
+/// --benchmark measures start-up to first frame, idle frame time and stroke-to-frame latency;
+/// --compose-experiment measures what Qt adds around paintGL for three ways to host GL.
 
 #include "Document.h"
 #include "MainWindow.h"
@@ -17,16 +19,24 @@
 #endif
 
 #include <lucent/core/Timer.h>
+#include <lucent/scene/SceneFile.h>
 
 #include <QApplication>
 #include <QEventLoop>
 #include <QCommandLineParser>
 #include <QDockWidget>
 #include <QFile>
+#include <QLabel>
+#include <QMainWindow>
+#include <QOpenGLContext>
+#include <QOpenGLFunctions>
+#include <QOpenGLWidget>
+#include <QOpenGLWindow>
 #include <QSurfaceFormat>
 #include <QTimer>
 
 #include <algorithm>
+#include <functional>
 #include <utility>
 #include <cstdio>
 #include <vector>
@@ -43,9 +53,11 @@ bool parseMethod(const QString& name, lucent::app::RenderSettings::Method& out) 
                                                {"single", M::SingleScattering},
                                                {"sslpv", M::Sslpv},
                                                {"dipole", M::Dipole},
-                                               {"better-dipole", M::BetterDipole}};
+                                               {"better-dipole", M::BetterDipole},
+                                               {"dirpole", M::DirectionalDipole},
+                                               {"combined", M::Combined}};
     for (const auto& [n, m] : names)
-        if (name == QLatin1String(n)) {
+        if (name == QLatin1String(n) && lucent::app::PreviewRenderer::hasMethod(m)) {
             out = m;
             return true;
         }
@@ -61,9 +73,16 @@ double median(std::vector<double> v) {
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-/// Idle frame and stroke-to-frame latency of the current preview method (medians, ms).
+/// Idle frame and stroke-to-frame latency of the current preview method (medians, ms), with
+/// where the stroke frame's time goes.
 struct MethodTiming {
     double idleMs = 0.0, strokeMs = 0.0, strokePaintGlMs = 0.0;
+    double idlePaintGlMs = 0.0;  ///< paintGL of the idle frames (idle − this = Qt's share)
+    double uploadMs = 0.0;       ///< material update inside the stroke frame (CPU)
+    double strokeCpuMs = 0.0;    ///< the stroke itself: picking, engine stamps, history
+    /// GPU ms per renderer pass of the stroke frames (shadows, gbuffer, subsurface, shade,
+    /// tonemap), medians.
+    std::vector<std::pair<std::string, double>> strokePassGpuMs;
 };
 
 /// Requests a frame and runs the event loop until the viewport has rendered it (the path a
@@ -78,22 +97,196 @@ void renderFrame(lucent::app::Viewport* vp) {
 MethodTiming timeMethod(lucent::app::Viewport* vp) {
     renderFrame(vp);  // settle: the first frame after a change of method compiles nothing new
     const int idleFrames = 15, strokes = 8;
-    std::vector<double> idle, latency, frameOnly;
+    std::vector<double> idle, idlePaint, latency, frameOnly, upload, strokeCpu;
+    std::vector<std::pair<std::string, std::vector<double>>> passes;
     for (int i = 0; i < idleFrames; ++i) {
         Timer t;
         renderFrame(vp);
         idle.push_back(t.elapsedMs());
+        idlePaint.push_back(vp->stats().frameMs);
     }
     const double cx = vp->width() / 2.0, cy = vp->height() / 2.0;
     for (int i = 0; i < strokes; ++i) {
         const double dy = (i - strokes / 2) * 4.0;
         Timer t;  // stroke (picking + engine stamps + history) → dirty-brick upload → frame
         vp->strokeBetween(QPointF(cx - 40, cy + dy), QPointF(cx + 40, cy + dy));
+        strokeCpu.push_back(t.elapsedMs());
         renderFrame(vp);
         latency.push_back(t.elapsedMs());
         frameOnly.push_back(vp->stats().frameMs);
+        upload.push_back(vp->stats().uploadMs);
+        for (const auto& pass : vp->stats().preview.passes) {  // this frame's (collected)
+            auto it = std::find_if(passes.begin(), passes.end(),
+                                   [&](const auto& p) { return p.first == pass.name; });
+            if (it == passes.end())
+                it = passes.insert(passes.end(), {pass.name, {}});
+            it->second.push_back(pass.gpuMs);
+        }
     }
-    return {median(idle), median(latency), median(frameOnly)};
+    MethodTiming m{median(idle),
+                   median(latency),
+                   median(frameOnly),
+                   median(idlePaint),
+                   median(upload),
+                   median(strokeCpu),
+                   {}};
+    for (const auto& [name, v] : passes)
+        m.strokePassGpuMs.push_back({name, median(v)});
+    return m;
+}
+
+// ---- Qt composition experiment (--compose-experiment) ----------------------------------------
+// The same PreviewRenderer frame (default scene, direct lighting, 640×360) drawn by three hosts,
+// to measure what Qt adds around paintGL: a QOpenGLWidget inside a large main window (the
+// app's arrangement), the same widget as a 640×360 top-level window, and a QOpenGLWindow
+// embedded with QWidget::createWindowContainer in the large window.
+
+/// Renderer state of one host (one GL context each).
+struct ComposeHostGl {
+    lucent::Scene* scene = nullptr;
+    lucent::app::PreviewRenderer preview;
+    bool first = true;
+    double paintMs = 0.0;
+    long long swaps = 0;
+
+    void paint(unsigned fbo, int w, int h) {
+        Timer t;
+        lucent::app::PreviewFrame f;
+        f.scene = scene;
+        f.volume = scene->objects[0].material.get();
+        f.shownMesh = &scene->objects[0].mesh;
+        f.sceneReplaced = first;
+        first = false;
+        f.camera = scene->camera;
+        f.camera.width = w;
+        f.camera.height = h;
+        f.settings.method = lucent::app::RenderSettings::Method::Direct;
+        f.settings.resolutionScale = 1.f;
+        f.framebuffer = fbo;
+        f.framebufferWidth = w;
+        f.framebufferHeight = h;
+        preview.render(f);
+        QOpenGLContext::currentContext()->functions()->glFinish();  // as Viewport::paintGL
+        paintMs = t.elapsedMs();
+    }
+};
+
+/// A GL host (QOpenGLWidget or QOpenGLWindow) drawing ComposeHostGl's frame.
+template <class Base>
+class ComposeHost : public Base {
+public:
+    explicit ComposeHost(ComposeHostGl* gl) : m_gl(gl) {
+        QObject::connect(this, &Base::frameSwapped, this, [this] { ++m_gl->swaps; });
+    }
+    ~ComposeHost() override {
+        this->makeCurrent();
+        m_gl->preview.destroy();
+        this->doneCurrent();
+    }
+
+protected:
+    void initializeGL() override { m_gl->preview.create(); }
+    void paintGL() override {
+        const qreal dpr = this->devicePixelRatioF();
+        m_gl->paint(this->defaultFramebufferObject(), int(this->width() * dpr),
+                    int(this->height() * dpr));
+    }
+
+private:
+    ComposeHostGl* m_gl;
+};
+using ComposeWidget = ComposeHost<QOpenGLWidget>;
+using ComposeWindow = ComposeHost<QOpenGLWindow>;
+
+/// update() → frameSwapped, `frames` times; @return medians (total, paintGL) in ms.
+std::pair<double, double> timeHost(ComposeHostGl& gl, const std::function<void()>& update,
+                                   int frames) {
+    std::vector<double> total, paint;
+    for (int i = 0; i < frames + 3; ++i) {  // 3 warm-up frames (first upload, shader variants)
+        const long long before = gl.swaps;
+        Timer t;
+        update();
+        while (gl.swaps == before)
+            QCoreApplication::processEvents(QEventLoop::AllEvents | QEventLoop::WaitForMoreEvents,
+                                            5);
+        if (i >= 3) {
+            total.push_back(t.elapsedMs());
+            paint.push_back(gl.paintMs);
+        }
+    }
+    return {median(total), median(paint)};
+}
+
+/// Shows `view` (640×360) in `win` resized to 1400×1100, about the app's main window, next to
+/// a label standing in for the docks.
+void showInLargeWindow(QMainWindow& win, QWidget* view) {
+    auto* central = new QWidget;
+    view->setParent(central);
+    view->setFixedSize(640, 360);
+    view->move(10, 10);
+    auto* label = new QLabel(QStringLiteral("docks stand-in"), central);
+    label->setGeometry(660, 10, 200, 30);
+    win.setCentralWidget(central);
+    win.resize(1400, 1100);
+    win.show();
+}
+
+/// Runs the three hosts one after the other and prints frame, paintGL and Qt's share.
+int runComposeExperiment() {
+    lucent::Scene scene = lucent::makeDefaultScene();
+    const int frames = 20;
+    struct Result {
+        const char* name;
+        double totalMs, paintMs;
+    };
+    std::vector<Result> results;
+    const auto settle = [] {
+        for (int i = 0; i < 20; ++i)
+            QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
+    };
+    {  // 1. QOpenGLWidget in a 1400×1100 main window (about the app's size)
+        ComposeHostGl gl;
+        gl.scene = &scene;
+        QMainWindow win;
+        auto* w = new ComposeWidget(&gl);
+        showInLargeWindow(win, w);
+        settle();
+        const auto [t, p] = timeHost(
+            gl, [w] { w->update(); }, frames);
+        results.push_back({"QOpenGLWidget in 1400x1100 window", t, p});
+    }
+    {  // 2. the widget alone as a 640×360 top-level
+        ComposeHostGl gl;
+        gl.scene = &scene;
+        ComposeWidget w(&gl);
+        w.resize(640, 360);
+        w.show();
+        settle();
+        const auto [t, p] = timeHost(
+            gl, [&w] { w.update(); }, frames);
+        results.push_back({"QOpenGLWidget as 640x360 top-level", t, p});
+    }
+    {  // 3. QOpenGLWindow in a container in the 1400×1100 window
+        ComposeHostGl gl;
+        gl.scene = &scene;
+        QMainWindow win;
+        auto* glWindow = new ComposeWindow(&gl);
+        showInLargeWindow(win, QWidget::createWindowContainer(glWindow));
+        settle();
+        const auto [t, p] = timeHost(
+            gl, [glWindow] { glWindow->update(); }, frames);
+        results.push_back({"QOpenGLWindow in container, 1400x1100", t, p});
+    }
+    const QSurfaceFormat f = QSurfaceFormat::defaultFormat();
+    std::printf(
+        "compose experiment: PreviewRenderer direct, 640x360, medians of %d frames; "
+        "swap interval %d, swap behaviour %d\n",
+        frames, f.swapInterval(), int(f.swapBehavior()));
+    std::printf("%-40s %10s %10s %12s\n", "host", "frame", "paintGL", "Qt's share");
+    for (const Result& r : results)
+        std::printf("%-40s %7.1f ms %7.1f ms %9.1f ms\n", r.name, r.totalMs, r.paintMs,
+                    r.totalMs - r.paintMs);
+    return 0;
 }
 
 /// Runs the latency harness on a shown window whose first frame has been rendered.
@@ -106,25 +299,43 @@ void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath,
         const char* name;
         Method method;
         float scale;
+        bool reuse = true;     ///< RenderSettings::reusePasses (false: every pass every frame)
+        bool overlay = false;  ///< RenderSettings::volumeOverlay (σt, opacity 0.5)
         MethodTiming t;
     };
     // Stroke latency of the live methods at the viewport's full resolution (SSLPV at 32³, CPU
-    // solve; dipoles at their default samples per frame), plus the direct baseline.
-    std::vector<Row> rows = {{"direct, full res (baseline)", Method::Direct, 1.f, {}},
-                             {"single-scatter, full res", Method::SingleScattering, 1.f, {}},
-                             {"sslpv 32^3, full res", Method::Sslpv, 1.f, {}},
-                             {"dipole, full res", Method::Dipole, 1.f, {}},
-                             {"better dipole, full res", Method::BetterDipole, 1.f, {}},
-                             {"sslpv 32^3, half res", Method::Sslpv, 0.5f, {}}};
+    // solve; dipoles at their default samples per frame), plus the direct baseline; the
+    // "no reuse" rows re-run the G-buffer and the direct lighting every frame (as before pass
+    // reuse; shadow maps were already kept) for a same-run before/after.
+    std::vector<Row> rows = {
+        {"direct, full res (baseline)", Method::Direct, 1.f, true, false, {}},
+        {"direct, full res, no reuse", Method::Direct, 1.f, false, false, {}},
+        {"single-scatter, full res", Method::SingleScattering, 1.f, true, false, {}},
+        {"sslpv 32^3, full res, no reuse", Method::Sslpv, 1.f, false, false, {}},
+        {"sslpv 32^3, full res", Method::Sslpv, 1.f, true, false, {}},
+        {"dipole, full res, no reuse", Method::Dipole, 1.f, false, false, {}},
+        {"dipole, full res", Method::Dipole, 1.f, true, false, {}},
+        {"better dipole, full res", Method::BetterDipole, 1.f, true, false, {}},
+        {"sslpv 32^3, half res", Method::Sslpv, 0.5f, true, false, {}},
+        {"sslpv 32^3, half res + overlay", Method::Sslpv, 0.5f, true, true, {}},
+        // Only with --method dirpole / combined (progressive restarts of seconds on llvmpipe).
+        {"directional dipole, full res", Method::DirectionalDipole, 1.f, true, false, {}},
+        {"combined, full res", Method::Combined, 1.f, true, false, {}}};
     Method only = Method::Direct;
     if (!methodFilter.isEmpty() && parseMethod(methodFilter, only))  // baseline + that method
         std::erase_if(rows,
                       [&](const Row& r) { return r.method != Method::Direct && r.method != only; });
+    else
+        std::erase_if(rows, [](const Row& r) {
+            return r.method == Method::DirectionalDipole || r.method == Method::Combined;
+        });
     rs.sslpvGrid = 32;
     rs.sslpvGlSolve = false;
     for (Row& r : rows) {
         rs.method = r.method;
         rs.resolutionScale = r.scale;
+        rs.reusePasses = r.reuse;
+        rs.volumeOverlay = r.overlay;
         vp->setRenderSettings(rs);
         r.t = timeMethod(vp);
     }
@@ -143,6 +354,26 @@ void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath,
         "(single-scatter: %d view steps, %d shadow steps; sslpv: %d steps, order %d; "
         "dipole: %d spp/frame)\n",
         rs.steps, rs.lightSteps, rs.sslpvSteps, rs.sslpvOrder, rs.dipoleSpp);
+    // Where a stroke frame goes: renderer passes (GPU ms), the material update (CPU), and what
+    // is outside paintGL (picking + stamping before, Qt's composition after).
+    std::printf("\nstroke frame breakdown (medians, ms)\n%-36s", "method");
+    for (const char* pass : {"shadows", "gbuffer", "subsurface", "shade", "tonemap"})
+        std::printf(" %10s", pass);
+    std::printf(" %10s %10s %12s %12s\n", "upload", "stroke CPU", "Qt (idle)", "outside GL");
+    for (const Row& r : rows) {
+        std::printf("%-36s", r.name);
+        for (const char* pass : {"shadows", "gbuffer", "subsurface", "shade", "tonemap"}) {
+            double ms = 0.0;
+            for (const auto& [name, v] : r.t.strokePassGpuMs)
+                if (name == pass)
+                    ms = v;
+            std::printf(" %10.2f", ms);
+        }
+        // The direct method updates no material: its upload column would be a stale value.
+        std::printf(" %10.2f %10.1f %12.1f %12.1f\n",
+                    r.method == Method::Direct ? 0.0 : r.t.uploadMs, r.t.strokeCpuMs,
+                    r.t.idleMs - r.t.idlePaintGlMs, r.t.strokeMs - r.t.strokePaintGlMs);
+    }
     if (!jsonPath.isEmpty()) {
         QFile f(jsonPath);
         if (f.open(QIODevice::WriteOnly)) {
@@ -211,13 +442,29 @@ int main(int argc, char** argv) {
                                  QStringLiteral("Before the screenshot, run a reference render "
                                                 "of SPP samples per pixel in the Reference dock."),
                                  QStringLiteral("SPP"));
+    QCommandLineOption composeExperiment(
+        QStringLiteral("compose-experiment"),
+        QStringLiteral("Measure Qt's composition around paintGL for three GL hosts, then exit."));
+    QCommandLineOption swapInterval(
+        QStringLiteral("swap-interval"),
+        QStringLiteral("QSurfaceFormat swap interval (default: Qt's, 1); 0 disables vsync."),
+        QStringLiteral("N"));
     QCommandLineOption method(
         QStringLiteral("method"),
-        QStringLiteral("Preview method: direct, single, sslpv, dipole or better-dipole."),
+        QStringLiteral("Preview method: direct, single, sslpv, dipole, better-dipole, dirpole or "
+                       "combined."),
         QStringLiteral("M"));
     parser.addOptions({shot, frames, bench, benchJson, viewportSize, noSettings, paintDemo,
-                       raiseDock, method, reference});
+                       raiseDock, method, reference, composeExperiment, swapInterval});
     parser.process(app);
+    if (parser.isSet(swapInterval)) {
+        // Before any window exists, so every context (viewport and composition) gets it.
+        QSurfaceFormat f = QSurfaceFormat::defaultFormat();
+        f.setSwapInterval(parser.value(swapInterval).toInt());
+        QSurfaceFormat::setDefaultFormat(f);
+    }
+    if (parser.isSet(composeExperiment))
+        return runComposeExperiment();
 
     const bool scripted = parser.isSet(shot) || parser.isSet(bench);
     MainWindow window(!scripted && !parser.isSet(noSettings));
@@ -236,8 +483,8 @@ int main(int argc, char** argv) {
         lucent::app::RenderSettings rs = window.viewport()->renderSettings();
         if (!parseMethod(parser.value(method), rs.method)) {
             std::fprintf(stderr,
-                         "lucent: --method expects direct, single, sslpv, dipole or "
-                         "better-dipole (got '%s')\n",
+                         "lucent: --method expects direct, single, sslpv, dipole, "
+                         "better-dipole, dirpole or combined (got '%s')\n",
                          qPrintable(parser.value(method)));
             return 2;
         }

@@ -3,8 +3,10 @@
 /// @brief Image-space dipole gather on the CPU (seed 004 §5–6): time at 640×360 and 1280×720 for
 /// 8…256 samples per pixel on a lit sphere, against two baselines measured in the same run: the
 /// camera-view irradiance pass (one primary + one shadow ray per pixel, Embree) and a single
-/// R_d evaluation per pixel-sample (the arithmetic floor of the gather). Results:
+/// R_d evaluation per pixel-sample (the arithmetic floor of the gather); `--light-view-cost`: the
+/// light views' share of a frame (back-lit scene, CPU and GL). Results:
 /// docs/benchmarks.md, "Dipoles".
+#include <lucent/dipole/DipoleProvider.h>
 #include <lucent/dipole/GpuGather.h>
 #include <lucent/dipole/IrradiancePass.h>
 #include <lucent/gpu/GlContext.h>
@@ -12,14 +14,18 @@
 #include <lucent/dipole/Sampling.h>
 #include <lucent/mesh/Procedural.h>
 #include <lucent/reference/PathTracer.h>
+#include <lucent/scene/SceneFile.h>
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 using namespace lucent;
 using namespace lucent::dipole;
@@ -227,9 +233,118 @@ int referenceError(float eta) {
     return 0;
 }
 
+double medianOf(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+template <class F>
+double wallMs(F&& f) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// `bench_dipole --light-view-cost`: cost of gathering the light views (seed 004 §7.1,
+/// docs/methods/dipole.md §3d) on the back-lit thin/thick scene at 256×192, CPU gather (32 spp)
+/// and GL provider (16 spp per frame), relative to the camera-only gather measured in the same
+/// run. "full set per view" gives every view the whole per-pixel budget (importance and uniform
+/// counts × views), which is exactly the sample and visibility-test work of the scheme before
+/// the budget split (every view drew all N samples); "split budget" is viewSamples().
+int lightViewCost() {
+    Scene scene =
+        loadScene(std::string(LUCENT_SOURCE_DIR) + "/resources/scenes/backlit_thin_thick.json");
+    scene.camera.width = 256;
+    scene.camera.height = 192;
+    GatherSettings gs;
+    gs.eta = scene.eta;
+    gs.importanceSamples = 24;
+    gs.uniformSamples = 8;
+    const ImageSpaceViews views = buildImageSpaceViews(scene, gs, LightViewSettings{});
+    const int viewCount = 1 + int(views.lights.size());
+    GatherSettings full = gs;
+    full.importanceSamples *= viewCount;
+    full.uniformSamples *= viewCount;
+    std::printf("back-lit thin/thick, 256x192, %d view(s) (camera + %d light views)\n", viewCount,
+                viewCount - 1);
+    const int reps = 5;
+    std::vector<double> tCam, tSplit, tFull;
+    for (int r = 0; r < reps; ++r) {  // interleaved, median of 5
+        tCam.push_back(
+            wallMs([&] { benchmark::DoNotOptimize(gatherImageSpace(views.camera, gs)); }));
+        tSplit.push_back(wallMs(
+            [&] { benchmark::DoNotOptimize(gatherImageSpace(views.camera, views.lights, gs)); }));
+        tFull.push_back(wallMs(
+            [&] { benchmark::DoNotOptimize(gatherImageSpace(views.camera, views.lights, full)); }));
+    }
+    const double cam = medianOf(tCam);
+    std::printf("CPU gather, 32 spp (median of %d):\n", reps);
+    std::printf("  camera only                 %8.1f ms   1.00x\n", cam);
+    std::printf("  light views, split budget   %8.1f ms   %.2fx\n", medianOf(tSplit),
+                medianOf(tSplit) / cam);
+    std::printf("  light views, full set/view  %8.1f ms   %.2fx\n", medianOf(tFull),
+                medianOf(tFull) / cam);
+
+    std::string reason;
+    if (!gpu::GlContext::isHeadlessAvailable(&reason)) {
+        std::printf("GL provider: skipped (no headless GL: %s)\n", reason.c_str());
+        return 0;
+    }
+    const auto ctx = gpu::GlContext::createHeadless();
+    gpu::SceneRenderer renderer;
+    renderer.create();
+    DipoleSubsurfaceProvider provider;
+    provider.create();
+    const int mesh = renderer.addMesh(scene.objects[0].mesh);
+    renderer.setLights(scene.lights);
+    renderer.setCamera(scene.camera);
+    gpu::DirectSettings ds;
+    ds.subsurfaceOnly = true;
+    renderer.setSettings(ds);
+    provider.setMaterial(scene.objects[0].material.get());
+    renderer.setSubsurfaceProvider(&provider);
+    struct Config {
+        const char* name;
+        bool lightViews;
+        int spf;
+    };
+    const Config configs[3] = {{"camera only                ", false, 16},
+                               {"light views, split budget  ", true, 16},
+                               {"light views, full set/view ", true, 16 * viewCount}};
+    std::vector<double> frameMs[3];
+    for (int round = 0; round < 2; ++round)
+        for (int c = 0; c < 3; ++c) {
+            ProviderSettings ps;
+            ps.eta = scene.eta;
+            ps.meshId = mesh;
+            ps.samplesPerFrame = configs[c].spf;
+            ps.lightViews = configs[c].lightViews;
+            ps.maxFrames = 1000;
+            ps.convergenceThreshold = 0.f;
+            provider.setSettings(ps);
+            provider.reset();
+            renderer.render();           // reset frame: irradiance pass and light views (not timed)
+            for (int f = 0; f < 4; ++f)  // the stats read-back waits for the dispatch
+                frameMs[c].push_back(wallMs([&] { renderer.render(); }));
+        }
+    const double camGl = medianOf(frameMs[0]);
+    std::printf("GL provider (%s), 16 spp per frame, whole frame (median of 8 frames):\n",
+                ctx->renderer().c_str());
+    for (int c = 0; c < 3; ++c)
+        std::printf("  %s%8.1f ms   %.2fx\n", configs[c].name, medianOf(frameMs[c]),
+                    medianOf(frameMs[c]) / camGl);
+    renderer.setSubsurfaceProvider(nullptr);
+    provider.destroy();
+    renderer.destroy();
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+    for (int i = 1; i < argc; ++i)
+        if (std::string(argv[i]) == "--light-view-cost")
+            return lightViewCost();
     for (int i = 1; i < argc; ++i)
         if (std::string(argv[i]) == "--reference-error") {
             for (float eta : {1.0f, 1.3f}) {

@@ -6,13 +6,17 @@
 
 #include <lucent/dipole/DipoleProvider.h>
 
+#include "VolumeTextures.h"
+
 #include <lucent/core/Error.h>
+#include <lucent/dipole/IrradiancePass.h>
 #include <lucent/gpu/GlContext.h>
 #include <lucent/gpu/GlResources.h>
 #include <lucent/gpu/Shader.h>
 #include <lucent/material/MaterialVolume.h>
 
 #include <epoxy/gl.h>
+#include <shared/LightingShared.h>
 
 #include <algorithm>
 #include <cmath>
@@ -28,6 +32,7 @@ GatherSettings ProviderSettings::gatherSettings() const {
     gs.uniformSamples = samplesPerFrame / 4;
     gs.importanceSamples = samplesPerFrame - gs.uniformSamples;
     gs.discQuantile = discQuantile;
+    gs.maxRadius = maxRadius;
     gs.jacobian = jacobian;
     gs.maxJacobian = maxJacobian;
     gs.interleave = interleave;
@@ -41,33 +46,77 @@ void validateSettings(const ProviderSettings& s) {
     LUCENT_CHECK(s.model == Model::Dipole || s.model == Model::BetterDipole,
                  "ProviderSettings.model: only dipole and better-dipole run in image space (got ",
                  modelName(s.model), ")");
-    LUCENT_CHECK(std::isfinite(s.eta) && s.eta >= 1.f && s.eta <= 3.f,
-                 "ProviderSettings.eta must be in [1, 3] (got ", s.eta, ")");
-    LUCENT_CHECK(s.samplesPerFrame >= 1 && s.samplesPerFrame <= 4096,
-                 "ProviderSettings.samplesPerFrame must be in [1, 4096] (got ", s.samplesPerFrame,
-                 ")");
-    LUCENT_CHECK(s.maxFrames >= 1 && s.maxFrames <= 1000000,
-                 "ProviderSettings.maxFrames must be in [1, 1e6] (got ", s.maxFrames, ")");
-    LUCENT_CHECK(std::isfinite(s.convergenceThreshold) && s.convergenceThreshold >= 0.f &&
-                     s.convergenceThreshold < 1.f,
-                 "ProviderSettings.convergenceThreshold must be in [0, 1) (got ",
-                 s.convergenceThreshold, ")");
+    detail::validateProgressiveSettings("ProviderSettings", s.eta, s.samplesPerFrame, s.maxFrames,
+                                        s.convergenceThreshold, s.meshId);
     LUCENT_CHECK(s.discQuantile > 0.f && s.discQuantile < 1.f,
                  "ProviderSettings.discQuantile must be in (0, 1)");
+    LUCENT_CHECK(std::isfinite(s.maxRadius) && s.maxRadius >= 0.f,
+                 "ProviderSettings.maxRadius must be finite and >= 0 mm (0 = unlimited; got ",
+                 s.maxRadius, ")");
     LUCENT_CHECK(std::isfinite(s.maxJacobian) && s.maxJacobian >= 1.f,
                  "ProviderSettings.maxJacobian must be finite and >= 1");
     LUCENT_CHECK(s.interleave >= 1 && s.interleave <= 64,
                  "ProviderSettings.interleave must be in [1, 64]");
-    LUCENT_CHECK(s.meshId >= -1, "ProviderSettings.meshId must be >= -1 (got ", s.meshId, ")");
+    LUCENT_CHECK(s.lightViewResolution >= 16 && s.lightViewResolution <= 4096,
+                 "ProviderSettings.lightViewResolution must be in [16, 4096] (got ",
+                 s.lightViewResolution, ")");
+    LUCENT_CHECK(std::isfinite(s.lightViewThreshold) && s.lightViewThreshold >= 0.f &&
+                     s.lightViewThreshold < 1.f,
+                 "ProviderSettings.lightViewThreshold must be in [0, 1) (got ",
+                 s.lightViewThreshold, ")");
 }
 
 bool sameSettings(const ProviderSettings& a, const ProviderSettings& b) {
     return a.model == b.model && a.eta == b.eta && a.samplesPerFrame == b.samplesPerFrame &&
            a.maxFrames == b.maxFrames && a.convergenceThreshold == b.convergenceThreshold &&
-           a.discQuantile == b.discQuantile && a.jacobian == b.jacobian &&
-           a.maxJacobian == b.maxJacobian && a.interleave == b.interleave && a.seed == b.seed &&
-           a.shadows == b.shadows && a.meshId == b.meshId;
+           a.discQuantile == b.discQuantile && a.maxRadius == b.maxRadius &&
+           a.jacobian == b.jacobian && a.maxJacobian == b.maxJacobian &&
+           a.interleave == b.interleave && a.seed == b.seed && a.shadows == b.shadows &&
+           a.meshId == b.meshId && a.lightViews == b.lightViews &&
+           a.lightViewResolution == b.lightViewResolution &&
+           a.lightViewThreshold == b.lightViewThreshold;
 }
+
+/// The camera of a G-buffer as a view (clip matrix, centre of projection, orthographic flag and
+/// the direction it looks): an orthographic clip matrix has a constant w row.
+struct CameraView {
+    Mat4f clip{1.f};
+    Point3f eye{0.f};
+    bool ortho = false;
+    Vector3f forward{0.f, 0.f, -1.f};
+};
+
+CameraView cameraView(const gpu::GBufferView& g) {
+    CameraView v;
+    v.clip = g.clipFromWorld;
+    const Mat4f worldFromView = glm::inverse(g.viewFromWorld);
+    const Mat4f clipFromView = g.clipFromWorld * worldFromView;
+    v.ortho = std::abs(clipFromView[2][3]) < 1e-6f;
+    v.forward = glm::normalize(-Vector3f(worldFromView[2]));
+    v.eye = g.cameraPosition;
+    return v;
+}
+
+/// The scene light a GpuLight was made from, as far as the light-view camera needs it (sphere
+/// lights arrive as points).
+Light sceneLight(const gpu::shared::GpuLight& gl) {
+    Light l;
+    const int type = int(gl.positionType.w + 0.5f);
+    l.type = type == LUCENT_LIGHT_DIRECTIONAL ? Light::Type::Directional
+             : type == LUCENT_LIGHT_SPOT      ? Light::Type::Spot
+                                              : Light::Type::Point;
+    l.position = Point3f(gl.positionType);
+    l.direction = Vector3f(gl.directionCosOuter);
+    return l;
+}
+
+/// std430 element of dipole_provider.comp's LightViewBlock.
+struct GpuLightView {
+    glm::mat4 clipFromWorld;
+    glm::vec4 eyeOrtho;
+    glm::vec4 viewDir;
+};
+static_assert(sizeof(GpuLightView) == 96, "std430 LightView stride");
 
 /// Seed of frame f's Cranley–Patterson table: frame 0 uses the settings' seed (so it equals the
 /// CPU gather), later frames a Weyl step of it (independent tables through Pcg32's seeding).
@@ -78,22 +127,28 @@ uint32_t frameSeed(uint32_t seed, int frame) {
 }  // namespace
 
 struct DipoleSubsurfaceProvider::Impl {
+    Impl(ProviderStats& st, detail::VolumeTextures& v) : stats(st), volume(v) {}
     ProviderSettings settings;
-    ProviderStats stats;
-    bool created = false;
+    ProviderStats& stats;            ///< the base class's
+    detail::VolumeTextures& volume;  ///< the material, 3-D textures (the base class's)
     gpu::GlProgram irradianceProgram, gatherProgram;
+    /// dipole_provider.comp with MULTI_VIEW=0: the camera-only gather (no light view gathered),
+    /// without the view-combination code, which slows the whole loop ≈ 2× on llvmpipe.
+    gpu::GlProgram cameraGatherProgram;
 
     // Per-pixel images (renderer size).
     int width = 0, height = 0;
     gpu::GlObject irradiance, sigmaT, sigmaS, accum;
-    gpu::GlObject shiftBuffer, statsBuffer;
+    gpu::GlObject shiftBuffer, statsBuffer, radiusBuffer;
 
-    // Material volume.
-    const MaterialVolume* volume = nullptr;
-    gpu::GlObject volumeSigmaT, volumeSigmaS;
-    GridSpec uploadedSpec;
-    uint64_t uploadedRevision = 0;
-    bool volumeStale = true;  ///< full upload needed at the next frame
+    // Light views (seed 004 §7.1): scratch images of one view, then the gathered views as
+    // layers of three arrays, with their cameras and descriptors (LightViewBlock).
+    gpu::GlProgram lightGbufferProgram, lightStatsProgram;
+    gpu::GlObject fbo, viewBuffer, partialBuffer;
+    int lvSize = 0, lvLayers = 0;
+    gpu::GlObject lvPosition, lvNormal, lvIrradiance;  // 2-D arrays, one layer per gathered view
+    gpu::GlObject scratchPosition, scratchNormal, scratchE, scratchT, scratchS, scratchDepth;
+    std::vector<Camera> lvCameras;  ///< of the gathered views, in layer order
 
     // What the accumulation was computed for.
     bool needReset = true;
@@ -101,10 +156,6 @@ struct DipoleSubsurfaceProvider::Impl {
     Point3f lastEye{0.f};
     std::vector<unsigned char> lastLights;
     bool lastShadows = false;
-
-    void requireCreated(const char* what) const {
-        LUCENT_CHECK(created, "DipoleSubsurfaceProvider::", what, " before create()");
-    }
 
     void destroyImages() {
         for (gpu::GlObject* o : {&irradiance, &sigmaT, &sigmaS, &accum})
@@ -125,116 +176,207 @@ struct DipoleSubsurfaceProvider::Impl {
         needReset = true;
     }
 
-    /// Writes bricks of the volume into the 3-D textures (texels inside the grid only).
-    void writeBricks(const std::vector<int>& bricks) {
-        const MaterialVolume& v = *volume;
-        const int res = v.resolution(), B = MaterialVolume::BRICK;
-        std::vector<float> t(size_t(MaterialVolume::BRICK_VOXELS) * 4);
-        std::vector<float> s(t.size());
-        glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
-        glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-        glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
-        glPixelStorei(GL_UNPACK_IMAGE_HEIGHT, 0);
-        glPixelStorei(GL_UNPACK_SKIP_PIXELS, 0);
-        glPixelStorei(GL_UNPACK_SKIP_ROWS, 0);
-        glPixelStorei(GL_UNPACK_SKIP_IMAGES, 0);
-        for (int b : bricks) {
-            const Coord o = v.brickOrigin(b);
-            const int nx = std::min(B, res - o.x), ny = std::min(B, res - o.y),
-                      nz = std::min(B, res - o.z);
-            if (nx <= 0 || ny <= 0 || nz <= 0)
-                continue;
-            const float* data = v.brickData(b);  // component-major, then x fastest
-            size_t k = 0;
-            for (int z = 0; z < nz; ++z)
-                for (int y = 0; y < ny; ++y)
-                    for (int x = 0; x < nx; ++x, ++k) {
-                        const int vi = MaterialVolume::voxelInBrick(x, y, z);
-                        const bool inside = v.isInside(o + Coord(x, y, z));
-                        for (int c = 0; c < 3; ++c) {
-                            const float st = data[MaterialVolume::component(Channel::SigmaT, c) *
-                                                      MaterialVolume::BRICK_VOXELS +
-                                                  vi];
-                            const float ss = data[MaterialVolume::component(Channel::SigmaS, c) *
-                                                      MaterialVolume::BRICK_VOXELS +
-                                                  vi];
-                            // Masked-out voxels read as zero, like MaterialVolume::at().
-                            t[4 * k + size_t(c)] = inside ? st : 0.f;
-                            s[4 * k + size_t(c)] = inside ? ss : 0.f;
-                        }
-                        t[4 * k + 3] = inside ? 1.f : 0.f;
-                        s[4 * k + 3] = 0.f;
-                    }
-            glTextureSubImage3D(volumeSigmaT.id(), 0, o.x, o.y, o.z, nx, ny, nz, GL_RGBA, GL_FLOAT,
-                                t.data());
-            glTextureSubImage3D(volumeSigmaS.id(), 0, o.x, o.y, o.z, nx, ny, nz, GL_RGBA, GL_FLOAT,
-                                s.data());
-        }
-        stats.lastUploadBricks = int(bricks.size());
-        uploadedRevision = v.revision();
-        needReset = true;
-    }
-
-    void uploadAll() {
-        volumeSigmaT.destroy();
-        volumeSigmaS.destroy();
-        volumeStale = false;
-        if (!volume)
-            return;
-        const int res = volume->resolution();
-        volumeSigmaT = gpu::createTexture3D(GL_RGBA32F, res, res, res, /*linear=*/false);
-        volumeSigmaS = gpu::createTexture3D(GL_RGBA32F, res, res, res, /*linear=*/false);
-        uploadedSpec = volume->spec();
-        std::vector<int> all(size_t(volume->brickCount()));
-        for (int b = 0; b < volume->brickCount(); ++b)
-            all[size_t(b)] = b;
-        writeBricks(all);
-        ++stats.fullUploads;
-    }
-
     void resetAccumulation() {
-        if (stats.frames > 0 || stats.converged)
-            ++stats.resets;
-        stats.frames = 0;
-        stats.samplesPerPixel = 0;
-        stats.lastChange = 1.f;
-        stats.converged = false;
+        detail::restartAccumulation(stats);
         needReset = false;
     }
 
-    void runIrradiance(const gpu::GBufferView& g) {
+    /// dipole_irradiance.comp over one view's (position, normal) images: E, σt, σs′ and R′.
+    /// `radiusStats`: also the min/max of R′ over the object's pixels into stats.
+    void runIrradianceOn(const gpu::GBufferView& g, unsigned position, unsigned normal, int w,
+                         int h, int meshId, unsigned outE, unsigned outT, unsigned outS,
+                         bool radiusStats) {
         const gpu::GlProgram& p = irradianceProgram;
         glUseProgram(p.id());
-        glBindTextureUnit(0, g.positionTexture);
-        glBindTextureUnit(1, g.normalTexture);
+        glBindTextureUnit(0, position);
+        glBindTextureUnit(1, normal);
         glBindTextureUnit(2, g.shadowMapTexture);
-        glBindTextureUnit(3, volumeSigmaT.id());
-        glBindTextureUnit(4, volumeSigmaS.id());
+        volume.bind(p, 3, 4);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, g.lightBuffer);  // LUCENT_BINDING_LIGHTS
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, g.shadowLayerBuffer);  // SHADOW_LAYERS
-        glBindImageTexture(0, irradiance.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        glBindImageTexture(1, sigmaT.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        glBindImageTexture(2, sigmaS.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
+        const uint32_t init[2] = {0x7f7fffffu, 0u};  // FLT_MAX, 0 (uint order of floats ≥ 0)
+        glNamedBufferSubData(radiusBuffer.id(), 0, sizeof(init), init);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, radiusBuffer.id());
+        glBindImageTexture(0, outE, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        glBindImageTexture(1, outT, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        glBindImageTexture(2, outS, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        glUniform2i(p.uniformLocation("u_size"), w, h);
         glUniform1i(p.uniformLocation("u_lightCount"), g.lightBuffer ? g.lightCount : 0);
         const bool shadows =
             settings.shadows && g.shadows && g.shadowMapTexture != 0 && g.shadowLayerBuffer != 0;
         glUniform1i(p.uniformLocation("u_shadows"), shadows ? 1 : 0);
         glUniform1f(p.uniformLocation("u_eta"), settings.eta);
-        const bool hasMaterial = volume != nullptr && volumeSigmaT.isValid();
-        glUniform1i(p.uniformLocation("u_hasMaterial"), hasMaterial ? 1 : 0);
-        glUniform3f(p.uniformLocation("u_gridOrigin"), uploadedSpec.origin.x, uploadedSpec.origin.y,
-                    uploadedSpec.origin.z);
-        glUniform1f(p.uniformLocation("u_voxelSize"), uploadedSpec.voxelSize);
-        glUniform1i(p.uniformLocation("u_resolution"), hasMaterial ? uploadedSpec.resolution : 0);
         const Boundary boundary = Boundary::of(settings.eta);
         glUniform1i(p.uniformLocation("u_model"), settings.model == Model::Dipole ? 0 : 1);
         glUniform3f(p.uniformLocation("u_boundary"), float(boundary.fdr), float(boundary.c1),
                     float(boundary.c2));
         glUniform1f(p.uniformLocation("u_discQuantile"), settings.discQuantile);
-        glUniform1i(p.uniformLocation("u_meshId"), settings.meshId);
-        glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
-        glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+        glUniform1f(p.uniformLocation("u_maxRadius"), settings.maxRadius);
+        glUniform1i(p.uniformLocation("u_meshId"), meshId);
+        glDispatchCompute(unsigned(w + 7) / 8, unsigned(h + 7) / 8, 1);
+        glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
+                        GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
+        if (!radiusStats)
+            return;
+        float r[2] = {0.f, 0.f};
+        glGetNamedBufferSubData(radiusBuffer.id(), 0, sizeof(r), r);
+        stats.epsilon = 1.f - settings.discQuantile;
+        stats.minRadius = r[1] > 0.f ? r[0] : 0.f;
+        stats.maxRadius = r[1];
+    }
+
+    void runIrradiance(const gpu::GBufferView& g) {
+        runIrradianceOn(g, g.positionTexture, g.normalTexture, g.width, g.height, settings.meshId,
+                        irradiance.id(), sigmaT.id(), sigmaS.id(), /*radiusStats=*/true);
+    }
+
+    void ensureLightViews(int size, int layers) {
+        if (size != lvSize) {
+            for (gpu::GlObject* o : {&scratchPosition, &scratchNormal, &scratchE, &scratchT,
+                                     &scratchS, &scratchDepth, &partialBuffer})
+                o->destroy();
+            for (gpu::GlObject* o :
+                 {&scratchPosition, &scratchNormal, &scratchE, &scratchT, &scratchS})
+                *o = gpu::createTexture2D(GL_RGBA32F, size, size);
+            scratchDepth = gpu::createTexture2D(GL_DEPTH_COMPONENT32F, size, size);
+            const int groups = (size + 7) / 8;
+            partialBuffer = gpu::createBuffer(size_t(groups) * size_t(groups) * 2 * sizeof(float),
+                                              nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
+            glNamedFramebufferTexture(fbo.id(), GL_COLOR_ATTACHMENT0, scratchPosition.id(), 0);
+            glNamedFramebufferTexture(fbo.id(), GL_COLOR_ATTACHMENT1, scratchNormal.id(), 0);
+            glNamedFramebufferTexture(fbo.id(), GL_DEPTH_ATTACHMENT, scratchDepth.id(), 0);
+            if (glCheckNamedFramebufferStatus(fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+                LUCENT_THROW(GpuError,
+                             "DipoleSubsurfaceProvider: incomplete light-view framebuffer (", size,
+                             " texels)");
+        }
+        if (size != lvSize || layers > lvLayers) {
+            for (gpu::GlObject* o : {&lvPosition, &lvNormal, &lvIrradiance})
+                o->destroy();
+            lvLayers = std::max(layers, 1);
+            for (gpu::GlObject* o : {&lvPosition, &lvNormal, &lvIrradiance})
+                *o = gpu::createTexture2DArray(GL_RGBA32F, size, size, lvLayers);
+        }
+        lvSize = size;
+    }
+
+    /// The object (settings.meshId's mesh, or every mesh) from clipFromWorld into the scratch
+    /// position/normal images (dirpole_gbuffer.*: position + coverage, outward normal).
+    void rasterise(const gpu::GBufferView& g, const Mat4f& clipFromWorld) {
+        glBindFramebuffer(GL_FRAMEBUFFER, fbo.id());
+        glViewport(0, 0, lvSize, lvSize);
+        const float zero[4] = {0.f, 0.f, 0.f, 0.f};
+        const float one = 1.f;
+        glClearNamedFramebufferfv(fbo.id(), GL_COLOR, 0, zero);
+        glClearNamedFramebufferfv(fbo.id(), GL_COLOR, 1, zero);
+        glClearNamedFramebufferfv(fbo.id(), GL_DEPTH, 0, &one);
+        glEnable(GL_DEPTH_TEST);
+        glDepthFunc(GL_LESS);
+        glDepthMask(GL_TRUE);
+        glDisable(GL_CULL_FACE);
+        glDisable(GL_BLEND);
+        glUseProgram(lightGbufferProgram.id());
+        glUniformMatrix4fv(0, 1, GL_FALSE, &clipFromWorld[0][0]);
+        for (size_t i = 0; i < g.meshes.size(); ++i) {
+            if ((settings.meshId >= 0 && int(i) != settings.meshId) || g.meshes[i].indexCount == 0)
+                continue;
+            glBindVertexArray(g.meshes[i].vertexArray);
+            glDrawElements(GL_TRIANGLES, g.meshes[i].indexCount, GL_UNSIGNED_INT, nullptr);
+        }
+        glBindVertexArray(0);
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    }
+
+    /// dipole_lightview.comp on the scratch view: backlitFluxFraction() against the camera.
+    float backlitFraction(const gpu::GBufferView& g, const Camera& cam, const Mat4f& clip) {
+        const gpu::GlProgram& p = lightStatsProgram;
+        glUseProgram(p.id());
+        glBindTextureUnit(0, scratchPosition.id());
+        glBindTextureUnit(1, scratchNormal.id());
+        glBindTextureUnit(2, scratchE.id());
+        glBindTextureUnit(3, g.positionTexture);
+        glBindTextureUnit(4, g.normalTexture);
+        glBindTextureUnit(5, sigmaS.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, partialBuffer.id());
+        const CameraView c = cameraView(g);
+        const Mat4f clips[2] = {c.clip, clip};
+        const glm::vec4 eyes[2] = {glm::vec4(c.eye, c.ortho ? 1.f : 0.f),
+                                   glm::vec4(cam.position, cam.orthographic ? 1.f : 0.f)};
+        const Vector3f dirs[2] = {c.forward, glm::normalize(cam.target - cam.position)};
+        const glm::ivec2 sizes[2] = {{g.width, g.height}, {lvSize, lvSize}};
+        glUniformMatrix4fv(p.uniformLocation("u_clip"), 2, GL_FALSE, &clips[0][0][0]);
+        glUniform4fv(p.uniformLocation("u_eyeOrtho"), 2, &eyes[0][0]);
+        glUniform3fv(p.uniformLocation("u_dir"), 2, &dirs[0][0]);
+        glUniform2iv(p.uniformLocation("u_size"), 2, &sizes[0][0]);
+        const int groups = (lvSize + 7) / 8;
+        glDispatchCompute(unsigned(groups), unsigned(groups), 1);
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        std::vector<glm::vec2> partial(size_t(groups) * size_t(groups));
+        glGetNamedBufferSubData(partialBuffer.id(), 0,
+                                GLsizeiptr(partial.size() * sizeof(glm::vec2)), partial.data());
+        double total = 0.0, back = 0.0;
+        for (const glm::vec2& v : partial) {
+            total += double(v.x);
+            back += double(v.y);
+        }
+        return total > 0.0 ? float(back / total) : 0.f;
+    }
+
+    /// Seed 004 §7.1: renders every light's view of the object, computes its E (all lights,
+    /// shadow maps) and its back-lit flux fraction, and keeps those above the threshold as
+    /// layers of the light-view arrays for the gather (after runIrradiance: needs R′).
+    void runLightViews(const gpu::GBufferView& g) {
+        const int lightCount = g.lightBuffer ? std::max(g.lightCount, 0) : 0;
+        stats.lightViewsRendered = stats.lightViewsGathered = 0;
+        stats.backlitFractions.assign(size_t(lightCount), -1.f);
+        lvCameras.clear();
+        if (!settings.lightViews || lightCount == 0 ||
+            lastLights.size() < size_t(lightCount) * sizeof(gpu::shared::GpuLight))
+            return;
+        Bounds3f bounds;
+        for (size_t i = 0; i < g.meshes.size(); ++i)
+            if (settings.meshId < 0 || int(i) == settings.meshId)
+                bounds.expand(g.meshes[i].bounds);
+        if (bounds.isEmpty())
+            return;
+        ensureLightViews(settings.lightViewResolution, lightCount);
+        std::vector<GpuLightView> views;
+        for (int l = 0; l < lightCount; ++l) {
+            gpu::shared::GpuLight gl;
+            std::memcpy(&gl, lastLights.data() + size_t(l) * sizeof(gl), sizeof(gl));
+            Camera cam;
+            try {
+                cam = lightViewCamera(sceneLight(gl), bounds, lvSize);
+            } catch (const ValueError&) {
+                continue;  // light inside the bounding sphere: no view (fraction stays −1)
+            }
+            const Mat4f clip = cam.clipFromView() * cam.viewFromWorld();
+            rasterise(g, clip);
+            runIrradianceOn(g, scratchPosition.id(), scratchNormal.id(), lvSize, lvSize, -1,
+                            scratchE.id(), scratchT.id(), scratchS.id(), /*radiusStats=*/false);
+            const float f = backlitFraction(g, cam, clip);
+            stats.backlitFractions[size_t(l)] = f;
+            ++stats.lightViewsRendered;
+            if (!(f > settings.lightViewThreshold))
+                continue;
+            const int layer = int(lvCameras.size());
+            glMemoryBarrier(GL_ALL_BARRIER_BITS);
+            const std::pair<unsigned, unsigned> copies[3] = {
+                {scratchPosition.id(), lvPosition.id()},
+                {scratchNormal.id(), lvNormal.id()},
+                {scratchE.id(), lvIrradiance.id()}};
+            for (const auto& [src, dst] : copies)
+                glCopyImageSubData(src, GL_TEXTURE_2D, 0, 0, 0, 0, dst, GL_TEXTURE_2D_ARRAY, 0, 0,
+                                   0, layer, lvSize, lvSize, 1);
+            lvCameras.push_back(cam);
+            views.push_back({clip, glm::vec4(cam.position, cam.orthographic ? 1.f : 0.f),
+                             glm::vec4(glm::normalize(cam.target - cam.position), 0.f)});
+        }
+        stats.lightViewsGathered = int(lvCameras.size());
+        if (!views.empty())
+            glNamedBufferSubData(viewBuffer.id(), 0, GLsizeiptr(views.size() * sizeof(views[0])),
+                                 views.data());
+        glMemoryBarrier(GL_ALL_BARRIER_BITS);
     }
 
     void runGather(const gpu::GBufferView& g, unsigned target, bool gather) {
@@ -253,7 +395,7 @@ struct DipoleSubsurfaceProvider::Impl {
             const uint32_t zero[2] = {0u, 0u};
             glNamedBufferSubData(statsBuffer.id(), 0, sizeof(zero), zero);
         }
-        const gpu::GlProgram& p = gatherProgram;
+        const gpu::GlProgram& p = lvCameras.empty() ? cameraGatherProgram : gatherProgram;
         glUseProgram(p.id());
         glBindTextureUnit(0, g.positionTexture);
         glBindTextureUnit(1, g.normalTexture);
@@ -264,12 +406,16 @@ struct DipoleSubsurfaceProvider::Impl {
         glBindImageTexture(1, target, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, shiftBuffer.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, statsBuffer.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, viewBuffer.id());
+        glBindTextureUnit(5, lvPosition.id());
+        glBindTextureUnit(6, lvNormal.id());
+        glBindTextureUnit(7, lvIrradiance.id());
+        glUniform1i(p.uniformLocation("u_lightViews"), int(lvCameras.size()));
+        glUniform1i(p.uniformLocation("u_lightViewSize"), lvSize);
 
-        // Camera from the G-buffer matrices: an orthographic clip matrix has a constant w row.
-        const Mat4f clipFromView = g.clipFromWorld * glm::inverse(g.viewFromWorld);
-        const bool ortho = std::abs(clipFromView[2][3]) < 1e-6f;
-        const Mat4f worldFromView = glm::inverse(g.viewFromWorld);
-        const Vector3f forward = glm::normalize(-Vector3f(worldFromView[2]));
+        const CameraView cv = cameraView(g);
+        const bool ortho = cv.ortho;
+        const Vector3f forward = cv.forward;
         glUniformMatrix4fv(p.uniformLocation("u_clipFromWorld"), 1, GL_FALSE,
                            &g.clipFromWorld[0][0]);
         glUniform3f(p.uniformLocation("u_eye"), g.cameraPosition.x, g.cameraPosition.y,
@@ -287,69 +433,63 @@ struct DipoleSubsurfaceProvider::Impl {
         glUniform1i(p.uniformLocation("u_jacobian"), gs.jacobian ? 1 : 0);
         glUniform1f(p.uniformLocation("u_maxJacobian"), gs.maxJacobian);
         glUniform1i(p.uniformLocation("u_interleave"), gs.interleave);
+        glUniform1f(p.uniformLocation("u_maxRadius"), gs.maxRadius);
         glUniform1i(p.uniformLocation("u_gather"), gather ? 1 : 0);
         glUniform1i(p.uniformLocation("u_framesBefore"), stats.frames);
         glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
                         GL_BUFFER_UPDATE_BARRIER_BIT);
         glUseProgram(0);
-        if (!gather)
-            return;
-        ++stats.frames;
-        stats.samplesPerPixel = stats.frames * settings.samplesPerFrame;
-        // Two words: synchronous, but the shading pass needs this dispatch done anyway.
-        uint32_t words[2] = {0u, 0u};
-        glGetNamedBufferSubData(statsBuffer.id(), 0, sizeof(words), words);
-        float maxChange = 0.f, maxMean = 0.f;
-        std::memcpy(&maxChange, &words[0], sizeof(float));
-        std::memcpy(&maxMean, &words[1], sizeof(float));
-        if (stats.frames > 1)
-            stats.lastChange = maxMean > 0.f ? maxChange / maxMean : 0.f;
-        const bool black = !(maxMean > 0.f);  // nothing lit: more samples change nothing
-        stats.converged = stats.frames >= settings.maxFrames || black ||
-                          (stats.frames > 1 && stats.lastChange < settings.convergenceThreshold);
+        if (gather)
+            detail::finishFrame(stats, statsBuffer.id(), settings.samplesPerFrame,
+                                settings.maxFrames, settings.convergenceThreshold);
     }
 };
 
-DipoleSubsurfaceProvider::DipoleSubsurfaceProvider() : m(std::make_unique<Impl>()) {}
+DipoleSubsurfaceProvider::DipoleSubsurfaceProvider()
+    : MaterialSubsurfaceProvider("DipoleSubsurfaceProvider"),
+      m(std::make_unique<Impl>(m_stats, *m_volume)) {}
 
 DipoleSubsurfaceProvider::~DipoleSubsurfaceProvider() = default;
 
-void DipoleSubsurfaceProvider::create(const gpu::ShaderLibrary& library) {
-    if (m->created)
-        return;
-    try {
-        m->irradianceProgram = gpu::GlProgram::compute(library, "dipole_irradiance.comp");
-        m->gatherProgram = gpu::GlProgram::compute(library, "dipole_provider.comp");
-        // Largest shift table: interleave 64 → 64² cells × 2 vec4.
-        m->shiftBuffer =
-            gpu::createBuffer(64 * 64 * 2 * sizeof(glm::vec4), nullptr, GL_DYNAMIC_STORAGE_BIT);
-        m->statsBuffer = gpu::createBuffer(2 * sizeof(uint32_t), nullptr,
-                                           GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
-    } catch (...) {
-        m->created = true;
-        destroy();
-        throw;
-    }
-    m->created = true;
-    m->volumeStale = true;
-    m->needReset = true;
+void DipoleSubsurfaceProvider::createGl(const gpu::ShaderLibrary& library) {
+    m->irradianceProgram = gpu::GlProgram::compute(library, "dipole_irradiance.comp");
+    m->gatherProgram = gpu::GlProgram::compute(library, "dipole_provider.comp");
+    m->cameraGatherProgram =
+        gpu::GlProgram::compute(library, "dipole_provider.comp", {"MULTI_VIEW=0"});
+    // Largest shift table: interleave 64 → 64² cells × 2 vec4.
+    m->shiftBuffer =
+        gpu::createBuffer(64 * 64 * 2 * sizeof(glm::vec4), nullptr, GL_DYNAMIC_STORAGE_BIT);
+    m->statsBuffer =
+        gpu::createBuffer(2 * sizeof(uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
+    m->radiusBuffer =
+        gpu::createBuffer(2 * sizeof(uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
+    // The light-view G-buffer shaders are the directional-dipole provider's (same content:
+    // position + coverage, outward normal; uniform location 0 = clipFromWorld).
+    m->lightGbufferProgram =
+        gpu::GlProgram::graphics(library, "dirpole_gbuffer.vert", "dirpole_gbuffer.frag");
+    m->lightStatsProgram = gpu::GlProgram::compute(library, "dipole_lightview.comp");
+    m->fbo = gpu::GlObject::create(gpu::GlObjectKind::Framebuffer);
+    const GLenum drawBuffers[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glNamedFramebufferDrawBuffers(m->fbo.id(), 2, drawBuffers);
+    m->viewBuffer = gpu::createBuffer(LUCENT_MAX_LIGHTS * sizeof(GpuLightView), nullptr,
+                                      GL_DYNAMIC_STORAGE_BIT);
 }
 
-void DipoleSubsurfaceProvider::destroy() {
-    if (!m->created)
-        return;
+void DipoleSubsurfaceProvider::destroyGl() {
     m->irradianceProgram.destroy();
     m->gatherProgram.destroy();
-    for (gpu::GlObject* o : {&m->shiftBuffer, &m->statsBuffer, &m->volumeSigmaT, &m->volumeSigmaS})
+    m->cameraGatherProgram.destroy();
+    m->lightGbufferProgram.destroy();
+    m->lightStatsProgram.destroy();
+    for (gpu::GlObject* o :
+         {&m->shiftBuffer, &m->statsBuffer, &m->radiusBuffer, &m->fbo, &m->viewBuffer,
+          &m->partialBuffer, &m->lvPosition, &m->lvNormal, &m->lvIrradiance, &m->scratchPosition,
+          &m->scratchNormal, &m->scratchE, &m->scratchT, &m->scratchS, &m->scratchDepth})
         o->destroy();
+    m->lvSize = m->lvLayers = 0;
+    m->lvCameras.clear();
     m->destroyImages();
-    m->volumeStale = true;
-    m->created = false;
-}
-
-bool DipoleSubsurfaceProvider::isCreated() const {
-    return m->created;
 }
 
 void DipoleSubsurfaceProvider::setSettings(const ProviderSettings& settings) {
@@ -363,65 +503,61 @@ const ProviderSettings& DipoleSubsurfaceProvider::settings() const {
     return m->settings;
 }
 
-void DipoleSubsurfaceProvider::setMaterial(const MaterialVolume* volume) {
-    if (volume == m->volume && !m->volumeStale)
-        return;
-    m->volume = volume;
-    m->volumeStale = true;
+void DipoleSubsurfaceProvider::restart() {
     m->needReset = true;
 }
 
-void DipoleSubsurfaceProvider::uploadBricks(const std::vector<int>& bricks) {
-    m->requireCreated("uploadBricks");
-    LUCENT_CHECK(m->volume != nullptr,
-                 "DipoleSubsurfaceProvider::uploadBricks: no material "
-                 "volume attached (call setMaterial first)");
-    for (int b : bricks)
-        LUCENT_CHECK(b >= 0 && b < m->volume->brickCount(),
-                     "DipoleSubsurfaceProvider::uploadBricks: brick ", b, " outside [0, ",
-                     m->volume->brickCount(), ")");
-    if (m->volumeStale || !(m->volume->spec() == m->uploadedSpec)) {
-        m->uploadAll();  // first upload or a new grid: everything
-        return;
+std::vector<SurfaceBuffers> DipoleSubsurfaceProvider::debugLightViews() const {
+    std::vector<SurfaceBuffers> views;
+    const int n = m->lvSize;
+    std::vector<glm::vec4> pos(size_t(n) * size_t(n)), nrm(pos.size()), e(pos.size());
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    const GLsizei bytes = GLsizei(pos.size() * sizeof(glm::vec4));
+    for (size_t layer = 0; layer < m->lvCameras.size(); ++layer) {
+        const Camera& cam = m->lvCameras[layer];
+        const GLint z = GLint(layer);
+        glGetTextureSubImage(m->lvPosition.id(), 0, 0, 0, z, n, n, 1, GL_RGBA, GL_FLOAT, bytes,
+                             pos.data());
+        glGetTextureSubImage(m->lvNormal.id(), 0, 0, 0, z, n, n, 1, GL_RGBA, GL_FLOAT, bytes,
+                             nrm.data());
+        glGetTextureSubImage(m->lvIrradiance.id(), 0, 0, 0, z, n, n, 1, GL_RGBA, GL_FLOAT, bytes,
+                             e.data());
+        SurfaceBuffers b;
+        b.resize(n, n);
+        b.clipFromWorld = cam.clipFromView() * cam.viewFromWorld();
+        b.eye = cam.position;
+        b.orthographic = cam.orthographic;
+        b.viewDirection = glm::normalize(cam.target - cam.position);
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const size_t gi = size_t(n - 1 - y) * size_t(n) + size_t(x), i = b.index(x, y);
+                if (pos[gi].w == 0.f)
+                    continue;
+                b.covered[i] = 1;
+                b.position[i] = Point3f(pos[gi]);
+                b.normal[i] = glm::normalize(Normal3f(nrm[gi]));
+                b.irradiance[i] = Rgb(e[gi]);
+            }
+        views.push_back(std::move(b));
     }
-    if (bricks.empty())
-        return;
-    m->writeBricks(bricks);
-}
-
-void DipoleSubsurfaceProvider::syncMaterial(MaterialVolume& volume) {
-    setMaterial(&volume);
-    const std::vector<int> dirty = volume.takeDirtyBricks();
-    if (m->volumeStale)
-        uploadBricks({});  // full upload; the dirty list is covered by it
-    else if (!dirty.empty())
-        uploadBricks(dirty);
-}
-
-void DipoleSubsurfaceProvider::reset() {
-    m->needReset = true;
-}
-
-const ProviderStats& DipoleSubsurfaceProvider::stats() const {
-    return m->stats;
+    gpu::checkGlError("DipoleSubsurfaceProvider::debugLightViews");
+    return views;
 }
 
 DipoleSubsurfaceProvider::DebugTextures DipoleSubsurfaceProvider::debugTextures() const {
-    return {m->irradiance.id(), m->sigmaT.id(),       m->sigmaS.id(),
-            m->accum.id(),      m->volumeSigmaT.id(), m->volumeSigmaS.id()};
+    return {m->irradiance.id(), m->sigmaT.id(),     m->sigmaS.id(),
+            m->accum.id(),      m->volume.sigmaT(), m->volume.sigmaS()};
 }
 
 void DipoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsigned target) {
-    m->requireCreated("renderSubsurface");
+    requireCreated("renderSubsurface");
     Impl& r = *m;
     r.ensureImages(g.width, g.height);
     // Material: a changed grid or changes nobody reported (revision moved without
     // uploadBricks) re-upload everything; reported bricks were uploaded already.
-    if (r.volume && (r.volumeStale || !(r.volume->spec() == r.uploadedSpec) ||
-                     r.volume->revision() != r.uploadedRevision))
-        r.uploadAll();
-    else if (!r.volume && r.volumeStale)
-        r.uploadAll();
+    if (r.volume.syncForFrame(r.stats))
+        r.needReset = true;
     // Camera and lights: compare with the accumulated frame's (the light SSBO is tiny).
     std::vector<unsigned char> lights(size_t(std::max(g.lightCount, 0)) * 64);
     if (!lights.empty() && g.lightBuffer)
@@ -437,6 +573,7 @@ void DipoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsig
     if (r.needReset) {
         r.resetAccumulation();
         r.runIrradiance(g);
+        r.runLightViews(g);
     }
     r.runGather(g, target, /*gather=*/!r.stats.converged);
     gpu::checkGlError("DipoleSubsurfaceProvider::renderSubsurface");

@@ -27,6 +27,7 @@ struct DirectionalDipoleRenderer::Impl {
     int passes = 0;
     float sceneRadius = 1.f;
     Point3f sceneCenter{0.f};
+    DirpoleEnergyTable energy;  ///< for scene.eta when settings.energyNormalised
 };
 
 DirectionalDipoleRenderer::DirectionalDipoleRenderer(const Scene& scene,
@@ -51,6 +52,8 @@ DirectionalDipoleRenderer::DirectionalDipoleRenderer(const Scene& scene,
     const Bounds3f b = m_impl->boundary->bounds();
     m_impl->sceneCenter = b.center();
     m_impl->sceneRadius = 0.5f * glm::length(b.extent()) + 1.f;
+    if (s.energyNormalised)
+        m_impl->energy = DirpoleEnergyTable(double(scene.eta));
 }
 
 DirectionalDipoleRenderer::~DirectionalDipoleRenderer() = default;
@@ -86,7 +89,12 @@ void DirectionalDipoleRenderer::addPass() {
                     channelCount = 0;
                     for (int c = 0; c < 3; ++c) {
                         const ScalarMedium med = fromReduced(mat.sigma_t[c], mat.sigma_s[c], eta);
-                        dd[size_t(c)] = DirectionalDipole(med.sigma_a, med.sigma_s, med.eta);
+                        // Energy-normalised S_d (DirectionalSettings::energyNormalised): the
+                        // table is empty (scale 1) when normalisation is off.
+                        const double alphaP =
+                            med.sigma_s > 0.0 ? med.sigma_s / (med.sigma_a + med.sigma_s) : 0.0;
+                        dd[size_t(c)] = DirectionalDipole(med.sigma_a, med.sigma_s, med.eta,
+                                                          m.energy.scale(alphaP));
                         // Importance function: the better dipole's exact sampler (same D and
                         // σ_tr as the directional dipole), seed 004 §4.
                         samplers[size_t(c)] = DipoleSampler(

@@ -80,6 +80,7 @@ GatherResult GpuGather::run(const SurfaceBuffers& buf, const GatherSettings& gs)
     set1i("u_nImp", gs.importanceSamples);
     set1i("u_nUni", gs.uniformSamples);
     set1f("u_discQuantile", gs.discQuantile);
+    set1f("u_maxRadius", gs.maxRadius);
     set1i("u_jacobian", gs.jacobian ? 1 : 0);
     set1f("u_maxJacobian", gs.maxJacobian);
     set1i("u_interleave", gs.interleave);

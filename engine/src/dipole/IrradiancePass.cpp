@@ -39,16 +39,11 @@ Rgb lightIrradiance(const Light& light, const Point3f& p, const Normal3f& n, flo
     return incident * (ft * cosI);
 }
 
-SurfaceBuffers buildSurfaceBuffers(const Scene& scene, int objectIndex) {
-    LUCENT_CHECK(objectIndex >= 0 && objectIndex < int(scene.objects.size()),
-                 "buildSurfaceBuffers: scene has no object ", objectIndex);
-    const SceneObject& obj = scene.objects[size_t(objectIndex)];
-    LUCENT_CHECK(obj.material != nullptr, "buildSurfaceBuffers: object ", objectIndex,
-                 " has no material");
-    const Camera& cam = scene.camera;
-    LUCENT_CHECK(cam.width >= 1 && cam.height >= 1,
-                 "buildSurfaceBuffers: camera size must be positive");
-    const MeshBoundary boundary(obj.mesh);
+namespace {
+
+/// The irradiance pass proper for an arbitrary view `cam` (the scene camera or a light's).
+SurfaceBuffers renderView(const Scene& scene, const SceneObject& obj, const MeshBoundary& boundary,
+                          const Camera& cam) {
     const MaterialVolume& volume = *obj.material;
     const float inset = 0.5f * volume.spec().voxelSize;
 
@@ -108,9 +103,120 @@ SurfaceBuffers buildSurfaceBuffers(const Scene& scene, int objectIndex) {
     return buf;
 }
 
-GatherResult renderImageSpaceDipole(const Scene& scene, GatherSettings settings) {
+const SceneObject& checkedObject(const Scene& scene, int objectIndex, const char* who) {
+    LUCENT_CHECK(objectIndex >= 0 && objectIndex < int(scene.objects.size()), who,
+                 ": scene has no object ", objectIndex);
+    const SceneObject& obj = scene.objects[size_t(objectIndex)];
+    LUCENT_CHECK(obj.material != nullptr, who, ": object ", objectIndex, " has no material");
+    return obj;
+}
+
+}  // namespace
+
+Camera lightViewCamera(const Light& light, const Bounds3f& bounds, int resolution) {
+    LUCENT_CHECK(resolution >= 16 && resolution <= 4096,
+                 "light view: resolution must be in [16, 4096] (got ", resolution, ")");
+    const Point3f centre = bounds.center();
+    const float radius = std::max(1e-3f, 0.5f * glm::length(bounds.hi - bounds.lo));
+    Camera cam;
+    cam.width = cam.height = resolution;
+    Vector3f forward;
+    if (light.type == Light::Type::Directional) {
+        forward = glm::normalize(light.direction);
+        cam.orthographic = true;
+        cam.orthoHeight = 2.f * radius * 1.02f;  // 2 % margin
+        cam.position = centre - forward * (2.f * radius);
+        cam.nearPlane = 0.5f * radius;
+        cam.farPlane = 4.f * radius;
+    } else {
+        const Vector3f toCentre = centre - light.position;
+        const float dist = glm::length(toCentre);
+        LUCENT_CHECK(dist > radius * 1.02f,
+                     "light view: the light lies inside the object's bounding sphere (distance ",
+                     dist, " mm, radius ", radius,
+                     " mm); no perspective light view frames the object");
+        forward = toCentre / dist;
+        cam.position = light.position;
+        // Field of view framing the bounding sphere: half-angle asin(radius/dist), 2 % margin.
+        cam.fovYDeg = 2.f * std::asin(std::min(0.999f, radius * 1.02f / dist)) * 180.f / PI;
+        cam.nearPlane = std::max(1e-3f, 0.5f * (dist - radius));
+        cam.farPlane = dist + 2.f * radius;
+    }
+    cam.target = cam.position + forward;
+    // Any up vector not parallel to the view direction.
+    cam.up = std::abs(forward.y) < 0.9f ? Vector3f(0.f, 1.f, 0.f) : Vector3f(1.f, 0.f, 0.f);
+    return cam;
+}
+
+SurfaceBuffers buildSurfaceBuffers(const Scene& scene, int objectIndex) {
+    const SceneObject& obj = checkedObject(scene, objectIndex, "buildSurfaceBuffers");
+    const Camera& cam = scene.camera;
+    LUCENT_CHECK(cam.width >= 1 && cam.height >= 1,
+                 "buildSurfaceBuffers: camera size must be positive");
+    const MeshBoundary boundary(obj.mesh);
+    return renderView(scene, obj, boundary, cam);
+}
+
+SurfaceBuffers buildLightViewBuffers(const Scene& scene, int lightIndex, int resolution,
+                                     int objectIndex) {
+    const SceneObject& obj = checkedObject(scene, objectIndex, "buildLightViewBuffers");
+    LUCENT_CHECK(lightIndex >= 0 && lightIndex < int(scene.lights.size()),
+                 "buildLightViewBuffers: scene has no light ", lightIndex);
+    LUCENT_CHECK(resolution >= 16 && resolution <= 4096,
+                 "buildLightViewBuffers: resolution must be in [16, 4096] (got ", resolution, ")");
+    const MeshBoundary boundary(obj.mesh);
+    const Camera cam =
+        lightViewCamera(scene.lights[size_t(lightIndex)], boundary.bounds(), resolution);
+    return renderView(scene, obj, boundary, cam);
+}
+
+ImageSpaceViews buildImageSpaceViews(const Scene& scene, const GatherSettings& settings,
+                                     const LightViewSettings& lv, int objectIndex) {
+    LUCENT_CHECK(lv.resolution >= 16 && lv.resolution <= 4096,
+                 "LightViewSettings.resolution must be in [16, 4096] (got ", lv.resolution, ")");
+    LUCENT_CHECK(lv.threshold >= 0.0 && lv.threshold < 1.0,
+                 "LightViewSettings.threshold must be in [0, 1) (got ", lv.threshold, ")");
+    const SceneObject& obj = checkedObject(scene, objectIndex, "buildImageSpaceViews");
+    LUCENT_CHECK(scene.camera.width >= 1 && scene.camera.height >= 1,
+                 "buildImageSpaceViews: camera size must be positive");
+    const MeshBoundary boundary(obj.mesh);
+    ImageSpaceViews views;
+    views.camera = renderView(scene, obj, boundary, scene.camera);
+    for (int l = 0; l < int(scene.lights.size()); ++l) {
+        LightViewReport rep;
+        rep.light = l;
+        if (!lv.enabled) {
+            rep.note = "light views disabled";
+            views.reports.push_back(rep);
+            continue;
+        }
+        Camera cam;
+        try {
+            cam = lightViewCamera(scene.lights[size_t(l)], boundary.bounds(), lv.resolution);
+        } catch (const ValueError& e) {
+            rep.note = e.what();
+            views.reports.push_back(rep);
+            continue;
+        }
+        SurfaceBuffers view = renderView(scene, obj, boundary, cam);
+        rep.built = true;
+        rep.backlitFraction = backlitFluxFraction(views.camera, view, settings);
+        rep.used = rep.backlitFraction > lv.threshold;
+        if (rep.used)
+            views.lights.push_back(std::move(view));
+        views.reports.push_back(rep);
+    }
+    return views;
+}
+
+GatherResult renderImageSpaceDipole(const Scene& scene, GatherSettings settings,
+                                    const LightViewSettings& lightViews,
+                                    std::vector<LightViewReport>* reports) {
     settings.eta = scene.eta;
-    return gatherImageSpace(buildSurfaceBuffers(scene), settings);
+    const ImageSpaceViews views = buildImageSpaceViews(scene, settings, lightViews);
+    if (reports)
+        *reports = views.reports;
+    return gatherImageSpace(views.camera, views.lights, settings);
 }
 
 }  // namespace lucent::dipole

@@ -235,6 +235,14 @@ double DipoleProfile::totalReflectance() const {
 // ---------------------------------------------------------------------------------------------
 // DirectionalDipole
 
+DirectionalDipole::DirectionalDipole(double sigma_a, double sigma_s, double eta, double energyScale)
+    : DirectionalDipole(sigma_a, sigma_s, eta) {
+    LUCENT_CHECK(std::isfinite(energyScale) && energyScale >= 0.0,
+                 "DirectionalDipole: energy scale must be finite and >= 0 (got ", energyScale, ")");
+    m_energyScale = energyScale;
+    m_norm *= energyScale;
+}
+
 DirectionalDipole::DirectionalDipole(double sigma_a, double sigma_s, double eta) {
     checkMedium(sigma_a, sigma_s, eta);
     const double sigmaTp = sigma_a + sigma_s;
@@ -243,6 +251,7 @@ DirectionalDipole::DirectionalDipole(double sigma_a, double sigma_s, double eta)
     m_zero = false;
     m_sigmaTp = sigmaTp;
     const double alphaP = sigma_s / sigmaTp;
+    m_alphaP = alphaP;
     // Frisvad et al. 2014, Sec. 4: D = (2σa + σs′)/(3σt′²), σ_tr = √(σa/D). (The authors'
     // reference program uses D = 1/(3σt′); identical at σa = 0, ρ lower by ≈ 3 % at α′ = 0.9.)
     // No α′ factor anywhere in S_d, as published: the model's total exceeds 1 at σa = 0
@@ -365,6 +374,63 @@ double integrateProfile(const DirectionalDipole& p) {
     return integrateRadial(
         [](const void* c, double r) { return static_cast<const DirectionalDipole*>(c)->radial(r); },
         &p, p.D());
+}
+
+double dirpoleEnergyScale(double alphaPrime, double eta) {
+    LUCENT_CHECK(std::isfinite(alphaPrime) && alphaPrime >= 0.0 && alphaPrime <= 1.0,
+                 "dirpoleEnergyScale: alpha' must be in [0, 1] (got ", alphaPrime, ")");
+    LUCENT_CHECK(std::isfinite(eta) && eta >= 1.0 && eta <= 3.0,
+                 "dirpoleEnergyScale: eta must be in [1, 3] (got ", eta, ")");
+    // σt′ = 1 mm⁻¹: both totals are dimensionless functions of α′ and η only.
+    const double a = std::max(alphaPrime, DIRPOLE_MIN_ALPHA);
+    const ScalarMedium med{1.0 - a, a, eta};
+    // ρ_better: d'Eon 2012 closed form (§1 of docs/methods/dipole.md); ρ_dirpole: quadrature of
+    // the normal-incidence profile R(r) = S_d·4πC_φ(1/η) (Frisvad et al. 2014).
+    const double better = DipoleProfile::make(Model::BetterDipole, med).totalReflectance();
+    const double dirpole = integrateProfile(DirectionalDipole(med.sigma_a, med.sigma_s, eta));
+    LUCENT_ASSERT(better > 0.0 && dirpole > 0.0);
+    return better / dirpole;
+}
+
+namespace {
+// DirpoleEnergyTable nodes: α′ ∈ [½, 1] uniform in s = √(1 − α′) (the totals are smooth in s,
+// e^{−√(3(1−α′))} terms), α′ ∈ [DIRPOLE_MIN_ALPHA, ½] uniform in log α′ (the scale falls
+// like α′ there); the table stores log s(α′), interpolated linearly in each variable.
+constexpr int HALF_NODES = DirpoleEnergyTable::NODES / 2;
+double tableAlpha(int i) {
+    if (i < HALF_NODES) {  // low albedos, log-spaced
+        const double t = double(i) / HALF_NODES;
+        return std::exp(std::log(DIRPOLE_MIN_ALPHA) * (1.0 - t) + std::log(0.5) * t);
+    }
+    const double s = std::sqrt(0.5) *
+                     (1.0 - double(i - HALF_NODES) / (DirpoleEnergyTable::NODES - 1 - HALF_NODES));
+    return 1.0 - s * s;
+}
+}  // namespace
+
+DirpoleEnergyTable::DirpoleEnergyTable(double eta) : m_eta(eta) {
+    LUCENT_CHECK(std::isfinite(eta) && eta >= 1.0 && eta <= 3.0,
+                 "DirpoleEnergyTable: eta must be in [1, 3] (got ", eta, ")");
+    m_scale.resize(NODES);
+    for (int i = 0; i < NODES; ++i)
+        m_scale[size_t(i)] = std::log(dirpoleEnergyScale(std::clamp(tableAlpha(i), 0.0, 1.0), eta));
+}
+
+double DirpoleEnergyTable::scale(double alphaPrime) const {
+    if (m_scale.empty())
+        return 1.0;
+    const double a = std::clamp(alphaPrime, DIRPOLE_MIN_ALPHA, 1.0);
+    double x;  // continuous node index
+    if (a < 0.5) {
+        x = (std::log(a) - std::log(DIRPOLE_MIN_ALPHA)) /
+            (std::log(0.5) - std::log(DIRPOLE_MIN_ALPHA)) * HALF_NODES;
+    } else {
+        const double s = std::sqrt(1.0 - a);
+        x = HALF_NODES + (1.0 - s / std::sqrt(0.5)) * (NODES - 1 - HALF_NODES);
+    }
+    const int i = std::clamp(int(x), 0, NODES - 2);
+    const double t = std::clamp(x - i, 0.0, 1.0);
+    return std::exp((1.0 - t) * m_scale[size_t(i)] + t * m_scale[size_t(i) + 1]);
 }
 
 double totalReflectance(Model m, const ScalarMedium& medium) {

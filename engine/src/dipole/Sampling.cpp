@@ -75,15 +75,41 @@ DipoleSampler::DipoleSampler(const DipoleProfile& p) {
     m_zv = p.zv();
     // P(real) = e^{−σz_r}/(e^{−σz_r} + e^{−σz_v}) = 1/(1 + e^{−σ(z_v − z_r)}).
     m_pReal = 1.0 / (1.0 + std::exp(-m_sigma * (m_zv - m_zr)));
+    m_pRealKept = m_pReal;
+}
+
+DipoleSampler DipoleSampler::truncated(double maxRadius) const {
+    DipoleSampler t = *this;
+    t.m_maxRadius = std::numeric_limits<double>::infinity();
+    t.m_cdfReal = t.m_cdfVirtual = t.m_mass = 1.0;
+    t.m_pRealKept = m_pReal;
+    if (!isValid() || !(maxRadius > 0.0) || !std::isfinite(maxRadius))
+        return t;
+    // Conditioning the two-source mixture of seed 004 §4 on r ≤ R: with F_s(R) of Eq. 6–7,
+    // P(s | r ≤ R) = P(s)F_s(R)/F(R) and r | s has the cdf F_s(r)/F_s(R) on [0, R].
+    t.m_maxRadius = maxRadius;
+    t.m_cdfReal = sourceRadiusCdf(m_sigma, m_zr, maxRadius);
+    t.m_cdfVirtual = sourceRadiusCdf(m_sigma, m_zv, maxRadius);
+    t.m_mass = m_pReal * t.m_cdfReal + (1.0 - m_pReal) * t.m_cdfVirtual;
+    if (!(t.m_mass > 0.0)) {
+        t.m_zr = 0.0;  // nothing within R (cannot happen for R > 0, kept as a guard): invalid
+        return t;
+    }
+    t.m_pRealKept = m_pReal * t.m_cdfReal / t.m_mass;
+    return t;
 }
 
 double DipoleSampler::sample(double xiSource, double xiRadius) const {
-    const double z = xiSource < m_pReal ? m_zr : m_zv;
-    return sampleSourceRadius(m_sigma, z, std::clamp(xiRadius, 0.0, std::nextafter(1.0, 0.0)));
+    const bool real = xiSource < m_pRealKept;
+    const double z = real ? m_zr : m_zv;
+    // Inverting F_s on [0, F_s(R)): ξ′ = ξ·F_s(R) (F_s(R) = 1 when not truncated).
+    const double xi =
+        std::clamp(xiRadius, 0.0, std::nextafter(1.0, 0.0)) * (real ? m_cdfReal : m_cdfVirtual);
+    return std::min(sampleSourceRadius(m_sigma, z, xi), m_maxRadius);
 }
 
 double DipoleSampler::pdfArea(double r) const {
-    if (!isValid())
+    if (!isValid() || r > m_maxRadius)
         return 0.0;
     // Each source's normalised area density z(1+σd)e^{−σ(d−z)}/(2πd³) (∫ over the plane = 1).
     const auto g = [&](double z) {
@@ -92,24 +118,28 @@ double DipoleSampler::pdfArea(double r) const {
             return 0.0;  // underflowed
         return z * (1.0 + m_sigma * d) * std::exp(-m_sigma * (d - z)) / (2.0 * PI_D * d * d * d);
     };
-    return m_pReal * g(m_zr) + (1.0 - m_pReal) * g(m_zv);
+    return (m_pReal * g(m_zr) + (1.0 - m_pReal) * g(m_zv)) / m_mass;
 }
 
 double DipoleSampler::cdf(double r) const {
     if (!isValid())
         return 0.0;
-    return m_pReal * sourceRadiusCdf(m_sigma, m_zr, r) +
-           (1.0 - m_pReal) * sourceRadiusCdf(m_sigma, m_zv, r);
+    r = std::min(r, m_maxRadius);
+    return std::min(1.0, (m_pReal * sourceRadiusCdf(m_sigma, m_zr, r) +
+                          (1.0 - m_pReal) * sourceRadiusCdf(m_sigma, m_zv, r)) /
+                             m_mass);
 }
 
 double DipoleSampler::quantile(double q) const {
     LUCENT_CHECK(q >= 0.0 && q < 1.0, "DipoleSampler::quantile: q must be in [0, 1)");
     if (!isValid() || q == 0.0)
         return 0.0;
-    // The virtual source's quantile bounds the mixture's from above (its cdf is smaller).
-    double lo = 0.0, hi = sampleSourceRadius(m_sigma, m_zv, q) + m_zv;
-    while (cdf(hi) < q)
-        hi *= 2.0;
+    // The virtual source's quantile bounds the untruncated mixture's from above (its cdf is
+    // smaller); with a window it is a first guess, widened up to maxRadius until it brackets q.
+    double lo = 0.0, hi = sampleSourceRadius(m_sigma, m_zv, q * m_cdfVirtual) + m_zv;
+    hi = std::min(hi, m_maxRadius);
+    while (cdf(hi) < q && hi < m_maxRadius)
+        hi = std::min(2.0 * hi, m_maxRadius);
     for (int i = 0; i < 200 && hi - lo > 1e-14 * hi; ++i) {
         const double m = 0.5 * (lo + hi);
         (cdf(m) < q ? lo : hi) = m;

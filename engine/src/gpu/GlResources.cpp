@@ -17,11 +17,13 @@ namespace lucent::gpu {
 namespace {
 std::atomic<std::size_t> s_live{0};
 std::atomic<std::size_t> s_leaked{0};
+std::atomic<std::size_t> s_created{0};
 }  // namespace
 
 namespace detail {
 void countCreated() {
     ++s_live;
+    ++s_created;
 }
 void countDestroyed() {
     --s_live;
@@ -37,6 +39,9 @@ std::size_t liveGlObjectCount() {
 }
 std::size_t leakedGlObjectCount() {
     return s_leaked.load();
+}
+std::size_t createdGlObjectCount() {
+    return s_created.load();
 }
 
 GlObject::GlObject(GlObjectKind kind, unsigned id) : m_kind(kind), m_id(id) {

@@ -44,6 +44,7 @@ struct MeshGpu {
     size_t indexCount = 0;
     Bounds3f bounds;
     SurfaceMaterial material;
+    uint64_t revision = 0;  ///< GBufferView::MeshGeometry::revision
 
     void destroy() {
         vao.destroy();
@@ -90,10 +91,12 @@ struct SceneRenderer::Impl {
     GlProgram gbufferProgram;
     GlProgram shadowProgram;
     GlProgram shadeProgram;
+    GlProgram shadeReuseProgram;  ///< direct_shade.frag with REUSE_DIRECT
     GlProgram tonemapProgram;
     GlObject emptyVao;
 
     std::vector<MeshGpu> meshes;
+    uint64_t meshUploads = 0;  ///< source of MeshGpu::revision
     std::vector<Light> lights;
     Camera camera;
     DirectSettings settings;
@@ -104,6 +107,7 @@ struct SceneRenderer::Impl {
     GlObject gPosition, gNormal, gDepth, gFbo;
     GlObject subsurface, subsurfaceFbo;
     GlObject radiance, radianceFbo;
+    GlObject direct, directFbo;  ///< the cached direct term; directFbo draws radiance + direct
     GlObject display, displayFbo;
     bool displayValid = false;
     bool haveFrame = false;
@@ -113,6 +117,9 @@ struct SceneRenderer::Impl {
     int shadowLayersAllocated = 0;
     int shadowSizeAllocated = 0;
     bool shadowsDirty = true;
+    bool gbufferDirty = true;  ///< camera, meshes or target size changed
+    bool directDirty = true;   ///< lights, surfaces or shading settings changed
+    PassReuseCounters counters;
 
     GlObject frameUbo, lightSsbo, layerSsbo, surfaceSsbo;
     int surfaceCapacity = 0;
@@ -160,7 +167,8 @@ struct SceneRenderer::Impl {
         g.vertexCount = mesh.positions.size();
         g.indexCount = mesh.triangles.size() * 3;
         g.bounds = mesh.bounds();
-        shadowsDirty = true;
+        g.revision = ++meshUploads;
+        shadowsDirty = gbufferDirty = true;
     }
 
     void uploadSurfaces() {
@@ -180,6 +188,7 @@ struct SceneRenderer::Impl {
         }
         glNamedBufferSubData(surfaceSsbo.id(), 0, GLsizeiptr(data.size() * sizeof(data[0])),
                              data.data());
+        directDirty = true;
     }
 
     void ensureTargets() {
@@ -205,19 +214,29 @@ struct SceneRenderer::Impl {
         radiance = createTexture2D(GL_RGBA32F, width, height, /*linear=*/true);
         radianceFbo = GlObject::create(GlObjectKind::Framebuffer);
         glNamedFramebufferTexture(radianceFbo.id(), GL_COLOR_ATTACHMENT0, radiance.id(), 0);
+        // The direct term is read while radianceFbo is drawn (reuse) and written through
+        // directFbo (recompute): never attached to the framebuffer it is sampled under.
+        direct = createTexture2D(GL_RGBA32F, width, height);
+        directFbo = GlObject::create(GlObjectKind::Framebuffer);
+        glNamedFramebufferTexture(directFbo.id(), GL_COLOR_ATTACHMENT0, radiance.id(), 0);
+        glNamedFramebufferTexture(directFbo.id(), GL_COLOR_ATTACHMENT1, direct.id(), 0);
+        const GLenum directBufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+        glNamedFramebufferDrawBuffers(directFbo.id(), 2, directBufs);
         display = createTexture2D(GL_RGBA32F, width, height);
         displayFbo = GlObject::create(GlObjectKind::Framebuffer);
         glNamedFramebufferTexture(displayFbo.id(), GL_COLOR_ATTACHMENT0, display.id(), 0);
-        for (GLuint fbo : {gFbo.id(), subsurfaceFbo.id(), radianceFbo.id(), displayFbo.id()})
+        for (GLuint fbo :
+             {gFbo.id(), subsurfaceFbo.id(), radianceFbo.id(), directFbo.id(), displayFbo.id()})
             if (glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
                 LUCENT_THROW(GpuError, "SceneRenderer: incomplete framebuffer at ", width, "x",
                              height);
         haveFrame = false;
+        gbufferDirty = directDirty = true;
     }
 
     void destroyTargets() {
         for (GlObject* o : {&gPosition, &gNormal, &gDepth, &gFbo, &subsurface, &subsurfaceFbo,
-                            &radiance, &radianceFbo, &display, &displayFbo})
+                            &radiance, &radianceFbo, &direct, &directFbo, &display, &displayFbo})
             o->destroy();
         width = height = 0;
     }
@@ -329,9 +348,15 @@ struct SceneRenderer::Impl {
         }
     }
 
-    void renderShadows(const std::vector<sh::GpuShadowLayer>& layers) {
-        if (!settings.shadows || layers.empty() || !shadowsDirty)
-            return;
+    /// @return true when the maps were re-rendered.
+    bool renderShadows(const std::vector<sh::GpuShadowLayer>& layers) {
+        if (!settings.shadows || layers.empty())
+            return false;
+        if (!shadowsDirty) {  // always reused while unchanged (reuseUnchangedPasses or not)
+            ++counters.shadowsReused;
+            return false;
+        }
+        ++counters.shadowsRendered;
         glBindFramebuffer(GL_FRAMEBUFFER, shadowFbo.id());
         glViewport(0, 0, shadowSizeAllocated, shadowSizeAllocated);
         glEnable(GL_DEPTH_TEST);
@@ -351,6 +376,7 @@ struct SceneRenderer::Impl {
         }
         glDisable(GL_POLYGON_OFFSET_FILL);
         shadowsDirty = false;
+        return true;
     }
 
     void renderFrame(unsigned tonemapFbo, int tonemapWidth, int tonemapHeight);
@@ -392,6 +418,8 @@ void SceneRenderer::createPrograms(const ShaderLibrary& library) {
     m->gbufferProgram = GlProgram::graphics(library, "mesh_gbuffer.vert", "mesh_gbuffer.frag");
     m->shadowProgram = GlProgram::graphics(library, "shadow_depth.vert", "shadow_depth.frag");
     m->shadeProgram = GlProgram::graphics(library, "post_fullscreen.vert", "direct_shade.frag");
+    m->shadeReuseProgram =
+        GlProgram::graphics(library, "post_fullscreen.vert", "direct_shade.frag", {"REUSE_DIRECT"});
     m->tonemapProgram = GlProgram::graphics(library, "post_fullscreen.vert", "post_tonemap.frag");
     m->emptyVao = GlObject::create(GlObjectKind::VertexArray);
     m->frameUbo = createBuffer(sizeof(sh::FrameUniforms), nullptr, GL_DYNAMIC_STORAGE_BIT);
@@ -405,14 +433,16 @@ void SceneRenderer::destroy() {
         g.destroy();
     m->meshes.clear();
     m->destroyTargets();
-    for (GlProgram* p :
-         {&m->gbufferProgram, &m->shadowProgram, &m->shadeProgram, &m->tonemapProgram})
+    for (GlProgram* p : {&m->gbufferProgram, &m->shadowProgram, &m->shadeProgram,
+                         &m->shadeReuseProgram, &m->tonemapProgram})
         p->destroy();
     for (GlObject* o : {&m->emptyVao, &m->shadowMaps, &m->shadowFbo, &m->frameUbo, &m->lightSsbo,
                         &m->layerSsbo, &m->surfaceSsbo})
         o->destroy();
     m->surfaceCapacity = 0;
     m->shadowLayersAllocated = m->shadowSizeAllocated = 0;
+    m->counters = {};
+    m->shadowsDirty = m->gbufferDirty = m->directDirty = true;
     m->profiler.destroy();
     m->created = false;
     m->haveFrame = false;
@@ -459,7 +489,7 @@ void SceneRenderer::clearMeshes() {
     for (MeshGpu& g : m->meshes)
         g.destroy();
     m->meshes.clear();
-    m->shadowsDirty = true;
+    m->shadowsDirty = m->gbufferDirty = true;
 }
 
 void SceneRenderer::setLights(const std::vector<Light>& lights) {
@@ -478,7 +508,7 @@ void SceneRenderer::setLights(const std::vector<Light>& lights) {
                          "].direction must be non-zero");
     }
     m->lights = lights;
-    m->shadowsDirty = true;
+    m->shadowsDirty = m->directDirty = true;
 }
 
 void SceneRenderer::setCamera(const Camera& c) {
@@ -492,6 +522,14 @@ void SceneRenderer::setCamera(const Camera& c) {
                  c.nearPlane, ", ", c.farPlane);
     LUCENT_CHECK(c.orthographic ? c.orthoHeight > 0.f : (c.fovYDeg > 0.f && c.fovYDeg < 180.f),
                  "camera: orthoHeight must be > 0 / fovYDeg in (0, 180)");
+    const Camera& o = m->camera;
+    const bool same = o.position == c.position && o.target == c.target && o.up == c.up &&
+                      o.orthographic == c.orthographic && o.fovYDeg == c.fovYDeg &&
+                      o.orthoHeight == c.orthoHeight && o.width == c.width &&
+                      o.height == c.height && o.nearPlane == c.nearPlane &&
+                      o.farPlane == c.farPlane;
+    if (!same)
+        m->gbufferDirty = true;  // the view vector of the direct term follows via the G-buffer
     m->camera = c;
 }
 
@@ -501,8 +539,12 @@ void SceneRenderer::setSettings(const DirectSettings& s) {
     LUCENT_CHECK(
         isFinite(s.background) && std::isfinite(s.toneMap.exposure) && s.toneMap.exposure >= 0.f,
         "DirectSettings: background and exposure must be finite (exposure >= 0)");
-    if (s.shadows != m->settings.shadows || s.shadowMapSize != m->settings.shadowMapSize)
+    const DirectSettings& o = m->settings;
+    if (s.shadows != o.shadows || s.shadowMapSize != o.shadowMapSize)
         m->shadowsDirty = true;
+    if (s.shadows != o.shadows || s.specular != o.specular ||
+        s.subsurfaceOnly != o.subsurfaceOnly || s.background != o.background)
+        m->directDirty = true;
     m->settings = s;
 }
 
@@ -512,6 +554,14 @@ const DirectSettings& SceneRenderer::settings() const {
 
 void SceneRenderer::setSubsurfaceProvider(SubsurfaceProvider* provider) {
     m->provider = provider;
+}
+
+const PassReuseCounters& SceneRenderer::reuseCounters() const {
+    return m->counters;
+}
+
+void SceneRenderer::invalidatePasses() {
+    m->shadowsDirty = m->gbufferDirty = m->directDirty = true;
 }
 
 void SceneRenderer::render() {
@@ -562,11 +612,20 @@ void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int
         glNamedBufferSubData(r.layerSsbo.id(), 0, GLsizeiptr(layers.size() * sizeof(layers[0])),
                              layers.data());
 
+    const bool reuse = r.settings.reuseUnchangedPasses;
+    bool shadowsRendered = false;
     {
         auto s = r.profiler.scope("shadows");
-        r.renderShadows(layers);
+        shadowsRendered = r.renderShadows(layers);
     }
-    {
+    const bool renderGbuffer = r.gbufferDirty || !reuse;
+    // The direct term depends on the G-buffer, the shadow maps, the lights, the surfaces and
+    // the shading settings; a material edit (new subsurface term) changes none of them.
+    const bool renderDirect = renderGbuffer || shadowsRendered || r.directDirty || !reuse;
+    ++r.counters.frames;
+    ++(renderGbuffer ? r.counters.gbufferRendered : r.counters.gbufferReused);
+    ++(renderDirect ? r.counters.directRendered : r.counters.directReused);
+    if (renderGbuffer) {
         auto s = r.profiler.scope("gbuffer");
         glBindFramebuffer(GL_FRAMEBUFFER, r.gFbo.id());
         glViewport(0, 0, r.width, r.height);
@@ -583,6 +642,9 @@ void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int
         glUseProgram(r.gbufferProgram.id());
         glBindBufferBase(GL_UNIFORM_BUFFER, LUCENT_BINDING_FRAME, r.frameUbo.id());
         r.drawMeshes(true);
+        r.gbufferDirty = false;
+    } else {
+        auto s = r.profiler.scope("gbuffer");  // reused: an empty scope keeps the pass list
     }
     {
         auto s = r.profiler.scope("subsurface");
@@ -596,11 +658,11 @@ void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int
     }
     {
         auto s = r.profiler.scope("shade");
-        glBindFramebuffer(GL_FRAMEBUFFER, r.radianceFbo.id());
+        glBindFramebuffer(GL_FRAMEBUFFER, renderDirect ? r.directFbo.id() : r.radianceFbo.id());
         glViewport(0, 0, r.width, r.height);
         glDisable(GL_DEPTH_TEST);
         glDisable(GL_BLEND);
-        glUseProgram(r.shadeProgram.id());
+        glUseProgram(renderDirect ? r.shadeProgram.id() : r.shadeReuseProgram.id());
         glBindBufferBase(GL_UNIFORM_BUFFER, LUCENT_BINDING_FRAME, r.frameUbo.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, LUCENT_BINDING_LIGHTS, r.lightSsbo.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, LUCENT_BINDING_SHADOW_LAYERS, r.layerSsbo.id());
@@ -610,8 +672,11 @@ void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int
         glBindTextureUnit(1, r.gNormal.id());
         glBindTextureUnit(2, r.subsurface.id());
         glBindTextureUnit(3, r.shadowMaps.id());
+        glBindTextureUnit(4, renderDirect ? 0 : r.direct.id());
         glBindVertexArray(r.emptyVao.id());
         glDrawArrays(GL_TRIANGLES, 0, 3);
+        glBindTextureUnit(4, 0);
+        r.directDirty = false;
     }
     {
         auto s = r.profiler.scope("tonemap");
@@ -670,6 +735,8 @@ GBufferView SceneRenderer::Impl::gbufferView() const {
     v.shadowMapTexture = shadowMaps.id();
     v.lightCount = int(lights.size());
     v.shadows = settings.shadows;
+    for (const MeshGpu& g : meshes)
+        v.meshes.push_back({g.vao.id(), int(g.indexCount), g.bounds, g.revision});
     return v;
 }
 

@@ -8,7 +8,13 @@
 /// "Residual ratio tracking", TOG 2014, Sec. 3 (Eq. 7: T = Π (1 − σt(xᵢ)/σ̄)). Free-flight
 /// sampling of a constant σ̄: t = −ln(1 − u)/σ̄ (STAR Eq. 12). HG phase function: Henyey &
 /// Greenstein 1941 (lucent/core/SphericalHarmonics.h hgPhase). Fresnel: Born & Wolf; pbrt-v3
-/// Eq. 8.1–8.2.
+/// Eq. 8.1–8.2. Hero-channel spectral MIS: Miller, Georgiev & Jarosz 2019, Eq. 9–12; Veach
+/// 1997, Eq. 9.15; Wilkie et al. 2014.
+///
+/// Structure: every tracker (delta tracking, ratio tracking, shadow rays, next-event
+/// estimation, the camera path) is implemented once, as a template over a channel policy
+/// (OneChannel / ChannelPath for per-channel tracking, AllChannels / HeroPath for spectral MIS);
+/// the public functions at the end instantiate them.
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Sampling.h>
@@ -63,17 +69,6 @@ float intersectSphere(const Point3f& o, const Vector3f& d, const Point3f& c, flo
 float exponentialStep(Pcg32& rng, float majorant) {
     // Free flight in a medium of constant σ̄: t = −ln(1 − u)/σ̄ (STAR Eq. 12).
     return -std::log1p(-rng.uniform()) / majorant;
-}
-
-/// Roulette on `weight`; returns false when the path is terminated.
-bool roulette(float& weight, Pcg32& rng) {
-    if (weight >= ROULETTE_WEIGHT)
-        return true;
-    const float q = weight / ROULETTE_WEIGHT;
-    if (rng.uniform() >= q)
-        return false;
-    weight = ROULETTE_WEIGHT;
-    return true;
 }
 
 /// A light sampled from a point x inside the medium (next-event estimation): direction wi
@@ -133,31 +128,6 @@ std::optional<LightSample> sampleLightFrom(const Light& light, const Point3f& x,
     return LightSample{wi, dist, le};
 }
 
-/// Next-event estimation from a real collision at x (inside the object): Σ over lights of
-/// phase · transmittance · radiance / pdf. `dirIn` is the path's travel direction at x.
-float directLighting(const VolumeScene& scene, const Point3f& x, const Vector3f& dirIn, float g,
-                     int ch, Pcg32& rng, const TransportOptions& options, TrackingStats* stats) {
-    float sum = 0.f;
-    for (const Light& light : scene.lights()) {
-        const std::optional<LightSample> ls = sampleLightFrom(light, x, rng);
-        if (!ls)
-            continue;
-        const Vector3f wi = ls->wi;
-        const float dist = ls->dist, le = ls->le[ch];
-        if (!(le > 0.f))
-            continue;
-        // HG phase value for the angle between the path's travel direction and wi (the
-        // light's travel direction −wi against −dirIn gives the same cosine).
-        const float phase = hgPhase(g, glm::dot(dirIn, wi));
-        if (!(phase > 0.f))
-            continue;
-        const float tr =
-            shadowTransmittance(scene, x, wi, dist, /*pInside=*/true, ch, rng, options, stats);
-        sum += phase * tr * le;
-    }
-    return sum;
-}
-
 }  // namespace
 
 float fresnelDielectric(float cosI, float eta) {
@@ -191,176 +161,12 @@ VolumeScene::VolumeScene(const TriangleMesh& mesh, GridMedium medium, std::vecto
     }
 }
 
-std::optional<float> sampleFreeFlight(const GridMedium& medium, const Point3f& o, const Vector3f& d,
-                                      float tMax, int ch, Pcg32& rng, TrackingStats* stats) {
-    std::optional<float> result;
-    const bool homogeneous = medium.isHomogeneous();
-    uint64_t lookups = 0;
-    medium.forEachMajorantSegment(o, d, 0.f, tMax, ch, [&](float t0, float t1, float majorant) {
-        if (!(majorant > 0.f))
-            return true;  // empty brick: skipped without a collision
-        float t = t0;
-        for (;;) {
-            t += exponentialStep(rng, majorant);
-            if (!(t < t1))
-                return true;    // restart in the next segment (memorylessness)
-            if (homogeneous) {  // σt = σ̄ everywhere: every collision is real
-                result = t;
-                return false;
-            }
-            ++lookups;
-            const float st = medium.sigmaT(o + d * t, ch);
-            // Accept with probability σt/σ̄ (STAR Eq. 18); otherwise a null collision.
-            if (rng.uniform() * majorant < st) {
-                result = t;
-                return false;
-            }
-        }
-    });
-    if (stats) {
-        stats->tentativeCollisions += lookups;
-        if (result)
-            ++stats->realCollisions;
-    }
-    return result;
-}
-
-float estimateTransmittance(const GridMedium& medium, const Point3f& o, const Vector3f& d,
-                            float tMax, int ch, Pcg32& rng, TrackingStats* stats) {
-    float tr = 1.f;
-    const bool homogeneous = medium.isHomogeneous();
-    uint64_t lookups = 0;
-    medium.forEachMajorantSegment(o, d, 0.f, tMax, ch, [&](float t0, float t1, float majorant) {
-        if (!(majorant > 0.f))
-            return true;
-        if (homogeneous) {  // Beer–Lambert in closed form: T = exp(−σt·ℓ)
-            tr *= std::exp(-majorant * (t1 - t0));
-            return true;
-        }
-        float t = t0;
-        for (;;) {
-            t += exponentialStep(rng, majorant);
-            if (!(t < t1))
-                return true;
-            ++lookups;
-            const float st = medium.sigmaT(o + d * t, ch);
-            // Ratio tracking: T ×= 1 − σt/σ̄ per tentative collision (Novák 2014, Eq. 7).
-            // σt ≤ σ̄ holds by construction; the clamp guards a lookup rounded into a
-            // neighbouring brick at a brick face.
-            tr *= std::max(0.f, 1.f - st / majorant);
-            if (tr < RATIO_ROULETTE) {
-                // Unbiased roulette: survive with probability tr/θ, then continue with θ.
-                if (tr <= 0.f || rng.uniform() * RATIO_ROULETTE >= tr) {
-                    tr = 0.f;
-                    return false;
-                }
-                tr = RATIO_ROULETTE;
-            }
-        }
-    });
-    if (stats)
-        stats->tentativeCollisions += lookups;
-    return tr;
-}
-
-WalkResult walkMedium(const VolumeScene& scene, const Point3f& p, const Vector3f& d, int ch,
-                      Pcg32& rng, const TransportOptions& options, TrackingStats* stats) {
-    WalkResult r;
-    const MeshBoundary& boundary = scene.boundary();
-    const GridMedium& medium = scene.medium();
-    const bool dielectric = options.boundary == BoundaryModel::Dielectric;
-    Point3f pos = p;
-    Vector3f dir = glm::normalize(d);
-    float weight = 1.f;
-    int surfaceEvents = 0;
-    while (surfaceEvents < MAX_SURFACE_EVENTS) {
-        const std::optional<SurfaceHit> exit = boundary.intersect(pos, dir, 0.f, INF);
-        if (!exit)
-            return r;  // numerically outside the closed mesh: lost
-        const std::optional<float> tc = sampleFreeFlight(medium, pos, dir, exit->t, ch, rng, stats);
-        if (tc) {
-            const Point3f x = pos + dir * *tc;
-            const float st = medium.sigmaT(x, ch);
-            // Collision weight: single-scattering albedo σs/σt (analog absorption as weight).
-            weight *= st > 0.f ? medium.sigmaS(x, ch) / st : 0.f;
-            ++r.scatterCount;
-            if (!(weight > 0.f) || r.scatterCount > options.maxScatter)
-                return r;
-            if (options.russianRoulette && !roulette(weight, rng))
-                return r;
-            dir = sampleHenyeyGreenstein(dir, medium.g(x, ch), {rng.uniform(), rng.uniform()});
-            pos = x;
-            continue;
-        }
-        ++surfaceEvents;
-        const Point3f x = pos + dir * exit->t;
-        const Normal3f n = exit->normal;
-        const float off = boundary.offsetAt(x);
-        if (dielectric) {
-            const float cosO = std::abs(glm::dot(dir, n));
-            // Leaving the dense side: relative index 1/η.
-            const float f = fresnelDielectric(cosO, 1.f / options.eta);
-            if (rng.uniform() < f) {
-                dir = glm::normalize(reflect(dir, n));
-                pos = x - n * off;
-                continue;
-            }
-            const std::optional<Vector3f> t = refract(dir, -n, 1.f / options.eta);
-            if (!t) {  // f = 1 covers TIR; guards rounding at the critical angle
-                dir = glm::normalize(reflect(dir, n));
-                pos = x - n * off;
-                continue;
-            }
-            dir = *t;
-        }
-        r.escaped = true;
-        r.position = x;
-        r.direction = dir;
-        r.weight = weight;
-        return r;
-    }
-    return r;
-}
-
-float shadowTransmittance(const VolumeScene& scene, const Point3f& p, const Vector3f& wi,
-                          float dist, bool pInside, int ch, Pcg32& rng,
-                          const TransportOptions& options, TrackingStats* stats) {
-    const MeshBoundary& boundary = scene.boundary();
-    const bool dielectric = options.boundary == BoundaryModel::Dielectric;
-    float tr = 1.f;
-    Point3f pos = p;
-    float remaining = dist;
-    bool inside = pInside;
-    for (int crossing = 0; crossing < 256; ++crossing) {
-        const std::optional<SurfaceHit> hit = boundary.intersect(pos, wi, 0.f, remaining);
-        const float segEnd = hit ? hit->t : remaining;
-        if (inside)
-            tr *= estimateTransmittance(scene.medium(), pos, wi, segEnd, ch, rng, stats);
-        if (!(tr > 0.f) || !hit)
-            return tr;
-        const Point3f x = pos + wi * hit->t;
-        const float off = boundary.offsetAt(x);
-        if (dielectric) {
-            // Straight shadow connection through the surface, weighted by the Fresnel
-            // transmittance 1 − F (refraction of the shadow ray ignored, as the dipole does).
-            const float cosT = std::abs(glm::dot(wi, hit->normal));
-            tr *= 1.f - fresnelDielectric(cosT, inside ? 1.f / options.eta : options.eta);
-        }
-        inside = !inside;
-        pos = x + wi * off;
-        remaining -= hit->t + off;
-        if (!(remaining > 0.f))
-            return tr;
-    }
-    return tr;
-}
-
 namespace {
 
 /// A camera path at point x of the surface (outward normal n), arriving from outside along
 /// `dir`. Moves it across (or off) the surface: updates pos/dir/inside and multiplies `weight`
 /// by the deterministic Fresnel split (subsurface-only first event) and the radiance scaling.
-/// Returns false when the path ends. Shared by the per-channel and spectral-MIS estimators.
+/// Returns false when the path ends.
 bool enterSurface(const Point3f& x, const Normal3f& n, float off, bool specularChain, Point3f& pos,
                   Vector3f& dir, bool& inside, double& weight, Pcg32& rng,
                   const TransportOptions& options) {
@@ -417,101 +223,127 @@ void exitSurface(const Point3f& x, const Normal3f& n, float off, Point3f& pos, V
     inside = false;
 }
 
-}  // namespace
+// ---------------------------------------------------------------------------------------------
+// Channel policies.
+//
+// Each estimator below is written once, as a template over a channel policy that holds only
+// what differs between the two colour modes of docs/reference.md:
+//  * OneChannel / ChannelPath: per-channel tracking, one channel `ch` as a scalar path tracer
+//    against its own majorant (with the homogeneous closed form where the medium allows it);
+//  * AllChannels / HeroPath: all three channels against the common majorant
+//    (GridMedium::ANY_CHANNEL), free flights sampled with the hero channel and weighted by
+//    hero-channel spectral MIS (the SpectralWeights below).
+// The policies keep each mode's arithmetic and random-number consumption exactly, so both modes
+// give the same bits as their former separate implementations (docs/reference.md).
+//
+// Spectral MIS (hero channel). Null-scattering path formulation (Miller, Georgiev & Jarosz
+// 2019, Eq. 9–12): with a common majorant σ̄ ≥ σt,c for every channel c, a tentative collision is
+// real with probability σt,c/σ̄ or null with probability σn,c/σ̄, σn = σ̄ − σt, under technique
+// c; the throughput of channel c gains σs,c·p_c(θ) at a real scattering event and σn,c at a null
+// one, its pdf under technique k gains σt,k·p_k(θ) and σn,k (the exponential factors are shared
+// and cancel). The one-sample balance heuristic over the three techniques (Veach 1997,
+// Eq. 9.15) gives the channel-c estimate f_c / ((1/3) Σ_k p_k). We keep w_c = f_c / p_hero and
+// q_k = p_k / p_hero in double precision, renormalised after every event so that mean(q) = 1
+// (only the ratio matters), so the estimate of the path prefix is simply w_c.
+// ---------------------------------------------------------------------------------------------
 
-float estimateRadiance(const VolumeScene& scene, const Point3f& o, const Vector3f& d, int ch,
-                       Pcg32& rng, const TransportOptions& options, TrackingStats* stats) {
-    const MeshBoundary& boundary = scene.boundary();
-    const GridMedium& medium = scene.medium();
-    float radiance = 0.f;
-    float beta = 1.f;
-    Point3f pos = o;
-    Vector3f dir = glm::normalize(d);
-    bool inside = false;
-    bool specularChain = true;  // only surface events (no scattering) since the camera
-    int scatterCount = 0;
-    for (int surfaceEvents = 0; surfaceEvents < MAX_SURFACE_EVENTS;) {
-        if (!inside) {
-            const std::optional<SurfaceHit> hit = boundary.intersect(pos, dir, 0.f, INF);
-            const float tHit = hit ? hit->t : INF;
-            // Sphere lights are opaque emitters. Their emission counts only along specular
-            // chains; after a scattering event they are reached by next-event estimation.
-            float tLight = INF, le = 0.f;
-            for (const Light& light : scene.lights()) {
-                if (light.type != Light::Type::Sphere)
-                    continue;
-                const float t = intersectSphere(pos, dir, light.position, light.radius);
-                if (t < tLight) {
-                    tLight = t;
-                    le = light.intensity[ch];
-                }
-            }
-            if (tLight < tHit) {
-                if (specularChain)
-                    radiance += beta * le;
-                break;
-            }
-            if (!hit)
-                break;  // black background
-            ++surfaceEvents;
-            const Point3f x = pos + dir * tHit;
-            const Normal3f n = hit->normal;
-            const float off = boundary.offsetAt(x);
-            double w = 1.0;
-            const bool alive =
-                enterSurface(x, n, off, specularChain, pos, dir, inside, w, rng, options);
-            beta *= float(w);
-            if (!alive)
-                break;
-            continue;
-        }
-        const std::optional<SurfaceHit> exit = boundary.intersect(pos, dir, 0.f, INF);
-        if (!exit) {
-            inside = false;  // numerically outside: continue as an outside ray
-            continue;
-        }
-        const std::optional<float> tc = sampleFreeFlight(medium, pos, dir, exit->t, ch, rng, stats);
-        if (tc) {
-            const Point3f x = pos + dir * *tc;
-            const float st = medium.sigmaT(x, ch);
-            beta *= st > 0.f ? medium.sigmaS(x, ch) / st : 0.f;
-            if (!(beta > 0.f) || ++scatterCount > options.maxScatter)
-                break;
-            const float g = medium.g(x, ch);
-            radiance += beta * directLighting(scene, x, dir, g, ch, rng, options, stats);
-            specularChain = false;
-            if (options.russianRoulette && !roulette(beta, rng))
-                break;
-            dir = sampleHenyeyGreenstein(dir, g, {rng.uniform(), rng.uniform()});
-            pos = x;
-            continue;
-        }
-        ++surfaceEvents;
-        const Point3f x = pos + dir * exit->t;
-        const Normal3f n = exit->normal;
-        const float off = boundary.offsetAt(x);
-        double w = 1.0;
-        exitSurface(x, n, off, pos, dir, inside, w, rng, options);
-        beta *= float(w);
-    }
-    return std::isfinite(radiance) ? radiance : 0.f;
+bool allFinite(float v) {
+    return std::isfinite(v);
+}
+bool allFinite(const Rgb& v) {
+    return isFinite(v);
 }
 
-// ---------------------------------------------------------------------------------------------
-// Spectral MIS (hero channel) estimators.
-//
-// Null-scattering path formulation (Miller, Georgiev & Jarosz 2019, Eq. 9–12): with a common
-// majorant σ̄ ≥ σt,c for every channel c, a tentative collision is real with probability
-// σt,c/σ̄ or null with probability σn,c/σ̄, σn = σ̄ − σt, under technique c; the throughput of
-// channel c gains σs,c·p_c(θ) at a real scattering event and σn,c at a null one, its pdf under
-// technique k gains σt,k·p_k(θ) and σn,k (the exponential factors are shared and cancel).
-// The one-sample balance heuristic over the three techniques (Veach 1997, Eq. 9.15) gives the
-// channel-c estimate f_c / ((1/3) Σ_k p_k). We keep w_c = f_c / p_hero and q_k = p_k / p_hero
-// in double precision, renormalised after every event so that mean(q) = 1 (only the ratio
-// matters), so the estimate of the path prefix is simply w_c.
-// ---------------------------------------------------------------------------------------------
+/// The trackers' view of one colour channel `ch`: its own majorant, a scalar transmittance.
+struct OneChannel {
+    using Value = float;
+    int ch = 0;
 
-namespace {
+    [[nodiscard]] int majorantChannel() const { return ch; }
+    /// Homogeneous medium: σ̄ = σt everywhere, so flights and transmittance are exponential.
+    [[nodiscard]] static bool closedForm(const GridMedium& medium) {
+        return medium.isHomogeneous();
+    }
+    [[nodiscard]] static float largest(float v) { return v; }
+    /// This channel's part of an RGB quantity.
+    [[nodiscard]] float pick(const Rgb& v) const { return v[ch]; }
+    /// Ratio-tracking factor at voxel v ≥ 0: T ×= 1 − σt/σ̄ (Novák 2014, Eq. 7). σt ≤ σ̄ holds
+    /// by construction; the clamp guards a lookup rounded into a neighbouring brick at a brick
+    /// face.
+    void attenuate(float& tr, const GridMedium& medium, int64_t v, float majorant) const {
+        tr *= std::max(0.f, 1.f - medium.sigmaTAt(v, ch) / majorant);
+    }
+    /// Survivor of the ratio-tracking roulette (probability tr/θ) continues with θ.
+    static void survive(float& tr, float /*largest*/) { tr = RATIO_ROULETTE; }
+    /// Delta tracking at voxel v (−1: outside the grid): a real collision with probability
+    /// σt/σ̄ (STAR Eq. 18), otherwise a null collision.
+    bool collide(const GridMedium& medium, int64_t v, float majorant, Pcg32& rng) const {
+        const float st = v < 0 ? 0.f : medium.sigmaTAt(v, ch);
+        return rng.uniform() * majorant < st;
+    }
+};
+
+/// The trackers' view of all three channels against the common majorant (Rgb transmittance).
+struct AllChannels {
+    using Value = Rgb;
+
+    [[nodiscard]] static int majorantChannel() { return GridMedium::ANY_CHANNEL; }
+    /// Never: the common σ̄ equals σt in one channel at most.
+    [[nodiscard]] static bool closedForm(const GridMedium& /*medium*/) { return false; }
+    [[nodiscard]] static float largest(const Rgb& v) { return std::max({v.r, v.g, v.b}); }
+    [[nodiscard]] static const Rgb& pick(const Rgb& v) { return v; }
+    /// Ratio tracking per channel against the common majorant (Novák 2014, Eq. 7).
+    static void attenuate(Rgb& tr, const GridMedium& medium, int64_t v, float majorant) {
+        for (int c = 0; c < 3; ++c)
+            tr[c] *= std::max(0.f, 1.f - medium.sigmaTAt(v, c) / majorant);
+    }
+    /// Roulette on the largest channel (survival probability largest/θ): rescale all channels.
+    static void survive(Rgb& tr, float largest) { tr *= RATIO_ROULETTE / largest; }
+};
+
+/// A per-channel camera path: scalar throughput β of channel `ch`.
+struct ChannelPath : OneChannel {
+    using Tracker = OneChannel;
+    float beta = 1.f;
+
+    [[nodiscard]] float throughput() const { return beta; }
+    /// False: the scalar weight does not change during a free flight (only at the collision,
+    /// where scatterAlbedo checks it).
+    [[nodiscard]] static bool isBlack() { return false; }
+    /// Surface crossing: `cross(w)` multiplies a fresh weight w (Fresnel split, radiance
+    /// scaling), folded into β; returns whether the path goes on.
+    template <typename F>
+    bool crossSurface(F&& cross) {
+        double w = 1.0;
+        const bool alive = cross(w);
+        beta *= float(w);
+        return alive;
+    }
+    /// Real collision at x: β ×= single-scattering albedo σs/σt. Returns false if β is zero.
+    bool scatterAlbedo(const GridMedium& medium, const Point3f& x) {
+        const float st = medium.sigmaT(x, ch);
+        beta *= st > 0.f ? medium.sigmaS(x, ch) / st : 0.f;
+        return beta > 0.f;
+    }
+    [[nodiscard]] float g(const GridMedium& medium, const Point3f& x) const {
+        return medium.g(x, ch);
+    }
+    [[nodiscard]] static float phase(float g, float cosT) { return hgPhase(g, cosT); }
+    /// Weight-window roulette on β (unbiased: survivors get weight / q). False: terminated.
+    bool roulette(Pcg32& rng) {
+        if (beta >= ROULETTE_WEIGHT)
+            return true;
+        const float q = beta / ROULETTE_WEIGHT;
+        if (rng.uniform() >= q)
+            return false;
+        beta = ROULETTE_WEIGHT;
+        return true;
+    }
+    /// New travel direction drawn from HG with this channel's g.
+    static Vector3f scatter(const Vector3f& dir, float g, Pcg32& rng) {
+        return sampleHenyeyGreenstein(dir, g, {rng.uniform(), rng.uniform()});
+    }
+};
 
 /// MIS state of a path prefix: contribution ratios w (per channel) and pdf ratios q.
 struct SpectralWeights {
@@ -536,41 +368,111 @@ struct SpectralWeights {
     [[nodiscard]] bool isZero() const { return !(maxWeight() > 0.0); }
 };
 
-/// Delta tracking with the hero channel against the common majorant; updates the MIS weights
-/// at every null and real collision. Returns the real collision's distance, if any.
-std::optional<float> sampleFreeFlightMis(const GridMedium& medium, const Point3f& o,
-                                         const Vector3f& d, float tMax, int hero, Pcg32& rng,
-                                         SpectralWeights& sw, TrackingStats* stats) {
+/// A hero-channel spectral-MIS camera path: MIS weights of all three channels, sampled with
+/// channel `hero`'s coefficients.
+struct HeroPath : AllChannels {
+    using Tracker = AllChannels;
+    int hero = 0;
+    SpectralWeights weights;
+    double scale = 1.0;  ///< Fresnel split and roulette factors (common to all channels)
+
+    [[nodiscard]] Rgb throughput() const {
+        return float(scale) * Rgb(float(weights.w[0]), float(weights.w[1]), float(weights.w[2]));
+    }
+    /// True when null collisions zeroed every channel's weight.
+    [[nodiscard]] bool isBlack() const { return weights.isZero(); }
+    template <typename F>
+    bool crossSurface(F&& cross) {
+        return cross(scale);
+    }
+    /// Delta tracking with the hero channel against the common majorant, updating the MIS
+    /// weights at every null and real collision.
+    bool collide(const GridMedium& medium, int64_t v, float majorant, Pcg32& rng) {
+        double st[3];
+        for (int c = 0; c < 3; ++c)
+            st[c] = v < 0 ? 0.0 : std::min(double(medium.sigmaTAt(v, c)), double(majorant));
+        // Real collision (the hero decides); st ≥ σ̄ (rounding) counts as real so that the
+        // hero's null probability is never zero.
+        if (st[hero] >= double(majorant) || rng.uniform() * majorant < st[hero]) {
+            double f[3];
+            for (int c = 0; c < 3; ++c)
+                f[c] = double(medium.sigmaSAt(v, c));
+            weights.update(f, st, hero);  // throughput σs,c; pdf σt,k (σ̄ cancels)
+            return true;
+        }
+        double sn[3];
+        for (int c = 0; c < 3; ++c)
+            sn[c] = double(majorant) - st[c];
+        weights.update(sn, sn, hero);  // null collision: σn in throughput and pdf
+        return false;
+    }
+    /// True: σs,c already entered the weights at the collision (collide).
+    static bool scatterAlbedo(const GridMedium& /*medium*/, const Point3f& /*x*/) { return true; }
+    [[nodiscard]] static Rgb g(const GridMedium& medium, const Point3f& x) {
+        return {medium.g(x, 0), medium.g(x, 1), medium.g(x, 2)};
+    }
+    [[nodiscard]] static Rgb phase(const Rgb& g, float cosT) {
+        return {hgPhase(g.r, cosT), hgPhase(g.g, cosT), hgPhase(g.b, cosT)};
+    }
+    /// Roulette on the largest channel weight (unbiased: survivors divided by q).
+    bool roulette(Pcg32& rng) {
+        const double m = scale * weights.maxWeight();
+        if (m >= ROULETTE_WEIGHT)
+            return true;
+        const double q = m / ROULETTE_WEIGHT;
+        if (rng.uniform() >= q)
+            return false;
+        scale /= q;
+        return true;
+    }
+    /// New direction drawn from HG with g_hero; the phase values of every channel enter the
+    /// throughput and the pdf alike.
+    Vector3f scatter(const Vector3f& dir, const Rgb& g, Pcg32& rng) {
+        const Vector3f next = sampleHenyeyGreenstein(dir, g[hero], {rng.uniform(), rng.uniform()});
+        const float cosT = glm::dot(dir, next);
+        double p[3];
+        for (int c = 0; c < 3; ++c)
+            p[c] = double(hgPhase(g[c], cosT));
+        weights.update(p, p, hero);
+        return next;
+    }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Trackers, one implementation each.
+// ---------------------------------------------------------------------------------------------
+
+/// Delta (Woodcock) tracking along o + t·d, t ∈ [0, tMax]: the first real collision decided
+/// by `channels.collide` (STAR Sec. 4.1), restarting the exponential step at every majorant
+/// segment (memorylessness). The segment callback is forced inline: as a call from the
+/// majorant walk it cost the spectral-MIS estimator ≈ 0.4 % more instructions (callgrind,
+/// docs/benchmarks.md).
+template <typename Channels>
+std::optional<float> trackFreeFlight(const GridMedium& medium, const Point3f& o, const Vector3f& d,
+                                     float tMax, Channels& channels, Pcg32& rng,
+                                     TrackingStats* stats) {
     std::optional<float> result;
+    const bool closedForm = channels.closedForm(medium);
     uint64_t lookups = 0;
     medium.forEachMajorantSegment(
-        o, d, 0.f, tMax, GridMedium::ANY_CHANNEL, [&](float t0, float t1, float majorant) {
+        o, d, 0.f, tMax, channels.majorantChannel(),
+        [&](float t0, float t1, float majorant) __attribute__((always_inline)) {
             if (!(majorant > 0.f))
-                return true;
+                return true;  // empty brick: skipped without a collision
             float t = t0;
             for (;;) {
                 t += exponentialStep(rng, majorant);
                 if (!(t < t1))
-                    return true;
-                ++lookups;
-                const int64_t v = medium.voxelIndex(o + d * t);
-                double st[3];
-                for (int c = 0; c < 3; ++c)
-                    st[c] = v < 0 ? 0.0 : std::min(double(medium.sigmaTAt(v, c)), double(majorant));
-                // Real collision (the hero decides); st ≥ σ̄ (rounding) counts as real so that
-                // the hero's null probability is never zero.
-                if (st[hero] >= double(majorant) || rng.uniform() * majorant < st[hero]) {
-                    double f[3];
-                    for (int c = 0; c < 3; ++c)
-                        f[c] = double(medium.sigmaSAt(v, c));
-                    sw.update(f, st, hero);  // throughput σs,c; pdf σt,k (σ̄ cancels)
+                    return true;   // restart in the next segment (memorylessness)
+                if (closedForm) {  // σt = σ̄ everywhere: every collision is real
                     result = t;
                     return false;
                 }
-                double sn[3];
-                for (int c = 0; c < 3; ++c)
-                    sn[c] = double(majorant) - st[c];
-                sw.update(sn, sn, hero);  // null collision: σn in throughput and pdf
+                ++lookups;
+                if (channels.collide(medium, medium.voxelIndex(o + d * t), majorant, rng)) {
+                    result = t;
+                    return false;
+                }
             }
         });
     if (stats) {
@@ -581,74 +483,24 @@ std::optional<float> sampleFreeFlightMis(const GridMedium& medium, const Point3f
     return result;
 }
 
-Rgb shadowTransmittanceRgb(const VolumeScene& scene, const Point3f& p, const Vector3f& wi,
-                           float dist, int hero, Pcg32& rng, const TransportOptions& options,
-                           TrackingStats* stats) {
-    const MeshBoundary& boundary = scene.boundary();
-    const bool dielectric = options.boundary == BoundaryModel::Dielectric;
-    Rgb tr(1.f);
-    Point3f pos = p;
-    float remaining = dist;
-    bool inside = true;
-    for (int crossing = 0; crossing < 256; ++crossing) {
-        const std::optional<SurfaceHit> hit = boundary.intersect(pos, wi, 0.f, remaining);
-        const float segEnd = hit ? hit->t : remaining;
-        if (inside)
-            tr *= estimateTransmittanceRgb(scene.medium(), pos, wi, segEnd, rng, stats);
-        if (!(std::max({tr.r, tr.g, tr.b}) > 0.f) || !hit)
-            return tr;
-        const Point3f x = pos + wi * hit->t;
-        const float off = boundary.offsetAt(x);
-        if (dielectric) {  // straight connection weighted by 1 − F (as in shadowTransmittance)
-            const float cosT = std::abs(glm::dot(wi, hit->normal));
-            tr *= 1.f - fresnelDielectric(cosT, inside ? 1.f / options.eta : options.eta);
-        }
-        inside = !inside;
-        pos = x + wi * off;
-        remaining -= hit->t + off;
-        if (!(remaining > 0.f))
-            return tr;
-    }
-    (void)hero;
-    return tr;
-}
-
-/// NEE for all channels at a real collision (see directLighting), phase per channel.
-Rgb directLightingRgb(const VolumeScene& scene, const Point3f& x, const Vector3f& dirIn,
-                      const Rgb& g, int hero, Pcg32& rng, const TransportOptions& options,
-                      TrackingStats* stats) {
-    Rgb sum(0.f);
-    for (const Light& light : scene.lights()) {
-        const std::optional<LightSample> ls = sampleLightFrom(light, x, rng);
-        if (!ls)
-            continue;
-        const Vector3f wi = ls->wi;
-        const float dist = ls->dist;
-        const Rgb le = ls->le;
-        if (!(std::max({le.r, le.g, le.b}) > 0.f))
-            continue;
-        const float cosT = glm::dot(dirIn, wi);
-        const Rgb phase(hgPhase(g.r, cosT), hgPhase(g.g, cosT), hgPhase(g.b, cosT));
-        const Rgb tr = shadowTransmittanceRgb(scene, x, wi, dist, hero, rng, options, stats);
-        sum += phase * tr * le;
-    }
-    return sum;
-}
-
-Rgb toRgb(const SpectralWeights& sw) {
-    return Rgb(float(sw.w[0]), float(sw.w[1]), float(sw.w[2]));
-}
-
-}  // namespace
-
-Rgb estimateTransmittanceRgb(const GridMedium& medium, const Point3f& o, const Vector3f& d,
-                             float tMax, Pcg32& rng, TrackingStats* stats) {
-    Rgb tr(1.f);
+/// Ratio tracking (Novák 2014, Sec. 3) of exp(−∫₀^tMax σt) along o + t·d, with unbiased
+/// roulette once the (largest) transmittance falls below RATIO_ROULETTE.
+template <typename Channels>
+typename Channels::Value trackTransmittance(const GridMedium& medium, const Point3f& o,
+                                            const Vector3f& d, float tMax, const Channels& channels,
+                                            Pcg32& rng, TrackingStats* stats) {
+    using Value = typename Channels::Value;
+    Value tr(1.f);
+    const bool closedForm = channels.closedForm(medium);
     uint64_t lookups = 0;
     medium.forEachMajorantSegment(
-        o, d, 0.f, tMax, GridMedium::ANY_CHANNEL, [&](float t0, float t1, float majorant) {
+        o, d, 0.f, tMax, channels.majorantChannel(), [&](float t0, float t1, float majorant) {
             if (!(majorant > 0.f))
                 return true;
+            if (closedForm) {  // Beer–Lambert in closed form: T = exp(−σt·ℓ)
+                tr *= std::exp(-majorant * (t1 - t0));
+                return true;
+            }
             float t = t0;
             for (;;) {
                 t += exponentialStep(rng, majorant);
@@ -658,16 +510,15 @@ Rgb estimateTransmittanceRgb(const GridMedium& medium, const Point3f& o, const V
                 const int64_t v = medium.voxelIndex(o + d * t);
                 if (v < 0)
                     continue;  // σt = 0 outside the grid: factor 1
-                // Ratio tracking per channel against the common majorant (Novák 2014, Eq. 7).
-                for (int c = 0; c < 3; ++c)
-                    tr[c] *= std::max(0.f, 1.f - medium.sigmaTAt(v, c) / majorant);
-                const float m = std::max({tr.r, tr.g, tr.b});
-                if (m < RATIO_ROULETTE) {  // roulette on the largest channel, unbiased
+                channels.attenuate(tr, medium, v, majorant);
+                const float m = channels.largest(tr);
+                if (m < RATIO_ROULETTE) {
+                    // Unbiased roulette: survive with probability m/θ, then continue with θ.
                     if (m <= 0.f || rng.uniform() * RATIO_ROULETTE >= m) {
-                        tr = Rgb(0.f);
+                        tr = Value(0.f);
                         return false;
                     }
-                    tr *= RATIO_ROULETTE / m;
+                    channels.survive(tr, m);
                 }
             }
         });
@@ -676,82 +527,141 @@ Rgb estimateTransmittanceRgb(const GridMedium& medium, const Point3f& o, const V
     return tr;
 }
 
-Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector3f& d, int hero,
-                        Pcg32& rng, const TransportOptions& options, TrackingStats* stats) {
+/// Transmittance of a shadow ray (see shadowTransmittance in Transport.h).
+template <typename Channels>
+typename Channels::Value traceShadowRay(const VolumeScene& scene, const Point3f& p,
+                                        const Vector3f& wi, float dist, bool pInside,
+                                        const Channels& channels, Pcg32& rng,
+                                        const TransportOptions& options, TrackingStats* stats) {
+    using Value = typename Channels::Value;
+    const MeshBoundary& boundary = scene.boundary();
+    const bool dielectric = options.boundary == BoundaryModel::Dielectric;
+    Value tr(1.f);
+    Point3f pos = p;
+    float remaining = dist;
+    bool inside = pInside;
+    for (int crossing = 0; crossing < 256; ++crossing) {
+        const std::optional<SurfaceHit> hit = boundary.intersect(pos, wi, 0.f, remaining);
+        const float segEnd = hit ? hit->t : remaining;
+        if (inside)
+            tr *= trackTransmittance(scene.medium(), pos, wi, segEnd, channels, rng, stats);
+        if (!(channels.largest(tr) > 0.f) || !hit)
+            return tr;
+        const Point3f x = pos + wi * hit->t;
+        const float off = boundary.offsetAt(x);
+        if (dielectric) {
+            // Straight shadow connection through the surface, weighted by the Fresnel
+            // transmittance 1 − F (refraction of the shadow ray ignored, as the dipole does).
+            const float cosT = std::abs(glm::dot(wi, hit->normal));
+            tr *= 1.f - fresnelDielectric(cosT, inside ? 1.f / options.eta : options.eta);
+        }
+        inside = !inside;
+        pos = x + wi * off;
+        remaining -= hit->t + off;
+        if (!(remaining > 0.f))
+            return tr;
+    }
+    return tr;
+}
+
+/// Next-event estimation from a real collision at x (inside the object): Σ over lights of
+/// phase · transmittance · radiance / pdf. `dirIn` is the path's travel direction at x.
+template <typename Path>
+typename Path::Value directLighting(const VolumeScene& scene, const Point3f& x,
+                                    const Vector3f& dirIn, const typename Path::Value& g,
+                                    const Path& path, Pcg32& rng, const TransportOptions& options,
+                                    TrackingStats* stats) {
+    using Value = typename Path::Value;
+    Value sum(0.f);
+    for (const Light& light : scene.lights()) {
+        const std::optional<LightSample> ls = sampleLightFrom(light, x, rng);
+        if (!ls)
+            continue;
+        const Value le = path.pick(ls->le);
+        if (!(path.largest(le) > 0.f))
+            continue;
+        // HG phase value for the angle between the path's travel direction and wi (the
+        // light's travel direction −wi against −dirIn gives the same cosine).
+        const Value phase = path.phase(g, glm::dot(dirIn, ls->wi));
+        if (!(path.largest(phase) > 0.f))
+            continue;  // hgPhase > 0 unless rounding of 1 + g² − 2g·cos bites (|g| ≳ 0.9995)
+        const Value tr =
+            traceShadowRay(scene, x, ls->wi, ls->dist, /*pInside=*/true,
+                           static_cast<const typename Path::Tracker&>(path), rng, options, stats);
+        sum += phase * tr * le;
+    }
+    return sum;
+}
+
+/// The camera-path estimator of estimateRadiance / estimateRadianceRgb (Transport.h).
+template <typename Path>
+typename Path::Value tracePath(const VolumeScene& scene, const Point3f& o, const Vector3f& d,
+                               Path& path, Pcg32& rng, const TransportOptions& options,
+                               TrackingStats* stats) {
+    using Value = typename Path::Value;
     const MeshBoundary& boundary = scene.boundary();
     const GridMedium& medium = scene.medium();
-    hero = std::clamp(hero, 0, 2);
-    Rgb radiance(0.f);
-    SpectralWeights sw;
-    double scale = 1.0;  // Fresnel split and roulette factors (common to all channels)
+    Value radiance(0.f);
     Point3f pos = o;
     Vector3f dir = glm::normalize(d);
     bool inside = false;
-    bool specularChain = true;
+    bool specularChain = true;  // only surface events (no scattering) since the camera
     int scatterCount = 0;
     for (int surfaceEvents = 0; surfaceEvents < MAX_SURFACE_EVENTS;) {
         if (!inside) {
             const std::optional<SurfaceHit> hit = boundary.intersect(pos, dir, 0.f, INF);
             const float tHit = hit ? hit->t : INF;
+            // Sphere lights are opaque emitters. Their emission counts only along specular
+            // chains; after a scattering event they are reached by next-event estimation.
             float tLight = INF;
-            Rgb le(0.f);
+            const Light* emitter = nullptr;
             for (const Light& light : scene.lights()) {
                 if (light.type != Light::Type::Sphere)
                     continue;
                 const float t = intersectSphere(pos, dir, light.position, light.radius);
                 if (t < tLight) {
                     tLight = t;
-                    le = light.intensity;
+                    emitter = &light;
                 }
             }
             if (tLight < tHit) {
                 if (specularChain)
-                    radiance += float(scale) * toRgb(sw) * le;
+                    radiance += path.throughput() * path.pick(emitter->intensity);
                 break;
             }
             if (!hit)
-                break;
+                break;  // black background
             ++surfaceEvents;
             const Point3f x = pos + dir * tHit;
             const Normal3f n = hit->normal;
             const float off = boundary.offsetAt(x);
-            if (!enterSurface(x, n, off, specularChain, pos, dir, inside, scale, rng, options))
+            if (!path.crossSurface([&](double& w) {
+                    return enterSurface(x, n, off, specularChain, pos, dir, inside, w, rng,
+                                        options);
+                }))
                 break;
             continue;
         }
         const std::optional<SurfaceHit> exit = boundary.intersect(pos, dir, 0.f, INF);
         if (!exit) {
-            inside = false;
+            inside = false;  // numerically outside: continue as an outside ray
             continue;
         }
         const std::optional<float> tc =
-            sampleFreeFlightMis(medium, pos, dir, exit->t, hero, rng, sw, stats);
-        if (sw.isZero())
+            trackFreeFlight(medium, pos, dir, exit->t, path, rng, stats);
+        if (path.isBlack())
             break;
         if (tc) {
             const Point3f x = pos + dir * *tc;
-            if (++scatterCount > options.maxScatter)
+            if (!path.scatterAlbedo(medium, x) || ++scatterCount > options.maxScatter)
                 break;
-            const Rgb g(medium.g(x, 0), medium.g(x, 1), medium.g(x, 2));
-            radiance += float(scale) * toRgb(sw) *
-                        directLightingRgb(scene, x, dir, g, hero, rng, options, stats);
+            const Value g = path.g(medium, x);
+            radiance +=
+                path.throughput() * directLighting(scene, x, dir, g, path, rng, options, stats);
             specularChain = false;
-            // Roulette on the largest channel weight (unbiased: survivors divided by q).
-            const double m = scale * sw.maxWeight();
-            if (options.russianRoulette && m < ROULETTE_WEIGHT) {
-                const double q = m / ROULETTE_WEIGHT;
-                if (rng.uniform() >= q)
-                    break;
-                scale /= q;
-            }
-            const Vector3f next =
-                sampleHenyeyGreenstein(dir, g[hero], {rng.uniform(), rng.uniform()});
-            const float cosT = glm::dot(dir, next);
-            double p[3];
-            for (int c = 0; c < 3; ++c)
-                p[c] = double(hgPhase(g[c], cosT));
-            sw.update(p, p, hero);  // phase value in throughput and pdf alike
-            dir = next;
+            if (options.russianRoulette && !path.roulette(rng))
+                break;
+            dir = path.scatter(dir, g, rng);
             pos = x;
             continue;
         }
@@ -759,9 +669,98 @@ Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector
         const Point3f x = pos + dir * exit->t;
         const Normal3f n = exit->normal;
         const float off = boundary.offsetAt(x);
-        exitSurface(x, n, off, pos, dir, inside, scale, rng, options);
+        path.crossSurface([&](double& w) {
+            exitSurface(x, n, off, pos, dir, inside, w, rng, options);
+            return true;
+        });
     }
-    return isFinite(radiance) ? radiance : Rgb(0.f);
+    return allFinite(radiance) ? radiance : Value(0.f);
+}
+
+}  // namespace
+
+std::optional<float> sampleFreeFlight(const GridMedium& medium, const Point3f& o, const Vector3f& d,
+                                      float tMax, int ch, Pcg32& rng, TrackingStats* stats) {
+    OneChannel channel{ch};
+    return trackFreeFlight(medium, o, d, tMax, channel, rng, stats);
+}
+
+float estimateTransmittance(const GridMedium& medium, const Point3f& o, const Vector3f& d,
+                            float tMax, int ch, Pcg32& rng, TrackingStats* stats) {
+    return trackTransmittance(medium, o, d, tMax, OneChannel{ch}, rng, stats);
+}
+
+Rgb estimateTransmittanceRgb(const GridMedium& medium, const Point3f& o, const Vector3f& d,
+                             float tMax, Pcg32& rng, TrackingStats* stats) {
+    return trackTransmittance(medium, o, d, tMax, AllChannels{}, rng, stats);
+}
+
+float shadowTransmittance(const VolumeScene& scene, const Point3f& p, const Vector3f& wi,
+                          float dist, bool pInside, int ch, Pcg32& rng,
+                          const TransportOptions& options, TrackingStats* stats) {
+    return traceShadowRay(scene, p, wi, dist, pInside, OneChannel{ch}, rng, options, stats);
+}
+
+WalkResult walkMedium(const VolumeScene& scene, const Point3f& p, const Vector3f& d, int ch,
+                      Pcg32& rng, const TransportOptions& options, TrackingStats* stats) {
+    WalkResult r;
+    const MeshBoundary& boundary = scene.boundary();
+    const GridMedium& medium = scene.medium();
+    ChannelPath path;  // β: product of albedos and roulette factors
+    path.ch = ch;
+    Point3f pos = p;
+    Vector3f dir = glm::normalize(d);
+    int surfaceEvents = 0;
+    while (surfaceEvents < MAX_SURFACE_EVENTS) {
+        const std::optional<SurfaceHit> exit = boundary.intersect(pos, dir, 0.f, INF);
+        if (!exit)
+            return r;  // numerically outside the closed mesh: lost
+        const std::optional<float> tc =
+            trackFreeFlight(medium, pos, dir, exit->t, path, rng, stats);
+        if (tc) {
+            const Point3f x = pos + dir * *tc;
+            // Collision weight: single-scattering albedo σs/σt (analog absorption as weight).
+            const bool alive = path.scatterAlbedo(medium, x);
+            ++r.scatterCount;
+            if (!alive || r.scatterCount > options.maxScatter)
+                return r;
+            if (options.russianRoulette && !path.roulette(rng))
+                return r;
+            dir = path.scatter(dir, path.g(medium, x), rng);
+            pos = x;
+            continue;
+        }
+        ++surfaceEvents;
+        const Point3f x = pos + dir * exit->t;
+        // Fresnel reflection back inside or refraction out; the walk follows flux, so the
+        // radiance scaling η² that exitSurface applies is dropped.
+        double radianceScale = 1.0;
+        bool inside = true;
+        exitSurface(x, exit->normal, boundary.offsetAt(x), pos, dir, inside, radianceScale, rng,
+                    options);
+        if (inside)
+            continue;
+        r.escaped = true;
+        r.position = x;
+        r.direction = dir;
+        r.weight = path.beta;
+        return r;
+    }
+    return r;
+}
+
+float estimateRadiance(const VolumeScene& scene, const Point3f& o, const Vector3f& d, int ch,
+                       Pcg32& rng, const TransportOptions& options, TrackingStats* stats) {
+    ChannelPath path;
+    path.ch = ch;
+    return tracePath(scene, o, d, path, rng, options, stats);
+}
+
+Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector3f& d, int hero,
+                        Pcg32& rng, const TransportOptions& options, TrackingStats* stats) {
+    HeroPath path;
+    path.hero = std::clamp(hero, 0, 2);
+    return tracePath(scene, o, d, path, rng, options, stats);
 }
 
 }  // namespace lucent

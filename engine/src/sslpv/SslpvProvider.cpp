@@ -302,7 +302,6 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
         s.glPropagateDirty = false;
         s.uploadDirty = true;
     }
-    const SslpvGrid& grid = s.sampledGrid();
     const GridSpec& spec = s.solver.spec();
     const int N = spec.resolution;
     if (s.uploadDirty || s.texRes != N) {
@@ -314,6 +313,20 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
             }
             s.texRes = N;
         }
+        if (s.opt.backend == SslpvBackend::Gl && s.gl) {
+            // The GL grid goes to the textures on the GPU: no read-back, no CPU upload.
+            const unsigned ids[UPLOADED_COEFFS] = {s.coeffTex[0].id(), s.coeffTex[1].id(),
+                                                   s.coeffTex[2].id(), s.coeffTex[3].id()};
+            s.gl->writeTextures(ids);
+            s.timings.uploadMs = t.elapsedMs();
+            s.timings.lastUpdateMs += s.timings.uploadMs;
+            s.uploadDirty = false;
+            ++s.stats.uploads;
+        }
+    }
+    if (s.uploadDirty) {
+        const Timer t;
+        const SslpvGrid& grid = s.sampledGrid();
         const size_t cells = spec.voxelCount();
         s.staging.resize(4 * cells);
         for (int i = 0; i < UPLOADED_COEFFS; ++i) {

@@ -131,13 +131,16 @@ struct StepCtx {
     L1Weights l1w[6];
 };
 
-/// Sums of one z-slice: [channel] × {remaining, exitant, absorbed}.
+/// Sums of one z-slice: [channel] × {remaining, exitant, absorbed}; bricks and cells computed.
 struct SliceSums {
     double v[3][3] = {};
+    int activeBricks = 0;
+    int64_t cells = 0;
 };
 
 constexpr int VEC = 8;  ///< floats per GCC vector below (AVX2 register; two SSE ones otherwise)
 typedef float Vec16 __attribute__((vector_size(2 * VEC * sizeof(float))));
+typedef int32_t Vec16i __attribute__((vector_size(2 * VEC * sizeof(int32_t))));
 
 // Unaligned 16-float load/store as macros: helper functions returning vectors would be
 // compiled for the baseline ABI outside the cloned kernel (GCC -Wpsabi).
@@ -161,14 +164,17 @@ typedef float Vec16 __attribute__((vector_size(2 * VEC * sizeof(float))));
 // neighbour along axis a couples only c00 with its own dipole coefficient, the other two are
 // scaled): 24 shifted loads and 36 FMAs per 32 cells instead of 36 loads; order 2 walks the
 // generic term list over 4 independent accumulator pairs to hide the FMA latency.
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void processSlice(
-    const StepCtx& ctx, int z, SliceSums& sums) {
-    const int len = ctx.box.hi.x - ctx.box.lo.x + 1;
+//
+// One call computes the run of `len` cells starting at (xStart, y, z) and writes into nz[x]
+// (x relative to xStart, len entries) a non-zero lane mask of the cell's new propagation
+// values, from which the caller derives the bricks lit after this step.
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void processRun(
+    const StepCtx& ctx, int z, int y, int xStart, int len, SliceSums& sums, int32_t* nz) {
     const size_t p = size_t(ctx.padded);
     constexpr int BLOCK = 4 * VEC;  // 32 cells
     alignas(64) float out[SSLPV_MAX_COEFFS][BLOCK];
-    for (int y = ctx.box.lo.y; y <= ctx.box.hi.y; ++y) {
-        const size_t base = (size_t(z + 1) * p + size_t(y + 1)) * p + size_t(ctx.box.lo.x + 1);
+    {
+        const size_t base = (size_t(z + 1) * p + size_t(y + 1)) * p + size_t(xStart + 1);
         for (int ch = 0; ch < 3; ++ch) {
             Vec16 remV = {}, absV = {}, exitV = {};
             float remS = 0.f, absS = 0.f, exitS = 0.f;
@@ -222,7 +228,9 @@ __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) vo
                     }
                 }
                 // ---- post-processing per coefficient
-                const bool full = x0 + BLOCK <= len;
+                // 16-cell halves done with vectors: both for a full block, else as many as fit.
+                const int halves = x0 + BLOCK <= len ? 2 : (len - x0) / (2 * VEC);
+                Vec16i nzv[2] = {};  // lanes whose new value is non-zero in any coefficient
                 const size_t bx = base + size_t(x0);
                 const float* msk = ctx.mask ? ctx.mask + bx : nullptr;
                 for (int i = 0; i < ctx.coeffs; ++i) {
@@ -233,8 +241,8 @@ __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) vo
                     float* ac = ctx.acc[ch][i] ? ctx.acc[ch][i] + bx : nullptr;
                     float* ds = ctx.dst[ch][i] + bx;
                     const bool sum = i == 0;
-                    if (full) {
-                        for (int h = 0; h < 2; ++h) {
+                    {
+                        for (int h = 0; h < halves; ++h) {
                             const int x = h * 2 * VEC;
                             Vec16 o = LUCENT_LOAD16(out[i] + x);
                             // Sinks: flux reaching a cell outside the object leaves it.
@@ -254,15 +262,26 @@ __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) vo
                             // times the scattering reweighting of band l (Eq. 3).
                             const Vec16 d = fac ? o * LUCENT_LOAD16(fac + x) : o * homF;
                             LUCENT_STORE16(ds + x, d);
+                            nzv[h] |= (d != 0.f);
                             if (sum) {
                                 remV += d;
                                 absV += o;
                             }
                         }
-                        continue;
+                        if (i + 1 == ctx.coeffs)
+                            for (int h = 0; h < halves; ++h) {
+                                Vec16i m = nzv[h];
+                                if (ch > 0) {
+                                    Vec16i prev;
+                                    __builtin_memcpy(&prev, nz + x0 + h * 2 * VEC, sizeof(prev));
+                                    m |= prev;
+                                }
+                                __builtin_memcpy(nz + x0 + h * 2 * VEC, &m, sizeof(m));
+                            }
                     }
-                    // Row tail (fewer than 32 cells left): scalar, same operations.
-                    for (int x = 0; x < len - x0; ++x) {
+                    // Row tail (fewer than 16 cells left): scalar, same operations.
+                    const int blockLen = std::min(len - x0, BLOCK);
+                    for (int x = halves * 2 * VEC; x < blockLen; ++x) {
                         float v = out[i][x];
                         if (msk) {
                             const float leave = v * (1.f - msk[x]);
@@ -275,6 +294,7 @@ __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) vo
                             ac[x] = ctx.assignAcc ? v : ac[x] + v;
                         const float d = v * (fac ? fac[x] : homF);
                         ds[x] = d;
+                        nz[x0 + x] = (ch > 0 || i > 0 ? nz[x0 + x] : 0) | (d != 0.f);
                         if (sum) {
                             remS += d;
                             absS += v;
@@ -540,9 +560,11 @@ void SslpvSolver::rebuildFactors() {
         }
         return;
     }
+    // Every interior value is rewritten below; the zero border is set once per grid size.
     for (int c = 0; c < 3; ++c) {
         for (auto& f : m_factor[c])
-            f.assign(plane, 0.f);
+            if (f.size() != plane)
+                f.assign(plane, 0.f);
     }
     parallelFor(
         0, n,
@@ -574,7 +596,9 @@ void SslpvSolver::inject() {
     else
         m_injection.clear();
     int used = 0, skipped = 0;
-    m_injSliceLit.assign(size_t(s.resolution), 0);
+    const int bricksX = (s.resolution + SSLPV_BRICK_X - 1) / SSLPV_BRICK_X;
+    const int bricksY = (s.resolution + SSLPV_BRICK_Y - 1) / SSLPV_BRICK_Y;
+    m_injBrickLit.assign(size_t(s.resolution) * bricksX * bricksY, 0);
     const float h = s.voxelSize;
     for (const SslpvInjectionSample& smp : m_samples) {
         const float cosI = -glm::dot(smp.direction, smp.normal);
@@ -606,7 +630,8 @@ void SslpvSolver::inject() {
         const Vector3f wt = refractInto(smp.direction, smp.normal, m_eta);
         const ShCoeffs<2> lobe = clampedCosineLobe<2>(wt);
         const size_t idx = m_injection.index(cell);
-        m_injSliceLit[size_t(cell.z)] = 1;
+        m_injBrickLit[(size_t(cell.z) * bricksY + size_t(cell.y / SSLPV_BRICK_Y)) * bricksX +
+                      size_t(cell.x / SSLPV_BRICK_X)] = 1;
         for (int ch = 0; ch < 3; ++ch) {
             const float k = T * smp.flux[ch] * INV_PI;
             for (int i = 0; i < count; ++i)
@@ -625,8 +650,9 @@ void SslpvSolver::propagate() {
     const int n = s.resolution;
     const int count = shCount(m_opt.order);
     LUCENT_CHECK(n + 2 <= 1024, "SSLPV: resolution ", n, " too large for the row kernel");
-    // Cells outside the active box are never written and stay zero, so the grids are cleared
-    // only when they are new or the box moved; inside it the first write assigns.
+    // Cells outside the active box stay zero (at most rewritten with zeros by a widened SIMD
+    // run), so the grids are cleared only when they are new or the box moved; inside it the
+    // first write assigns.
     const bool boxMoved = m_active.lo != m_lastActive.lo || m_active.hi != m_lastActive.hi;
     bool cleared = boxMoved;
     for (SslpvGrid* g : {&m_accum, &m_exitant, &m_prop[0], &m_prop[1]}) {
@@ -637,11 +663,15 @@ void SslpvSolver::propagate() {
             g->clear();
         }
     }
-    // Which z-slices of each ping-pong grid may hold non-zero values (persist across solves,
-    // like the grids). prop[0] is rewritten below from the injection.
-    if (cleared || m_sliceLit[1].size() != size_t(n))
-        m_sliceLit[1].assign(size_t(n), 0);
-    m_sliceLit[0] = m_injSliceLit;
+    // Which bricks of each grid may hold non-zero values (persist across solves, like the
+    // grids). prop[0] is rewritten below from the injection, so its bricks are the injected ones.
+    static_assert(SSLPV_BRICK_Z == 1, "the step loop below works on one-slice bricks");
+    const int bricksX = (n + SSLPV_BRICK_X - 1) / SSLPV_BRICK_X;
+    const int bricksY = (n + SSLPV_BRICK_Y - 1) / SSLPV_BRICK_Y;
+    const size_t brickTotal = size_t(n) * bricksX * bricksY;
+    for (std::vector<uint8_t>* f : {&m_brickLit[1], &m_accBrickLit, &m_exitBrickLit})
+        if (cleared || f->size() != brickTotal)
+            f->assign(brickTotal, 0);
     m_lastActive = m_active;
     bool accWritten = false, exitWritten = false;
 
@@ -705,23 +735,53 @@ void SslpvSolver::propagate() {
     }
 
     // Step 0: the injected lights become the first sources, with their cells' factors folded in.
+    // Only bricks holding injected light are computed; bricks of m_prop[0] lit by the previous
+    // solve are cleared, so m_prop[0]'s bricks are exactly the injected ones afterwards.
     Rgb absorbed(0.f), exitant(0.f), remaining(0.f);
     const Rgb injected = m_injection.flux();
-    for (int ch = 0; ch < 3; ++ch) {
-        for (int i = 0; i < count; ++i) {
-            const float* in = m_injection.plane(ch, i);
-            float* out = m_prop[0].plane(ch, i);
-            const int band = bandOf(i);
-            for (size_t k = 0; k < m_injection.planeSize(); ++k)
-                out[k] = in[k] * (m_homogeneous ? m_homFactor[ch][band] : m_factor[ch][band][k]);
+    {
+        if (cleared || m_brickLit[0].size() != brickTotal)
+            m_brickLit[0].assign(brickTotal, 0);
+        double ab[3] = {}, rem[3] = {};
+        for (int z = 0; z < n; ++z)
+            for (int by = 0; by < bricksY; ++by)
+                for (int bx = 0; bx < bricksX; ++bx) {
+                    const size_t t = (size_t(z) * bricksY + size_t(by)) * bricksX + size_t(bx);
+                    const bool lit = m_injBrickLit[t] != 0;
+                    if (!lit && !m_brickLit[0][t])
+                        continue;
+                    m_brickLit[0][t] = uint8_t(lit);
+                    const int xa = bx * SSLPV_BRICK_X, xb = std::min(xa + SSLPV_BRICK_X, n);
+                    const int ya = by * SSLPV_BRICK_Y, yb = std::min(ya + SSLPV_BRICK_Y, n);
+                    for (int y = ya; y < yb; ++y) {
+                        const size_t k0 = m_injection.index({xa, y, z});
+                        for (int ch = 0; ch < 3; ++ch) {
+                            for (int i = 0; i < count; ++i) {
+                                const float* in = m_injection.plane(ch, i) + k0;
+                                float* out = m_prop[0].plane(ch, i) + k0;
+                                const int band = bandOf(i);
+                                const float* f =
+                                    m_homogeneous ? nullptr : m_factor[ch][band].data() + k0;
+                                for (int x = 0; x < xb - xa; ++x)
+                                    out[x] = lit ? in[x] * (f ? f[x] : m_homFactor[ch][band]) : 0.f;
+                            }
+                            if (!lit)
+                                continue;
+                            const float* c0 = m_injection.plane(ch, 0) + k0;
+                            const float* p0 = m_prop[0].plane(ch, 0) + k0;
+                            const float* f0 = m_homogeneous ? nullptr : m_factor[ch][0].data() + k0;
+                            for (int x = 0; x < xb - xa; ++x) {
+                                ab[ch] += double(c0[x]) * (f0 ? 1.f - f0[x] : m_homAbsorb[ch]);
+                                rem[ch] += double(p0[x]);
+                            }
+                        }
+                    }
+                }
+        for (int ch = 0; ch < 3; ++ch) {
+            absorbed[ch] = float(ab[ch] * TWO_SQRT_PI);
+            remaining[ch] = float(rem[ch] * TWO_SQRT_PI);
         }
-        const float* c0 = m_injection.plane(ch, 0);
-        double ab = 0.0;
-        for (size_t k = 0; k < m_injection.planeSize(); ++k)
-            ab += double(c0[k]) * (m_homogeneous ? m_homAbsorb[ch] : 1.f - m_factor[ch][0][k]);
-        absorbed[ch] = float(ab * TWO_SQRT_PI);
     }
-    remaining = m_prop[0].flux();
     m_cur = 0;
 
     int steps = 0;
@@ -735,6 +795,32 @@ void SslpvSolver::propagate() {
         return true;
     };
     std::vector<SliceSums> sums(size_t(std::max(n, 1)));
+    const CoordBox box = m_active;
+    const bool dense = !m_opt.skipEmptySlices;
+    const int bx0 = box.lo.x / SSLPV_BRICK_X, bx1 = box.hi.x / SSLPV_BRICK_X;
+    const int by0 = box.lo.y / SSLPV_BRICK_Y, by1 = box.hi.y / SSLPV_BRICK_Y;
+    m_stats.brickCount = empty ? 0 : (bx1 - bx0 + 1) * (by1 - by0 + 1) * (box.hi.z - box.lo.z + 1);
+    m_stats.activeBricksPerStep.clear();
+    m_stats.cellsComputed = 0;
+    struct Run {
+        int xs, xe;  // inclusive cell range in x
+    };
+    // Zeroes cells [xs, xe] × [ya, yb] of slice z, for every segment, in every plane of g.
+    auto zeroSegments = [&](SslpvGrid& g, const Run* seg, int segs, int ya, int yb, int z) {
+        for (int ch = 0; ch < 3; ++ch)
+            for (int i = 0; i < count; ++i)
+                for (int y = ya; y <= yb; ++y)
+                    for (int r = 0; r < segs; ++r)
+                        std::memset(g.plane(ch, i) + g.index({seg[r].xs, y, z}), 0,
+                                    size_t(seg[r].xe - seg[r].xs + 1) * sizeof(float));
+    };
+    // Appends [xs, xe] to a sorted segment list, merging with the last one when adjacent.
+    auto append = [](Run* seg, int& segs, int xs, int xe) {
+        if (segs > 0 && seg[segs - 1].xe + 1 == xs)
+            seg[segs - 1].xe = xe;
+        else
+            seg[segs++] = {xs, xe};
+    };
     const Timer stepTimer;
     while (!empty && steps < m_opt.maxSteps && !converged()) {
         const int next = 1 - m_cur;
@@ -751,58 +837,159 @@ void SslpvSolver::propagate() {
                 ctx.exit[ch][i] = m_opt.removeExitant ? m_exitant.plane(ch, i) : nullptr;
             }
         std::fill(sums.begin(), sums.end(), SliceSums{});
-        // Slice skipping: destination slice z can only receive light from source slices
-        // z−1, z, z+1; otherwise its new values are exactly zero and it is only cleared
-        // (with the accumulation/exitant slices on the step that assigns them).
-        const std::vector<uint8_t>& srcLit = m_sliceLit[m_cur];
-        std::vector<uint8_t>& dstLit = m_sliceLit[next];
-        const CoordBox box = m_active;
-        auto zeroSlice = [&](SslpvGrid& g, int z) {
-            const size_t len = size_t(box.hi.x - box.lo.x + 1);
-            for (int ch = 0; ch < 3; ++ch)
-                for (int i = 0; i < count; ++i)
-                    for (int y = box.lo.y; y <= box.hi.y; ++y)
-                        std::memset(g.plane(ch, i) + g.index({box.lo.x, y, z}), 0,
-                                    len * sizeof(float));
-        };
+        const uint8_t* srcLit = m_brickLit[m_cur].data();
+        uint8_t* dstLit = m_brickLit[next].data();
+        uint8_t* accLit = m_accBrickLit.data();
+        uint8_t* exitLit = m_exitBrickLit.data();
         parallelFor(
-            m_active.lo.z, m_active.hi.z + 1,
-            [&](int64_t b, int64_t e) {
-                for (int64_t z = b; z < e; ++z) {
-                    const size_t zi = size_t(z);
-                    const bool needed = !m_opt.skipEmptySlices || srcLit[zi] ||
-                                        (z > 0 && srcLit[zi - 1]) || (z + 1 < n && srcLit[zi + 1]);
-                    if (needed) {
-                        processSlice(ctx, int(z), sums[zi]);
-                        dstLit[zi] = 1;  // conservative: computed from lit sources
-                        continue;
+            box.lo.z, box.hi.z + 1,
+            [&](int64_t zb, int64_t ze) {
+                constexpr int MAX_RUNS = 1024 / SSLPV_BRICK_X + 1;
+                Run runs[MAX_RUNS], clearDst[MAX_RUNS], clearAcc[MAX_RUNS], clearExit[MAX_RUNS];
+                uint8_t brickNz[1024 / SSLPV_BRICK_X + 1];
+                alignas(64) int32_t nz[1024 + 64];
+                for (int z = int(zb); z < int(ze); ++z) {
+                    SliceSums& sl = sums[size_t(z)];
+                    const size_t zBase = size_t(z) * bricksY * bricksX;
+                    for (int by = by0; by <= by1; ++by) {
+                        const size_t rowBase = zBase + size_t(by) * bricksX;
+                        // Active bricks of this brick row: lit, or next to a lit brick (face
+                        // neighbours; the stencil reaches no further). The others get exactly
+                        // zero; they are only cleared where an earlier write may remain.
+                        int nr = 0, nDst = 0, nAcc = 0, nExit = 0;
+                        for (int bx = bx0; bx <= bx1; ++bx) {
+                            const size_t t = rowBase + size_t(bx);
+                            const bool active =
+                                dense || srcLit[t] || (bx > 0 && srcLit[t - 1]) ||
+                                (bx + 1 < bricksX && srcLit[t + 1]) ||
+                                (by > 0 && srcLit[t - size_t(bricksX)]) ||
+                                (by + 1 < bricksY && srcLit[t + size_t(bricksX)]) ||
+                                (z > 0 && srcLit[t - size_t(bricksX) * bricksY]) ||
+                                (z + 1 < n && srcLit[t + size_t(bricksX) * bricksY]);
+                            const int xs = std::max(bx * SSLPV_BRICK_X, box.lo.x);
+                            const int xe =
+                                std::min(bx * SSLPV_BRICK_X + SSLPV_BRICK_X - 1, box.hi.x);
+                            if (active) {
+                                ++sl.activeBricks;
+                                append(runs, nr, xs, xe);
+                                continue;
+                            }
+                            if (dstLit[t]) {
+                                append(clearDst, nDst, xs, xe);
+                                dstLit[t] = 0;
+                            }
+                            if (ctx.assignAcc && accLit[t]) {
+                                append(clearAcc, nAcc, xs, xe);
+                                accLit[t] = 0;
+                            }
+                            if (ctx.assignExit && ctx.exit[0][0] && exitLit[t]) {
+                                append(clearExit, nExit, xs, xe);
+                                exitLit[t] = 0;
+                            }
+                        }
+                        const int ya = std::max(by * SSLPV_BRICK_Y, box.lo.y);
+                        const int yb = std::min(by * SSLPV_BRICK_Y + SSLPV_BRICK_Y - 1, box.hi.y);
+                        if (nDst > 0)
+                            zeroSegments(m_prop[next], clearDst, nDst, ya, yb, z);
+                        if (nAcc > 0)
+                            zeroSegments(m_accum, clearAcc, nAcc, ya, yb, z);
+                        if (nExit > 0)
+                            zeroSegments(m_exitant, clearExit, nExit, ya, yb, z);
+                        if (nr == 0)
+                            continue;
+                        // Widen each run to whole 32-cell SIMD blocks where the grid allows,
+                        // merging runs that meet, so the kernel rarely takes its scalar tail:
+                        // inactive cells computed this way come out exactly zero, and so do
+                        // cells outside the box (only sink cells, which hold no light, border
+                        // it), so writing them keeps every grid as the dense solve has it.
+                        int nm = 0;
+                        for (int r = 0; r < nr; ++r) {
+                            Run cur = runs[r];
+                            if (nm > 0 && cur.xs <= runs[nm - 1].xe + 1) {
+                                cur.xs = runs[nm - 1].xs;
+                                cur.xe = std::max(cur.xe, runs[nm - 1].xe);
+                                --nm;
+                            }
+                            const int minStart = nm > 0 ? runs[nm - 1].xe + 1 : 0;
+                            const int want = (cur.xe - cur.xs + 1 + 31) / 32 * 32;
+                            if (cur.xs + want - 1 <= n - 1) {
+                                cur.xe = cur.xs + want - 1;
+                            } else {
+                                cur.xe = n - 1;
+                                cur.xs = std::max(minStart, n - want);
+                            }
+                            runs[nm++] = cur;
+                        }
+                        // Later raw runs may now lie inside a widened one: merge once more.
+                        nr = 0;
+                        for (int r = 0; r < nm; ++r) {
+                            if (nr > 0 && runs[r].xs <= runs[nr - 1].xe + 1)
+                                runs[nr - 1].xe = std::max(runs[nr - 1].xe, runs[r].xe);
+                            else
+                                runs[nr++] = runs[r];
+                        }
+                        const int bxa = runs[0].xs / SSLPV_BRICK_X;
+                        const int bxb = runs[nr - 1].xe / SSLPV_BRICK_X;
+                        std::fill(brickNz + bxa, brickNz + bxb + 1, uint8_t(0));
+                        for (int y = ya; y <= yb; ++y)
+                            for (int r = 0; r < nr; ++r) {
+                                const int len = runs[r].xe - runs[r].xs + 1;
+                                processRun(ctx, z, y, runs[r].xs, len, sl, nz);
+                                sl.cells += len;
+                                const int xs = runs[r].xs, xe = runs[r].xe;
+                                for (int bx = xs / SSLPV_BRICK_X; bx <= xe / SSLPV_BRICK_X; ++bx) {
+                                    const int a = std::max(bx * SSLPV_BRICK_X, xs) - xs;
+                                    const int b =
+                                        std::min(bx * SSLPV_BRICK_X + SSLPV_BRICK_X - 1, xe) - xs;
+                                    int32_t any = 0;
+                                    for (int x = a; x <= b; ++x)
+                                        any |= nz[x];
+                                    brickNz[bx] |= uint8_t(any != 0);
+                                }
+                            }
+                        // Bricks the runs touched: fully rewritten when active, zero or
+                        // rewritten with exact zeros otherwise, so their new flag is exact.
+                        for (int r = 0; r < nr; ++r)
+                            for (int bx = runs[r].xs / SSLPV_BRICK_X;
+                                 bx <= runs[r].xe / SSLPV_BRICK_X; ++bx) {
+                                const size_t t = rowBase + size_t(bx);
+                                const bool whole =
+                                    std::max(bx * SSLPV_BRICK_X, box.lo.x) >= runs[r].xs &&
+                                    std::min(bx * SSLPV_BRICK_X + SSLPV_BRICK_X - 1, box.hi.x) <=
+                                        runs[r].xe;
+                                dstLit[t] = whole ? brickNz[bx] : uint8_t(dstLit[t] | brickNz[bx]);
+                                accLit[t] |= uint8_t(accumulate);
+                                exitLit[t] |= uint8_t(ctx.exit[0][0] != nullptr);
+                            }
                     }
-                    if (dstLit[zi])
-                        zeroSlice(m_prop[next], int(z));
-                    dstLit[zi] = 0;
-                    if (ctx.assignAcc)
-                        zeroSlice(m_accum, int(z));
-                    if (ctx.assignExit && ctx.exit[0][0])
-                        zeroSlice(m_exitant, int(z));
                 }
             },
             /*grain=*/1);
         Rgb rem(0.f);
-        for (const SliceSums& sl : sums)
+        int active = 0;
+        for (const SliceSums& sl : sums) {
             for (int ch = 0; ch < 3; ++ch) {
                 rem[ch] += float(sl.v[ch][0] * TWO_SQRT_PI);
                 exitant[ch] += float(sl.v[ch][1] * TWO_SQRT_PI);
                 absorbed[ch] += float(sl.v[ch][2] * TWO_SQRT_PI);
             }
+            active += sl.activeBricks;
+            m_stats.cellsComputed += sl.cells;
+        }
+        m_stats.activeBricksPerStep.push_back(active);
         remaining = rem;
         m_cur = next;
         ++steps;
     }
     m_stats.stepsMs = stepTimer.elapsedMs();
-    if (!accWritten)
+    if (!accWritten) {
         m_accum.clear();
-    if (!exitWritten)
+        std::fill(m_accBrickLit.begin(), m_accBrickLit.end(), uint8_t(0));
+    }
+    if (!exitWritten) {
         m_exitant.clear();
+        std::fill(m_exitBrickLit.begin(), m_exitBrickLit.end(), uint8_t(0));
+    }
     m_stats.stepsUsed = steps;
     m_stats.injected = injected;
     m_stats.remaining = remaining;

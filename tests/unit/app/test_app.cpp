@@ -23,7 +23,18 @@
 
 #include <QAction>
 #include <QApplication>
+#include <QCheckBox>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QMessageBox>
+#include <QPointingDevice>
+#include <QPushButton>
+#include <QSpinBox>
+#include <QStandardItemModel>
+#include <QStandardPaths>
+#include <QTabletEvent>
 #include <QDir>
+#include <QDockWidget>
 #include <QDropEvent>
 #include <QMimeData>
 #include <QUrl>
@@ -500,6 +511,341 @@ TEST(AppReference, ProgressiveRenderOffTheUiThread) {
 #endif
 }
 
+// ---- Light gizmos ---------------------------------------------------------------------------
+
+/// Unit view direction of the viewport's camera.
+Vector3f viewForward(Viewport* vp) {
+    return glm::normalize(vp->camera().target - vp->camera().eye());
+}
+
+TEST(AppLights, DragMovesPointLightOnTheViewPlaneAndUndoRestoresIt) {
+    auto w = shownWindow(1);
+    Viewport* vp = w->viewport();
+    Document* doc = w->document();
+    ASSERT_GE(doc->scene().lights.size(), 1u);
+    // Light 0 of the default scene: the back light, behind the object but on screen.
+    const Light original = doc->scene().lights[0];
+    const auto handle = vp->lightHandle(0);
+    ASSERT_TRUE(handle);
+    ASSERT_TRUE(vp->rect().contains(handle->toPoint())) << "back light handle off screen";
+    const QPoint press = handle->toPoint();  // within a pixel of the handle
+    ASSERT_EQ(vp->lightAt(press), 0);
+    const QPoint delta(40, -25);
+    drag(vp, press, press + delta, 8);
+    // One undo step, and no paint: the press picked the handle, not the surface below it.
+    EXPECT_EQ(doc->undoStack()->count(), 1);
+    EXPECT_EQ(doc->history().undoCount(), 0u);
+    EXPECT_EQ(vp->selectedLight(), 0);
+    const Light& moved = doc->scene().lights[0];
+    // On the view-aligned plane through the light: depth unchanged, handle follows the cursor.
+    const Vector3f fwd = viewForward(vp);
+    const Point3f eye = vp->camera().eye();
+    const float depth = glm::dot(original.position - eye, fwd);
+    EXPECT_NEAR(glm::dot(moved.position - eye, fwd), depth, 1e-3f * depth);
+    const auto movedHandle = vp->lightHandle(0);
+    ASSERT_TRUE(movedHandle);
+    // Float rounding of the ray/plane maths at ~200 mm: far below 0.01 px.
+    EXPECT_NEAR(movedHandle->x(), handle->x() + delta.x(), 0.01);
+    EXPECT_NEAR(movedHandle->y(), handle->y() + delta.y(), 0.01);
+    // The pinhole maps a plane at depth d with 2·d·tan(fov/2)/H mm per pixel.
+    const double mmPerPixel = 2.0 * double(depth) *
+                              std::tan(0.5 * double(glm::radians(vp->camera().fovYDeg))) /
+                              double(vp->height());
+    const double expected = std::hypot(delta.x(), delta.y()) * mmPerPixel;
+    EXPECT_NEAR(double(glm::length(moved.position - original.position)), expected, 1e-4 * expected);
+    // The Lights dock shows the dragged light and its new position.
+    EXPECT_EQ(w->lightPanel()->currentLight(), 0);
+    auto* posX = w->lightPanel()->findChild<QDoubleSpinBox*>(QStringLiteral("lightPos0"));
+    ASSERT_NE(posX, nullptr);
+    EXPECT_NEAR(posX->value(), double(moved.position.x), 0.005);  // 2 decimals shown
+    const Point3f movedPosition = moved.position;
+    // Undo restores the light bit-exactly; redo moves it back.
+    QAction* undo = findAction(*w, "actionUndo");
+    QAction* redo = findAction(*w, "actionRedo");
+    undo->trigger();
+    EXPECT_EQ(doc->scene().lights[0].position, original.position);
+    EXPECT_NEAR(posX->value(), double(original.position.x), 0.005);
+    EXPECT_FALSE(doc->isModified());
+    redo->trigger();
+    EXPECT_EQ(doc->scene().lights[0].position, movedPosition);
+    renderOneFrame(vp);
+    EXPECT_EQ(vp->stats().glErrors, 0);
+    // The gizmo is drawn in the light's colour over the frame, hidden in the exported render.
+    const QImage shown = vp->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
+    const QImage bare = vp->grabRender().convertToFormat(QImage::Format_RGB32);
+    const QPoint h = vp->lightHandle(0)->toPoint();
+    EXPECT_GT(meanAbsDiff(shown, bare, QRect(h - QPoint(3, 3), QSize(7, 7))), 20.0)
+        << "no gizmo drawn at the light's handle";
+}
+
+TEST(AppLights, DragMovesDirectionalLightOnTheGizmoSphere) {
+    auto w = shownWindow(1);
+    Viewport* vp = w->viewport();
+    Document* doc = w->document();
+    // A directional light travelling away from the viewer: its handle is in front of the object.
+    std::vector<Light> lights = doc->scene().lights;
+    Light sun;
+    sun.type = Light::Type::Directional;
+    sun.direction = glm::normalize(Vector3f(-0.3f, -0.2f, -1.f));
+    sun.intensity = Rgb(1.f, 0.8f, 0.5f);
+    lights.push_back(sun);
+    doc->setLights(lights, QStringLiteral("Add sun"));
+    const int index = int(lights.size()) - 1;
+    EXPECT_EQ(doc->undoStack()->count(), 1);
+    const auto handle = vp->lightHandle(index);
+    ASSERT_TRUE(handle);
+    const QPoint press = handle->toPoint();
+    ASSERT_EQ(vp->lightAt(press), index);
+    Point3f center;
+    float radius = 0.f;
+    vp->gizmoSphere(center, radius);
+    const auto c = vp->project(center);
+    ASSERT_TRUE(c);
+    // Release on the far side of the sphere's centre, well inside its outline.
+    const QPoint release = (c->toPoint() * 2 + (c->toPoint() - press)) / 3;
+    drag(vp, press, release, 10);
+    ASSERT_EQ(doc->undoStack()->count(), 2);
+    const Light& moved = doc->scene().lights[size_t(index)];
+    EXPECT_NEAR(glm::length(moved.direction), 1.f, 1e-6f);
+    // The handle sits where the cursor was released, on the sphere, and the light shines
+    // from it through the centre. Float rounding of a ray–sphere hit: below 0.01 px.
+    const auto movedHandle = vp->lightHandle(index);
+    ASSERT_TRUE(movedHandle);
+    EXPECT_NEAR(movedHandle->x(), double(release.x()), 0.01);
+    EXPECT_NEAR(movedHandle->y(), double(release.y()), 0.01);
+    const Point3f h = *vp->lightHandleWorld(index);
+    EXPECT_NEAR(glm::length(h - center), radius, 1e-4f * radius);
+    EXPECT_LT(glm::length(glm::normalize(center - h) - moved.direction), 1e-5f);
+    // The dock followed the selection and shows the new direction (3 decimals).
+    EXPECT_EQ(w->lightPanel()->currentLight(), index);
+    for (int k = 0; k < 3; ++k) {
+        auto* f = w->lightPanel()->findChild<QDoubleSpinBox*>(QStringLiteral("lightDir%1").arg(k));
+        ASSERT_NE(f, nullptr);
+        EXPECT_NEAR(f->value(), double(moved.direction[k]), 5e-4);
+    }
+    renderOneFrame(vp);
+    EXPECT_EQ(vp->stats().glErrors, 0);
+    w->grab().save(outputPath("app_light_gizmo_window.png"));
+    // Undo: the drag, then the added light.
+    QAction* undo = findAction(*w, "actionUndo");
+    undo->trigger();
+    EXPECT_EQ(doc->scene().lights[size_t(index)].direction, sun.direction);
+    undo->trigger();
+    EXPECT_EQ(doc->scene().lights.size(), size_t(index));
+    EXPECT_EQ(w->lightPanel()->currentLight(), index - 1);
+}
+
+// ---- Tablet pressure ------------------------------------------------------------------------
+
+/// Sends a tablet event of a pen at `pos` with `pressure`. @return whether it was accepted.
+bool sendTablet(QWidget* w, QEvent::Type type, QPointF pos, double pressure) {
+    static const QPointingDevice pen(
+        QStringLiteral("test pen"), 4242, QInputDevice::DeviceType::Stylus,
+        QPointingDevice::PointerType::Pen,
+        QInputDevice::Capability::Position | QInputDevice::Capability::Pressure, 1, 3);
+    const Qt::MouseButton button = type == QEvent::TabletMove ? Qt::NoButton : Qt::LeftButton;
+    const Qt::MouseButtons buttons =
+        type == QEvent::TabletRelease ? Qt::NoButton : Qt::MouseButtons(Qt::LeftButton);
+    QTabletEvent e(type, &pen, pos, w->mapToGlobal(pos), pressure, 0.f, 0.f, 0.f, 0.0, 0.f,
+                   Qt::NoModifier, button, buttons);
+    QApplication::sendEvent(w, &e);
+    return e.isAccepted();
+}
+
+TEST(AppPaint, TabletPressureScalesTheStamp) {
+    auto w = shownWindow(1);
+    Viewport* vp = w->viewport();
+    Document* doc = w->document();
+    MaterialVolume* vol = doc->material();
+    const QPointF c(vp->width() / 2.0, vp->height() / 2.0);
+    const auto hit = vp->pickAt(c);
+    ASSERT_TRUE(hit);
+    // Voxels changed by one pen dab (press and release at c) at `pressure`, counted in the
+    // box of the largest stamp (radius 4 voxels) around the hit; the caller undoes it.
+    const GridSpec& spec = vol->spec();
+    const Coord hitCell = spec.cellOf(hit->position);
+    const auto local = [&] {
+        std::vector<MaterialSample> v;
+        for (int dz = -6; dz <= 6; ++dz)
+            for (int dy = -6; dy <= 6; ++dy)
+                for (int dx = -6; dx <= 6; ++dx)
+                    if (const Coord q = hitCell + Coord(dx, dy, dz); spec.contains(q))
+                        v.push_back(vol->at(q));
+        return v;
+    };
+    const auto dab = [&](double pressure) {
+        const std::vector<MaterialSample> before = local();
+        EXPECT_TRUE(sendTablet(vp, QEvent::TabletPress, c, pressure));
+        EXPECT_TRUE(sendTablet(vp, QEvent::TabletRelease, c, pressure));
+        const std::vector<MaterialSample> after = local();
+        size_t changed = 0;
+        for (size_t i = 0; i < before.size(); ++i)
+            changed += before[i] != after[i];
+        return changed;
+    };
+    // Radius mode through the Tools dock: the stamp's radius is radius × pressure.
+    auto* pressureBox = w->brushPanel()->findChild<QComboBox*>(QStringLiteral("brushPressure"));
+    ASSERT_NE(pressureBox, nullptr);
+    pressureBox->setCurrentIndex(int(PressureMode::Radius));
+    ASSERT_EQ(vp->brush().pressureMode, PressureMode::Radius);
+    setExactBrush(vp, PAINT, 4.f * vol->spec().voxelSize);  // keeps the pressure mode
+    const std::vector<MaterialSample> pristine = local();
+    const size_t full = dab(1.0);
+    EXPECT_EQ(doc->undoStack()->count(), 1) << "a pen dab is one undo step";
+    doc->undoStack()->undo();
+    ASSERT_TRUE(local() == pristine);
+    const size_t light = dab(0.4);
+    doc->undoStack()->undo();
+    // A ball (half inside the surface) of 4 voxels holds ~130 inside voxels; at 0.4 × the
+    // radius 0.4³ ≈ 6 % of that, with voxelisation noise: well under a third.
+    EXPECT_GT(full, 50u);
+    EXPECT_GT(light, 0u);
+    EXPECT_LT(double(light), 0.3 * double(full)) << "full " << full << ", light " << light;
+
+    // Strength mode: Set with constant falloff moves a voxel by pressure × (u − v).
+    vp->brush().pressureMode = PressureMode::Strength;
+    const Coord cell =
+        vol->spec().cellOf(hit->position - hit->normal * (0.5f * vol->spec().voxelSize));
+    ASSERT_TRUE(vol->isInside(cell));
+    const MaterialSample v0 = vol->at(cell);
+    dab(0.5);
+    const MaterialSample v1 = vol->at(cell);
+    const MaterialSample u = sanitize(PAINT);
+    for (int k = 0; k < 3; ++k) {
+        const float expected = v0.sigma_t[k] + 0.5f * (u.sigma_t[k] - v0.sigma_t[k]);
+        EXPECT_NEAR(v1.sigma_t[k], expected, 1e-5f * expected);  // float rounding
+    }
+    doc->undoStack()->undo();
+    // Off: the pen paints like the mouse, whatever its pressure.
+    vp->brush().pressureMode = PressureMode::Off;
+    dab(0.2);
+    EXPECT_EQ(vol->at(cell).sigma_t, u.sigma_t);
+    doc->undoStack()->undo();
+    // A pen move with no press (hovering) paints nothing and is left to the mouse path.
+    EXPECT_FALSE(sendTablet(vp, QEvent::TabletMove, c, 0.0));
+    EXPECT_TRUE(local() == pristine);
+}
+
+// ---- Render dock: methods and volume overlay ----------------------------------------------
+
+TEST(AppRender, DirectionalDipoleAndCombinedFromTheDock) {
+    auto w = shownWindow(1);
+    Viewport* vp = w->viewport();
+    auto* method = w->findChild<QComboBox*>(QStringLiteral("renderMethod"));
+    auto* dirpoleSpp = w->findChild<QSpinBox*>(QStringLiteral("renderDirpoleSpp"));
+    auto* split = w->findChild<QDoubleSpinBox*>(QStringLiteral("renderSplitRadius"));
+    ASSERT_NE(method, nullptr);
+    ASSERT_NE(dirpoleSpp, nullptr);
+    ASSERT_NE(split, nullptr);
+    using M = RenderSettings::Method;
+    ASSERT_EQ(method->count(), int(M::Combined) + 1) << "one entry per RenderSettings::Method";
+    const QImage direct = [&] {
+        w->setRenderMethod(int(M::Direct));
+        renderOneFrame(vp);
+        return vp->grabRender().convertToFormat(QImage::Format_RGB32);
+    }();
+    for (const M m : {M::DirectionalDipole, M::Combined}) {
+        SCOPED_TRACE(int(m));
+        if (!PreviewRenderer::hasMethod(m)) {
+            EXPECT_FALSE(
+                qobject_cast<QStandardItemModel*>(method->model())->item(int(m))->isEnabled());
+            continue;
+        }
+        method->setCurrentIndex(int(m));
+        ASSERT_EQ(vp->renderSettings().method, m);
+        EXPECT_EQ(dirpoleSpp->isEnabled(), m == M::DirectionalDipole);
+        EXPECT_EQ(split->isEnabled(), m == M::Combined);
+        if (m == M::DirectionalDipole) {
+            dirpoleSpp->setValue(4);
+            EXPECT_EQ(vp->renderSettings().dirpoleSpp, 4);
+        } else {
+            EXPECT_LT(vp->renderSettings().combinedSplitRadius, 0.f) << "auto split by default";
+            split->setValue(3.0);
+            EXPECT_FLOAT_EQ(vp->renderSettings().combinedSplitRadius, 3.f);
+        }
+        renderOneFrame(vp);
+        renderOneFrame(vp);
+        EXPECT_EQ(vp->stats().glErrors, 0);
+        EXPECT_TRUE(vp->stats().initError.isEmpty()) << vp->stats().initError.toStdString();
+        const QImage img = vp->grabRender().convertToFormat(QImage::Format_RGB32);
+        // The subsurface term changes the picture against the opaque direct shading.
+        EXPECT_GT(meanAbsDiff(direct, img, img.rect()), 1.0);
+    }
+}
+
+TEST(AppRender, VolumeOverlayControlsReachTheRenderer) {
+    auto w = shownWindow(1);
+    Viewport* vp = w->viewport();
+    auto* overlay = w->findChild<QCheckBox*>(QStringLiteral("renderOverlay"));
+    auto* channel = w->findChild<QComboBox*>(QStringLiteral("renderOverlayChannel"));
+    auto* opacity = w->findChild<QDoubleSpinBox*>(QStringLiteral("renderOverlayOpacity"));
+    ASSERT_TRUE(overlay && channel && opacity);
+    EXPECT_FALSE(vp->renderSettings().volumeOverlay);
+    renderOneFrame(vp);
+    const QImage off = vp->grabRender().convertToFormat(QImage::Format_RGB32);
+    overlay->setChecked(true);
+    channel->setCurrentIndex(1);
+    opacity->setValue(0.8);
+    EXPECT_TRUE(vp->renderSettings().volumeOverlay);
+    EXPECT_EQ(vp->renderSettings().overlayChannel, 1);
+    EXPECT_FLOAT_EQ(vp->renderSettings().overlayOpacity, 0.8f);
+    renderOneFrame(vp);
+    EXPECT_EQ(vp->stats().glErrors, 0);
+    EXPECT_TRUE(vp->stats().initError.isEmpty()) << vp->stats().initError.toStdString();
+    const QImage on = vp->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
+    on.save(outputPath("app_volume_overlay.png"));
+    w->grab().save(outputPath("app_volume_overlay_window.png"));
+    // The overlay covers the object: the picture changes by more than 8-bit rounding.
+    EXPECT_GT(meanAbsDiff(off, on, off.rect()), 1.0);
+    overlay->setChecked(false);
+    EXPECT_FALSE(vp->renderSettings().volumeOverlay);
+}
+
+// ---- Screenshots for docs/user-guide.md ------------------------------------------------------
+
+/// Writes the user guide's screenshots of the light gizmo and the volume overlay into
+/// $LUCENT_SCREENSHOT_DIR (a tool run by hand, see docs/user-guide.md; skipped without it).
+TEST(AppDocs, Screenshots) {
+    const QString dir = qEnvironmentVariable("LUCENT_SCREENSHOT_DIR");
+    if (dir.isEmpty())
+        GTEST_SKIP() << "set LUCENT_SCREENSHOT_DIR to write the user guide's screenshots";
+    MainWindow w(/*restoreSettings=*/false);
+    w.resize(1400, 900);
+    w.show();
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
+    Viewport* vp = w.viewport();
+    renderOneFrame(vp);
+    const auto raise = [&w](const char* dock) {
+        if (auto* d = w.findChild<QDockWidget*>(QString::fromLatin1(dock)))
+            d->raise();
+    };
+    // A warm directional light added in the Lights dock, then dragged by its handle.
+    auto* add = w.lightPanel()->findChild<QPushButton*>(QStringLiteral("lightAddDirectional"));
+    ASSERT_NE(add, nullptr);
+    add->click();
+    const int sun = int(w.document()->scene().lights.size()) - 1;
+    std::vector<Light> lights = w.document()->scene().lights;
+    lights[size_t(sun)].direction = glm::normalize(Vector3f(-0.2f, -0.3f, -1.f));
+    lights[size_t(sun)].intensity = Rgb(1.f, 0.75f, 0.45f);
+    w.document()->setLights(lights, QStringLiteral("Sun"));
+    const auto h = vp->lightHandle(sun);
+    ASSERT_TRUE(h);
+    drag(vp, h->toPoint(), h->toPoint() + QPoint(-90, 40), 10);
+    raise("dockLights");
+    for (int i = 0; i < 3; ++i)
+        renderOneFrame(vp);
+    ASSERT_TRUE(w.grab().save(dir + QStringLiteral("/app-light-gizmo.png")));
+    // The volume overlay of σt through the Render settings dock.
+    w.findChild<QCheckBox*>(QStringLiteral("renderOverlay"))->setChecked(true);
+    w.findChild<QDoubleSpinBox*>(QStringLiteral("renderOverlayOpacity"))->setValue(0.7);
+    vp->setLightGizmosVisible(false);
+    raise("dockRender");
+    for (int i = 0; i < 3; ++i)
+        renderOneFrame(vp);
+    ASSERT_TRUE(w.grab().save(dir + QStringLiteral("/app-volume-overlay.png")));
+    EXPECT_EQ(vp->stats().glErrors, 0);
+}
+
 TEST(AppFiles, SaveOpenRoundTripOfUniformFill) {
     // A uniform material (fill through the Tools dock's engine path), then save and reopen.
     auto w = shownWindow();
@@ -632,17 +978,119 @@ TEST(AppFiles, BrokenMeshIsReported) {
     EXPECT_EQ(snapshot(*w.document()->material()), before) << "the open scene must be kept";
 }
 
-TEST(AppFiles, ExportRenderPngAndExr) {
-    auto w = shownWindow();
-    const QString png = outputPath("app_render.png"), exr = outputPath("app_render.exr");
-    QFile::remove(png);
-    QFile::remove(exr);
-    ASSERT_TRUE(w->exportRenderTo(png));
-    ASSERT_TRUE(w->exportRenderTo(exr));
-    const QImage img(png);
-    EXPECT_EQ(img.size(), w->viewport()->size() * w->viewport()->devicePixelRatio());
+TEST(AppFiles, ExportRenderPngIsToneMappedAndExrIsLinear) {
+    auto w = shownWindow(1);
+    Viewport* vp = w->viewport();
+    RenderSettings rs = vp->renderSettings();
+    rs.method = RenderSettings::Method::Direct;  // deterministic frame after frame
+    rs.resolutionScale = 1.f;                    // render pixels = widget pixels: no upscale
+    rs.exposureStops = 1.f;
+    vp->setRenderSettings(rs);
+    renderOneFrame(vp);
+    const QString png = outputPath("app_render.png"), exr = outputPath("app_render.exr"),
+                  exr2 = outputPath("app_render_exposure3.exr");
+    for (const QString& p : {png, exr, exr2})
+        QFile::remove(p);
+    ASSERT_TRUE(w->exportRenderTo(png)) << w->lastError().toStdString();
+    ASSERT_TRUE(w->exportRenderTo(exr)) << w->lastError().toStdString();
+    const QImage img = QImage(png).convertToFormat(QImage::Format_RGB32);
+    ASSERT_EQ(img.size(), vp->size() * vp->devicePixelRatio());
     const ImageRgb lin = readExr(exr.toStdString());
-    EXPECT_EQ(lin.width(), img.width());
+    ASSERT_EQ(lin.width(), img.width());
+    ASSERT_EQ(lin.height(), img.height());
+    // The PNG is the EXR through the viewport's tone map (exposure 2^1, Reinhard, sRGB): every
+    // 8-bit value within one level (rounding of the GPU's float maths and 8-bit target).
+    const ToneMap tm{std::exp2(1.f), ToneMap::Curve::Reinhard};
+    int worst = 0;
+    for (int y = 0; y < img.height(); ++y)
+        for (int x = 0; x < img.width(); ++x) {
+            const Rgb& l = lin.at(x, y);
+            ASSERT_TRUE(std::isfinite(l.r) && std::isfinite(l.g) && std::isfinite(l.b))
+                << "pixel " << x << "," << y;
+            ASSERT_TRUE(l.r >= 0.f && l.g >= 0.f && l.b >= 0.f) << "pixel " << x << "," << y;
+            const Rgb d = toneMapToDisplay(l, tm);
+            const QRgb p = img.pixel(x, y);
+            worst = std::max({worst, std::abs(qRed(p) - int(std::lround(255.f * d.r))),
+                              std::abs(qGreen(p) - int(std::lround(255.f * d.g))),
+                              std::abs(qBlue(p) - int(std::lround(255.f * d.b)))});
+        }
+    EXPECT_LE(worst, 1) << "the PNG is not the EXR tone-mapped";
+    // Linear radiance does not depend on the exposure: at +3 stops the object's pixels are the
+    // same (the background is chosen per exposure so it shows the clear colour: skip it).
+    rs.exposureStops = 3.f;
+    vp->setRenderSettings(rs);
+    renderOneFrame(vp);
+    ASSERT_TRUE(w->exportRenderTo(exr2));
+    const ImageRgb lin2 = readExr(exr2.toStdString());
+    ASSERT_EQ(lin2.width(), lin.width());
+    const Rgb background = lin.at(0, 0);  // the corner shows no object in the default view
+    long long object = 0;
+    double worstRel = 0.0;
+    for (int y = 0; y < lin.height(); ++y)
+        for (int x = 0; x < lin.width(); ++x) {
+            if (lin.at(x, y) == background)
+                continue;
+            ++object;
+            for (int c = 0; c < 3; ++c) {
+                const double a = lin.at(x, y)[c], b = lin2.at(x, y)[c];
+                worstRel = std::max(worstRel, std::abs(a - b) / std::max(std::abs(a), 1e-12));
+            }
+        }
+    EXPECT_GT(double(object), 0.02 * double(lin.width()) * lin.height());
+    // The same deterministic frame, only the tone map changed: equal to float precision.
+    EXPECT_LT(worstRel, 1e-5);
+}
+
+TEST(AppFiles, AutosaveIsRecoveredAfterACrashAndRemovedOnCleanExit) {
+    // Settings and the autosave go to the Qt test locations (~/.qttest), not the user's.
+    QStandardPaths::setTestModeEnabled(true);
+    const QString autosave = MainWindow::autosavePath();
+    const QString autosaveVdb = QFileInfo(autosave).path() + QStringLiteral("/autosave.vdb");
+    QFile::remove(autosave);
+    QFile::remove(autosaveVdb);
+    qunsetenv(MainWindow::RECOVERY_ENV);
+    std::vector<float> painted;
+    {
+        // Painting needs the viewport's size (picking), not its GL frames: the window stays
+        // hidden, which keeps the test fast.
+        auto w = std::make_unique<MainWindow>(/*restoreSettings=*/true);
+        w->viewport()->setFixedSize(640, 360);
+        Viewport* vp = w->viewport();
+        setExactBrush(vp, PAINT, 4.f * w->document()->material()->spec().voxelSize);
+        const QPointF c(vp->width() / 2.0, vp->height() / 2.0);
+        ASSERT_EQ(vp->strokeBetween(c - QPointF(30, 5), c + QPointF(30, 5)), 1);
+        painted = snapshot(*w->document()->material());
+        w->autosaveNow();  // what the 2-minute timer does
+        ASSERT_TRUE(QFile::exists(autosave));
+        EXPECT_TRUE(QFile::exists(autosaveVdb));
+        // The crash: the window goes away without a close event, so nothing is cleaned up.
+    }
+    ASSERT_TRUE(QFile::exists(autosave));
+    // Restart: recovery is offered, and accepted here through the environment.
+    qputenv(MainWindow::RECOVERY_ENV, "accept");
+    auto w = std::make_unique<MainWindow>(/*restoreSettings=*/true);
+    EXPECT_TRUE(QTest::qWaitFor([&] { return w->document()->isModified(); }, 10000))
+        << "recovery was not offered";
+    qunsetenv(MainWindow::RECOVERY_ENV);
+    EXPECT_EQ(snapshot(*w->document()->material()), painted)
+        << "the recovered material must equal the painted one bit-exactly";
+    EXPECT_TRUE(w->document()->filePath().isEmpty()) << "recovered work is an unsaved project";
+    EXPECT_TRUE(QFile::exists(autosave)) << "kept until the next autosave or a clean exit";
+    // Clean exit: the unsaved-changes question is answered "Discard"; the autosave goes.
+    bool asked = false;
+    QTimer::singleShot(100, [&asked] {
+        for (QWidget* t : QApplication::topLevelWidgets())
+            if (auto* box = qobject_cast<QMessageBox*>(t); box && box->isVisible())
+                if (QAbstractButton* discard = box->button(QMessageBox::Discard)) {
+                    asked = true;
+                    discard->click();
+                }
+    });
+    EXPECT_TRUE(w->close());
+    EXPECT_TRUE(asked) << "closing with unsaved changes must ask";
+    EXPECT_FALSE(QFile::exists(autosave));
+    EXPECT_FALSE(QFile::exists(autosaveVdb));
+    QStandardPaths::setTestModeEnabled(false);
 }
 
 }  // namespace lucent::app

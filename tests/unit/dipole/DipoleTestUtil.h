@@ -1,15 +1,23 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief Exact reference integrals and unbiasedness checks shared by the dipole image tests.
+/// @brief Exact reference integrals and unbiasedness checks shared by the dipole image tests,
+/// and the headless-GL fixture of the two GL providers' tests.
 
 #include <lucent/core/Image.h>
 #include <lucent/dipole/ImageSpace.h>
+#include <lucent/gpu/GlContext.h>
+#include <lucent/gpu/SceneRenderer.h>
+#include <lucent/material/MaterialVolume.h>
+#include <lucent/mesh/Procedural.h>
+#include <lucent/scene/Scene.h>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <functional>
+#include <memory>
+#include <string>
 #include <vector>
 
 namespace lucent::dipole::testutil {
@@ -84,5 +92,84 @@ inline std::vector<glm::ivec2> block(int x0, int y0, int w, int h) {
             v.push_back({x, y});
     return v;
 }
+
+/// A skin-like medium: σs′ = 1.2, 1.6, 2.0 mm⁻¹, σa = 0.02, 0.08, 0.2 mm⁻¹ (σt = σs′ + σa).
+inline MaterialSample skinMaterial() {
+    MaterialSample m;
+    m.sigma_s = Rgb(1.2f, 1.6f, 2.0f);
+    m.sigma_t = m.sigma_s + Rgb(0.02f, 0.08f, 0.2f);
+    return m;
+}
+
+/// A 10 mm sphere (makeSphere(10, subdivisions)) of skinMaterial() on a 32³ grid, lit by a point
+/// light of 1000 W/sr at (25, 20, 25) mm, seen by the default perspective camera from
+/// (0, 0, 40) mm at w×h pixels.
+inline Scene pointLitSphere(int subdivisions, int w, int h) {
+    Scene s;
+    SceneObject obj;
+    obj.mesh = makeSphere(10.f, subdivisions);
+    obj.material =
+        std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), 32), skinMaterial());
+    s.objects.push_back(std::move(obj));
+    Light l;
+    l.position = {25.f, 20.f, 25.f};
+    l.intensity = Rgb(1000.f);
+    s.lights.push_back(l);
+    s.camera.position = {0.f, 0.f, 40.f};
+    s.camera.width = w;
+    s.camera.height = h;
+    return s;
+}
+
+/// Headless context + gpu::SceneRenderer + one subsurface provider (DipoleSubsurfaceProvider
+/// or DirpoleSubsurfaceProvider) for one scene: every test skips cleanly without EGL and fails
+/// on any GL error the debug log recorded.
+template <class Provider, class Settings>
+class GlProviderFixture : public ::testing::Test {
+protected:
+    void SetUp() override {
+        std::string reason;
+        if (!gpu::GlContext::isHeadlessAvailable(&reason))
+            GTEST_SKIP() << "no headless GL: " << reason;
+        ctx = gpu::GlContext::createHeadless();
+        renderer.create();
+        provider.create();
+    }
+    void TearDown() override {
+        if (!ctx)
+            return;
+        renderer.setSubsurfaceProvider(nullptr);
+        provider.destroy();
+        renderer.destroy();
+        for (const std::string& e : ctx->debugLog().takeErrors())
+            ADD_FAILURE() << e;  // no GL errors in any test
+    }
+    /// objects[0]'s mesh, the scene's lights and camera, the subsurface term only; then the
+    /// provider with `settings` (settings.meshId = the mesh's id when `ownMeshId`) and
+    /// objects[0]'s material. @return the mesh id.
+    int loadScene(const Scene& s, Settings settings, bool ownMeshId) {
+        const int id = renderer.addMesh(s.objects[0].mesh);
+        renderer.setLights(s.lights);
+        renderer.setCamera(s.camera);
+        gpu::DirectSettings direct;
+        direct.subsurfaceOnly = true;
+        renderer.setSettings(direct);
+        if (ownMeshId)
+            settings.meshId = id;
+        provider.setSettings(settings);
+        provider.setMaterial(s.objects[0].material.get());
+        renderer.setSubsurfaceProvider(&provider);
+        return id;
+    }
+    /// Renders until the provider converges (at most `limit` frames).
+    void renderUntilConverged(int limit) {
+        for (int i = 0; i < limit && !provider.stats().converged; ++i)
+            renderer.render();
+    }
+
+    std::unique_ptr<gpu::GlContext> ctx;
+    gpu::SceneRenderer renderer;
+    Provider provider;
+};
 
 }  // namespace lucent::dipole::testutil

@@ -11,6 +11,8 @@
 #include <lucent/material/MaterialVolume.h>
 #include <lucent/mesh/Procedural.h>
 
+#include "DipoleTestUtil.h"
+
 #include <epoxy/gl.h>
 #include <gtest/gtest.h>
 
@@ -35,66 +37,20 @@ std::vector<glm::vec4> readRgba(unsigned tex, int w, int h) {
 }
 
 /// Headless context + renderer + provider for one scene (one object, its material attached).
-class ProviderFixture : public ::testing::Test {
+class ProviderFixture
+    : public testutil::GlProviderFixture<DipoleSubsurfaceProvider, ProviderSettings> {
 protected:
-    void SetUp() override {
-        std::string reason;
-        if (!gpu::GlContext::isHeadlessAvailable(&reason))
-            GTEST_SKIP() << "no headless GL: " << reason;
-        ctx = gpu::GlContext::createHeadless();
-        renderer.create();
-        provider.create();
-    }
-    void TearDown() override {
-        if (!ctx)
-            return;
-        renderer.setSubsurfaceProvider(nullptr);
-        provider.destroy();
-        renderer.destroy();
-        for (const std::string& e : ctx->debugLog().takeErrors())
-            ADD_FAILURE() << e;
-    }
+    /// The settings' meshId is kept (−1: every mesh).
     void load(Scene& s, const ProviderSettings& ps) {
         scene = &s;
-        renderer.addMesh(s.objects[0].mesh);
-        renderer.setLights(s.lights);
-        renderer.setCamera(s.camera);
-        gpu::DirectSettings ds;
-        ds.subsurfaceOnly = true;
-        renderer.setSettings(ds);
-        provider.setSettings(ps);
-        provider.setMaterial(s.objects[0].material.get());
-        renderer.setSubsurfaceProvider(&provider);
+        loadScene(s, ps, /*ownMeshId=*/false);
     }
-
-    std::unique_ptr<gpu::GlContext> ctx;
-    gpu::SceneRenderer renderer;
-    DipoleSubsurfaceProvider provider;
     Scene* scene = nullptr;
 };
 
-MaterialSample skinLike() {
-    MaterialSample m;
-    m.sigma_s = Rgb(1.2f, 1.6f, 2.0f);
-    m.sigma_t = m.sigma_s + Rgb(0.02f, 0.08f, 0.2f);
-    return m;
-}
-
+/// The lit sphere of the parity tests: 160×90 pixels, subdivision 4.
 Scene litSphere() {
-    Scene s;
-    SceneObject obj;
-    obj.mesh = makeSphere(10.f, 4);
-    obj.material =
-        std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), 32), skinLike());
-    s.objects.push_back(std::move(obj));
-    Light l;
-    l.position = {25.f, 20.f, 25.f};
-    l.intensity = Rgb(1000.f);
-    s.lights.push_back(l);
-    s.camera.position = {0.f, 0.f, 40.f};
-    s.camera.width = 160;
-    s.camera.height = 90;
-    return s;
+    return testutil::pointLitSphere(4, 160, 90);
 }
 
 /// A 240×240×20 mm slab seen from above (orthographic, 64² pixels over 160 mm), lit by a
@@ -119,6 +75,28 @@ Scene largeSlab(const MaterialSample& m) {
     return s;
 }
 
+/// Mean of channel c over the central 16×16 pixels of a 64×64 image and its standard error:
+/// on a uniform slab the pixels of one interleave cell see identical samples, so there are k²
+/// independent estimates and SE = spread/√k².
+struct BlockStats {
+    double mean = 0.0, se = 0.0;
+};
+BlockStats centreBlock(const ImageRgb& img, int c, int k) {
+    double sum = 0.0, sum2 = 0.0;
+    int count = 0;
+    for (int y = 24; y < 40; ++y)
+        for (int x = 24; x < 40; ++x) {
+            const double v = img.at(x, y)[c];
+            sum += v;
+            sum2 += v * v;
+            ++count;
+        }
+    BlockStats b;
+    b.mean = sum / count;
+    b.se = std::sqrt(std::max(0.0, sum2 / count - b.mean * b.mean) / double(k * k));
+    return b;
+}
+
 }  // namespace
 
 TEST(DipoleProviderSettings, RejectsBadSettingsWithoutGl) {
@@ -134,6 +112,15 @@ TEST(DipoleProviderSettings, RejectsBadSettingsWithoutGl) {
     EXPECT_THROW(p.setSettings(s), ValueError);
     s = {};
     s.convergenceThreshold = -1.f;
+    EXPECT_THROW(p.setSettings(s), ValueError);
+    s = {};
+    s.maxRadius = -0.5f;
+    EXPECT_THROW(p.setSettings(s), ValueError);
+    s = {};
+    s.lightViewResolution = 8;
+    EXPECT_THROW(p.setSettings(s), ValueError);
+    s = {};
+    s.lightViewThreshold = 1.f;
     EXPECT_THROW(p.setSettings(s), ValueError);
     EXPECT_THROW(p.uploadBricks({0}), ValueError);  // not created
     EXPECT_FALSE(p.isCreated());
@@ -188,10 +175,17 @@ TEST_F(ProviderFixture, FirstFrameMatchesCpuGatherOnALitSphere) {
                     ASSERT_NEAR(buf.irradiance[i].g, cpuE.g, 1e-4f * cpuE.g) << x << "," << y;
                 }
                 // The material lookup: the homogeneous volume's value everywhere.
-                ASSERT_EQ(buf.material[i].sigma_t, skinLike().sigma_t) << x << "," << y;
+                ASSERT_EQ(buf.material[i].sigma_t, testutil::skinMaterial().sigma_t)
+                    << x << "," << y;
             }
         ASSERT_GT(lit, 1000);
-        const GatherResult cpu = gatherImageSpace(buf, ps.gatherSettings());
+        // With the light views the GPU gathered (the side light reaches points near the
+        // silhouette the camera does not see: its view is gathered, seed 004 §7.1).
+        const std::vector<SurfaceBuffers> views = provider.debugLightViews();
+        std::printf("%s: %d light view(s) gathered, back-lit fraction %.3g\n", modelName(model),
+                    provider.stats().lightViewsGathered,
+                    double(provider.stats().backlitFractions.at(0)));
+        const GatherResult cpu = gatherImageSpace(buf, views, ps.gatherSettings());
         // Same samples and weights in float (as GpuGather.MatchesCpuGatherOnALitSphere): a sample
         // may land in the neighbouring pixel at a pixel edge. Image sums within 1e-3, 95 % of
         // pixels within 1e-4.
@@ -252,23 +246,15 @@ TEST_F(ProviderFixture, SlabCentreMatchesClosedFormAndConvergesAsInverseSqrtFram
         double sq = 0.0;
         int n = 0;
         for (int c = 0; c < 3; ++c) {
-            double sum = 0.0, sum2 = 0.0;
-            int count = 0;
+            const BlockStats b = centreBlock(img, c, k);
+            lastMean[c] = b.mean;
+            lastSe[c] = b.se;
             for (int y = 24; y < 40; ++y)
                 for (int x = 24; x < 40; ++x) {
-                    const double v = img.at(x, y)[c];
-                    sum += v;
-                    sum2 += v * v;
-                    ++count;
-                    const double e = v / expected[size_t(c)] - 1.0;
+                    const double e = img.at(x, y)[c] / expected[size_t(c)] - 1.0;
                     sq += e * e;
                     ++n;
                 }
-            lastMean[c] = sum / count;
-            // Pixels of one interleave cell see identical samples on a uniform slab: k² = 16
-            // independent estimates, so SE = spread/√k².
-            const double var = std::max(0.0, sum2 / count - lastMean[c] * lastMean[c]);
-            lastSe[c] = std::sqrt(var / double(k * k));
         }
         frameCounts.push_back(f);
         rmsErrors.push_back(std::sqrt(sq / n));
@@ -335,7 +321,7 @@ TEST_F(ProviderFixture, AccumulationResetsOnChangeAndStopsWhenConverged) {
     renderer.render();
     // Material (painted voxel, reported through the dirty bricks).
     MaterialVolume& vol = *s.objects[0].material;
-    MaterialSample red = skinLike();
+    MaterialSample red = testutil::skinMaterial();
     red.sigma_t.r *= 3.f;
     vol.set({16, 16, 28}, red);
     provider.syncMaterial(vol);
@@ -344,7 +330,7 @@ TEST_F(ProviderFixture, AccumulationResetsOnChangeAndStopsWhenConverged) {
     EXPECT_EQ(frames(), 1);
     renderer.render();
     // Material changed behind the provider's back (nobody took the dirty bricks): revision.
-    vol.set({16, 16, 27}, skinLike());
+    vol.set({16, 16, 27}, testutil::skinMaterial());
     renderer.render();
     EXPECT_EQ(frames(), 1);
     // Settings.
@@ -406,7 +392,7 @@ TEST_F(ProviderFixture, DirtyBrickUploadWritesOnlyThoseBricks) {
     const float sentinel[4] = {-7.f, -7.f, -7.f, -7.f};
     glClearTexImage(tex, 0, GL_RGBA, GL_FLOAT, sentinel);
 
-    MaterialSample painted = skinLike();
+    MaterialSample painted = testutil::skinMaterial();
     painted.sigma_t = Rgb(9.f, 8.f, 7.f);
     const Coord voxel{13, 17, 21};
     vol.set(voxel, painted);
@@ -480,4 +466,72 @@ TEST_F(ProviderFixture, OtherMeshesAreExcludedByMeshId) {
     EXPECT_GT(litObject, 100);
     ps.meshId = -2;
     EXPECT_THROW(provider.setSettings(ps), ValueError);
+}
+
+// Seed 004 §7.1 end to end on the GPU: a 1 mm slab lit from below, seen from above. The camera
+// image holds E = 0 everywhere; the light view (rasterised from the directional light) holds
+// E = F_t(0) on the bottom face, and the gather reaches it through the slab: the centre must
+// equal F_t(0)·F_t(0)/π · ∫ R_d(√(ρ² + T²)) dA = … ∫_T^{15 mm} R_d 2πs ds (the 30 mm face's edges
+// are ≥ 15 mm away). Without light views the image is black.
+TEST_F(ProviderFixture, BackLitSlabIsLitThroughTheLightView) {
+    const float T = 1.f;
+    Scene s;
+    SceneObject obj;
+    obj.mesh = makeBox({30.f, 30.f, T});
+    // 0.47 mm voxels: the 1 mm slab keeps voxel centres inside the mesh.
+    obj.material = std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), 64),
+                                                    testutil::skinMaterial());
+    s.objects.push_back(std::move(obj));
+    Light l;
+    l.type = Light::Type::Directional;
+    l.direction = {0.f, 0.f, 1.f};  // travelling up: lights the bottom face only
+    l.intensity = Rgb(1.f);
+    s.lights.push_back(l);
+    s.camera.position = {0.f, 0.f, 50.f};
+    s.camera.orthographic = true;
+    s.camera.orthoHeight = 10.f;
+    s.camera.width = 64;
+    s.camera.height = 64;
+    ProviderSettings ps;
+    ps.model = Model::BetterDipole;
+    ps.eta = 1.3f;
+    ps.samplesPerFrame = 16;
+    ps.maxFrames = 16;  // the light view draws 8 of the 16 samples per frame (viewSamples)
+    ps.convergenceThreshold = 0.f;
+    ps.lightViews = false;
+    load(s, ps);
+    renderer.render();
+    EXPECT_EQ(provider.stats().lightViewsRendered, 0);
+    EXPECT_EQ(renderer.readRadiance().at(32, 32), Rgb(0.f));  // the published method: dark
+
+    ps.lightViews = true;
+    provider.setSettings(ps);
+    do {
+        renderer.render();
+    } while (!provider.stats().converged);
+    const ProviderStats& st = provider.stats();
+    EXPECT_EQ(st.frames, 16);
+    EXPECT_EQ(st.lightViewsRendered, 1);
+    EXPECT_EQ(st.lightViewsGathered, 1);
+    // The 10×10 mm in view of the 30×30 mm lit face: 1/9 of the flux is behind visible pixels.
+    EXPECT_NEAR(st.backlitFractions.at(0), 1.0 / 9.0, 0.02);
+    EXPECT_NEAR(st.epsilon, 0.01f, 1e-6f);
+    EXPECT_GT(st.minRadius, 0.f);
+    EXPECT_EQ(st.minRadius, st.maxRadius);  // one material
+    const ImageRgb img = renderer.readRadiance();
+    const double ft0 = 1.0 - fresnelReflectance(1.0, ps.eta);
+    const Boundary bd = Boundary::of(ps.eta);
+    const int k = ps.interleave;
+    for (int c = 0; c < 3; ++c) {
+        const MaterialSample m = testutil::skinMaterial();
+        const DipoleProfile p =
+            DipoleProfile::make(ps.model, m.sigma_t[c] - m.sigma_s[c], m.sigma_s[c], bd);
+        const double exact =
+            ft0 * ft0 / PI * (testutil::radialIntegral(p, 15.0) - testutil::radialIntegral(p, T));
+        const auto [mean, se] = centreBlock(img, c, k);
+        std::printf("back-lit slab, channel %d: GPU %.6g, exact %.6g (SE %.2g)\n", c, mean, exact,
+                    se);
+        // 4 SE, plus 2e-3 relative for the shadow-map PCF on the lit face and float arithmetic.
+        EXPECT_NEAR(mean, exact, 4 * se + 2e-3 * exact) << "channel " << c;
+    }
 }

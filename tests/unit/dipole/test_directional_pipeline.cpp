@@ -41,33 +41,68 @@ Scene slab(float sigma_a, float sigma_s) {
 TEST(DirectionalPipeline, SlabAtNormalIncidenceMatchesQuadrature) {
     // Normal incidence on a face much wider than the profile: the estimate of
     // T₂₁(0) T₁₂(0) E ∫ S_d dA must match the radial quadrature within 4 standard errors
-    // (spread over the 256 pixels, which use independent sample offsets).
+    // (spread over the 256 pixels, which use independent sample offsets). Published model
+    // (normalisation off) against its quadrature; normalised model against the better dipole's
+    // closed-form ρ (plus 5e-4: DirpoleEnergyTable's interpolation bound).
     const float sa = 0.05f, ss = 1.5f;
-    DirectionalSettings ds;
-    ds.samplesPerPass = 32;
-    DirectionalDipoleRenderer r(slab(sa, ss), ds);
-    for (int i = 0; i < 4; ++i)
-        r.addPass();
-    EXPECT_EQ(r.passes(), 4);
-    const ImageRgb L = r.radiance();
-    double mean = 0.0, m2 = 0.0;
-    for (const Rgb& v : L.pixels()) {
-        mean += v.g;
-        m2 += double(v.g) * v.g;
+    for (bool normalised : {false, true}) {
+        DirectionalSettings ds;
+        ds.samplesPerPass = 32;
+        ds.energyNormalised = normalised;
+        DirectionalDipoleRenderer r(slab(sa, ss), ds);
+        for (int i = 0; i < 4; ++i)
+            r.addPass();
+        EXPECT_EQ(r.passes(), 4);
+        const ImageRgb L = r.radiance();
+        double mean = 0.0, m2 = 0.0;
+        for (const Rgb& v : L.pixels()) {
+            mean += v.g;
+            m2 += double(v.g) * v.g;
+        }
+        const double n = double(L.pixels().size());
+        mean /= n;
+        const double se = std::sqrt(std::max(0.0, m2 / n - mean * mean) / (n - 1));
+        // Exact: S_d is radial at normal incidence, radial(r) = S_d·4πC_φ(1/η); the 60 mm face
+        // is ≫ the profile, so the plane integral is the quadrature of the radial profile.
+        const DirectionalDipole d(sa, ss, 1.3);
+        const double cPhiInv = 0.25 * (1.0 - 2.0 * fresnelMoment(1, 1.0 / 1.3));
+        const double rho =
+            normalised ? totalReflectance(Model::BetterDipole, {sa, ss, 1.3}) : integrateProfile(d);
+        const double t = 1.0 - fresnelReflectance(1.0, 1.3);
+        const double expected = t * t * rho / (4 * M_PI * cPhiInv);
+        std::printf("directional pipeline (%s): mean %.6g, expected %.6g, standard error %.2g\n",
+                    normalised ? "normalised" : "published", mean, expected, se);
+        EXPECT_NEAR(mean, expected, 4 * se + (normalised ? 6e-4 : 1e-4) * expected) << "se " << se;
     }
-    const double n = double(L.pixels().size());
-    mean /= n;
-    const double se = std::sqrt(std::max(0.0, m2 / n - mean * mean) / (n - 1));
-    // Exact: S_d is radial at normal incidence, radial(r) = S_d·4πC_φ(1/η); the 60 mm face is
-    // ≫ the profile, so the plane integral is the quadrature of the radial profile.
-    const DirectionalDipole d(sa, ss, 1.3);
-    const double cPhiInv = 0.25 * (1.0 - 2.0 * fresnelMoment(1, 1.0 / 1.3));
-    const double integral = integrateProfile(d) / (4 * M_PI * cPhiInv);
-    const double t = 1.0 - fresnelReflectance(1.0, 1.3);
-    const double expected = t * t * integral;
-    std::printf("directional pipeline: mean %.6g, expected %.6g, standard error %.2g\n", mean,
-                expected, se);
-    EXPECT_NEAR(mean, expected, 4 * se + 1e-4 * expected) << "se " << se;
+}
+
+TEST(DirectionalPipeline, EnergyNormalisationScalesEachChannelByTheTable) {
+    // Same samples with and without the normalisation: every pixel's channel c is scaled by
+    // DirpoleEnergyTable(η).scale(α′_c) (float rounding: 1e-5 relative).
+    Scene s = slab(0.f, 1.f);
+    MaterialSample m;
+    m.sigma_s = Rgb(1.5f, 1.2f, 0.9f);
+    m.sigma_t = m.sigma_s + Rgb(0.01f, 0.1f, 0.6f);
+    s.objects[0].material =
+        std::make_shared<MaterialVolume>(GridSpec::around(s.objects[0].mesh.bounds(), 32), m);
+    DirectionalSettings off;
+    off.energyNormalised = false;
+    DirectionalSettings on;
+    DirectionalDipoleRenderer a(s, off), b(s, on);
+    a.addPass();
+    b.addPass();
+    const DirpoleEnergyTable table(1.3);
+    int checked = 0;
+    for (size_t i = 0; i < a.radiance().pixels().size(); ++i)
+        for (int c = 0; c < 3; ++c) {
+            const float va = a.radiance().pixels()[i][c], vb = b.radiance().pixels()[i][c];
+            if (!(va > 0.f))
+                continue;
+            const double want = table.scale(double(m.sigma_s[c]) / double(m.sigma_t[c]));
+            ASSERT_NEAR(double(vb) / double(va), want, 1e-5 * want) << "pixel " << i << " c " << c;
+            ++checked;
+        }
+    EXPECT_GT(checked, 600);
 }
 
 TEST(DirectionalPipeline, ProgressiveAndErrors) {

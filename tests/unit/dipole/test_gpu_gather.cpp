@@ -5,6 +5,8 @@
 #include <lucent/gpu/Shader.h>
 #include <lucent/mesh/Procedural.h>
 
+#include "DipoleTestUtil.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -22,28 +24,19 @@ TEST(GpuGather, MatchesCpuGatherOnALitSphere) {
     auto ctx = gpu::GlContext::createHeadless();
 
     // A 10 mm sphere lit by a point light, perspective camera 160×90.
-    Scene s;
-    SceneObject obj;
-    obj.mesh = makeSphere(10.f, 4);
-    MaterialSample m;
-    m.sigma_s = Rgb(1.2f, 1.6f, 2.0f);
-    m.sigma_t = m.sigma_s + Rgb(0.02f, 0.08f, 0.2f);
-    obj.material = std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), 32), m);
-    s.objects.push_back(std::move(obj));
-    Light l;
-    l.position = {25.f, 20.f, 25.f};
-    l.intensity = Rgb(1000.f);
-    s.lights.push_back(l);
-    s.camera.position = {0.f, 0.f, 40.f};
-    s.camera.width = 160;
-    s.camera.height = 90;
+    const Scene s = testutil::pointLitSphere(4, 160, 90);
     const SurfaceBuffers buf = buildSurfaceBuffers(s);
 
-    for (Model model : {Model::Dipole, Model::BetterDipole}) {
+    // Both dipoles; the better dipole also with a local-radius window of 2 mm (truncated
+    // sampler, GatherSettings::maxRadius), as the combined mode uses it.
+    for (const auto& [model, window] :
+         {std::pair{Model::Dipole, 0.f}, std::pair{Model::BetterDipole, 0.f},
+          std::pair{Model::BetterDipole, 2.f}}) {
         GatherSettings gs;
         gs.model = model;
         gs.importanceSamples = 24;
         gs.uniformSamples = 8;
+        gs.maxRadius = window;
         const GatherResult cpu = gatherImageSpace(buf, gs);
         GpuGather gather{gpu::ShaderLibrary{}};
         const GatherResult gl = gather.run(buf, gs);
@@ -66,8 +59,8 @@ TEST(GpuGather, MatchesCpuGatherOnALitSphere) {
         ASSERT_GT(rel.size(), 1000u);
         EXPECT_NEAR(sumGl / sumCpu, 1.0, 1e-3) << modelName(model);
         std::sort(rel.begin(), rel.end());
-        std::printf("%s: GL/CPU image sum %.5f, median |rel| %.2e, p95 %.2e (%s)\n",
-                    modelName(model), sumGl / sumCpu, rel[rel.size() / 2],
+        std::printf("%s, window %g mm: GL/CPU image sum %.5f, median |rel| %.2e, p95 %.2e (%s)\n",
+                    modelName(model), double(window), sumGl / sumCpu, rel[rel.size() / 2],
                     rel[rel.size() * 95 / 100], ctx->renderer().c_str());
         EXPECT_LT(rel[rel.size() * 95 / 100], 1e-4) << modelName(model);
     }

@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 using namespace lucent;
@@ -290,4 +292,65 @@ TEST(Profiles, BadInputIsAClearError) {
     // No medium / no scattering: zero profile (documented clamp).
     EXPECT_EQ(DipoleProfile::jensen(0.0, 0.0, 1.3).Rd(0.0), 0.0);
     EXPECT_EQ(DipoleProfile::better(1.0, 0.0, 1.3).totalReflectance(), 0.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Energy-normalised directional dipole (docs/methods/dipole.md §1)
+
+TEST(DirpoleEnergy, NormalisedTotalEqualsBetterDipole) {
+    // The scale is computed at σt′ = 1 mm⁻¹; applied to media of other σt′ it must still give
+    // ρ_better, since both totals depend on α′ and η only. Tolerance 1e-4: the quadrature's
+    // agreement with closed forms (§1, "Quadrature"); with the table, + 5e-4 interpolation.
+    for (double eta : {1.0, 1.3, 1.5, 2.5}) {
+        const DirpoleEnergyTable table(eta);
+        for (double a : {0.02, 0.3, 0.5, 0.8, 0.9, 0.99, 1.0}) {
+            const double sigmaT = 7.3;  // mm⁻¹
+            const double ss = a * sigmaT, sa = sigmaT - ss;
+            const double better = totalReflectance(Model::BetterDipole, {sa, ss, eta});
+            const double exact =
+                integrateProfile(DirectionalDipole(sa, ss, eta, dirpoleEnergyScale(a, eta)));
+            EXPECT_NEAR(exact, better, 1e-4 * better) << "alpha' " << a << " eta " << eta;
+            const double tabulated =
+                integrateProfile(DirectionalDipole(sa, ss, eta, table.scale(a)));
+            EXPECT_NEAR(tabulated, better, 6e-4 * better) << "alpha' " << a << " eta " << eta;
+        }
+    }
+}
+
+TEST(DirpoleEnergy, TableMatchesExactScaleBetweenNodes) {
+    // Dense sweep (between and on nodes, both segments of the table).
+    double worst = 0.0;
+    for (double eta : {1.0, 1.4, 2.5}) {
+        const DirpoleEnergyTable table(eta);
+        for (int i = 0; i <= 200; ++i) {
+            const double a = i < 100 ? std::exp(std::log(1e-3) * (1.0 - (i + 0.37) / 100.0))
+                                     : 1.0 - std::pow((200 - i + 0.37) / 100.0, 2) * 0.5;
+            const double exact = dirpoleEnergyScale(std::clamp(a, 0.0, 1.0), eta);
+            worst = std::max(worst, std::abs(table.scale(a) / exact - 1.0));
+        }
+    }
+    std::printf("dirpole energy table: worst interpolation error %.2e\n", worst);
+    EXPECT_LT(worst, 5e-4);
+}
+
+TEST(DirpoleEnergy, ScaleIsFiniteForAllAlbedosAndIndices) {
+    double lo = 1e30, hi = 0.0;
+    for (double eta = 1.0; eta <= 2.5 + 1e-9; eta += 0.25)
+        for (double a : {0.0, 1e-6, 1e-3, 0.01, 0.1, 0.25, 0.5, 0.75, 0.9, 0.99, 0.999, 1.0}) {
+            const double s = dirpoleEnergyScale(a, eta);
+            ASSERT_TRUE(std::isfinite(s) && s > 0.0) << "alpha' " << a << " eta " << eta;
+            lo = std::min(lo, s);
+            hi = std::max(hi, s);
+        }
+    std::printf("dirpole energy scale over alpha' in [0,1], eta in [1,2.5]: [%.4f, %.4f]\n", lo,
+                hi);
+    // The published total at σa = 0, η = 1 is 1.3395 (§1): the scale there is its inverse.
+    EXPECT_NEAR(dirpoleEnergyScale(1.0, 1.0), 1.0 / 1.3395, 1e-3);
+    EXPECT_THROW(dirpoleEnergyScale(-0.1, 1.3), ValueError);
+    EXPECT_THROW(dirpoleEnergyScale(1.1, 1.3), ValueError);
+    EXPECT_THROW(dirpoleEnergyScale(NAN, 1.3), ValueError);
+    EXPECT_THROW(dirpoleEnergyScale(0.5, 0.9), ValueError);
+    EXPECT_THROW(DirpoleEnergyTable(3.5), ValueError);
+    EXPECT_THROW(DirectionalDipole(0.1, 1.0, 1.3, -1.0), ValueError);
+    EXPECT_EQ(DirpoleEnergyTable().scale(0.5), 1.0);  // empty table: the published model
 }

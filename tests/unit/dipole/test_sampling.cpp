@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -26,6 +27,25 @@ double chi2Critical(int dof) {
     const double k = dof, z = 3.0902;
     const double t = 1.0 - 2.0 / (9.0 * k) + z * std::sqrt(2.0 / (9.0 * k));
     return k * t * t * t;
+}
+/// χ² statistic of n samples of `s` (seeded Pcg32) in the bins [edges[k], edges[k+1]) against
+/// the bin probabilities `expected`.
+double chiSquare(const DipoleSampler& s, const std::vector<double>& edges,
+                 const std::vector<double>& expected, int n, uint64_t seed) {
+    const int bins = int(expected.size());
+    std::vector<int> counts(size_t(bins), 0);
+    Pcg32 rng(seed);
+    for (int i = 0; i < n; ++i) {
+        const double r = s.sample(rng.uniform(), rng.uniform());
+        const int k = int(std::upper_bound(edges.begin(), edges.end(), r) - edges.begin()) - 1;
+        ++counts[size_t(std::clamp(k, 0, bins - 1))];
+    }
+    double chi2 = 0.0;
+    for (int k = 0; k < bins; ++k) {
+        const double e = expected[size_t(k)] * n;
+        chi2 += (counts[size_t(k)] - e) * (counts[size_t(k)] - e) / e;
+    }
+    return chi2;
 }
 }  // namespace
 
@@ -82,20 +102,9 @@ TEST(DipoleSampling, ChiSquareAgainstNormalisedProfile) {
             acc += expected[k];
         }
         expected[bins - 1] = 1.0 - acc;
-        std::vector<int> counts(bins, 0);
-        Pcg32 rng(7);
-        for (int i = 0; i < n; ++i) {
-            const double r = s.sample(rng.uniform(), rng.uniform());
-            const int k = int(std::upper_bound(edges.begin(), edges.end(), r) - edges.begin()) - 1;
-            ++counts[std::clamp(k, 0, bins - 1)];
-        }
-        double chi2 = 0.0;
-        for (int k = 0; k < bins; ++k) {
-            const double e = expected[k] * n;
-            chi2 += (counts[k] - e) * (counts[k] - e) / e;
-        }
         // df = bins − 1, significance 1e-3 (seeded: deterministic).
-        EXPECT_LT(chi2, chi2Critical(bins - 1)) << "sa " << sa << " ss " << ss;
+        EXPECT_LT(chiSquare(s, edges, expected, n, 7), chi2Critical(bins - 1))
+            << "sa " << sa << " ss " << ss;
     }
 }
 
@@ -162,4 +171,46 @@ TEST(DipoleSampling, StressExtremeParameters) {
                     ASSERT_TRUE(std::isfinite(pdf) && pdf >= 0.0);
                 }
             }
+}
+
+TEST(DipoleSampling, TruncatedSamplerIsTheConditionedMixture) {
+    // The window r ≤ R of the combined mode: samples never exceed R, the renormalised pdf
+    // integrates to 1 on the disc, the histogram follows R_d(r)·2πr restricted to [0, R]
+    // (χ², 40 equal-probability bins, significance 1e-3), and Jensen's R_d/pdf is the constant
+    // ∫_{r≤R} R_d dA (exact importance sampling of the truncated profile).
+    for (const auto& [sa, ss] : {std::pair{0.0021, 2.19}, std::pair{0.5, 0.3}}) {
+        const DipoleProfile p = DipoleProfile::jensen(sa, ss, 1.3);
+        const DipoleSampler full(p);
+        const double R = full.quantile(0.6);  // keeps 60 % of the mass
+        const DipoleSampler s = full.truncated(R);
+        EXPECT_NEAR(s.keptMass(), 0.6, 1e-9);
+        EXPECT_EQ(s.pdfArea(1.0001 * R), 0.0);
+        EXPECT_NEAR(s.cdf(R), 1.0, 1e-12);
+        const double area =
+            simpson([&](double r) { return s.pdfArea(r) * 2 * M_PI * r; }, 0.0, R, 20000);
+        EXPECT_NEAR(area, 1.0, 1e-6);
+        const double exactWindow =
+            simpson([&](double r) { return p.Rd(r) * 2 * M_PI * r; }, 0.0, R, 20000);
+        const int bins = 40, n = 200000;
+        std::vector<double> edges(bins + 1);
+        for (int k = 0; k < bins; ++k)
+            edges[k] = s.quantile(double(k) / bins);
+        edges[bins] = R;
+        std::vector<double> expected(bins);
+        for (int k = 0; k < bins; ++k)
+            expected[k] = simpson([&](double r) { return p.Rd(r) * 2 * M_PI * r; }, edges[k],
+                                  edges[k + 1], 2000) /
+                          exactWindow;
+        Pcg32 rng(13);
+        for (int i = 0; i < 20000; ++i) {
+            const double r = s.sample(rng.uniform(), rng.uniform());
+            ASSERT_LE(r, R);
+            ASSERT_NEAR(p.Rd(r) / s.pdfArea(r), exactWindow, 1e-6 * exactWindow);
+        }
+        EXPECT_LT(chiSquare(s, edges, expected, n, 13), chi2Critical(bins - 1))
+            << "sa " << sa << " ss " << ss;
+        // No window (0 or ∞) is the untruncated sampler.
+        EXPECT_EQ(full.truncated(0.0).pdfArea(2.0), full.pdfArea(2.0));
+        EXPECT_EQ(full.truncated(INFINITY).sample(0.3, 0.7), full.sample(0.3, 0.7));
+    }
 }

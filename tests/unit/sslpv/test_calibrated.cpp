@@ -9,6 +9,8 @@
 #include <lucent/core/Error.h>
 #include <lucent/dipole/Profiles.h>
 
+#include "SslpvTestGrids.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -71,17 +73,7 @@ double slabTarget(float albedo, float eta) {
 }
 
 CoarseMaterial ball(int n, float h, float st, float ss, float g) {
-    CoarseMaterial m;
-    m.spec.resolution = n;
-    m.spec.voxelSize = h;
-    m.spec.origin = Point3f(-0.5f * n * h);
-    const size_t count = m.spec.voxelCount();
-    m.insideFraction.assign(count, 0.f);
-    for (int c = 0; c < 3; ++c) {
-        m.sigma_t[c].assign(count, st);
-        m.sigma_s[c].assign(count, ss);
-        m.g[c].assign(count, g);
-    }
+    CoarseMaterial m = test::centredMaterial(n, h, st, ss, g);
     for (int z = 0; z < n; ++z)
         for (int y = 0; y < n; ++y)
             for (int x = 0; x < n; ++x)

@@ -4,6 +4,8 @@
 #include <lucent/core/Error.h>
 #include <lucent/core/Parallel.h>
 
+#include "SslpvTestGrids.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,19 +14,11 @@ using namespace lucent;
 
 namespace {
 
+using test::ballTexels;
+
 /// A ball of radius 0.35·N cells centred in an N³ grid of cell size h (mm), uniform material.
 CoarseMaterial ballMaterial(int n, float h, Rgb sigma_t, Rgb sigma_s, Rgb g) {
-    CoarseMaterial m;
-    m.spec.resolution = n;
-    m.spec.voxelSize = h;
-    m.spec.origin = Point3f(-0.5f * n * h);
-    const size_t count = m.spec.voxelCount();
-    m.insideFraction.assign(count, 0.f);
-    for (int c = 0; c < 3; ++c) {
-        m.sigma_t[c].assign(count, 0.f);
-        m.sigma_s[c].assign(count, 0.f);
-        m.g[c].assign(count, 0.f);
-    }
+    CoarseMaterial m = test::centredMaterial(n, h);
     const float radius = 0.35f * n * h;
     for (int z = 0; z < n; ++z)
         for (int y = 0; y < n; ++y)
@@ -42,28 +36,6 @@ CoarseMaterial ballMaterial(int n, float h, Rgb sigma_t, Rgb sigma_s, Rgb g) {
             }
     m.homogeneous = true;
     return m;
-}
-
-/// Texels of an orthographic RSM of a directional light travelling along `dir` onto the ball:
-/// texel area a (mm²) times irradiance E (W/mm²) gives Φ_p (§3.1, directional case).
-std::vector<SslpvInjectionSample> ballTexels(const CoarseMaterial& m, Vector3f dir, Rgb E,
-                                             int texels = 48) {
-    dir = glm::normalize(dir);
-    const float radius = 0.35f * m.spec.resolution * m.spec.voxelSize;
-    const Vector3f a = std::abs(dir.x) < 0.9f ? Vector3f(1, 0, 0) : Vector3f(0, 1, 0);
-    const Vector3f u = glm::normalize(glm::cross(dir, a)), v = glm::cross(dir, u);
-    const float pitch = 2.f * radius / texels;
-    std::vector<SslpvInjectionSample> out;
-    for (int j = 0; j < texels; ++j)
-        for (int i = 0; i < texels; ++i) {
-            const float s = (i + 0.5f) * pitch - radius, t = (j + 0.5f) * pitch - radius;
-            const float r2 = s * s + t * t;
-            if (r2 >= radius * radius)
-                continue;
-            const Point3f p = s * u + t * v - std::sqrt(radius * radius - r2) * dir;
-            out.push_back({p, glm::normalize(p), dir, E * pitch * pitch});
-        }
-    return out;
 }
 
 // Float sums over ≤ 64³ cells and ≤ 512 steps: relative rounding ~1e-6 per step; the matrices'

@@ -8,7 +8,9 @@
 ///  1. (after a reset only) irradiance pass: per covered G-buffer pixel, the Fresnel-transmitted
 ///     irradiance E = Σ_lights F_t(η, cos θ_i) E⊥ cos θ_i V (seed 004 Eq. 5; V from the
 ///     renderer's shadow maps) and the painted material just inside the surface (the volume is a
-///     3-D texture, re-uploaded brick by brick);
+///     3-D texture, re-uploaded brick by brick); then one light view per light (§7.1: the
+///     object rasterised from the light, its E, its back-lit flux fraction), kept for the
+///     gather when back-lit (ProviderSettings::lightViews);
 ///  2. gather pass: one more set of samples of the dipole gather (same estimator as
 ///     gatherImageSpace(), a new Cranley–Patterson rotation per frame) added to a running sum;
 ///  3. resolve: L = F_t(η, ω_o) B̄/π (Eq. 3) into the renderer's subsurface texture.
@@ -53,14 +55,23 @@ struct ProviderSettings {
     /// Stop when max_pixels |B̄_N − B̄_{N−1}| < this × max_pixels B̄_N (per channel), [0, 1).
     float convergenceThreshold = 1e-3f;
     float discQuantile = 0.99f;  ///< GatherSettings::discQuantile
-    bool jacobian = true;        ///< GatherSettings::jacobian (Eq. 9)
-    float maxJacobian = 8.f;     ///< GatherSettings::maxJacobian
-    int interleave = 4;          ///< GatherSettings::interleave (k×k shift table)
-    uint32_t seed = 1;           ///< frame 0 uses exactly gatherImageSpace()'s table for `seed`
+    float maxRadius = 0.f;  ///< mm; > 0: the gather only integrates r ≤ maxRadius (0 = unlimited)
+    bool jacobian = true;   ///< GatherSettings::jacobian (Eq. 9)
+    float maxJacobian = 8.f;  ///< GatherSettings::maxJacobian
+    int interleave = 4;       ///< GatherSettings::interleave (k×k shift table)
+    uint32_t seed = 1;        ///< frame 0 uses exactly gatherImageSpace()'s table for `seed`
     bool shadows = true;  ///< irradiance shadowed by the renderer's shadow maps (when it has them)
     /// SceneRenderer mesh id (addMesh's return) the material belongs to: other meshes (a ground
     /// plane) get no subsurface term and lend no irradiance to the gather. −1: every mesh.
     int meshId = -1;
+    /// Light-view irradiance images (seed 004 §7.1, docs/methods/dipole.md §3d): after a reset,
+    /// the object is rasterised from each light (lightViewCamera()), its E computed like the
+    /// camera's, and the view is gathered with the camera's (balance heuristic; the views share
+    /// samplesPerFrame, viewSamples()) when its back-lit flux fraction exceeds
+    /// lightViewThreshold; false: the camera image only.
+    bool lightViews = true;
+    int lightViewResolution = 512;     ///< texels per side of a light view, [16, 4096]
+    float lightViewThreshold = 1e-3f;  ///< LightViewSettings::threshold, [0, 1)
 
     /// The CPU gather settings of frame 0 (importance = samplesPerFrame − uniform).
     [[nodiscard]] GatherSettings gatherSettings() const;
@@ -75,34 +86,43 @@ struct ProviderStats {
     int resets = 0;            ///< accumulation restarts so far
     int lastUploadBricks = 0;  ///< bricks written by the last material upload
     int fullUploads = 0;       ///< complete volume uploads so far
+    // Set at each reset (the irradiance passes):
+    float epsilon = 0.f;         ///< 1 − discQuantile: energy fraction beyond R′ (GatherStats)
+    float minRadius = 0.f;       ///< disc radius min(R′, maxRadius) over the object's pixels, mm
+    float maxRadius = 0.f;       ///< (0 when no object pixel)
+    int lightViewsRendered = 0;  ///< light views rendered
+    int lightViewsGathered = 0;  ///< of which gathered (back-lit fraction > threshold)
+    /// Per light: backlitFluxFraction() of its view; −1 when none was rendered (light views
+    /// off, or the light inside the object's bounding sphere).
+    std::vector<float> backlitFractions;
 };
 
-/// gpu::SubsurfaceProvider running the image-space dipole gather on the GPU, progressively.
-/// Create/destroy explicitly with a current GL 4.5 context (the renderer's).
-class DipoleSubsurfaceProvider final : public gpu::SubsurfaceProvider {
-public:
-    DipoleSubsurfaceProvider();
-    ~DipoleSubsurfaceProvider() override;
-    DipoleSubsurfaceProvider(const DipoleSubsurfaceProvider&) = delete;
-    DipoleSubsurfaceProvider& operator=(const DipoleSubsurfaceProvider&) = delete;
+namespace detail {
+class VolumeTextures;
+}
 
-    /// Compiles dipole_irradiance.comp and dipole_provider.comp (context current).
-    /// @throw GpuError with file:line on shader errors.
+/// What the GL dipole providers (DipoleSubsurfaceProvider, DirpoleSubsurfaceProvider) share:
+/// the painted material, uploaded as 3-D textures brick by brick, and the progressive
+/// accumulation's statistics. Every material change restarts the accumulation.
+class MaterialSubsurfaceProvider : public gpu::SubsurfaceProvider {
+public:
+    ~MaterialSubsurfaceProvider() override;
+    MaterialSubsurfaceProvider(const MaterialSubsurfaceProvider&) = delete;
+    MaterialSubsurfaceProvider& operator=(const MaterialSubsurfaceProvider&) = delete;
+
+    /// Compiles the provider's shaders and creates its GL objects (context current; the
+    /// renderer's). @throw GpuError with file:line on shader errors (nothing stays allocated).
     void create(const gpu::ShaderLibrary& library = gpu::ShaderLibrary());
     /// Frees every GL object (context current). Idempotent.
     void destroy();
-    [[nodiscard]] bool isCreated() const;
-
-    /// @throw ValueError naming the field (model dirpole, η ∉ [1,3], counts out of range).
-    void setSettings(const ProviderSettings& settings);
-    [[nodiscard]] const ProviderSettings& settings() const;
+    [[nodiscard]] bool isCreated() const { return m_created; }
 
     /// The painted material (non-owning; must outlive its use, nullptr = none: black output).
     /// Its grid is in the mesh's space (mm). The whole volume is uploaded at the next frame.
     void setMaterial(const MaterialVolume* volume);
     /// Re-uploads bricks `bricks` of the attached volume (context current) and restarts the
     /// accumulation; for callers that share MaterialVolume::takeDirtyBricks() between passes.
-    /// @throw ValueError for a brick index out of range or no attached volume.
+    /// @throw ValueError before create(), for a brick index out of range or no attached volume.
     void uploadBricks(const std::vector<int>& bricks);
     /// setMaterial(&volume) if it is not attached, then uploadBricks(volume.takeDirtyBricks())
     /// when there are any (context current).
@@ -110,8 +130,38 @@ public:
     /// Restarts the accumulation (e.g. after updateMesh() on a deforming mesh: G-buffer content
     /// changes that the camera, lights and material do not reveal).
     void reset();
+    [[nodiscard]] const ProviderStats& stats() const { return m_stats; }
 
-    [[nodiscard]] const ProviderStats& stats() const;
+protected:
+    /// @param name the provider's class name, for error messages.
+    explicit MaterialSubsurfaceProvider(const char* name);
+    /// Restarts the accumulation at the next frame (each provider's rule).
+    virtual void restart() = 0;
+    /// The provider's programs and GL objects; on a throw, destroyGl() frees what was made.
+    virtual void createGl(const gpu::ShaderLibrary& library) = 0;
+    /// Frees them (must accept a partly created state).
+    virtual void destroyGl() = 0;
+    /// @throw ValueError "<name>::<what> before create()" unless created.
+    void requireCreated(const char* what) const;
+
+    bool m_created = false;
+    ProviderStats m_stats;
+    std::unique_ptr<detail::VolumeTextures> m_volume;  ///< the material's 3-D textures
+};
+
+/// gpu::SubsurfaceProvider running the image-space dipole gather on the GPU, progressively.
+/// Create/destroy explicitly with a current GL 4.5 context (the renderer's).
+class DipoleSubsurfaceProvider final : public MaterialSubsurfaceProvider {
+public:
+    DipoleSubsurfaceProvider();
+    ~DipoleSubsurfaceProvider() override;
+    DipoleSubsurfaceProvider(const DipoleSubsurfaceProvider&) = delete;
+    DipoleSubsurfaceProvider& operator=(const DipoleSubsurfaceProvider&) = delete;
+
+    /// @throw ValueError naming the field (model dirpole, η ∉ [1,3], counts out of range).
+    void setSettings(const ProviderSettings& settings);
+    [[nodiscard]] const ProviderSettings& settings() const;
+
     /// GL names of the intermediate images (valid after a frame; for tests and debugging):
     /// RGBA32F irradiance E (W/mm²), σt and σs′ (mm⁻¹) per pixel, running sum of B (W/mm²),
     /// and the RGBA32F 3-D material textures (σt rgb + inside in a; σs′ rgb).
@@ -120,11 +170,20 @@ public:
         unsigned volumeSigmaT = 0, volumeSigmaS = 0;
     };
     [[nodiscard]] DebugTextures debugTextures() const;
+    /// The light views the last reset gathered, read back as CPU buffers (context current; for
+    /// the parity test: gatherImageSpace(camera, debugLightViews(), settings().gatherSettings())
+    /// is frame 0). Material entries are left empty (the gather uses x_o's material).
+    [[nodiscard]] std::vector<SurfaceBuffers> debugLightViews() const;
 
     /// gpu::SubsurfaceProvider: one progressive step (see the file comment).
     void renderSubsurface(const gpu::GBufferView& gbuffer, unsigned targetTexture) override;
 
 private:
+    void restart() override;
+    /// Compiles dipole_irradiance.comp, dipole_provider.comp (two variants), the light-view
+    /// G-buffer (dirpole_gbuffer.*) and dipole_lightview.comp.
+    void createGl(const gpu::ShaderLibrary& library) override;
+    void destroyGl() override;
     struct Impl;
     std::unique_ptr<Impl> m;
 };

@@ -26,6 +26,10 @@ struct DirectionalSettings {
     float discQuantile = 0.99f;  ///< disc radius: this quantile of the widest channel's profile
     float shrink = 0.05f;        ///< ε_g of seed 001 §4.3.1, mm
     uint32_t seed = 1;
+    /// Scale S_d per channel by DirpoleEnergyTable::scale(α′) so that its normal-incidence
+    /// total equals the better dipole's ρ(α′, η) (docs/methods/dipole.md §1); false: the
+    /// published model (total 1.34 at σa = 0, η = 1).
+    bool energyNormalised = true;
 };
 
 class DirectionalDipoleRenderer {

@@ -2,7 +2,9 @@
 #pragma once
 /// @file
 /// @brief OpenGL 4.5 compute version of the image-space dipole gather (shaders/dipole_gather.comp):
-/// same samples, weights and interleave table as gatherImageSpace(), in float on the GPU.
+/// same samples, weights and interleave table as gatherImageSpace(), in float on the GPU,
+/// including GatherSettings::maxRadius (camera image only: light views are gathered by the CPU
+/// gather and by DipoleSubsurfaceProvider).
 ///
 ///     auto ctx = gpu::GlContext::createHeadless();      // or the app's current context
 ///     dipole::GpuGather gather(gpu::ShaderLibrary{});    // compiles; context current

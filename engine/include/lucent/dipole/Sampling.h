@@ -12,6 +12,8 @@
 
 #include <lucent/dipole/Profiles.h>
 
+#include <limits>
+
 namespace lucent::dipole {
 
 /// Solves σz(u − 1) + log u + log(1 − ξ) = 0 for u ≥ 1 (seed 004 §4) by a bracketed,
@@ -42,8 +44,23 @@ public:
     [[nodiscard]] double probabilityReal() const { return m_pReal; }
     [[nodiscard]] bool isValid() const { return m_zr > 0.0; }
 
+    /// The same sampler restricted to r ≤ maxRadius (mm; ≤ 0 or ∞: unrestricted): the mixture
+    /// is conditioned on r ≤ maxRadius, i.e. source s is chosen with P(s)·F_s(R)/F(R) and its
+    /// radius by inverting F_s on [0, F_s(R)); pdfArea() and cdf() are the renormalised
+    /// pdf/F(R) and F(min(r, R))/F(R), so R/pdf estimators stay unbiased for ∫_{r ≤ R}.
+    [[nodiscard]] DipoleSampler truncated(double maxRadius) const;
+    /// mm; +∞ when not truncated.
+    [[nodiscard]] double maxRadius() const { return m_maxRadius; }
+    /// F(maxRadius) of the untruncated mixture: the probability mass the window keeps (1 when
+    /// not truncated).
+    [[nodiscard]] double keptMass() const { return m_mass; }
+
 private:
     double m_sigma = 0.0, m_zr = 0.0, m_zv = 0.0, m_pReal = 1.0;
+    // Truncation: per-source F_s(R) and the mass F(R) = P(real)F_r(R) + P(virtual)F_v(R).
+    double m_maxRadius = std::numeric_limits<double>::infinity(), m_cdfReal = 1.0,
+           m_cdfVirtual = 1.0, m_mass = 1.0;
+    double m_pRealKept = 1.0;  ///< P(real | r ≤ R)
 };
 
 }  // namespace lucent::dipole

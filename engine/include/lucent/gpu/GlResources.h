@@ -47,6 +47,9 @@ private:
 std::size_t liveGlObjectCount();
 /// Number of GL objects whose owner was destroyed without destroy() (a leak of GPU memory).
 std::size_t leakedGlObjectCount();
+/// Number of GL objects (GlObject and GlProgram) created so far in this process (monotonic:
+/// tests use it to check that a steady-state frame or solve creates none).
+std::size_t createdGlObjectCount();
 
 /// Immutable-storage buffer helper: creates a buffer of `bytes` with `data` (may be null) and
 /// glNamedBufferStorage `flags` (e.g. GL_DYNAMIC_STORAGE_BIT).

@@ -26,6 +26,7 @@
 #include <lucent/mesh/TriangleMesh.h>
 #include <lucent/scene/Scene.h>
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -46,6 +47,20 @@ struct DirectSettings {
     bool subsurfaceOnly = false;  ///< output only the SubsurfaceProvider term (black without one)
     Rgb background{0.f};          ///< radiance of uncovered pixels
     ToneMap toneMap;              ///< for renderToFramebuffer() / readDisplay()
+    /// Reuse the G-buffer (camera, meshes and size unchanged) and the direct-lighting term
+    /// (G-buffer, shadow maps, lights, surfaces and shading settings unchanged) of the last
+    /// frame. A material edit changes none of them, so a paint stroke re-runs only the
+    /// subsurface pass, the sum and the tone map; the image is bit-identical to a frame with
+    /// false (both passes re-run). Shadow maps are reused while unchanged either way.
+    bool reuseUnchangedPasses = true;
+};
+
+/// How many times each cacheable pass ran or was reused (since create()).
+struct PassReuseCounters {
+    long long frames = 0;
+    long long shadowsRendered = 0, shadowsReused = 0;  ///< frames with shadows on only
+    long long gbufferRendered = 0, gbufferReused = 0;
+    long long directRendered = 0, directReused = 0;  ///< the direct-lighting term
 };
 
 /// What a plug-in pass may read: the current frame's G-buffer and camera (valid during
@@ -67,6 +82,16 @@ struct GBufferView {
     unsigned shadowMapTexture = 0;   ///< DEPTH_COMPONENT32F 2-D array, compare mode (PCF)
     int lightCount = 0;
     bool shadows = false;  ///< DirectSettings::shadows: GpuLight::shadow layers are valid
+    /// Geometry of the renderer's meshes (index = mesh id), for providers that rasterise the
+    /// object from other views (dipole::DirpoleSubsurfaceProvider). The vertex array has
+    /// attribute 0 = position (vec3, mm), 1 = normal (vec3), and GL_UNSIGNED_INT triangle indices.
+    struct MeshGeometry {
+        unsigned vertexArray = 0;
+        int indexCount = 0;     ///< 3 × triangles
+        Bounds3f bounds;        ///< mm
+        uint64_t revision = 0;  ///< changes on every addMesh/updateMesh upload of this mesh
+    };
+    std::vector<MeshGeometry> meshes;
 };
 
 /// A pass adding subsurface (translucency) radiance to every covered pixel. The renderer owns
@@ -135,6 +160,11 @@ public:
     [[nodiscard]] unsigned radianceTexture() const;
     /// Per-pass GPU/CPU timings ("shadows", "gbuffer", "subsurface", "shade", "tonemap").
     GpuProfiler& profiler();
+    /// Ran/reused pass counts (DirectSettings::reuseUnchangedPasses).
+    [[nodiscard]] const PassReuseCounters& reuseCounters() const;
+    /// Forces the next frame to re-run every pass (e.g. after GL state outside the renderer
+    /// changed its textures). Context not needed.
+    void invalidatePasses();
     //! @}
 
     static constexpr int MAX_LIGHTS = 8;

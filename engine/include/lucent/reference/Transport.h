@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief Radiative-transfer kernels of the reference path tracer, one colour channel at a
-/// time: null-collision (delta) tracking of free flights, ratio-tracking transmittance, the
-/// analog medium walk and the full radiance estimator of one ray. Exposed for the validation
-/// tests (tests/unit/reference) and used by PathTracer.h; docs/reference.md has the model.
+/// @brief Radiative-transfer kernels of the reference path tracer, per colour channel or for
+/// all three with hero-channel spectral MIS: null-collision (delta) tracking of free flights,
+/// ratio-tracking transmittance, the analog medium walk and the full radiance estimator of one
+/// ray. Exposed for the validation tests (tests/unit/reference) and used by PathTracer.h;
+/// docs/reference.md has the model. Both colour modes share one implementation of each
+/// estimator (Transport.cpp: templates over a channel policy).
 ///
 ///     VolumeScene scene(mesh, GridMedium::fromMaterial(vol, {}), lights);
 ///     TransportOptions opt{.boundary = BoundaryModel::Dielectric, .eta = 1.3f};

@@ -7,11 +7,17 @@
 ///     SslpvSolver cpu(opt);  cpu.setMaterial(m, eta);  cpu.setInjectionSamples(s);  cpu.solve();
 ///     SslpvGlPropagator gl(SslpvGlStorage::Float16);   // a GL 4.5 context is current
 ///     gl.propagate(cpu);           // re-runs cpu's propagation on the GPU (all maxSteps steps)
-///     gl.accumulation();           // read back into an SslpvGrid
+///     gl.writeTextures(tex);       // GPU → four RGBA32F 3-D textures, no read-back
+///     gl.accumulation();           // read back into an SslpvGrid (only when a CPU user asks)
 ///     gl.destroy();                // context current
 ///
 /// The CPU solver still does injection and folds the per-cell factors; the GPU runs the
 /// steps. No early stop on the GPU (it would need a reduction per step): always maxSteps.
+/// The GL buffers persist: they are created when the grid size, SH order or storage first
+/// appears and reused afterwards; each propagate() uploads only the z-slices of the factor,
+/// mask, inside and step-0 source planes whose contents changed since the last upload (a paint
+/// stroke uploads the slices it touched), and nothing is read back until accumulation() or
+/// exitant() is called.
 
 #include <lucent/sslpv/SslpvSolver.h>
 
@@ -25,10 +31,12 @@ enum class SslpvGlStorage { Float32, Float16 };
 
 /// CPU and GPU times of the last propagate(), milliseconds.
 struct SslpvGlTimings {
-    double uploadCpuMs = 0.0;
-    double propagateCpuMs = 0.0;  ///< issuing the dispatches
+    double uploadCpuMs = 0.0;     ///< building the inputs, comparing and uploading changes
+    double propagateCpuMs = 0.0;  ///< issuing the dispatches (and waiting for the timer)
     double propagateGpuMs = 0.0;  ///< GL timestamp queries around the steps
-    double readbackCpuMs = 0.0;
+    double readbackCpuMs = 0.0;   ///< the last read-back (accumulation() or exitant())
+    size_t uploadedBytes = 0;     ///< bytes uploaded by the last propagate()
+    size_t readbacks = 0;         ///< grids read back so far (cumulative)
 };
 
 class SslpvGlPropagator {
@@ -44,8 +52,17 @@ public:
     /// maxSteps, skipAccumulateSteps) and reads back the accumulation and exitant grids.
     /// @throw ValueError if the solver has not been solved; GpuError on GL errors.
     void propagate(const SslpvSolver& solver);
+    /// The accumulation grid of the last propagate(), read back from the GPU on the first call
+    /// after it (context current). @throw ValueError before the first propagate().
     [[nodiscard]] const SslpvGrid& accumulation() const;
+    /// The exitant grid, read back likewise.
     [[nodiscard]] const SslpvGrid& exitant() const;
+    /// Writes the accumulation grid into four RGBA32F N³ 3-D textures on the GPU: texture i
+    /// holds SH coefficient i (i < 4) of the three channels in rgb; texture 0's alpha is 1 in
+    /// cells inside the object (SslpvSolver::isInside), else 0; the other alphas are 0. This
+    /// is the layout SslpvSubsurfaceProvider samples. Context current.
+    /// @throw ValueError before the first propagate().
+    void writeTextures(const unsigned textures[4]) const;
     [[nodiscard]] const SslpvGlTimings& timings() const;
     [[nodiscard]] SslpvGlStorage storage() const;
     /// Frees GL objects (context current). Idempotent.

@@ -117,8 +117,13 @@ struct SslpvOptions {
     /// Stop once the flux left in the propagation grid is below stopEpsilon · injected flux
     /// (all channels); 0 runs maxSteps. [0, 1].
     float stopEpsilon = 0.f;
-    /// Skip z-slices whose neighbourhood holds no light (exact: their new values are zero).
-    /// Off: every cell of the active box is computed each step (the paper's dense GPU work).
+    /// Active-brick propagation: each step computes only the bricks (SSLPV_BRICK_X × _Y × _Z
+    /// cells) of which the brick itself or a face neighbour held non-zero flux after the
+    /// previous step; every other cell's new value is exactly zero (the stencil reaches only
+    /// face neighbours), so the result equals the dense solve. Light only exists inside the
+    /// object and its one-cell sink shell, so this also skips everything else.
+    /// Off: every cell of the box around the object is computed each step (the paper's dense
+    /// GPU work). (The name predates the bricks: they replaced whole-slice skipping.)
     bool skipEmptySlices = true;
     /// Paper (default; `attenuation` applies) or Calibrated (`calibration` applies, the
     /// attenuation setting is ignored).
@@ -134,6 +139,13 @@ struct SslpvInjectionSample {
     Rgb flux{0.f};                       ///< Φ_p = I·Δω_p through the texel, W
 };
 
+/// Brick of the active-brick propagation (SslpvOptions::skipEmptySlices), cells per axis: one
+/// z-slice thick because the light front advances one cell per step (a thicker brick would
+/// recompute up to BRICK_Z − 1 dark slices ahead of it), 4 × 4 in x and y.
+constexpr int SSLPV_BRICK_X = 4;
+constexpr int SSLPV_BRICK_Y = 4;
+constexpr int SSLPV_BRICK_Z = 1;
+
 /// Results and energy bookkeeping of the last solve. Fluxes in W per channel.
 struct SslpvStats {
     int stepsUsed = 0;
@@ -148,6 +160,14 @@ struct SslpvStats {
     double stepsMs = 0.0;       ///< the propagation steps alone
     bool reinjected = false;    ///< this solve re-ran injection
     bool repropagated = false;  ///< this solve re-ran propagation
+    /// Bricks (SSLPV_BRICK_X × _Y × _Z cells) overlapping the propagation box (the object's
+    /// bounding box dilated by its sink shell, or the whole grid without sinks).
+    int brickCount = 0;
+    /// Bricks computed at each step (size stepsUsed); brickCount each step when dense.
+    std::vector<int> activeBricksPerStep;
+    /// Cells computed over all steps (active bricks' cells, plus the cells SIMD rows padded
+    /// them with, which are exactly zero).
+    int64_t cellsComputed = 0;
 };
 
 /// Incremental SSLPV solver (see file comment). Not thread-safe; solve() uses parallelFor.
@@ -236,8 +256,11 @@ private:
     float m_homAbsorb[3] = {};
     CoordBox m_active;  ///< cells that can hold light (inside cells dilated by one, or all)
     CoordBox m_lastActive;
-    std::vector<uint8_t> m_injSliceLit;  ///< z-slices holding injected light
-    std::vector<uint8_t> m_sliceLit[2];  ///< z-slices of m_prop[k] that may be non-zero
+    // Per-brick flags (index (z·bricksY + by)·bricksX + bx with SSLPV_BRICK_Z = 1):
+    std::vector<uint8_t> m_injBrickLit;   ///< bricks holding injected light
+    std::vector<uint8_t> m_brickLit[2];   ///< m_prop[k]'s brick may hold non-zero values
+    std::vector<uint8_t> m_accBrickLit;   ///< m_accum's brick may hold non-zero values
+    std::vector<uint8_t> m_exitBrickLit;  ///< m_exitant's brick may hold non-zero values
     SslpvStats m_stats;
 };
 

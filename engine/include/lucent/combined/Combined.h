@@ -1,0 +1,169 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief Combined subsurface mode: the image-space dipole for the *local* part of the
+/// transport (x_i within the split radius r_s of x_o) plus SSLPV for what travels further
+/// (Mertens et al. 2005, seed 004 §7.1: the two are "perfectly complementary"; Børlum et al.
+/// 2011, seed 000). Two splits (docs/methods/combined.md):
+///
+///  - SplitMode::Kernel (default): SSLPV's own estimate of its local part is replaced by the
+///    dipole's,
+///      L(x_o) = L_sslpv(x_o) + F_t(ω_o)/π ∫_{|x_i−x_o|≤r_s} (R_d(r) − R_lpv(r)) E(x_i) dA,
+///    R_lpv the radial surface kernel of SSLPV itself (a point-injection solve on a homogeneous
+///    half-space with the same options, SslpvSurfaceKernel), E the Fresnel-transmitted
+///    irradiance the dipole gathers. Exact bookkeeping for uniform irradiance on a flat surface.
+///  - SplitMode::Steps: L(x_o) = L_dipole,r≤r_s(x_o) + L_sslpv,n>k(x_o), k = max(k₀,
+///    round(r_s/Δx)): SSLPV skips its first k propagation steps (SslpvOptions::
+///    skipAccumulateSteps, §4). Light from beyond k·Δx needs more than k steps, so nothing
+///    far is dropped, but SSLPV light of near sources that arrives late is counted twice
+///    (20–40 % of the total on thick slabs, docs/methods/combined.md).
+///
+///     combined::CombinedSettings cs;  cs.splitRadius = 4.f;     // mm
+///     combined::CombinedResult r = combined::renderCombined(scene, cs);
+///     writeExr(r.radiance, "combined.exr");                     // W/(mm²·sr), subsurface only
+///
+/// Units: mm, mm⁻¹, radiance W/(mm²·sr).
+
+#include <lucent/core/Image.h>
+#include <lucent/dipole/ImageSpace.h>
+#include <lucent/scene/Scene.h>
+#include <lucent/sslpv/SslpvRenderer.h>
+
+#include <limits>
+#include <vector>
+
+namespace lucent {
+class MaterialVolume;
+}
+
+namespace lucent::combined {
+
+/// Which split (see the file comment).
+enum class SplitMode {
+    Kernel,  ///< SSLPV minus its own local kernel, plus the windowed dipole (default)
+    Steps,   ///< windowed dipole plus SSLPV without its first k propagation steps
+};
+
+/// How the transport is split between the two methods.
+struct SplitPlan {
+    SplitMode mode = SplitMode::Kernel;
+    float cellSize = 0.f;     ///< SSLPV cell edge Δx, mm
+    float splitRadius = 0.f;  ///< r_s, mm (+∞: dipole only)
+    int skipSteps = 0;        ///< k: SSLPV accumulates from step k + 1 on
+    bool dipoleOn = false;    ///< r_s > 0: the dipole term is evaluated
+    bool sslpvOn = false;     ///< the SSLPV term is evaluated (Steps: k < maxSteps)
+    /// dipole::GatherSettings::maxRadius for this plan (0 = unlimited when r_s = +∞).
+    [[nodiscard]] float dipoleMaxRadius() const;
+};
+
+/// Default split radius in SSLPV cells (r_s = DEFAULT_SPLIT_CELLS·Δx when
+/// CombinedSettings::splitRadius < 0); chosen from the evaluation in docs/methods/combined.md.
+constexpr float DEFAULT_SPLIT_CELLS = 4.f;
+
+/// Largest split radius of SplitMode::Kernel, in SSLPV cells (the kernel's half-space solve
+/// grows with it).
+constexpr float MAX_KERNEL_SPLIT_CELLS = 24.f;
+
+/// The plan for a split radius. @param splitRadius r_s in mm: ≥ 0 or +∞, < 0 picks
+/// DEFAULT_SPLIT_CELLS·Δx (Kernel mode: at most MAX_KERNEL_SPLIT_CELLS·Δx; +∞ and larger radii
+/// are clamped to it). @param cellSize Δx > 0 (mm). @param baseSkip k₀ ≥ 0 (SSLPV's own skip).
+/// @param maxSteps SSLPV propagation steps. @throw ValueError for NaN or Δx ≤ 0.
+SplitPlan planSplit(float splitRadius, float cellSize, int baseSkip, int maxSteps,
+                    SplitMode mode = SplitMode::Kernel);
+
+/// SSLPV's radial surface kernel for one homogeneous material, in the units of a dipole profile
+/// R_d(r) (mm⁻², per unit Fresnel-transmitted irradiance): a unit flux is injected at normal
+/// incidence into one boundary cell of a half-space (a thick slab of the material, sinks
+/// around it) and solved with the renderer's options; the exitant radiance of the surface cells
+/// (calibrated exit scale, without T(ω_o)) times Δx² is G(i, j). Cells are grouped into rings
+/// by their distance from the source cell (ring 0: the source cell; ring b: distances in
+/// [b − ½, b + ½) cells) and ring b becomes an annulus of the same total area (outer radius
+/// Δx·√(cells so far/π)), over which R_lpv is constant: R_lpv = π Σ_ring G /(T(0)·area). So
+/// ∫_0^{ρ_b} R_lpv 2πr dr = π Σ_{rings ≤ b} G / T(0) exactly.
+struct SslpvSurfaceKernel {
+    float cellSize = 0.f;          ///< Δx, mm
+    std::vector<float> ringOuter;  ///< ρ_b, mm (increasing)
+    std::vector<Rgb> ringValue;    ///< R_lpv on ring b, mm⁻²
+    /// R_lpv(r), 0 beyond the last ring. @param r mm ≥ 0.
+    [[nodiscard]] Rgb evaluate(float r) const;
+    /// ∫_0^R R_lpv(r) 2πr dr (piecewise exact), dimensionless.
+    [[nodiscard]] Rgb integral(float R) const;
+};
+
+/// SSLPV's response to a point injection on a homogeneous half-space: a thick slab of
+/// `material` (cells [1, n−2]³ of an n³ grid of edge Δx, sinks around it), 2×2 texels of ¼ W
+/// each at normal incidence into the top cell (n/2, n/2), solved with `options` at index η.
+/// Returns G(i, j) for |i|, |j| ≤ half, row-major (j slowest): the exitant radiance of the top
+/// cell (n/2 + i, n/2 + j), read at its face centre along +z (calibrated exit scale, without
+/// T(ω_o)), times Δx², per watt injected (before Fresnel). By superposition Σ_ij G is L_o/E of a
+/// laterally infinite slab under uniform normal irradiance E. @param n grid cells per axis,
+/// [8, 128]; @param half ≤ (n − 3)/2. @throw ValueError for invalid arguments.
+std::vector<Rgb> sslpvHalfSpaceResponse(const MaterialSample& material, float eta,
+                                        const SslpvOptions& options, float cellSize, int n,
+                                        int half);
+
+/// Solves the half-space for `material` (reduced σt, σs′, g, mm⁻¹) with `options` (mode,
+/// order, steps, skip, attenuation as the renderer uses them) at cell size Δx and index η,
+/// covering radii up to `radius` (mm). @throw ValueError for an invalid material, Δx ≤ 0.
+SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, float eta,
+                                             const SslpvOptions& options, float cellSize,
+                                             float radius);
+
+/// Mean reduced material over the inside voxels of `volume` (the kernel's material for
+/// painted volumes). @throw ValueError if no voxel is inside.
+MaterialSample meanInsideMaterial(const MaterialVolume& volume);
+
+/// SSLPV's local part at every covered pixel, L̂(x_o) = F_t(η, ω_o)/π ∫_{r ≤ r_s} R_lpv(r) E dA,
+/// by `samples` stratified uniform disc samples on the tangent plane (Hammersley with a
+/// per-pixel Cranley–Patterson shift from pixelShift()); a sample counts where it projects onto
+/// a covered pixel, E and r = its tangent-plane distance. W/(mm²·sr).
+/// @throw ValueError for invalid buffers, r_s ≤ 0 or samples ∉ [1, 4096].
+ImageRgb localSslpvEstimate(const dipole::SurfaceBuffers& buffers, const SslpvSurfaceKernel& kernel,
+                            float splitRadius, float eta, int samples, uint32_t seed);
+
+/// Per-pixel shift pair in [0, 1)² of localSslpvEstimate (PCG hash of x, y, seed; the GLSL
+/// copy in shaders/combined_add.comp is bit-identical).
+Point2f pixelShift(int x, int y, uint32_t seed);
+
+/// SSLPV cell size Δx (mm) of `volume` resampled to gridResolution³ (resampleForPropagation).
+/// @throw ValueError if gridResolution ∉ [1, volume resolution].
+float sslpvCellSize(const MaterialVolume& volume, int gridResolution);
+
+/// Settings of the CPU combined renderer.
+struct CombinedSettings {
+    /// r_s in mm; < 0: DEFAULT_SPLIT_CELLS·Δx; 0: SSLPV only; +∞: dipole only (Steps mode).
+    float splitRadius = -1.f;
+    SplitMode mode = SplitMode::Kernel;
+    int localSamples = 32;  ///< Kernel mode: disc samples of localSslpvEstimate, [1, 4096]
+    /// The dipole part's light-view irradiance images (dipole::LightViewSettings). Off by
+    /// default: the local-part subtraction sees the camera image only, so light-view irradiance
+    /// gathered by the dipole would be counted twice (docs/methods/combined.md).
+    bool dipoleLightViews = false;
+    /// Dipole gather (model, samples, seed...). eta is taken from the scene, maxRadius from
+    /// the split.
+    dipole::GatherSettings dipole;
+    /// SSLPV (grid, steps, order, mode; calibrated by default as in the CLI). The subsurface
+    /// term alone is used; skipAccumulateSteps is k₀ and is raised to k by the split.
+    SslpvRenderOptions sslpv = defaultSslpvOptions();
+
+    /// Calibrated mode (the CLI's SSLPV default), subsurface term only.
+    static SslpvRenderOptions defaultSslpvOptions();
+};
+
+/// The combined image and its two parts (all subsurface radiance, W/(mm²·sr)).
+struct CombinedResult {
+    ImageRgb radiance;  ///< dipole + sslpv
+    ImageRgb dipole;    ///< the windowed dipole term (black when the plan disables it)
+    ImageRgb sslpv;     ///< the SSLPV term (Steps: late steps only; black when disabled)
+    ImageRgb local;     ///< Kernel mode: SSLPV's local estimate that was subtracted
+    SplitPlan plan;
+};
+
+/// CPU combined render of scene.objects[0]: CPU irradiance pass + image-space gather
+/// (dipole::renderImageSpaceDipole with maxRadius = r_s) and the CPU SslpvRenderer; Kernel mode
+/// subtracts localSslpvEstimate() on the camera's surface buffers (the sum clamped at 0 per
+/// channel), Steps mode skips k propagation steps. @throw ValueError for a scene without
+/// object/material or bad settings (message names the field).
+CombinedResult renderCombined(const Scene& scene, const CombinedSettings& settings);
+
+}  // namespace lucent::combined

@@ -1,0 +1,333 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief CPU combined mode: windowed image-space dipole + SSLPV, split by SSLPV's own local
+/// kernel or by skipped propagation steps (docs/methods/combined.md).
+
+#include <lucent/combined/Combined.h>
+
+#include <lucent/core/Error.h>
+#include <lucent/core/Parallel.h>
+#include <lucent/core/Random.h>
+#include <lucent/core/Sampling.h>
+#include <lucent/dipole/IrradiancePass.h>
+#include <lucent/dipole/Profiles.h>
+#include <lucent/material/MaterialVolume.h>
+#include <lucent/material/Resample.h>
+#include <lucent/sslpv/Transfer.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace lucent::combined {
+
+namespace {
+constexpr double PI_D = 3.14159265358979323846;
+}  // namespace
+
+float SplitPlan::dipoleMaxRadius() const {
+    // dipole::GatherSettings::maxRadius: 0 means unlimited, so r_s = +∞ maps to 0; r_s = 0
+    // never reaches the gather (dipoleOn is false).
+    return std::isinf(splitRadius) ? 0.f : splitRadius;
+}
+
+SplitPlan planSplit(float splitRadius, float cellSize, int baseSkip, int maxSteps, SplitMode mode) {
+    LUCENT_CHECK(!std::isnan(splitRadius), "combined: split radius is NaN");
+    LUCENT_CHECK(std::isfinite(cellSize) && cellSize > 0.f,
+                 "combined: SSLPV cell size must be finite and > 0 mm (got ", cellSize, ")");
+    LUCENT_CHECK(baseSkip >= 0 && maxSteps >= 0,
+                 "combined: skipAccumulateSteps and maxSteps must be >= 0");
+    SplitPlan p;
+    p.mode = mode;
+    p.cellSize = cellSize;
+    p.splitRadius = splitRadius < 0.f ? DEFAULT_SPLIT_CELLS * cellSize : splitRadius;
+    if (mode == SplitMode::Kernel) {
+        // SSLPV runs unchanged; its local part within r_s is replaced by the dipole's.
+        p.splitRadius = std::min(p.splitRadius, MAX_KERNEL_SPLIT_CELLS * cellSize);
+        p.skipSteps = baseSkip;
+        p.dipoleOn = p.splitRadius > 0.f;
+        p.sslpvOn = true;
+        return p;
+    }
+    // k = max(k₀, round(r_s/Δx)): after n six-neighbour steps light has moved at most n cells
+    // (Manhattan), hence at most n·Δx (Euclidean); steps n ≤ k therefore carry only light from
+    // sources within k·Δx ≈ r_s (docs/methods/combined.md, "Steps split").
+    const double cells = std::isinf(p.splitRadius) ? double(maxSteps) + 1.0
+                                                   : std::round(double(p.splitRadius / cellSize));
+    p.skipSteps = int(std::clamp(cells, double(baseSkip), double(maxSteps) + 1.0));
+    p.skipSteps = std::max(p.skipSteps, baseSkip);
+    p.dipoleOn = p.splitRadius > 0.f;
+    p.sslpvOn = p.skipSteps < maxSteps;
+    return p;
+}
+
+// ---------------------------------------------------------------------------------------------
+// SSLPV's own surface kernel
+
+Rgb SslpvSurfaceKernel::evaluate(float r) const {
+    const auto it = std::lower_bound(ringOuter.begin(), ringOuter.end(), r);
+    return it == ringOuter.end() ? Rgb(0.f) : ringValue[size_t(it - ringOuter.begin())];
+}
+
+Rgb SslpvSurfaceKernel::integral(float R) const {
+    glm::dvec3 sum(0.0);
+    double inner = 0.0;
+    for (size_t b = 0; b < ringOuter.size() && inner < double(R); ++b) {
+        const double outer = std::min(double(ringOuter[b]), double(R));
+        const double area = PI_D * (outer * outer - inner * inner);
+        sum += glm::dvec3(ringValue[b].r, ringValue[b].g, ringValue[b].b) * area;
+        inner = double(ringOuter[b]);
+    }
+    return Rgb(float(sum.x), float(sum.y), float(sum.z));
+}
+
+std::vector<Rgb> sslpvHalfSpaceResponse(const MaterialSample& material, float eta,
+                                        const SslpvOptions& options, float cellSize, int n,
+                                        int half) {
+    LUCENT_CHECK(std::isfinite(cellSize) && cellSize > 0.f,
+                 "combined kernel: cell size must be finite and > 0 mm");
+    LUCENT_CHECK(n >= 8 && n <= 128 && half >= 0 && half <= (n - 3) / 2,
+                 "combined kernel: need 8 <= n <= 128 and 0 <= half <= (n - 3)/2 (got n ", n,
+                 ", half ", half, ")");
+    for (int c = 0; c < 3; ++c)
+        LUCENT_CHECK(std::isfinite(material.sigma_t[c]) && material.sigma_s[c] >= 0.f &&
+                         material.sigma_s[c] <= material.sigma_t[c],
+                     "combined kernel: material needs 0 <= sigma_s' <= sigma_t (mm^-1), finite");
+    CoarseMaterial m;
+    m.spec.resolution = n;
+    m.spec.voxelSize = cellSize;
+    m.spec.origin = Point3f(0.f);
+    const size_t count = m.spec.voxelCount();
+    m.insideFraction.assign(count, 0.f);
+    for (int c = 0; c < 3; ++c) {
+        m.sigma_t[c].assign(count, material.sigma_t[c]);
+        m.sigma_s[c].assign(count, material.sigma_s[c]);
+        m.g[c].assign(count, material.g[c]);
+    }
+    for (int z = 1; z < n - 1; ++z)
+        for (int y = 1; y < n - 1; ++y)
+            for (int x = 1; x < n - 1; ++x)
+                m.insideFraction[m.spec.linearIndex({x, y, z})] = 1.f;
+    m.homogeneous = true;
+    const int c0 = n / 2;
+    const float zTop = float(n - 1) * cellSize;
+    // 2×2 texels of ¼ W each at normal incidence into the top cell (c0, c0), as the RSM would.
+    std::vector<SslpvInjectionSample> texels;
+    for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i)
+            texels.push_back({Point3f((float(c0) + 0.25f + 0.5f * float(i)) * cellSize,
+                                      (float(c0) + 0.25f + 0.5f * float(j)) * cellSize, zTop),
+                              Normal3f(0.f, 0.f, 1.f), Vector3f(0.f, 0.f, -1.f), Rgb(0.25f)});
+    SslpvSolver solver(options);
+    solver.setMaterial(m, eta);
+    solver.setInjectionSamples(std::move(texels));
+    solver.solve();
+    const int side = 2 * half + 1;
+    const float scale = solver.exitScale() * cellSize * cellSize;
+    std::vector<Rgb> g(size_t(side) * size_t(side));
+    for (int j = -half; j <= half; ++j)
+        for (int i = -half; i <= half; ++i)
+            g[size_t(j + half) * size_t(side) + size_t(i + half)] =
+                scale * solver.radiance(Point3f((float(c0 + i) + 0.5f) * cellSize,
+                                                (float(c0 + j) + 0.5f) * cellSize, zTop),
+                                        Normal3f(0.f, 0.f, 1.f));
+    return g;
+}
+
+SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, float eta,
+                                             const SslpvOptions& options, float cellSize,
+                                             float radius) {
+    LUCENT_CHECK(std::isfinite(cellSize) && cellSize > 0.f,
+                 "combined kernel: cell size must be finite and > 0 mm");
+    LUCENT_CHECK(std::isfinite(radius) && radius >= 0.f,
+                 "combined kernel: radius must be finite and >= 0 mm");
+    // Half-space: the kernel is wanted out to `radius`; sinks lie 6 cells beyond it laterally
+    // and the slab is as deep as it is wide.
+    const int reach = int(std::ceil(radius / cellSize)) + 6;
+    const int n = std::clamp(2 * reach + 3, 16, 2 * int(MAX_KERNEL_SPLIT_CELLS) + 15);
+    const int half = std::min(reach, (n - 3) / 2);
+    const std::vector<Rgb> g = sslpvHalfSpaceResponse(material, eta, options, cellSize, n, half);
+    // Rings by distance from the source cell, in cells: ring 0 = {0}, ring b = [b − ½, b + ½).
+    const int rings = half + 1, side = 2 * half + 1;
+    std::vector<glm::dvec3> ringSum(size_t(rings), glm::dvec3(0.0));
+    std::vector<int> ringCells(size_t(rings), 0);
+    for (int j = -half; j <= half; ++j)
+        for (int i = -half; i <= half; ++i) {
+            const int b = int(std::floor(std::hypot(double(i), double(j)) + 0.5));
+            if (b >= rings)
+                continue;
+            ringSum[size_t(b)] += glm::dvec3(g[size_t(j + half) * size_t(side) + size_t(i + half)]);
+            ++ringCells[size_t(b)];
+        }
+    // Per unit *transmitted* irradiance (the dipole's E): divide by T(0); R-units: × π.
+    const double t0 = 1.0 - double(dielectricReflectance(1.f, eta));
+    SslpvSurfaceKernel k;
+    k.cellSize = cellSize;
+    double inner = 0.0;
+    int cells = 0;
+    for (int b = 0; b < rings; ++b) {
+        cells += ringCells[size_t(b)];
+        const double outer = double(cellSize) * std::sqrt(double(cells) / PI_D);
+        const double area = PI_D * (outer * outer - inner * inner);
+        const glm::dvec3 v = ringSum[size_t(b)] * (PI_D / (t0 * area));
+        k.ringOuter.push_back(float(outer));
+        k.ringValue.push_back(Rgb(float(v.x), float(v.y), float(v.z)));
+        inner = outer;
+    }
+    return k;
+}
+
+MaterialSample meanInsideMaterial(const MaterialVolume& volume) {
+    const int n = volume.resolution();
+    glm::dvec3 st(0.0), ss(0.0), g(0.0);
+    size_t count = 0;
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const Coord c(x, y, z);
+                if (!volume.isInside(c))
+                    continue;
+                const MaterialSample v = volume.at(c);
+                st += glm::dvec3(v.sigma_t.r, v.sigma_t.g, v.sigma_t.b);
+                ss += glm::dvec3(v.sigma_s.r, v.sigma_s.g, v.sigma_s.b);
+                g += glm::dvec3(v.g.r, v.g.g, v.g.b);
+                ++count;
+            }
+    LUCENT_CHECK(count > 0, "combined: the material volume has no inside voxel");
+    const double inv = 1.0 / double(count);
+    MaterialSample m;
+    m.sigma_t = Rgb(glm::vec3(st * inv));
+    m.sigma_s = glm::min(Rgb(glm::vec3(ss * inv)), m.sigma_t);
+    m.g = Rgb(glm::vec3(g * inv));
+    return m;
+}
+
+Point2f pixelShift(int x, int y, uint32_t seed) {
+    // PCG hash (Jarzynski & Olano 2020, "Hash Functions for GPU Rendering"), chained.
+    const auto pcg = [](uint32_t v) {
+        const uint32_t state = v * 747796405u + 2891336453u;
+        const uint32_t word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+        return (word >> 22u) ^ word;
+    };
+    const uint32_t h1 = pcg(uint32_t(x) + pcg(uint32_t(y) + pcg(seed)));
+    const uint32_t h2 = pcg(h1);
+    return {float(h1 >> 8u) * 0x1p-24f, float(h2 >> 8u) * 0x1p-24f};
+}
+
+ImageRgb localSslpvEstimate(const dipole::SurfaceBuffers& buf, const SslpvSurfaceKernel& kernel,
+                            float splitRadius, float eta, int samples, uint32_t seed) {
+    LUCENT_CHECK(std::isfinite(splitRadius) && splitRadius > 0.f,
+                 "combined: the local estimate needs a finite split radius > 0 mm");
+    LUCENT_CHECK(samples >= 1 && samples <= 4096,
+                 "combined: localSamples must be in [1, 4096] (got ", samples, ")");
+    buf.validate();
+    ImageRgb out(buf.width, buf.height);
+    const double area = PI_D * double(splitRadius) * double(splitRadius);
+    parallelFor(
+        0, buf.height,
+        [&](int64_t y0, int64_t y1) {
+            for (int y = int(y0); y < int(y1); ++y)
+                for (int x = 0; x < buf.width; ++x) {
+                    const size_t idx = buf.index(x, y);
+                    if (!buf.covered[idx])
+                        continue;
+                    const Point3f xo = buf.position[idx];
+                    const Normal3f no = glm::normalize(buf.normal[idx]);
+                    const Frame frame(no);
+                    const Point2f shift = pixelShift(x, y, seed);
+                    glm::dvec3 B(0.0);
+                    for (int i = 0; i < samples; ++i) {
+                        // Uniform on the disc r ≤ r_s: pdf 1/(π r_s²) on the tangent plane.
+                        const Point2f h = hammersley(uint32_t(i), uint32_t(samples));
+                        const float u = h.x + shift.x - std::floor(h.x + shift.x);
+                        const float v = h.y + shift.y - std::floor(h.y + shift.y);
+                        const float r = splitRadius * std::sqrt(u), phi = 2.f * PI * v;
+                        const Point3f p =
+                            xo + r * (std::cos(phi) * frame.s + std::sin(phi) * frame.t);
+                        Point2f px;
+                        if (!buf.project(p, px))
+                            continue;
+                        const size_t j = buf.index(int(px.x), int(px.y));
+                        if (!buf.covered[j])
+                            continue;
+                        const Rgb k = kernel.evaluate(r);
+                        const Rgb& E = buf.irradiance[j];
+                        B += glm::dvec3(k.r * E.r, k.g * E.g, k.b * E.b);
+                    }
+                    B *= area / double(samples);
+                    // Seed 004 Eq. 3: L = F_t(η, ω_o) B/π, the dipole's exit.
+                    const double cosO = std::max(0.0, double(glm::dot(no, buf.towardEye(xo))));
+                    const double ft = 1.0 - dipole::fresnelReflectance(cosO, eta);
+                    out.at(x, y) = Rgb(glm::vec3(B * (ft / PI_D)));
+                }
+        },
+        /*grain=*/1);
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The CPU renderer
+
+float sslpvCellSize(const MaterialVolume& volume, int gridResolution) {
+    const GridSpec& s = volume.spec();
+    LUCENT_CHECK(gridResolution >= 1 && gridResolution <= s.resolution,
+                 "combined: SSLPV grid resolution must be in [1, ", s.resolution, "] (got ",
+                 gridResolution, ")");
+    // The same cell edge resampleForPropagation gives the coarse grid (material/Resample.cpp).
+    return s.voxelSize * float(s.resolution) / float(gridResolution);
+}
+
+SslpvRenderOptions CombinedSettings::defaultSslpvOptions() {
+    SslpvRenderOptions o;
+    o.solver.mode = SslpvMode::Calibrated;
+    o.direct = false;
+    o.subsurface = true;
+    return o;
+}
+
+CombinedResult renderCombined(const Scene& scene, const CombinedSettings& settings) {
+    LUCENT_CHECK(!scene.objects.empty() && scene.objects[0].material != nullptr,
+                 "combined: the scene needs an object with a material volume");
+    LUCENT_CHECK(settings.localSamples >= 1 && settings.localSamples <= 4096,
+                 "CombinedSettings.localSamples must be in [1, 4096] (got ", settings.localSamples,
+                 ")");
+    const MaterialVolume& volume = *scene.objects[0].material;
+    CombinedResult out;
+    out.plan = planSplit(settings.splitRadius, sslpvCellSize(volume, settings.sslpv.gridResolution),
+                         settings.sslpv.solver.skipAccumulateSteps, settings.sslpv.solver.maxSteps,
+                         settings.mode);
+    const int w = scene.camera.width, h = scene.camera.height;
+    out.dipole = ImageRgb(w, h);
+    out.sslpv = ImageRgb(w, h);
+    out.local = ImageRgb(w, h);
+    if (out.plan.dipoleOn) {
+        dipole::GatherSettings gs = settings.dipole;
+        gs.maxRadius = out.plan.dipoleMaxRadius();
+        dipole::LightViewSettings lv;
+        lv.enabled = settings.dipoleLightViews;
+        out.dipole = dipole::renderImageSpaceDipole(scene, gs, lv).radiance;
+    }
+    if (out.plan.sslpvOn) {
+        SslpvRenderOptions so = settings.sslpv;
+        so.subsurface = true;
+        so.direct = false;
+        so.solver.skipAccumulateSteps = out.plan.skipSteps;
+        out.sslpv = renderSslpv(scene, so);
+    }
+    if (out.plan.mode == SplitMode::Kernel && out.plan.dipoleOn) {
+        const SslpvSurfaceKernel kernel =
+            computeSslpvSurfaceKernel(meanInsideMaterial(volume), scene.eta, settings.sslpv.solver,
+                                      out.plan.cellSize, out.plan.splitRadius);
+        out.local =
+            localSslpvEstimate(dipole::buildSurfaceBuffers(scene), kernel, out.plan.splitRadius,
+                               scene.eta, settings.localSamples, settings.dipole.seed);
+    }
+    LUCENT_ASSERT(out.dipole.width() == w && out.sslpv.width() == w && out.local.width() == w);
+    out.radiance = ImageRgb(w, h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            out.radiance.at(x, y) =
+                glm::max(out.dipole.at(x, y) + out.sslpv.at(x, y) - out.local.at(x, y), Rgb(0.f));
+    return out;
+}
+
+}  // namespace lucent::combined

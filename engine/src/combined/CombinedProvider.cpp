@@ -1,0 +1,317 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief CombinedSubsurfaceProvider: SSLPV (late steps) + windowed image-space dipole on the GPU,
+/// summed by shaders/combined_add.comp (docs/methods/combined.md).
+
+#include <lucent/combined/CombinedProvider.h>
+
+#include <lucent/core/Error.h>
+#include <lucent/dipole/Profiles.h>
+#include <lucent/gpu/GlContext.h>
+#include <lucent/gpu/GlResources.h>
+#include <lucent/material/MaterialVolume.h>
+
+#include <epoxy/gl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+namespace lucent::combined {
+
+struct CombinedSubsurfaceProvider::Impl {
+    CombinedProviderSettings settings;
+    SslpvSubsurfaceProvider sslpv{
+        SslpvProviderOptions{.render = CombinedSettings::defaultSslpvOptions()}};
+    dipole::DipoleSubsurfaceProvider dipole;
+    gpu::GlProgram addProgram;
+    gpu::GlObject scratch;  ///< RGBA32F, the dipole part before it is added to the target
+    int scratchW = 0, scratchH = 0;
+    const MaterialVolume* volume = nullptr;
+    float cellSize = 0.f;            ///< SSLPV Δx of the attached volume, 0 before one
+    std::vector<int> pendingBricks;  ///< dipole uploads waiting for a current context
+    SslpvSurfaceKernel kernel;       ///< Kernel split: SSLPV's local kernel
+    bool kernelDirty = true;         ///< material/split changed: recompute and re-upload
+    gpu::GlObject kernelBuffer;      ///< SSBO vec4(outer, R_lpv rgb) per ring
+    bool created = false;
+    CombinedProviderStats stats;
+};
+
+CombinedSubsurfaceProvider::CombinedSubsurfaceProvider() : m(std::make_unique<Impl>()) {
+    applySplit();
+}
+
+CombinedSubsurfaceProvider::~CombinedSubsurfaceProvider() = default;
+
+void CombinedSubsurfaceProvider::create(const gpu::ShaderLibrary& library) {
+    if (m->created)
+        return;
+    m->sslpv.create(library);
+    m->dipole.create(library);
+    m->addProgram = gpu::GlProgram::compute(library, "combined_add.comp");
+    m->created = true;
+}
+
+void CombinedSubsurfaceProvider::destroy() {
+    m->sslpv.destroy();
+    m->dipole.destroy();
+    m->addProgram.destroy();
+    m->scratch.destroy();
+    m->kernelBuffer.destroy();
+    m->kernelDirty = true;
+    m->scratchW = m->scratchH = 0;
+    m->created = false;
+}
+
+bool CombinedSubsurfaceProvider::isCreated() const {
+    return m->created;
+}
+
+void CombinedSubsurfaceProvider::setSettings(const CombinedProviderSettings& settings) {
+    LUCENT_CHECK(!std::isnan(settings.splitRadius),
+                 "CombinedProviderSettings.splitRadius is NaN (mm; < 0: default, +inf: dipole)");
+    LUCENT_CHECK(settings.eta >= 1.f && settings.eta <= 3.f,
+                 "CombinedProviderSettings.eta must be in [1, 3] (got ", settings.eta, ")");
+    LUCENT_CHECK(settings.meshId >= -1, "CombinedProviderSettings.meshId must be >= -1");
+    const CombinedProviderSettings old = m->settings;
+    m->settings = settings;
+    try {
+        applySplit();
+    } catch (...) {
+        m->settings = old;
+        applySplit();
+        throw;
+    }
+}
+
+const CombinedProviderSettings& CombinedSubsurfaceProvider::settings() const {
+    return m->settings;
+}
+
+void CombinedSubsurfaceProvider::applySplit() {
+    const CombinedProviderSettings& s = m->settings;
+    const SslpvOptions& so = s.sslpv.render.solver;
+    // Before a material is attached Δx is unknown: plan with a unit cell (replanned later).
+    LUCENT_CHECK(s.localSamples >= 1 && s.localSamples <= 4096,
+                 "CombinedProviderSettings.localSamples must be in [1, 4096] (got ", s.localSamples,
+                 ")");
+    const SplitPlan plan = planSplit(s.splitRadius, m->cellSize > 0.f ? m->cellSize : 1.f,
+                                     so.skipAccumulateSteps, so.maxSteps, s.mode);
+    SslpvProviderOptions lo = s.sslpv;
+    lo.render.solver.skipAccumulateSteps = plan.skipSteps;
+    lo.meshId = s.meshId;
+    dipole::ProviderSettings dp = s.dipole;
+    dp.eta = s.eta;
+    dp.meshId = s.meshId;
+    dp.maxRadius = plan.dipoleMaxRadius();
+    m->sslpv.setOptions(lo);    // validates; re-propagates only when the options changed
+    m->dipole.setSettings(dp);  // validates; restarts the accumulation only on a change
+    m->stats.plan = plan;
+    m->kernelDirty = true;
+}
+
+void CombinedSubsurfaceProvider::setMesh(const TriangleMesh& mesh) {
+    m->sslpv.setMesh(mesh);
+    m->dipole.reset();  // the G-buffer changes in ways camera/lights/material do not reveal
+}
+
+void CombinedSubsurfaceProvider::setLights(const std::vector<Light>& lights) {
+    m->sslpv.setLights(lights);
+}
+
+void CombinedSubsurfaceProvider::setObjectFromWorld(const Mat4f& objectFromWorld) {
+    m->sslpv.setObjectFromWorld(objectFromWorld);
+}
+
+void CombinedSubsurfaceProvider::setMaterial(const MaterialVolume& volume, float eta) {
+    m->sslpv.setMaterial(volume, eta);
+    m->dipole.setMaterial(&volume);
+    m->volume = &volume;
+    m->pendingBricks.clear();  // the dipole uploads the whole volume at the next frame
+    m->cellSize = sslpvCellSize(volume, m->settings.sslpv.render.gridResolution);
+    m->settings.eta = eta;
+    applySplit();
+}
+
+size_t CombinedSubsurfaceProvider::syncMaterial(MaterialVolume& volume) {
+    const std::vector<int> bricks = volume.takeDirtyBricks();
+    if (!bricks.empty() || m->volume != &volume)
+        updateMaterial(volume, bricks);
+    return bricks.size();
+}
+
+void CombinedSubsurfaceProvider::updateMaterial(const MaterialVolume& volume,
+                                                const std::vector<int>& dirtyBricks) {
+    if (m->volume != &volume || !(volume.spec() == m->volume->spec())) {
+        setMaterial(volume, m->settings.eta);
+        return;
+    }
+    if (dirtyBricks.empty())
+        return;
+    m->sslpv.updateMaterial(volume, dirtyBricks);
+    m->pendingBricks.insert(m->pendingBricks.end(), dirtyBricks.begin(), dirtyBricks.end());
+    m->kernelDirty = true;  // the mean material may have changed
+}
+
+void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
+                                                  unsigned targetTexture) {
+    LUCENT_CHECK(m->created, "CombinedSubsurfaceProvider: create() was not called");
+    const SplitPlan& plan = m->stats.plan;
+    if (plan.sslpvOn)
+        m->sslpv.renderSubsurface(g, targetTexture);  // writes the covered pixels of meshId
+    if (plan.dipoleOn) {
+        if (!m->pendingBricks.empty()) {
+            std::sort(m->pendingBricks.begin(), m->pendingBricks.end());
+            m->pendingBricks.erase(std::unique(m->pendingBricks.begin(), m->pendingBricks.end()),
+                                   m->pendingBricks.end());
+            m->dipole.uploadBricks(m->pendingBricks);
+            m->pendingBricks.clear();
+        }
+        if (m->scratchW != g.width || m->scratchH != g.height) {
+            m->scratch.destroy();
+            m->scratch = gpu::createTexture2D(GL_RGBA32F, g.width, g.height);
+            m->scratchW = g.width;
+            m->scratchH = g.height;
+        }
+        const float zero[4] = {0.f, 0.f, 0.f, 0.f};
+        glClearTexImage(m->scratch.id(), 0, GL_RGBA, GL_FLOAT, zero);
+        m->dipole.renderSubsurface(g, m->scratch.id());
+        const bool kernel = plan.mode == SplitMode::Kernel;
+        if (kernel && (m->kernelDirty || !m->kernelBuffer.isValid()) && m->volume) {
+            // SSLPV's local kernel for the volume's mean material (docs/methods/combined.md).
+            m->kernel = computeSslpvSurfaceKernel(meanInsideMaterial(*m->volume), m->settings.eta,
+                                                  m->sslpv.options().render.solver, plan.cellSize,
+                                                  plan.splitRadius);
+            std::vector<glm::vec4> rings;
+            for (size_t b = 0; b < m->kernel.ringOuter.size(); ++b)
+                rings.emplace_back(m->kernel.ringOuter[b], m->kernel.ringValue[b]);
+            m->kernelBuffer.destroy();
+            m->kernelBuffer = gpu::createBuffer(rings.size() * sizeof(glm::vec4), rings.data(), 0);
+            m->kernelDirty = false;
+        }
+        // target = max(0, target + scratch − local SSLPV) (shaders/combined_add.comp).
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT |
+                        GL_TEXTURE_FETCH_BARRIER_BIT);
+        const gpu::GlProgram& p = m->addProgram;
+        glUseProgram(p.id());
+        glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
+        glUniform1i(p.uniformLocation("u_kernel"), kernel && m->kernelBuffer.isValid() ? 1 : 0);
+        if (kernel && m->kernelBuffer.isValid()) {
+            // Camera from the G-buffer matrices as dipole::DipoleSubsurfaceProvider does.
+            const Mat4f worldFromView = glm::inverse(g.viewFromWorld);
+            const Mat4f clipFromView = g.clipFromWorld * worldFromView;
+            const bool ortho = std::abs(clipFromView[2][3]) < 1e-6f;
+            const Vector3f forward = glm::normalize(-Vector3f(worldFromView[2]));
+            glUniform1i(p.uniformLocation("u_ringCount"), int(m->kernel.ringOuter.size()));
+            glUniform1f(p.uniformLocation("u_splitRadius"), plan.splitRadius);
+            glUniform1i(p.uniformLocation("u_samples"), m->settings.localSamples);
+            glUniform1ui(p.uniformLocation("u_seed"), m->settings.dipole.seed);
+            glUniform1i(p.uniformLocation("u_meshId"), m->settings.meshId);
+            glUniformMatrix4fv(p.uniformLocation("u_clipFromWorld"), 1, GL_FALSE,
+                               &g.clipFromWorld[0][0]);
+            glUniform3f(p.uniformLocation("u_eye"), g.cameraPosition.x, g.cameraPosition.y,
+                        g.cameraPosition.z);
+            glUniform3f(p.uniformLocation("u_viewDir"), forward.x, forward.y, forward.z);
+            glUniform1i(p.uniformLocation("u_ortho"), ortho ? 1 : 0);
+            glUniform1f(p.uniformLocation("u_eta"), m->settings.eta);
+            glBindTextureUnit(0, g.positionTexture);
+            glBindTextureUnit(1, g.normalTexture);
+            glBindTextureUnit(2, m->dipole.debugTextures().irradiance);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, m->kernelBuffer.id());
+        }
+        glBindImageTexture(0, targetTexture, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindImageTexture(1, m->scratch.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+        glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+        glUseProgram(0);
+    }
+    ++m->stats.frames;
+    m->stats.dipole = m->dipole.stats();
+    m->stats.sslpv = m->sslpv.stats();
+    m->stats.converged = !plan.dipoleOn || m->stats.dipole.converged;
+}
+
+const CombinedProviderStats& CombinedSubsurfaceProvider::stats() const {
+    return m->stats;
+}
+
+const SslpvSubsurfaceProvider& CombinedSubsurfaceProvider::sslpvProvider() const {
+    return m->sslpv;
+}
+
+const dipole::DipoleSubsurfaceProvider& CombinedSubsurfaceProvider::dipoleProvider() const {
+    return m->dipole;
+}
+
+const SslpvSurfaceKernel& CombinedSubsurfaceProvider::kernel() const {
+    return m->kernel;
+}
+
+ImageRgb renderCombinedGl(const Scene& scene, const CombinedProviderSettings& settings,
+                          int samplesPerPixel, bool subsurfaceOnly) {
+    LUCENT_CHECK(!scene.objects.empty() && scene.objects[0].material != nullptr,
+                 "combined: the scene needs an object with a material volume");
+    LUCENT_CHECK(samplesPerPixel >= 1, "combined: samples per pixel must be >= 1");
+    std::string reason;
+    if (!gpu::GlContext::isHeadlessAvailable(&reason))
+        LUCENT_THROW(GpuError, "combined: no headless OpenGL 4.5 context: ", reason);
+    auto ctx = gpu::GlContext::createHeadless();
+    gpu::SceneRenderer renderer;
+    CombinedSubsurfaceProvider provider;
+    ImageRgb image;
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+        renderer.create();
+        provider.create();
+        gpu::SurfaceMaterial surface;
+        surface.diffuseAlbedo = Rgb(0.f);
+        surface.specularAlbedo = Rgb(float(dipole::fresnelReflectance(1.0, scene.eta)));
+        int meshId = -1;
+        for (const SceneObject& object : scene.objects) {
+            const int id = renderer.addMesh(object.mesh, surface);
+            if (meshId < 0)
+                meshId = id;  // the volume belongs to objects[0]
+        }
+        renderer.setLights(scene.lights);
+        renderer.setCamera(scene.camera);
+        gpu::DirectSettings ds;
+        ds.subsurfaceOnly = subsurfaceOnly;
+        renderer.setSettings(ds);
+        CombinedProviderSettings s = settings;
+        s.eta = scene.eta;
+        s.meshId = meshId;
+        s.dipole.samplesPerFrame = std::min(s.dipole.samplesPerFrame, samplesPerPixel);
+        s.dipole.maxFrames =
+            (samplesPerPixel + s.dipole.samplesPerFrame - 1) / s.dipole.samplesPerFrame;
+        provider.setSettings(s);
+        provider.setMesh(scene.objects[0].mesh);
+        provider.setLights(scene.lights);
+        provider.setMaterial(*scene.objects[0].material, scene.eta);
+        renderer.setSubsurfaceProvider(&provider);
+        do {
+            renderer.render();
+        } while (!provider.stats().converged);
+        image = renderer.readRadiance();
+    } catch (...) {
+        renderer.setSubsurfaceProvider(nullptr);
+        provider.destroy();
+        renderer.destroy();
+        throw;
+    }
+    const CombinedProviderStats& st = provider.stats();
+    std::fprintf(
+        stderr,
+        "combined (%s): r_s %.3g mm = %.2f cells of %.3g mm, SSLPV skips %d of %d steps; "
+        "dipole %d frames, %d spp; %.1f ms\n",
+        ctx->renderer().c_str(), double(st.plan.splitRadius),
+        double(st.plan.splitRadius / st.plan.cellSize), double(st.plan.cellSize), st.plan.skipSteps,
+        settings.sslpv.render.solver.maxSteps, st.dipole.frames, st.dipole.samplesPerPixel,
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    renderer.setSubsurfaceProvider(nullptr);
+    provider.destroy();
+    renderer.destroy();
+    return image;
+}
+
+}  // namespace lucent::combined

@@ -1,0 +1,115 @@
+#version 450 core
+// SPDX-License-Identifier: MIT
+// Combined subsurface mode (docs/methods/combined.md), the last pass of
+// lucent::combined::CombinedSubsurfaceProvider: the SSLPV term (Borlum et al. 2011, seed 000,
+// Eq. 4/7) is already in the target, the windowed image-space dipole term (Mertens et al. 2005,
+// seed 004, Eq. 3 restricted to r <= r_s) is in u_addend. Steps split: target += addend.
+// Kernel split: SSLPV's own estimate of its local part is removed as well,
+//   L(x_o) = max(0, L_sslpv + L_dipole,r<=r_s - F_t(eta, w_o)/pi * B_lpv),
+//   B_lpv = (pi r_s^2 / N) sum_i R_lpv(r_i) E(p_i)   (uniform disc samples, r_i <= r_s),
+// line for line as lucent::combined::localSslpvEstimate (engine/src/combined/Combined.cpp).
+
+#include "dipole_fresnel.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(rgba32f, binding = 0) uniform image2D u_target;           // SSLPV term in, sum out
+layout(rgba32f, binding = 1) readonly uniform image2D u_addend;  // the dipole term
+
+layout(binding = 0) uniform sampler2D u_position;    // xyz mm, a coverage
+layout(binding = 1) uniform sampler2D u_normal;      // unit normal, a = mesh id + 1
+layout(binding = 2) uniform sampler2D u_irradiance;  // Fresnel-transmitted E (W/mm^2)
+
+// SSLPV surface kernel: ring b covers (outer_{b-1}, outer_b], value R_lpv rgb (mm^-2).
+layout(std430, binding = 0) readonly buffer KernelBlock { vec4 b_ring[]; };  // outer, rgb
+
+uniform ivec2 u_size;
+uniform int u_kernel;  // 1: Kernel split (subtract), 0: Steps split (add only)
+uniform int u_ringCount;
+uniform float u_splitRadius;  // r_s, mm
+uniform int u_samples;
+uniform uint u_seed;
+uniform int u_meshId;  // -1: every covered pixel
+uniform mat4 u_clipFromWorld;
+uniform vec3 u_eye;
+uniform vec3 u_viewDir;
+uniform int u_ortho;
+uniform float u_eta;
+
+const float PI = 3.14159265358979;
+
+vec3 towardEye(vec3 p) { return u_ortho != 0 ? -normalize(u_viewDir) : normalize(u_eye - p); }
+
+// Top-first pixel of p like SurfaceBuffers::project; false outside the image.
+bool projectTop(vec3 p, out ivec2 top) {
+    vec4 clip = u_clipFromWorld * vec4(p, 1.0);
+    if (!(clip.w > 0.0)) return false;
+    vec2 ndc = clip.xy / clip.w;
+    vec2 px = vec2((ndc.x * 0.5 + 0.5) * float(u_size.x), (0.5 - ndc.y * 0.5) * float(u_size.y));
+    if (px.x < 0.0 || px.y < 0.0 || px.x >= float(u_size.x) || px.y >= float(u_size.y))
+        return false;
+    top = ivec2(px);
+    return true;
+}
+
+// lucent::combined::pixelShift: chained PCG hashes (Jarzynski & Olano 2020).
+uint pcg(uint v) {
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+vec2 pixelShift(int x, int y) {
+    uint h1 = pcg(uint(x) + pcg(uint(y) + pcg(u_seed)));
+    uint h2 = pcg(h1);
+    return vec2(float(h1 >> 8u), float(h2 >> 8u)) * (1.0 / 16777216.0);
+}
+float radicalInverse2(uint i) { return float(bitfieldReverse(i)) * 2.3283064365386963e-10; }
+
+vec3 kernelAt(float r) {
+    for (int b = 0; b < u_ringCount; ++b)
+        if (r <= b_ring[b].x) return b_ring[b].yzw;
+    return vec3(0.0);
+}
+
+bool ownPixel(ivec2 xy) {
+    vec4 q = texelFetch(u_position, xy, 0);
+    if (q.w == 0.0) return false;
+    return u_meshId < 0 || int(texelFetch(u_normal, xy, 0).a + 0.5) - 1 == u_meshId;
+}
+
+void main() {
+    const ivec2 xy = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(xy, u_size)))
+        return;
+    const vec4 a = imageLoad(u_target, xy);
+    const vec4 d = imageLoad(u_addend, xy);
+    vec3 sum = a.rgb + d.rgb;
+    if (u_kernel != 0 && ownPixel(xy)) {
+        vec3 xo = texelFetch(u_position, xy, 0).xyz;
+        vec3 no = normalize(texelFetch(u_normal, xy, 0).xyz);
+        float sgn = no.z >= 0.0 ? 1.0 : -1.0;  // Duff et al. 2017 basis (lucent::Frame)
+        float aa = -1.0 / (sgn + no.z);
+        float bb = no.x * no.y * aa;
+        vec3 fs = vec3(1.0 + sgn * no.x * no.x * aa, sgn * bb, -sgn * no.x);
+        vec3 ft = vec3(bb, sgn + no.y * no.y * aa, -no.y);
+        int yTop = u_size.y - 1 - xy.y;
+        vec2 shift = pixelShift(xy.x, yTop);
+        vec3 B = vec3(0.0);
+        for (int i = 0; i < u_samples; ++i) {
+            vec2 h = vec2((float(i) + 0.5) / float(u_samples), radicalInverse2(uint(i)));
+            float u = fract(h.x + shift.x), v = fract(h.y + shift.y);
+            float r = u_splitRadius * sqrt(u), phi = 2.0 * PI * v;
+            vec3 p = xo + r * (cos(phi) * fs + sin(phi) * ft);
+            ivec2 top;
+            if (!projectTop(p, top)) continue;
+            ivec2 pix = ivec2(top.x, u_size.y - 1 - top.y);
+            if (!ownPixel(pix)) continue;
+            B += kernelAt(r) * texelFetch(u_irradiance, pix, 0).rgb;
+        }
+        B *= PI * u_splitRadius * u_splitRadius / float(u_samples);
+        float cosO = max(0.0, dot(no, towardEye(xo)));
+        float fto = 1.0 - dipoleFresnelReflectance(cosO, u_eta);
+        sum = max(sum - B * (fto / PI), vec3(0.0));
+    }
+    imageStore(u_target, xy, vec4(sum, max(a.a, d.a)));
+}

@@ -1,0 +1,193 @@
+#version 450 core
+// SPDX-License-Identifier: MIT
+// Gather pass of dipole::DirpoleSubsurfaceProvider (seed 001 §4.1 step 2, "render to cubemap"):
+// for every cube-face fragment x_o (normal n_o) and light, k new disc samples around x_o in the
+// light's view add to a running sum (one layer per face)
+//   C^f(x_o) += Σ_i E⊥(x_i) T₁₂(ω_i) S_d(x_i, ω₁₂; x_o) ΔA⊥_i          (seed 001 §4.1, C^f)
+// where x_i, n_i are the light G-buffer texel the sample falls in, ω₁₂ the refracted light
+// direction (Snell), T₁₂ = 1 − F_r (Fresnel), S_d the Frisvad et al. 2014 directional dipole
+// and ΔA⊥_i = 1/(k·p(r)) the light-plane area a sample stands for: the disc is importance-
+// sampled with the better dipole's exact sampler per channel (seed 004 §4; multi-sample balance
+// heuristic over the channels, as the CPU DirectionalDipoleRenderer) instead of seed 001's
+// uniform disc, because S_d falls off over a few diffusion lengths while a uniform disc must
+// reach the far tail. Point/spot lights: the flux crossing the disc plane (normal along the ray
+// to x′_o) is I(ω)cosθ_p/ρ_p² per unit plane area (inverse-square law), which the same
+// perspective G-buffer texel receives.
+// Seed 001 §4.3.1 (G-buffer shrink): the disc is centred at x′_o = x_o − ε_g(n_o − ω_l(ω_l·n_o)).
+// Progressive: frame N adds samples N·k … N·k + k − 1 of a per-texel rotated R2 sequence.
+// Convergence statistics: atomic max of |C̄_N − C̄_{N−1}| and of C̄_N over texels and channels.
+#include "common/lighting.glsl"
+#include "dipole_fresnel.glsl"
+#include "dipole_profiles.glsl"
+#include "dirpole_common.glsl"
+
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+layout(binding = 0) uniform sampler2DArray u_facePosition;   // xyz mm, a covered
+layout(binding = 1) uniform sampler2DArray u_faceNormal;     // outward unit normal
+layout(binding = 2) uniform sampler2DArray u_lightPosition;  // one layer per light
+layout(binding = 3) uniform sampler2DArray u_lightNormal;
+
+layout(rgba32f, binding = 0) uniform image2DArray u_accum;  // rgb Σ_frames C (W/(mm²·sr))
+
+layout(std430, binding = 4) buffer StatsBlock { uint b_maxChange; uint b_maxMean; };
+
+layout(location = 0) uniform mat4 u_lightClipFromWorld[LUCENT_MAX_LIGHTS];
+uniform int u_lightCount;
+uniform int u_faceSize;
+uniform int u_lightMapSize;
+uniform float u_eta;
+uniform vec3 u_boundary;  // F_dr, C1(η), C2(η) for the sampler (better dipole)
+uniform vec3 u_moments;   // C1(η), C2(η), C1(1/η) for the directional dipole
+uniform int u_samples;    // k, per light and frame
+uniform int u_framesBefore;
+uniform float u_shrink;   // ε_g (mm), 0 when the fix is off
+uniform uint u_seed;
+// Energy-normalised S_d (DirpoleSettings::energyNormalised): lucent::DirpoleEnergyTable::scale
+// sampled at nodes uniform in s = √(1 − α′), interpolated linearly in s.
+const int ENERGY_NODES = 256;  // DirpoleProvider.cpp ENERGY_NODES
+uniform int u_energyNormalised;
+uniform float u_energyScale[ENERGY_NODES];
+
+float energyScale(float alphaP) {
+    float s = sqrt(clamp(1.0 - alphaP, 0.0, 1.0)) * float(ENERGY_NODES - 1);
+    int i = min(int(s), ENERGY_NODES - 2);
+    float t = s - float(i);
+    return (1.0 - t) * u_energyScale[i] + t * u_energyScale[i + 1];
+}
+
+const float PI = 3.14159265358979;
+
+// PCG hash (Jarzynski & Olano 2020, "Hash Functions for GPU Rendering", pcg).
+uint pcgHash(uint v) {
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+float toUnit(uint v) { return float(v >> 8) * (1.0 / 16777216.0); }
+
+// R2 sequence (Roberts 2018; lucent::r2Sequence) in 32-bit fixed point, so sample indices in
+// the millions keep full precision: frac(offset + n·(1/φ₂, 1/φ₂²)).
+vec2 r2(uint n, uvec2 offset) {
+    return vec2(toUnit(offset.x + n * 3242174890u), toUnit(offset.y + n * 2447445414u));
+}
+
+// C^f contribution of one light at x_o (W/(mm²·sr)).
+vec3 gatherLight(int l, vec3 xo, vec3 no, Dirpole dd[3], Profile prof[3], int channels[3],
+                 int channelCount, int nChan[3], uvec2 offset, uint texelSeed) {
+    GpuLight light = lights[l];
+    bool directional = int(light.positionType.w) == LUCENT_LIGHT_DIRECTIONAL;
+    vec3 wl, unusedE;
+    float unusedD;
+    lightIncidence(light, xo, wl, unusedE, unusedD);  // ω_l: unit, toward the light
+    vec3 xs = xo - u_shrink * (no - wl * dot(wl, no));  // seed 001 §4.3.1
+    // Disc plane through x′_o, perpendicular to the light ray (Duff et al. 2017 basis).
+    vec3 pn = directional ? -wl : normalize(xs - light.positionType.xyz);
+    float sgn = pn.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (sgn + pn.z);
+    float b = pn.x * pn.y * a;
+    vec3 fs = vec3(1.0 + sgn * pn.x * pn.x * a, sgn * b, -sgn * pn.x);
+    vec3 ft = vec3(b, sgn + pn.y * pn.y * a, -pn.y);
+    mat4 clipFromWorld = u_lightClipFromWorld[l];
+    vec3 sum = vec3(0.0);
+    for (int i = 0; i < u_samples; ++i) {
+        uint n = uint(u_framesBefore * u_samples + i);
+        vec2 u = r2(n, offset);
+        float uSrc = toUnit(pcgHash(texelSeed ^ pcgHash(n + uint(l) * 0x68E31DA4u)));
+        Profile p = prof[channels[i % channelCount]];
+        float r = sampleSourceRadius(p.sigma, uSrc < p.pReal ? p.zr : p.zv, u.x);
+        float phi = 2.0 * PI * u.y;
+        // Balance heuristic over the channels' samplers: weight/pdf = 1/Σ_c n_c p_c(r).
+        float denom = 0.0;
+        for (int c = 0; c < 3; ++c)
+            if (nChan[c] > 0) denom += float(nChan[c]) * pdfArea(prof[c], r);
+        if (!(denom > 0.0)) continue;
+        vec3 pp = xs + r * (cos(phi) * fs + sin(phi) * ft);
+        // The light G-buffer texel the ray through pp lands in: x_i, n_i.
+        vec4 clip = clipFromWorld * vec4(pp, 1.0);
+        if (!(clip.w > 0.0)) continue;
+        vec2 uv = (clip.xy / clip.w) * 0.5 + 0.5;
+        if (any(lessThan(uv, vec2(0.0))) || any(greaterThanEqual(uv, vec2(1.0)))) continue;
+        ivec3 texel = ivec3(ivec2(uv * float(u_lightMapSize)), l);
+        vec4 xiCover = texelFetch(u_lightPosition, texel, 0);
+        if (xiCover.w == 0.0) continue;
+        vec3 xi = xiCover.xyz;
+        vec3 ni = texelFetch(u_lightNormal, texel, 0).xyz;
+        vec3 wi, E, wp, Ep;
+        float dist;
+        lightIncidence(light, xi, wi, E, dist);
+        float cosI = dot(ni, wi);
+        if (cosI <= 0.0) continue;
+        // Flux per unit disc area: E⊥ at pp times cos θ_p (1 for a directional light).
+        lightIncidence(light, pp, wp, Ep, dist);
+        float cosP = directional ? 1.0 : max(0.0, dot(-wp, pn));
+        // Refracted direction of travel ω₁₂ (Snell, relative index 1/η from outside).
+        vec3 wt = -wi;
+        float sin2T = (1.0 - cosI * cosI) / (u_eta * u_eta);
+        float cosT = sqrt(max(0.0, 1.0 - sin2T));
+        vec3 w12 = normalize(wt / u_eta + (cosI / u_eta - cosT) * ni);
+        float t12 = 1.0 - dipoleFresnelReflectance(cosI, u_eta);
+        vec3 w = Ep * (cosP * t12 / denom);
+        for (int c = 0; c < 3; ++c) sum[c] += w[c] * dirpoleSd(dd[c], xi, ni, w12, xo, no);
+    }
+    return sum;
+}
+
+shared uint s_maxChange;
+shared uint s_maxMean;
+
+void main() {
+    if (gl_LocalInvocationIndex == 0u) {
+        s_maxChange = 0u;
+        s_maxMean = 0u;
+    }
+    barrier();
+    ivec3 id = ivec3(gl_GlobalInvocationID);
+    bool inside = id.x < u_faceSize && id.y < u_faceSize;
+    vec4 pos = inside ? texelFetch(u_facePosition, id, 0) : vec4(0.0);
+    if (pos.w != 0.0) {  // covered texel: always written (0 without material)
+        vec3 xo = pos.xyz;
+        vec3 no = texelFetch(u_faceNormal, id, 0).xyz;
+        vec3 sigT, sigS;
+        materialInside(xo, no, sigT, sigS);
+        Dirpole dd[3];
+        Profile prof[3];
+        int channels[3];
+        int channelCount = 0;
+        for (int c = 0; c < 3; ++c) {
+            float sa = max(sigT[c] - sigS[c], 0.0);
+            dd[c] = makeDirpole(sa, sigS[c], u_moments);
+            if (u_energyNormalised != 0 && sigS[c] > 0.0)
+                dd[c].norm *= energyScale(sigS[c] / (sa + sigS[c]));
+            prof[c] = makeProfile(1, sa, sigS[c], u_boundary);
+            if (prof[c].zr > 0.0 && !dd[c].zero) channels[channelCount++] = c;
+        }
+        vec3 C = vec3(0.0);
+        if (channelCount > 0) {
+            int nChan[3] = int[3](0, 0, 0);
+            for (int i = 0; i < u_samples; ++i) nChan[channels[i % channelCount]]++;
+            uint texelSeed = pcgHash(uint(id.x) + pcgHash(uint(id.y) + pcgHash(uint(id.z) +
+                                                                               pcgHash(u_seed))));
+            uvec2 offset = uvec2(pcgHash(texelSeed), pcgHash(texelSeed + 1u));
+            for (int l = 0; l < u_lightCount; ++l)
+                C += gatherLight(l, xo, no, dd, prof, channels, channelCount, nChan, offset,
+                                 texelSeed);
+        }
+        vec3 sum = u_framesBefore > 0 ? imageLoad(u_accum, id).rgb : vec3(0.0);
+        vec3 oldMean = u_framesBefore > 0 ? sum / float(u_framesBefore) : vec3(0.0);
+        sum += C;
+        vec3 mean = sum / float(u_framesBefore + 1);
+        imageStore(u_accum, id, vec4(sum, 1.0));
+        // Non-negative floats order like their bit patterns: atomicMax on uint.
+        if (u_framesBefore > 0) {
+            vec3 d = abs(mean - oldMean);
+            atomicMax(s_maxChange, floatBitsToUint(max(d.r, max(d.g, d.b))));
+        }
+        atomicMax(s_maxMean, floatBitsToUint(max(mean.r, max(mean.g, mean.b))));
+    }
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) {
+        atomicMax(b_maxChange, s_maxChange);
+        atomicMax(b_maxMean, s_maxMean);
+    }
+}

@@ -1,0 +1,260 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief Active-brick propagation (SslpvOptions::skipEmptySlices) against the dense solve:
+/// heterogeneous stress scenes, the default scene, a small lit region; bricks per step.
+
+#include <lucent/sslpv/SslpvRenderer.h>
+#include <lucent/sslpv/SslpvSolver.h>
+#include <lucent/sslpv/Transfer.h>
+
+#include <lucent/core/Random.h>
+#include <lucent/scene/SceneFile.h>
+
+#include "SslpvTestGrids.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+using namespace lucent;
+
+namespace {
+
+/// Ball of radius 0.35·N cells in an N³ grid of cell size h, every inside cell with its own
+/// σt = st·(0.5 + u), σs′ = min(ss·(0.5 + u′), σt) and g = clamp(g + 0.2(u″ − ½)) (seeded).
+CoarseMaterial hetBall(int n, float h, float st, float ss, float g, uint64_t seed) {
+    CoarseMaterial m = test::centredMaterial(n, h);
+    Pcg32 rng(seed);
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                if (glm::length(m.spec.cellCenter({x, y, z})) > 0.35f * n * h)
+                    continue;
+                const size_t k = m.spec.linearIndex({x, y, z});
+                m.insideFraction[k] = 1.f;
+                for (int c = 0; c < 3; ++c) {
+                    m.sigma_t[c][k] = st * (0.5f + rng.uniform());
+                    m.sigma_s[c][k] = std::min(ss * (0.5f + rng.uniform()), m.sigma_t[c][k]);
+                    m.g[c][k] = std::clamp(g + 0.2f * (rng.uniform() - 0.5f), -0.99f, 0.99f);
+                }
+            }
+    return m;
+}
+
+/// Directional light along `dir` onto the ball: 24² texels over its disc.
+std::vector<SslpvInjectionSample> ballTexels(const CoarseMaterial& m, Vector3f dir) {
+    return test::ballTexels(m, dir, Rgb(1.f, 0.7f, 0.4f), /*texels=*/24);
+}
+
+/// The grids must be identical: active bricks compute every non-zero cell with the same
+/// arithmetic as the dense solve, every other cell is exactly zero in both. The energy sums
+/// differ only by float reassociation (rows are split into different SIMD blocks): relative
+/// ~1e-7 per addition over ≤ 24³ cells × 64 steps, bounded here by 1e-5 of the injected flux.
+void expectSameSolve(const SslpvSolver& active, const SslpvSolver& dense, const std::string& what) {
+    SCOPED_TRACE(what);
+    EXPECT_EQ(active.accumulation().raw(), dense.accumulation().raw());
+    EXPECT_EQ(active.exitant().raw(), dense.exitant().raw());
+    EXPECT_EQ(active.propagation().raw(), dense.propagation().raw());
+    const SslpvStats &a = active.stats(), &d = dense.stats();
+    EXPECT_EQ(a.stepsUsed, d.stepsUsed);
+    EXPECT_EQ(a.brickCount, d.brickCount);
+    ASSERT_EQ(a.activeBricksPerStep.size(), size_t(a.stepsUsed));
+    for (int k = 0; k < a.stepsUsed; ++k) {
+        EXPECT_LE(a.activeBricksPerStep[size_t(k)], a.brickCount);
+        EXPECT_EQ(d.activeBricksPerStep[size_t(k)], d.brickCount);
+    }
+    for (int c = 0; c < 3; ++c) {
+        const float tol = 1e-5f * d.injected[c] + 1e-30f;
+        EXPECT_EQ(a.injected[c], d.injected[c]);
+        EXPECT_NEAR(a.remaining[c], d.remaining[c], tol);
+        EXPECT_NEAR(a.exitant[c], d.exitant[c], tol);
+        EXPECT_NEAR(a.absorbed[c], d.absorbed[c], tol);
+    }
+}
+
+}  // namespace
+
+TEST(SslpvBricks, EqualDenseOnHeterogeneousStressScenes) {
+    struct Case {
+        const char* name;
+        float st, ss, g, cell;
+        int steps;
+    };
+    const Case cases[] = {
+        {"sigma_t->0", 1e-9f, 0.f, 0.f, 1.f, 40},    {"sigma_t=1e4", 1e4f, 5e3f, 0.f, 1.f, 12},
+        {"sigma_s=sigma_t", 3.f, 3.f, 0.f, 1.f, 40}, {"g=+0.99", 1.f, 1.f, 0.95f, 1.f, 24},
+        {"g=-0.99", 1.f, 1.f, -0.95f, 1.f, 24},      {"cell=1e-3mm", 1.f, 0.9f, 0.f, 1e-3f, 24},
+        {"cell=1e3mm", 1.f, 0.9f, 0.f, 1e3f, 24},    {"1 step", 1.f, 0.9f, 0.5f, 1.f, 1},
+        {"marble-like", 2.f, 1.9f, 0.2f, 0.7f, 64},
+    };
+    for (const Case& c : cases)
+        for (int order : {1, 2})
+            for (bool sinks : {true, false})
+                for (SslpvMode mode : {SslpvMode::Paper, SslpvMode::Calibrated}) {
+                    const int n = order == 1 ? 22 : 14;  // L2 is ~6× slower per cell
+                    const CoarseMaterial m = hetBall(n, c.cell, c.st, c.ss, c.g, 17);
+                    SslpvOptions o{.order = order,
+                                   .maxSteps = c.steps,
+                                   .skipAccumulateSteps = 2,
+                                   .removeExitant = sinks,
+                                   .attenuation = SslpvAttenuation::Absorption};
+                    o.mode = mode;
+                    SslpvSolver active(o);
+                    o.skipEmptySlices = false;
+                    SslpvSolver dense(o);
+                    for (SslpvSolver* s : {&active, &dense})
+                        s->setMaterial(m, 1.3f);
+                    // Several lights in turn: the grids keep stale values between solves.
+                    for (Vector3f dir :
+                         {Vector3f(0, 0, -1), Vector3f(1, 0.3f, 0.2f), Vector3f(0.1f, -1, 0.4f)}) {
+                        const auto texels = ballTexels(m, dir);
+                        for (SslpvSolver* s : {&active, &dense}) {
+                            s->setInjectionSamples(texels);
+                            s->solve();
+                        }
+                        expectSameSolve(active, dense,
+                                        std::string(c.name) + " order " + std::to_string(order) +
+                                            (sinks ? " sinks" : " no sinks") +
+                                            (mode == SslpvMode::Paper ? " paper" : " calibrated"));
+                    }
+                }
+}
+
+TEST(SslpvBricks, EqualDenseOnTheDefaultScene) {
+    const std::filesystem::path file = std::filesystem::path(LUCENT_SCENES_DIR) / "minimal.json";
+    if (!std::filesystem::exists(file))
+        GTEST_SKIP() << file << " not found";
+    const Scene scene = loadScene(file.string());
+    // 48³: dense rows (the box, ≈ 46 cells) end in the kernel's scalar tail where the active
+    // runs use vectors, and vice versa, so this also checks both paths agree bit for bit.
+    for (int order : {1, 2}) {
+        SslpvRenderOptions ro;
+        ro.gridResolution = order == 1 ? 48 : 32;
+        ro.injectionResolution = 96;
+        ro.solver.order = order;
+        ro.solver.maxSteps = order == 1 ? 32 : 12;
+        ro.solver.mode = SslpvMode::Calibrated;
+        SslpvRenderer active(ro);
+        ro.solver.skipEmptySlices = false;
+        SslpvRenderer dense(ro);
+        for (SslpvRenderer* r : {&active, &dense}) {
+            r->setMesh(scene.objects[0].mesh);
+            r->setLights(scene.lights);
+            r->setMaterial(*scene.objects[0].material, scene.eta);
+            r->update();
+        }
+        expectSameSolve(active.solver(), dense.solver(),
+                        "minimal.json order " + std::to_string(order));
+        EXPECT_GT(active.solver().stats().injected.y, 0.f);
+        // A point light lights one side of the sphere: early steps skip most bricks.
+        EXPECT_LT(active.solver().stats().activeBricksPerStep.front(),
+                  active.solver().stats().brickCount / 2);
+    }
+}
+
+TEST(SslpvBricks, SmallLitRegionActivatesOnlyItsNeighbourhood) {
+    // Every cell material, no sinks (the paper's set-up), 40³; one unit texel at normal
+    // incidence lands in cell (21, 21, 39), inside brick (5, 5) of the top slice.
+    const int n = 40;
+    CoarseMaterial m = hetBall(n, 1.f, 1.f, 0.8f, 0.3f, 5);
+    std::fill(m.insideFraction.begin(), m.insideFraction.end(), 1.f);
+    for (int c = 0; c < 3; ++c)
+        for (size_t k = 0; k < m.spec.voxelCount(); ++k)
+            if (m.sigma_t[c][k] == 0.f) {
+                m.sigma_t[c][k] = 1.f;
+                m.sigma_s[c][k] = 0.8f;
+            }
+    const float top = m.spec.origin.z + n;
+    const std::vector<SslpvInjectionSample> spot = {
+        {Point3f(m.spec.origin.x + 21.5f, m.spec.origin.y + 21.5f, top), Normal3f(0, 0, 1),
+         Vector3f(0, 0, -1), Rgb(1.f)}};
+    SslpvOptions o{.maxSteps = 8, .skipAccumulateSteps = 0, .removeExitant = false};
+    SslpvSolver active(o);
+    o.skipEmptySlices = false;
+    SslpvSolver dense(o);
+    for (SslpvSolver* s : {&active, &dense}) {
+        s->setMaterial(m, 1.3f);
+        s->setInjectionSamples(spot);
+        s->solve();
+    }
+    expectSameSolve(active, dense, "spot");
+    const SslpvStats& st = active.stats();
+    EXPECT_EQ(st.brickCount, 10 * 10 * 40);
+    // Step 1: the lit brick, its four neighbours in the slice and the one below (none above).
+    EXPECT_EQ(st.activeBricksPerStep[0], 6);
+    // After k steps light reaches at most k cells from (21, 21): x, y ∈ [21 − k, 21 + k], so
+    // the active bricks lie within ⌈(k + 1 + 4)/4⌉ bricks of it per side and k + 1 slices.
+    for (int k = 1; k <= 8; ++k) {
+        const int lo = (21 - (k - 1)) / 4 - 1, hi = (21 + (k - 1)) / 4 + 1;
+        EXPECT_LE(st.activeBricksPerStep[size_t(k - 1)], (hi - lo + 1) * (hi - lo + 1) * (k + 1))
+            << "step " << k;
+    }
+    EXPECT_LT(st.cellsComputed * 10, dense.stats().cellsComputed);
+}
+TEST(SslpvBricks, StepMatchesBruteForceGather) {
+    // Independent of the kernel: one step recomputed cell by cell from §4's gather
+    // c_d,i = Σ_o Σ_j M_o[i][j] c_{d+o,j}, then sinks and the folded factors, for rows longer
+    // than one 32-cell SIMD block (a 46-cell box in a 48³ grid), active and dense.
+    const int n = 48;
+    CoarseMaterial m = hetBall(n, 1.f, 1.f, 0.9f, 0.2f, 3);
+    for (int z = 0; z < n; ++z)  // a ball of radius 0.47·N
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x)
+                m.insideFraction[m.spec.linearIndex({x, y, z})] =
+                    glm::length(m.spec.cellCenter({x, y, z})) <= 0.47f * n ? 1.f : 0.f;
+    for (int c = 0; c < 3; ++c)
+        for (size_t k = 0; k < m.spec.voxelCount(); ++k)
+            if (m.insideFraction[k] > 0.f && m.sigma_t[c][k] == 0.f) {
+                m.sigma_t[c][k] = 1.f;
+                m.sigma_s[c][k] = 0.9f;
+            }
+    const auto texels = ballTexels(m, Vector3f(0.3f, 0.2f, -1.f));
+    const auto& M = propagationMatrices(1);
+    const Coord off[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (bool dense : {false, true}) {
+        SslpvOptions o{.maxSteps = 1, .skipAccumulateSteps = 0};
+        o.skipEmptySlices = !dense;
+        SslpvSolver one(o);
+        o.maxSteps = 2;
+        SslpvSolver two(o);
+        for (SslpvSolver* s : {&one, &two}) {
+            s->setMaterial(m, 1.3f);
+            s->setInjectionSamples(texels);
+            s->solve();
+        }
+        const SslpvGrid& src = one.propagation();
+        std::vector<float> fac[2] = {two.foldedFactorPlane(0, 0), two.foldedFactorPlane(0, 1)};
+        int bad = 0;
+        for (int z = 0; z < n; ++z)
+            for (int y = 0; y < n; ++y)
+                for (int x = 0; x < n; ++x) {
+                    const Coord d(x, y, z);
+                    const size_t k = src.index(d);
+                    const bool inside = two.isInside(d);
+                    for (int i = 0; i < 4; ++i) {
+                        double c = 0.0, mag = 0.0;
+                        for (int nb = 0; nb < 6; ++nb) {
+                            const Coord s = d + off[nb];
+                            if (glm::any(glm::lessThan(s, Coord(0))) ||
+                                glm::any(glm::greaterThanEqual(s, Coord(n))))
+                                continue;  // the zero border
+                            for (int j = 0; j < 4; ++j) {
+                                c += M[nb].at(i, j) * src.at(s, 0, j);
+                                mag += std::abs(M[nb].at(i, j) * src.at(s, 0, j));
+                            }
+                        }
+                        // float sums of ≤ 24 terms: relative 1e-6 of the terms' magnitude.
+                        const double tol = 1e-6 * mag + 1e-30;
+                        const double expExit = one.exitant().at(d, 0, i) + (inside ? 0.0 : c);
+                        const double expProp = inside ? c * fac[i == 0 ? 0 : 1][k] : 0.0;
+                        if (std::abs(two.exitant().at(d, 0, i) - expExit) >
+                                tol + 1e-6 * std::abs(expExit) ||
+                            std::abs(two.propagation().at(d, 0, i) - expProp) > tol)
+                            ++bad;
+                    }
+                }
+        EXPECT_EQ(bad, 0) << (dense ? "dense" : "active");
+    }
+}
