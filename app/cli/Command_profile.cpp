@@ -205,20 +205,7 @@ ImageRgb renderDipoleGl(const Scene& scene, Model model, bool subsurfaceOnly, in
     try {
         renderer.create();
         provider.create();
-        gpu::SurfaceMaterial surface;
-        surface.diffuseAlbedo = Rgb(0.f);
-        surface.specularAlbedo = Rgb(float(dipole::fresnelReflectance(1.0, scene.eta)));
-        int materialMesh = -1;
-        for (const SceneObject& object : scene.objects) {
-            const int id = renderer.addMesh(object.mesh, surface);
-            if (materialMesh < 0)
-                materialMesh = id;  // the volume belongs to objects[0]
-        }
-        renderer.setLights(scene.lights);
-        renderer.setCamera(scene.camera);
-        gpu::DirectSettings settings;
-        settings.subsurfaceOnly = subsurfaceOnly;
-        renderer.setSettings(settings);
+        const int materialMesh = dipole::addTranslucentScene(renderer, scene, subsurfaceOnly);
         dipole::ProviderSettings ps;
         ps.model = model;
         ps.eta = scene.eta;

@@ -264,20 +264,7 @@ ImageRgb renderCombinedGl(const Scene& scene, const CombinedProviderSettings& se
     try {
         renderer.create();
         provider.create();
-        gpu::SurfaceMaterial surface;
-        surface.diffuseAlbedo = Rgb(0.f);
-        surface.specularAlbedo = Rgb(float(dipole::fresnelReflectance(1.0, scene.eta)));
-        int meshId = -1;
-        for (const SceneObject& object : scene.objects) {
-            const int id = renderer.addMesh(object.mesh, surface);
-            if (meshId < 0)
-                meshId = id;  // the volume belongs to objects[0]
-        }
-        renderer.setLights(scene.lights);
-        renderer.setCamera(scene.camera);
-        gpu::DirectSettings ds;
-        ds.subsurfaceOnly = subsurfaceOnly;
-        renderer.setSettings(ds);
+        const int meshId = dipole::addTranslucentScene(renderer, scene, subsurfaceOnly);
         CombinedProviderSettings s = settings;
         s.eta = scene.eta;
         s.meshId = meshId;
