@@ -8,13 +8,22 @@
 //   L(x_o) = max(0, L_sslpv + L_dipole,r<=r_s - F_t(eta, w_o)/pi * B_lpv),
 //   B_lpv = (pi r_s^2 / N) sum_i R_lpv(r_i) E(p_i)   (uniform disc samples, r_i <= r_s),
 // line for line as lucent::combined::localSslpvEstimate (engine/src/combined/Combined.cpp).
+// Two programs: with LOCAL_ESTIMATE, F_t(eta, w_o)/pi * B_lpv into u_local (it depends on the
+// G-buffer, the irradiance image and the kernel, not on the painted material or the dipole's
+// progress, so the provider computes it only when those change); without, the per-frame sum
+// target = max(0, target + addend - local) (local read only in the Kernel split).
 
 #include "dipole_fresnel.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
+#ifdef LOCAL_ESTIMATE
+layout(rgba32f, binding = 2) writeonly uniform image2D u_local;  // F_t/pi B_lpv, a own pixel
+#else
 layout(rgba32f, binding = 0) uniform image2D u_target;           // SSLPV term in, sum out
 layout(rgba32f, binding = 1) readonly uniform image2D u_addend;  // the dipole term
+layout(rgba32f, binding = 2) readonly uniform image2D u_local;   // F_t/pi B_lpv (Kernel split)
+#endif
 
 layout(binding = 0) uniform sampler2D u_position;    // xyz mm, a coverage
 layout(binding = 1) uniform sampler2D u_normal;      // unit normal, a = mesh id + 1
@@ -77,14 +86,14 @@ bool ownPixel(ivec2 xy) {
     return u_meshId < 0 || int(texelFetch(u_normal, xy, 0).a + 0.5) - 1 == u_meshId;
 }
 
+#ifdef LOCAL_ESTIMATE
 void main() {
     const ivec2 xy = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(xy, u_size)))
         return;
-    const vec4 a = imageLoad(u_target, xy);
-    const vec4 d = imageLoad(u_addend, xy);
-    vec3 sum = a.rgb + d.rgb;
-    if (u_kernel != 0 && ownPixel(xy)) {
+    vec3 local = vec3(0.0);
+    bool own = ownPixel(xy);
+    if (own) {
         vec3 xo = texelFetch(u_position, xy, 0).xyz;
         vec3 no = normalize(texelFetch(u_normal, xy, 0).xyz);
         float sgn = no.z >= 0.0 ? 1.0 : -1.0;  // Duff et al. 2017 basis (lucent::Frame)
@@ -109,7 +118,22 @@ void main() {
         B *= PI * u_splitRadius * u_splitRadius / float(u_samples);
         float cosO = max(0.0, dot(no, towardEye(xo)));
         float fto = 1.0 - dipoleFresnelReflectance(cosO, u_eta);
-        sum = max(sum - B * (fto / PI), vec3(0.0));
+        local = B * (fto / PI);
+    }
+    imageStore(u_local, xy, vec4(local, own ? 1.0 : 0.0));  // a: the pixel is the object's
+}
+#else
+void main() {
+    const ivec2 xy = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(xy, u_size)))
+        return;
+    const vec4 a = imageLoad(u_target, xy);
+    const vec4 d = imageLoad(u_addend, xy);
+    vec3 sum = a.rgb + d.rgb;
+    if (u_kernel != 0) {
+        vec4 local = imageLoad(u_local, xy);
+        if (local.a != 0.0) sum = max(sum - local.rgb, vec3(0.0));
     }
     imageStore(u_target, xy, vec4(sum, max(a.a, d.a)));
 }
+#endif

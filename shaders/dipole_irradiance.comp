@@ -10,6 +10,13 @@
 // channel's virtual source, as the CPU gather's PixelMaterial), so the per-frame gather does not
 // repeat the three Newton solves. Outputs (GL rows, bottom first): E (W/mm²), σt and σs′ (mm⁻¹),
 // R′ (mm) in the σs′ image's alpha.
+// LIGHT_VIEW 1 (the light views of seed 004 §7.1, docs/methods/dipole.md §3d): E only. The
+// gather takes the profile from x_o's material, so a light view needs neither the material
+// nor R′ (three Newton solves per texel); a separate program, not a uniform branch (llvmpipe
+// runs both sides of a branch under its execution mask).
+#ifndef LIGHT_VIEW
+#define LIGHT_VIEW 0
+#endif
 #include "common/lighting.glsl"
 #include "common/shadow.glsl"
 #include "dipole_fresnel.glsl"
@@ -24,10 +31,12 @@ layout(binding = 3) uniform sampler3D u_volumeSigmaT;  // rgb σt (mm⁻¹), a i
 layout(binding = 4) uniform sampler3D u_volumeSigmaS;  // rgb σs′ (mm⁻¹)
 
 layout(rgba32f, binding = 0) writeonly uniform image2D o_irradiance;
+#if !LIGHT_VIEW
 layout(rgba32f, binding = 1) writeonly uniform image2D o_sigmaT;
 layout(rgba32f, binding = 2) writeonly uniform image2D o_sigmaS;
 // min and max of R′ over the object's pixels (floats ≥ 0 order like their bit patterns).
 layout(std430, binding = 3) buffer RadiusBlock { uint b_minRadius; uint b_maxRadius; };
+#endif
 
 uniform ivec2 u_size;
 uniform int u_lightCount;
@@ -62,6 +71,7 @@ void main() {
             float V = u_shadows != 0 ? shadowVisibility(u_shadowMaps, lights[i], p, n) : 1.0;
             E += incident * ((1.0 - dipoleFresnelReflectance(cosI, u_eta)) * cosI * V);
         }
+#if !LIGHT_VIEW
         if (u_hasMaterial != 0) {
             float inset = 0.5 * u_voxelSize;
             for (int step = 1; step <= 6; ++step) {
@@ -77,7 +87,11 @@ void main() {
                 }
             }
         }
+#endif
     }
+#if LIGHT_VIEW
+    imageStore(o_irradiance, xy, vec4(E, pos.w));
+#else
     float R = 0.0;
     for (int c = 0; c < 3; ++c) {
         Profile prof = makeProfile(u_model, max(sigT[c] - sigS[c], 0.0), sigS[c], u_boundary);
@@ -91,4 +105,5 @@ void main() {
     imageStore(o_irradiance, xy, vec4(E, pos.w));
     imageStore(o_sigmaT, xy, vec4(sigT, 0.0));
     imageStore(o_sigmaS, xy, vec4(sigS, R));
+#endif
 }

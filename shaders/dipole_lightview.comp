@@ -6,13 +6,15 @@
 // the camera does not see the point (visibleIn rule of dipole_lightview.glsl) but the camera
 // texel in front of it along the camera ray lies within that pixel's disc radius
 // min(R′, maxRadius). Output: one (Σ flux, Σ back-lit flux) pair per work group; the host sums.
+// The light view is layer u_layer of the provider's light-view arrays (one layer per light,
+// kept across camera and material changes).
 #include "dipole_lightview.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(binding = 0) uniform sampler2D u_lvPosition;    // light view: xyz mm, a covered
-layout(binding = 1) uniform sampler2D u_lvNormal;      // light view: outward unit normal
-layout(binding = 2) uniform sampler2D u_lvIrradiance;  // light view: E (W/mm²)
+layout(binding = 0) uniform sampler2DArray u_lvPosition;    // light views: xyz mm, a covered
+layout(binding = 1) uniform sampler2DArray u_lvNormal;      // outward unit normal
+layout(binding = 2) uniform sampler2DArray u_lvIrradiance;  // E (W/mm²)
 layout(binding = 3) uniform sampler2D u_camPosition;   // camera G-buffer
 layout(binding = 4) uniform sampler2D u_camNormal;
 layout(binding = 5) uniform sampler2D u_camSigmaS;     // a: disc radius min(R′, maxRadius), mm
@@ -23,6 +25,7 @@ uniform mat4 u_clip[2];  // 0 camera, 1 light view
 uniform vec4 u_eyeOrtho[2];
 uniform vec3 u_dir[2];
 uniform ivec2 u_size[2];
+uniform int u_layer;  // the light view's layer
 
 mat4 viewClip(int v) { return u_clip[v]; }
 bool viewOrtho(int v) { return u_eyeOrtho[v].w > 0.5; }
@@ -30,12 +33,16 @@ vec3 viewEye(int v) { return u_eyeOrtho[v].xyz; }
 vec3 viewDirection(int v) { return u_dir[v]; }
 ivec2 viewSize(int v) { return u_size[v]; }
 vec4 viewPosition(int v, ivec2 pix) {
-    return v == 0 ? texelFetch(u_camPosition, pix, 0) : texelFetch(u_lvPosition, pix, 0);
+    return v == 0 ? texelFetch(u_camPosition, pix, 0)
+                  : texelFetch(u_lvPosition, ivec3(pix, u_layer), 0);
 }
 vec3 viewNormal(int v, ivec2 pix) {
-    return v == 0 ? texelFetch(u_camNormal, pix, 0).xyz : texelFetch(u_lvNormal, pix, 0).xyz;
+    return v == 0 ? texelFetch(u_camNormal, pix, 0).xyz
+                  : texelFetch(u_lvNormal, ivec3(pix, u_layer), 0).xyz;
 }
-vec3 viewIrradiance(int v, ivec2 pix) { return texelFetch(u_lvIrradiance, pix, 0).rgb; }
+vec3 viewIrradiance(int v, ivec2 pix) {
+    return texelFetch(u_lvIrradiance, ivec3(pix, u_layer), 0).rgb;
+}
 
 shared vec2 s_sum[64];
 
@@ -43,11 +50,11 @@ void main() {
     ivec2 xy = ivec2(gl_GlobalInvocationID.xy);
     vec2 mine = vec2(0.0);
     if (xy.x < u_size[1].x && xy.y < u_size[1].y) {
-        vec4 q = texelFetch(u_lvPosition, xy, 0);
-        vec3 E = texelFetch(u_lvIrradiance, xy, 0).rgb;
+        vec4 q = viewPosition(1, xy);
+        vec3 E = viewIrradiance(1, xy);
         if (q.w != 0.0 && E != vec3(0.0)) {
             vec3 p = q.xyz;
-            vec3 n = normalize(texelFetch(u_lvNormal, xy, 0).xyz);
+            vec3 n = normalize(viewNormal(1, xy));
             float fp = pixelFootprint(1, p);
             float cosA = max(0.05, abs(dot(n, towardEyeOf(1, p))));
             float flux = dot(E, vec3(0.2126, 0.7152, 0.0722)) * fp * fp / cosA;

@@ -38,14 +38,14 @@ layout(rgba32f, binding = 1) writeonly uniform image2D u_target;  // renderer's 
 layout(std430, binding = 0) readonly buffer ShiftBlock { vec4 b_shift[]; };  // 2 per cell
 layout(std430, binding = 1) buffer StatsBlock { uint b_maxChange; uint b_maxMean; };
 
-// Light views gathered besides the camera (seed 004 §7.1), one array layer each.
+// Light views (seed 004 §7.1), one array layer per light; b_views lists the gathered ones.
 layout(binding = 5) uniform sampler2DArray u_lvPosition;    // xyz mm, a covered
 layout(binding = 6) uniform sampler2DArray u_lvNormal;      // outward unit normal
 layout(binding = 7) uniform sampler2DArray u_lvIrradiance;  // E (W/mm²), all lights, shadowed
 struct LightView {
     mat4 clipFromWorld;
     vec4 eyeOrtho;  // xyz centre of projection (mm); w 1 orthographic
-    vec4 viewDir;   // xyz unit direction the view looks
+    vec4 viewDir;   // xyz unit direction the view looks; w its layer of the u_lv* arrays
 };
 layout(std430, binding = 2) readonly buffer LightViewBlock { LightView b_views[]; };
 
@@ -63,10 +63,23 @@ uniform int u_jacobian;
 uniform float u_maxJacobian;
 uniform int u_interleave;
 uniform float u_maxRadius;  // mm; > 0: only r ≤ u_maxRadius (ProviderSettings::maxRadius)
-uniform int u_lightViews;     // light views gathered (layers of u_lv*), 0: camera only
+uniform int u_lightViews;     // light views gathered (entries of b_views), 0: camera only
 uniform int u_lightViewSize;  // texels per side of each light view
 uniform int u_gather;      // 1: add one frame of samples; 0: only resolve the stored mean
-uniform int u_framesBefore;  // frames already in u_accum
+uniform int u_framesBefore;  // frames already in u_accum (rows of parts ≥ u_part)
+// Frame parts (interactive accumulations, docs/methods/dipole.md §3c): a frame's samples are
+// added over u_parts provider frames; work-group row y belongs to part y mod u_parts. The gather
+// program is dispatched over part u_part's rows only; the RESOLVE_ONLY program over every pixel
+// (rows of parts < u_part already hold frame u_framesBefore + 1). Every pixel gets exactly the
+// samples of a one-part frame. RESOLVE_ONLY 1 (a third program): no gather code at all —
+// llvmpipe runs the straight-line code of a branch under its execution mask even when no lane
+// takes it, so a resolve inside the gather program cost nearly a gather (≈ 200 ms at 640×360).
+uniform int u_parts;
+uniform int u_part;
+uniform int u_previewInAccum;  // RESOLVE_ONLY: u_accum holds a preview (one frame) where empty
+#ifndef RESOLVE_ONLY
+#define RESOLVE_ONLY 0
+#endif
 
 const float PI = 3.14159265358979;
 
@@ -77,16 +90,18 @@ bool viewOrtho(int v) { return v == 0 ? u_ortho != 0 : b_views[v - 1].eyeOrtho.w
 vec3 viewEye(int v) { return v == 0 ? u_eye : b_views[v - 1].eyeOrtho.xyz; }
 vec3 viewDirection(int v) { return v == 0 ? u_viewDir : b_views[v - 1].viewDir.xyz; }
 ivec2 viewSize(int v) { return v == 0 ? u_size : ivec2(u_lightViewSize); }
+int viewLayer(int v) { return int(b_views[v - 1].viewDir.w + 0.5); }
 vec4 viewPosition(int v, ivec2 pix) {
-    return v == 0 ? texelFetch(u_position, pix, 0) : texelFetch(u_lvPosition, ivec3(pix, v - 1), 0);
+    return v == 0 ? texelFetch(u_position, pix, 0)
+                  : texelFetch(u_lvPosition, ivec3(pix, viewLayer(v)), 0);
 }
 vec3 viewNormal(int v, ivec2 pix) {
     return v == 0 ? texelFetch(u_normal, pix, 0).xyz
-                  : texelFetch(u_lvNormal, ivec3(pix, v - 1), 0).xyz;
+                  : texelFetch(u_lvNormal, ivec3(pix, viewLayer(v)), 0).xyz;
 }
 vec3 viewIrradiance(int v, ivec2 pix) {
     return v == 0 ? texelFetch(u_irradiance, pix, 0).rgb
-                  : texelFetch(u_lvIrradiance, ivec3(pix, v - 1), 0).rgb;
+                  : texelFetch(u_lvIrradiance, ivec3(pix, viewLayer(v)), 0).rgb;
 }
 
 vec3 towardEye(vec3 p) { return towardEyeOf(0, p); }
@@ -103,7 +118,7 @@ float halton3(uint i) {
     return r;
 }
 
-// The pixel's sampling techniques (set by gatherExitance). Channel arrays are indexed by
+// The pixel's sampling techniques (set by setUpTechniques). Channel arrays are indexed by
 // constants only where it matters (llvmpipe lowers dynamic indices of private arrays to
 // per-lane selects).
 Profile g_prof[3];
@@ -112,6 +127,28 @@ int g_channels[3];  // the valid channels, in order
 int g_slot[3];      // channel → its round-robin slot in g_channels (−1: invalid)
 int g_channelCount;
 float g_R, g_pUniform;
+
+// Sets the globals above for pixel xy (its material and disc radius); false: no valid channel.
+// Defined before every function that reads them: Mesa's GLSL compiler warns "used
+// uninitialized" for a global read textually before any assignment, and the GL debug log
+// reports that warning as an error on every compile that misses the shader cache.
+bool setUpTechniques(ivec2 xy) {
+    vec4 sigS4 = texelFetch(u_sigmaS, xy, 0);
+    vec3 sigT = texelFetch(u_sigmaT, xy, 0).rgb, sigS = sigS4.rgb;
+    g_channelCount = 0;
+    g_R = sigS4.a;  // min(R′, maxRadius), from the irradiance pass
+    for (int c = 0; c < 3; ++c) {
+        g_prof[c] = makeProfile(u_model, max(sigT[c] - sigS[c], 0.0), sigS[c], u_boundary);
+        g_masses[c] = windowMasses(g_prof[c], u_maxRadius);
+        g_slot[c] = -1;
+        if (g_prof[c].zr > 0.0) {
+            g_slot[c] = g_channelCount;
+            g_channels[g_channelCount++] = c;
+        }
+    }
+    g_pUniform = g_R > 0.0 ? 1.0 / (PI * g_R * g_R) : 0.0;
+    return g_channelCount > 0;
+}
 
 // View v's share of the pixel's budget (dipole::viewSamples, docs/methods/dipole.md §3d): the
 // nImp + nUni samples (importance first) go to view g mod views; a view left with none draws one
@@ -143,20 +180,7 @@ vec3 gatherExitance(ivec2 xy, vec3 xo, vec3 no) {
     vec3 fs = vec3(1.0 + sgn * no.x * no.x * a, sgn * bb, -sgn * no.x);
     vec3 ft = vec3(bb, sgn + no.y * no.y * a, -no.y);
 
-    vec3 sigT = texelFetch(u_sigmaT, xy, 0).rgb, sigS = texelFetch(u_sigmaS, xy, 0).rgb;
-    g_channelCount = 0;
-    g_R = texelFetch(u_sigmaS, xy, 0).a;  // min(R′, maxRadius), from the irradiance pass
-    for (int c = 0; c < 3; ++c) {
-        g_prof[c] = makeProfile(u_model, max(sigT[c] - sigS[c], 0.0), sigS[c], u_boundary);
-        g_masses[c] = windowMasses(g_prof[c], u_maxRadius);
-        g_slot[c] = -1;
-        if (g_prof[c].zr > 0.0) {
-            g_slot[c] = g_channelCount;
-            g_channels[g_channelCount++] = c;
-        }
-    }
-    if (g_channelCount == 0) return vec3(0.0);
-    g_pUniform = g_R > 0.0 ? 1.0 / (PI * g_R * g_R) : 0.0;
+    if (!setUpTechniques(xy)) return vec3(0.0);
     int k = u_interleave;
     int cell = ((u_size.y - 1 - xy.y) % k) * k + (xy.x % k);
     vec4 s0 = b_shift[2 * cell], s1 = b_shift[2 * cell + 1];
@@ -227,16 +251,27 @@ void main() {
         s_maxMean = 0u;
     }
     barrier();
-    ivec2 xy = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 group = ivec2(gl_WorkGroupID.xy);
+#if RESOLVE_ONLY
+    const bool gatherHere = false;
+    int part = u_parts > 1 ? group.y % u_parts : 0;
+    int frames = u_framesBefore + (part < u_part ? 1 : 0);
+    if (frames == 0 && u_previewInAccum != 0) frames = 1;  // rows still showing the preview
+#else
+    if (u_parts > 1) group.y = u_part + u_parts * group.y;  // the rows of part u_part only
+    bool gatherHere = u_gather != 0;
+    int frames = u_framesBefore;
+#endif
+    ivec2 xy = group * 8 + ivec2(gl_LocalInvocationID.xy);
     bool inside = xy.x < u_size.x && xy.y < u_size.y;
     vec4 pos = inside ? texelFetch(u_position, xy, 0) : vec4(0.0);
     if (inside && pos.w == 0.0) imageStore(u_target, xy, vec4(0.0));
     if (inside && pos.w != 0.0) {
         vec3 xo = pos.xyz;
         vec3 no = normalize(texelFetch(u_normal, xy, 0).xyz);
-        vec3 sum = u_framesBefore > 0 ? imageLoad(u_accum, xy).rgb : vec3(0.0);
-        int frames = u_framesBefore;
-        if (u_gather != 0) {
+        vec3 sum = frames > 0 ? imageLoad(u_accum, xy).rgb : vec3(0.0);
+#if !RESOLVE_ONLY
+        if (gatherHere) {
             vec3 B = gatherExitance(xy, xo, no);
             vec3 oldMean = frames > 0 ? sum / float(frames) : vec3(0.0);
             sum += B;
@@ -251,6 +286,7 @@ void main() {
             }
             atomicMax(s_maxMean, floatBitsToUint(max(mean.r, max(mean.g, mean.b))));
         }
+#endif
         vec3 mean = frames > 0 ? sum / float(frames) : vec3(0.0);
         // Eq. 3: L = F_t(η, ω_o) B/π, F_t = 1 − F_r for the exit direction.
         float cosO = max(0.0, dot(no, towardEye(xo)));
@@ -258,7 +294,7 @@ void main() {
         imageStore(u_target, xy, vec4(mean * (Ft / PI), 0.0));
     }
     barrier();
-    if (gl_LocalInvocationIndex == 0u && u_gather != 0) {
+    if (gl_LocalInvocationIndex == 0u && gatherHere) {
         atomicMax(b_maxChange, s_maxChange);
         atomicMax(b_maxMean, s_maxMean);
     }

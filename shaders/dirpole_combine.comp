@@ -3,7 +3,8 @@
 // Combination pass of dipole::DirpoleSubsurfaceProvider (seed 001 §4.1 step 3): every camera
 // pixel x_o of the object averages the cube faces that see it,
 //   L(x_o) = T₂₁(ω_o) · Σ_f V_f C̄^f(x_proj^f) / Σ_f V_f,
-// C̄^f the running mean of the gather pass, T₂₁ = 1 − F_r(η, n_o·ω_o) (Fresnel).
+// C̄^f the texel's running mean (rgb / sample count a of the gather pass's accumulator; a face
+// texel without samples does not count), T₂₁ = 1 − F_r(η, n_o·ω_o) (Fresnel).
 // Seed 001 §4.3.2 (cube-map intrusion): faces are looked up at x′_o = x_o − ε_c n_o.
 // Seed 001 §4.3.3 (shadow bias): the face's stored window depth z_tex becomes a world distance
 // along the face axis, z = z_near + (z_far − z_near) z_tex (the §4.3.3 formula for an
@@ -19,7 +20,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0) uniform sampler2D u_position;       // camera G-buffer: xyz mm, a covered
 layout(binding = 1) uniform sampler2D u_normal;         // unit normal facing the camera; a id+1
 layout(binding = 2) uniform sampler2DArray u_faceDepth;  // window depth per face
-layout(binding = 3) uniform sampler2DArray u_accum;      // rgb Σ_frames C^f
+layout(binding = 3) uniform sampler2DArray u_accum;      // rgb Σ C^f over a samples
 
 layout(rgba32f, binding = 0) writeonly uniform image2D u_target;
 
@@ -28,7 +29,6 @@ uniform int u_faceSize;
 uniform vec3 u_faceEye[6];   // camera position of each face (mm)
 uniform vec3 u_faceAxis[6];  // unit view direction of each face
 uniform vec2 u_faceNearFar;  // z_near, z_far (mm), the same for every face
-uniform int u_frames;        // frames in u_accum
 uniform float u_intrusion;   // ε_c (mm), 0 when the fix is off
 uniform float u_bias;        // ε_b (mm)
 uniform float u_slopeBias;   // extra bias per face texel and unit tan θ (0: constant ε_b)
@@ -45,7 +45,7 @@ void main() {
     vec4 pos = texelFetch(u_position, xy, 0);
     vec4 normalId = texelFetch(u_normal, xy, 0);
     bool ours = u_meshId < 0 || int(normalId.a + 0.5) - 1 == u_meshId;
-    if (pos.w == 0.0 || !ours || u_frames == 0) {
+    if (pos.w == 0.0 || !ours) {
         imageStore(u_target, xy, vec4(0.0));
         return;
     }
@@ -69,10 +69,12 @@ void main() {
         float tanF = sqrt(max(0.0, 1.0 - cosF * cosF)) / cosF;
         float bias = u_bias + u_slopeBias * u_faceTexel * tanF;
         if (!(zPoint < zStored + bias)) continue;  // V_f = 0: hidden from face f
-        sum += texelFetch(u_accum, texel, 0).rgb;
+        vec4 acc = texelFetch(u_accum, texel, 0);
+        if (acc.a == 0.0) continue;  // no samples yet
+        sum += acc.rgb / acc.a;
         ++visible;
     }
-    vec3 C = visible > 0 ? sum / (float(visible) * float(u_frames)) : vec3(0.0);
+    vec3 C = visible > 0 ? sum / float(visible) : vec3(0.0);
     vec3 toEye = u_ortho != 0 ? -normalize(u_viewDir) : normalize(u_eye - xo);
     float T21 = 1.0 - dipoleFresnelReflectance(max(0.0, dot(no, toEye)), u_eta);
     imageStore(u_target, xy, vec4(C * T21, 0.0));

@@ -14,33 +14,45 @@
 // to x′_o) is I(ω)cosθ_p/ρ_p² per unit plane area (inverse-square law), which the same
 // perspective G-buffer texel receives.
 // Seed 001 §4.3.1 (G-buffer shrink): the disc is centred at x′_o = x_o − ε_g(n_o − ω_l(ω_l·n_o)).
-// Progressive: frame N adds samples N·k … N·k + k − 1 of a per-texel rotated R2 sequence.
-// Convergence statistics: atomic max of |C̄_N − C̄_{N−1}| and of C̄_N over texels and channels.
+// Progressive, per texel: the texel's accumulator holds Σ over its N samples of the one-sample
+// estimate and N (a); a frame adds k_t = min(u_k, u_target − N) samples n = N … N + k_t − 1 of a
+// per-texel rotated R2 sequence, so the sum after N samples does not depend on how they were
+// spread over frames. Sample n uses channel c_n = channels[(n + o_t) mod m] (o_t a per-texel
+// hash, m the channels with a profile): every channel is chosen with probability 1/m, and the
+// one-sample balance heuristic (Veach 1997 §9.2.4) weights f/p by p_c/Σ_c p_c with p = Σ_c p_c/m
+// per unit light-plane area, i.e. each sample is f·m/Σ_c p_c(r) (the CPU pipeline's n_c/k =
+// 1/m up to the rounding of k/m).
+// Convergence statistics: atomic max of |C̄_after − C̄_before| and of C̄_after over the sampled
+// texels, and their count.
 #include "common/lighting.glsl"
 #include "dipole_fresnel.glsl"
 #include "dipole_profiles.glsl"
 #include "dirpole_common.glsl"
 
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+layout(local_size_x = 64) in;  // one invocation per listed texel
 
 layout(binding = 0) uniform sampler2DArray u_facePosition;   // xyz mm, a covered
 layout(binding = 1) uniform sampler2DArray u_faceNormal;     // outward unit normal
 layout(binding = 2) uniform sampler2DArray u_lightPosition;  // one layer per light
 layout(binding = 3) uniform sampler2DArray u_lightNormal;
 
-layout(rgba32f, binding = 0) uniform image2DArray u_accum;  // rgb Σ_frames C (W/(mm²·sr))
+layout(binding = 4) uniform sampler2DArray u_matT;          // σt rgb at x_o (prepare pass)
+layout(binding = 5) uniform sampler2DArray u_matS;          // σs′ rgb at x_o
 
-layout(std430, binding = 4) buffer StatsBlock { uint b_maxChange; uint b_maxMean; };
+layout(rgba32f, binding = 0) uniform image2DArray u_accum;  // rgb Σ C (W/(mm²·sr)), a = N
+
+// The texels to sample (dirpole_compact.comp, packTexel words).
+layout(std430, binding = 5) readonly buffer WorkList { uint b_texels[]; };
+uniform uint u_listed;  // entries in b_texels
 
 layout(location = 0) uniform mat4 u_lightClipFromWorld[LUCENT_MAX_LIGHTS];
 uniform int u_lightCount;
-uniform int u_faceSize;
 uniform int u_lightMapSize;
 uniform float u_eta;
 uniform vec3 u_boundary;  // F_dr, C1(η), C2(η) for the sampler (better dipole)
 uniform vec3 u_moments;   // C1(η), C2(η), C1(1/η) for the directional dipole
-uniform int u_samples;    // k, per light and frame
-uniform int u_framesBefore;
+uniform uint u_k;       // samples per texel and light of this frame (at most)
+uniform uint u_target;  // texels sample up to this count
 uniform float u_shrink;   // ε_g (mm), 0 when the fix is off
 uniform uint u_seed;
 // Energy-normalised S_d (DirpoleSettings::energyNormalised): lucent::DirpoleEnergyTable::scale
@@ -73,8 +85,9 @@ vec2 r2(uint n, uvec2 offset) {
 }
 
 // C^f contribution of one light at x_o (W/(mm²·sr)).
+// Samples n = first … first + count − 1.
 vec3 gatherLight(int l, vec3 xo, vec3 no, Dirpole dd[3], Profile prof[3], int channels[3],
-                 int channelCount, int nChan[3], uvec2 offset, uint texelSeed) {
+                 int channelCount, uint first, uint count, uvec2 offset, uint texelSeed) {
     GpuLight light = lights[l];
     bool directional = int(light.positionType.w) == LUCENT_LIGHT_DIRECTIONAL;
     vec3 wl, unusedE;
@@ -90,17 +103,17 @@ vec3 gatherLight(int l, vec3 xo, vec3 no, Dirpole dd[3], Profile prof[3], int ch
     vec3 ft = vec3(b, sgn + pn.y * pn.y * a, -pn.y);
     mat4 clipFromWorld = u_lightClipFromWorld[l];
     vec3 sum = vec3(0.0);
-    for (int i = 0; i < u_samples; ++i) {
-        uint n = uint(u_framesBefore * u_samples + i);
+    uint rotation = pcgHash(texelSeed + 2u) % uint(channelCount);
+    for (uint n = first; n < first + count; ++n) {
         vec2 u = r2(n, offset);
         float uSrc = toUnit(pcgHash(texelSeed ^ pcgHash(n + uint(l) * 0x68E31DA4u)));
-        Profile p = prof[channels[i % channelCount]];
+        Profile p = prof[channels[(n + rotation) % uint(channelCount)]];
         float r = sampleSourceRadius(p.sigma, uSrc < p.pReal ? p.zr : p.zv, u.x);
         float phi = 2.0 * PI * u.y;
-        // Balance heuristic over the channels' samplers: weight/pdf = 1/Σ_c n_c p_c(r).
+        // One-sample balance heuristic over the channels' samplers: weight/pdf = m/Σ_c p_c(r).
         float denom = 0.0;
-        for (int c = 0; c < 3; ++c)
-            if (nChan[c] > 0) denom += float(nChan[c]) * pdfArea(prof[c], r);
+        for (int j = 0; j < channelCount; ++j) denom += pdfArea(prof[channels[j]], r);
+        denom /= float(channelCount);
         if (!(denom > 0.0)) continue;
         vec3 pp = xs + r * (cos(phi) * fs + sin(phi) * ft);
         // The light G-buffer texel the ray through pp lands in: x_i, n_i.
@@ -135,21 +148,27 @@ vec3 gatherLight(int l, vec3 xo, vec3 no, Dirpole dd[3], Profile prof[3], int ch
 
 shared uint s_maxChange;
 shared uint s_maxMean;
+shared uint s_sampled;
 
 void main() {
     if (gl_LocalInvocationIndex == 0u) {
         s_maxChange = 0u;
         s_maxMean = 0u;
+        s_sampled = 0u;
     }
     barrier();
-    ivec3 id = ivec3(gl_GlobalInvocationID);
-    bool inside = id.x < u_faceSize && id.y < u_faceSize;
-    vec4 pos = inside ? texelFetch(u_facePosition, id, 0) : vec4(0.0);
-    if (pos.w != 0.0) {  // covered texel: always written (0 without material)
+    uint entry = gl_GlobalInvocationID.x < u_listed ? b_texels[gl_GlobalInvocationID.x] : 0u;
+    ivec3 id = unpackTexel(entry);
+    bool listed = gl_GlobalInvocationID.x < u_listed;
+    vec4 pos = listed ? texelFetch(u_facePosition, id, 0) : vec4(0.0);
+    vec4 acc = listed ? imageLoad(u_accum, id) : vec4(0.0);
+    uint before = uint(acc.a);
+    if (listed && before < u_target) {  // covered and behind (the list): always written
+        uint k = min(u_k, u_target - before);
         vec3 xo = pos.xyz;
         vec3 no = texelFetch(u_faceNormal, id, 0).xyz;
-        vec3 sigT, sigS;
-        materialInside(xo, no, sigT, sigS);
+        vec3 sigT = texelFetch(u_matT, id, 0).rgb;  // 0 without material: black
+        vec3 sigS = texelFetch(u_matS, id, 0).rgb;
         Dirpole dd[3];
         Profile prof[3];
         int channels[3];
@@ -164,30 +183,29 @@ void main() {
         }
         vec3 C = vec3(0.0);
         if (channelCount > 0) {
-            int nChan[3] = int[3](0, 0, 0);
-            for (int i = 0; i < u_samples; ++i) nChan[channels[i % channelCount]]++;
             uint texelSeed = pcgHash(uint(id.x) + pcgHash(uint(id.y) + pcgHash(uint(id.z) +
                                                                                pcgHash(u_seed))));
             uvec2 offset = uvec2(pcgHash(texelSeed), pcgHash(texelSeed + 1u));
             for (int l = 0; l < u_lightCount; ++l)
-                C += gatherLight(l, xo, no, dd, prof, channels, channelCount, nChan, offset,
+                C += gatherLight(l, xo, no, dd, prof, channels, channelCount, before, k, offset,
                                  texelSeed);
         }
-        vec3 sum = u_framesBefore > 0 ? imageLoad(u_accum, id).rgb : vec3(0.0);
-        vec3 oldMean = u_framesBefore > 0 ? sum / float(u_framesBefore) : vec3(0.0);
-        sum += C;
-        vec3 mean = sum / float(u_framesBefore + 1);
-        imageStore(u_accum, id, vec4(sum, 1.0));
-        // Non-negative floats order like their bit patterns: atomicMax on uint.
-        if (u_framesBefore > 0) {
+        vec3 oldMean = before > 0u ? acc.rgb / float(before) : vec3(0.0);
+        vec3 sum = acc.rgb + C;
+        uint after = before + k;
+        vec3 mean = sum / float(after);
+        imageStore(u_accum, id, vec4(sum, float(after)));
+        if (before > 0u) {
             vec3 d = abs(mean - oldMean);
             atomicMax(s_maxChange, floatBitsToUint(max(d.r, max(d.g, d.b))));
         }
         atomicMax(s_maxMean, floatBitsToUint(max(mean.r, max(mean.g, mean.b))));
+        atomicAdd(s_sampled, 1u);
     }
     barrier();
-    if (gl_LocalInvocationIndex == 0u) {
+    if (gl_LocalInvocationIndex == 0u && s_sampled > 0u) {
         atomicMax(b_maxChange, s_maxChange);
         atomicMax(b_maxMean, s_maxMean);
+        atomicAdd(b_sampled, s_sampled);
     }
 }

@@ -186,6 +186,26 @@ int runProfile(const std::vector<std::string>& argv) {
 
 namespace {
 
+/// Detaches `provider` from `renderer` and frees both (the GL context current).
+template <class Provider>
+void releaseGlRender(gpu::SceneRenderer& renderer, Provider& provider) {
+    renderer.setSubsurfaceProvider(nullptr);
+    provider.destroy();
+    renderer.destroy();
+}
+
+/// Epilogue of a finished GL render: the last frame's pass timings to stderr, `provider` and
+/// `renderer` freed, then the GL errors the context's debug log collected, to stderr.
+template <class Provider>
+void finishGlRender(gpu::GlContext& ctx, gpu::SceneRenderer& renderer, Provider& provider) {
+    for (const gpu::PassTiming& t : renderer.profiler().latest())
+        std::fprintf(stderr, "  %-12s %8.2f ms GPU %8.2f ms CPU (last frame)\n", t.name.c_str(),
+                     t.gpuMs, t.cpuMs);
+    releaseGlRender(renderer, provider);
+    for (const std::string& e : ctx.debugLog().takeErrors())
+        std::fprintf(stderr, "%s\n", e.c_str());
+}
+
 /// The image-space dipoles through gpu::SceneRenderer and dipole::DipoleSubsurfaceProvider on a
 /// headless context: frames of `--spp-frame` samples are accumulated until `--spp` samples per
 /// pixel or convergence. Unless subsurface-only, the renderer adds the direct surface reflection:
@@ -228,9 +248,7 @@ ImageRgb renderDipoleGl(const Scene& scene, Model model, bool subsurfaceOnly, in
                       .count();
         renderer.profiler().collect(/*wait=*/true);
     } catch (...) {
-        renderer.setSubsurfaceProvider(nullptr);
-        provider.destroy();
-        renderer.destroy();
+        releaseGlRender(renderer, provider);
         throw;
     }
     const dipole::ProviderStats& st = provider.stats();
@@ -250,14 +268,7 @@ ImageRgb renderDipoleGl(const Scene& scene, Model model, bool subsurfaceOnly, in
                      : st.backlitFractions[l] > provider.settings().lightViewThreshold ? "gathered"
                                                                                        : "skipped",
                      double(st.backlitFractions[l]));
-    for (const gpu::PassTiming& t : renderer.profiler().latest())
-        std::fprintf(stderr, "  %-12s %8.2f ms GPU %8.2f ms CPU (last frame)\n", t.name.c_str(),
-                     t.gpuMs, t.cpuMs);
-    renderer.setSubsurfaceProvider(nullptr);
-    provider.destroy();
-    renderer.destroy();
-    for (const std::string& e : ctx->debugLog().takeErrors())
-        std::fprintf(stderr, "%s\n", e.c_str());
+    finishGlRender(*ctx, renderer, provider);
     return image;
 }
 
@@ -278,6 +289,9 @@ ImageRgb renderDirpoleGl(const Scene& scene, bool subsurfaceOnly, const Args& ar
     ds.maxFrames = (spp + ds.samplesPerFrame - 1) / ds.samplesPerFrame;
     ds.seed = seed;
     ds.energyNormalised = dirpoleNormalised(args);
+    // Offline: whole frames of --spp-frame samples (the frame budgets bound interactive frames
+    // only; the image after N samples per texel is the same either way).
+    ds.frameSampleBudget = ds.firstFrameSampleBudget = 0;
     auto ctx = gpu::GlContext::createHeadless();
     std::fprintf(stderr, "render: %s (%s, EGL %s), GPU directional-dipole pipeline\n",
                  ctx->renderer().c_str(), ctx->version().c_str(), ctx->platform().c_str());
@@ -308,9 +322,7 @@ ImageRgb renderDirpoleGl(const Scene& scene, bool subsurfaceOnly, const Args& ar
         image = renderer.readRadiance();
         renderer.profiler().collect(/*wait=*/true);
     } catch (...) {
-        renderer.setSubsurfaceProvider(nullptr);
-        provider.destroy();
-        renderer.destroy();
+        releaseGlRender(renderer, provider);
         throw;
     }
     const double ms =
@@ -320,14 +332,7 @@ ImageRgb renderDirpoleGl(const Scene& scene, bool subsurfaceOnly, const Args& ar
                  "  %d frames x %d disc samples per cube texel and light, last change %.2e of "
                  "the peak, %.1f ms per frame (first frame builds the light and cube G-buffers)\n",
                  st.frames, ds.samplesPerFrame, double(st.lastChange), ms / std::max(st.frames, 1));
-    for (const gpu::PassTiming& t : renderer.profiler().latest())
-        std::fprintf(stderr, "  %-12s %8.2f ms GPU %8.2f ms CPU (last frame)\n", t.name.c_str(),
-                     t.gpuMs, t.cpuMs);
-    renderer.setSubsurfaceProvider(nullptr);
-    provider.destroy();
-    renderer.destroy();
-    for (const std::string& e : ctx->debugLog().takeErrors())
-        std::fprintf(stderr, "%s\n", e.c_str());
+    finishGlRender(*ctx, renderer, provider);
     return image;
 }
 

@@ -26,7 +26,8 @@ struct CombinedSubsurfaceProvider::Impl {
         SslpvProviderOptions{.render = CombinedSettings::defaultSslpvOptions()}};
     dipole::DipoleSubsurfaceProvider dipole;
     gpu::GlProgram addProgram;
-    gpu::GlObject scratch;  ///< RGBA32F, the dipole part before it is added to the target
+    gpu::GlProgram localProgram;  ///< combined_add.comp LOCAL_ESTIMATE: L̂ into `local`
+    gpu::GlObject scratch;        ///< RGBA32F, the dipole part before it is added to the target
     int scratchW = 0, scratchH = 0;
     const MaterialVolume* volume = nullptr;
     float cellSize = 0.f;            ///< SSLPV Δx of the attached volume, 0 before one
@@ -34,8 +35,19 @@ struct CombinedSubsurfaceProvider::Impl {
     SslpvSurfaceKernel kernel;       ///< Kernel split: SSLPV's local kernel
     bool kernelDirty = true;         ///< material/split changed: recompute and re-upload
     gpu::GlObject kernelBuffer;      ///< SSBO vec4(outer, R_lpv rgb) per ring
+    /// A paint stroke marks the kernel dirty: its frame keeps the old kernel (the mean material
+    /// of a 128³ volume moves little per stroke) and the next frame recomputes it, so the
+    /// stroke frame does not pay the half-space solve; the image converges to the same result.
+    bool kernelDeferred = false;
+    uint64_t kernelVersion = 0;  ///< counts kernel recomputes (part of the L̂ key)
+    /// L̂ = F_t/π ∫_{r≤r_s} R_lpv E dA per pixel (RGBA32F, a = the object's pixel). It depends
+    /// on the G-buffer, the lights, η, the dipole's irradiance image and the kernel, not on the
+    /// painted material or the dipole's progress: recomputed only when its key changes.
+    gpu::GlObject local;
+    std::vector<unsigned char> localKey;
     bool created = false;
     CombinedProviderStats stats;
+    mutable gpu::GpuProfiler profiler;  ///< per-part GPU/CPU times (passTimes())
 };
 
 CombinedSubsurfaceProvider::CombinedSubsurfaceProvider() : m(std::make_unique<Impl>()) {
@@ -50,6 +62,7 @@ void CombinedSubsurfaceProvider::create(const gpu::ShaderLibrary& library) {
     m->sslpv.create(library);
     m->dipole.create(library);
     m->addProgram = gpu::GlProgram::compute(library, "combined_add.comp");
+    m->localProgram = gpu::GlProgram::compute(library, "combined_add.comp", {"LOCAL_ESTIMATE"});
     m->created = true;
 }
 
@@ -57,7 +70,11 @@ void CombinedSubsurfaceProvider::destroy() {
     m->sslpv.destroy();
     m->dipole.destroy();
     m->addProgram.destroy();
+    m->localProgram.destroy();
+    m->profiler.destroy();
     m->scratch.destroy();
+    m->local.destroy();
+    m->localKey.clear();
     m->kernelBuffer.destroy();
     m->kernelDirty = true;
     m->scratchW = m->scratchH = 0;
@@ -151,16 +168,22 @@ void CombinedSubsurfaceProvider::updateMaterial(const MaterialVolume& volume,
         return;
     m->sslpv.updateMaterial(volume, dirtyBricks);
     m->pendingBricks.insert(m->pendingBricks.end(), dirtyBricks.begin(), dirtyBricks.end());
-    m->kernelDirty = true;  // the mean material may have changed
+    if (!m->kernelDirty)
+        m->kernelDeferred = true;  // the mean material may have changed: next frame
+    m->kernelDirty = true;
 }
 
 void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
                                                   unsigned targetTexture) {
     LUCENT_CHECK(m->created, "CombinedSubsurfaceProvider: create() was not called");
     const SplitPlan& plan = m->stats.plan;
-    if (plan.sslpvOn)
+    m->profiler.beginFrame();
+    if (plan.sslpvOn) {
+        const auto scope = m->profiler.scope("sslpv");
         m->sslpv.renderSubsurface(g, targetTexture);  // writes the covered pixels of meshId
+    }
     if (plan.dipoleOn) {
+        m->profiler.begin("dipole");
         if (!m->pendingBricks.empty()) {
             std::sort(m->pendingBricks.begin(), m->pendingBricks.end());
             m->pendingBricks.erase(std::unique(m->pendingBricks.begin(), m->pendingBricks.end()),
@@ -169,16 +192,26 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
             m->pendingBricks.clear();
         }
         if (m->scratchW != g.width || m->scratchH != g.height) {
-            m->scratch.destroy();
-            m->scratch = gpu::createTexture2D(GL_RGBA32F, g.width, g.height);
+            for (gpu::GlObject* o : {&m->scratch, &m->local}) {
+                o->destroy();
+                *o = gpu::createTexture2D(GL_RGBA32F, g.width, g.height);
+            }
+            m->localKey.clear();
             m->scratchW = g.width;
             m->scratchH = g.height;
         }
+        // The last frame's add pass read the scratch image (imageLoad); the dipole wrote it
+        // with imageStore: both finish before the clear (GL 4.5 §7.13.2).
+        glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
         const float zero[4] = {0.f, 0.f, 0.f, 0.f};
         glClearTexImage(m->scratch.id(), 0, GL_RGBA, GL_FLOAT, zero);
         m->dipole.renderSubsurface(g, m->scratch.id());
+        m->profiler.end();
         const bool kernel = plan.mode == SplitMode::Kernel;
-        if (kernel && (m->kernelDirty || !m->kernelBuffer.isValid()) && m->volume) {
+        const bool deferKernel = m->kernelDeferred && m->kernelBuffer.isValid();
+        m->kernelDeferred = false;
+        if (kernel && (m->kernelDirty || !m->kernelBuffer.isValid()) && m->volume && !deferKernel) {
+            const auto scope = m->profiler.scope("kernel");
             // SSLPV's local kernel for the volume's mean material (docs/methods/combined.md).
             m->kernel = computeSslpvSurfaceKernel(meanInsideMaterial(*m->volume), m->settings.eta,
                                                   m->sslpv.options().render.solver, plan.cellSize,
@@ -189,51 +222,113 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
             m->kernelBuffer.destroy();
             m->kernelBuffer = gpu::createBuffer(rings.size() * sizeof(glm::vec4), rings.data(), 0);
             m->kernelDirty = false;
+            ++m->kernelVersion;
         }
-        // target = max(0, target + scratch − local SSLPV) (shaders/combined_add.comp).
+        const bool subtract = kernel && m->kernelBuffer.isValid();
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT |
                         GL_TEXTURE_FETCH_BARRIER_BIT);
+        if (subtract)
+            updateLocalEstimate(g);
+        // target = max(0, target + scratch − L̂) (shaders/combined_add.comp).
+        const auto scope = m->profiler.scope("add");
         const gpu::GlProgram& p = m->addProgram;
         glUseProgram(p.id());
         glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
-        glUniform1i(p.uniformLocation("u_kernel"), kernel && m->kernelBuffer.isValid() ? 1 : 0);
-        if (kernel && m->kernelBuffer.isValid()) {
-            // Camera from the G-buffer matrices as dipole::DipoleSubsurfaceProvider does.
-            const Mat4f worldFromView = glm::inverse(g.viewFromWorld);
-            const Mat4f clipFromView = g.clipFromWorld * worldFromView;
-            const bool ortho = std::abs(clipFromView[2][3]) < 1e-6f;
-            const Vector3f forward = glm::normalize(-Vector3f(worldFromView[2]));
-            glUniform1i(p.uniformLocation("u_ringCount"), int(m->kernel.ringOuter.size()));
-            glUniform1f(p.uniformLocation("u_splitRadius"), plan.splitRadius);
-            glUniform1i(p.uniformLocation("u_samples"), m->settings.localSamples);
-            glUniform1ui(p.uniformLocation("u_seed"), m->settings.dipole.seed);
-            glUniform1i(p.uniformLocation("u_meshId"), m->settings.meshId);
-            glUniformMatrix4fv(p.uniformLocation("u_clipFromWorld"), 1, GL_FALSE,
-                               &g.clipFromWorld[0][0]);
-            glUniform3f(p.uniformLocation("u_eye"), g.cameraPosition.x, g.cameraPosition.y,
-                        g.cameraPosition.z);
-            glUniform3f(p.uniformLocation("u_viewDir"), forward.x, forward.y, forward.z);
-            glUniform1i(p.uniformLocation("u_ortho"), ortho ? 1 : 0);
-            glUniform1f(p.uniformLocation("u_eta"), m->settings.eta);
-            glBindTextureUnit(0, g.positionTexture);
-            glBindTextureUnit(1, g.normalTexture);
-            glBindTextureUnit(2, m->dipole.debugTextures().irradiance);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, m->kernelBuffer.id());
-        }
+        glUniform1i(p.uniformLocation("u_kernel"), subtract ? 1 : 0);
         glBindImageTexture(0, targetTexture, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         glBindImageTexture(1, m->scratch.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+        glBindImageTexture(2, m->local.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
         glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
-        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+        // The target is read by the shading pass (texture fetch) and cleared by the renderer
+        // at the next frame (framebuffer clear or texture update), as the SSLPV provider does.
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                        GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
         glUseProgram(0);
     }
+    m->profiler.endFrame();
     ++m->stats.frames;
     m->stats.dipole = m->dipole.stats();
     m->stats.sslpv = m->sslpv.stats();
-    m->stats.converged = !plan.dipoleOn || m->stats.dipole.converged;
+    m->stats.converged = !plan.dipoleOn || (m->stats.dipole.converged && !m->kernelDirty);
+}
+
+void CombinedSubsurfaceProvider::updateLocalEstimate(const gpu::GBufferView& g) {
+    // Key: everything L̂ depends on (the G-buffer's camera and size, the meshes' uploads, the
+    // lights and shadows, η, the split, the irradiance image and the kernel). The dipole's
+    // irradiance E (shaders/dipole_irradiance.comp) does not depend on the painted material.
+    const SplitPlan& plan = m->stats.plan;
+    const unsigned irradiance = m->dipole.debugTextures().irradiance;
+    std::vector<unsigned char> key;
+    const auto put = [&key](const void* data, size_t bytes) {
+        const auto* b = static_cast<const unsigned char*>(data);
+        key.insert(key.end(), b, b + bytes);
+    };
+    put(&g.clipFromWorld, sizeof(g.clipFromWorld));
+    put(&g.viewFromWorld, sizeof(g.viewFromWorld));
+    put(&g.cameraPosition, sizeof(g.cameraPosition));
+    const int ints[7] = {g.width,
+                         g.height,
+                         int(irradiance),
+                         m->settings.localSamples,
+                         m->settings.meshId,
+                         g.shadows ? 1 : 0,
+                         m->settings.dipole.shadows ? 1 : 0};
+    put(ints, sizeof(ints));
+    const float floats[2] = {m->settings.eta, plan.splitRadius};
+    put(floats, sizeof(floats));
+    const uint32_t seed = m->settings.dipole.seed;
+    put(&seed, sizeof(seed));
+    put(&m->kernelVersion, sizeof(m->kernelVersion));
+    for (const gpu::GBufferView::MeshGeometry& mesh : g.meshes)
+        put(&mesh.revision, sizeof(mesh.revision));
+    const int lightCount = g.lightBuffer ? std::max(g.lightCount, 0) : 0;
+    std::vector<unsigned char> lights(size_t(lightCount) * 64);  // GpuLight, 64 bytes each
+    if (!lights.empty())
+        glGetNamedBufferSubData(g.lightBuffer, 0, GLsizeiptr(lights.size()), lights.data());
+    key.insert(key.end(), lights.begin(), lights.end());
+    if (key == m->localKey)
+        return;
+    const auto scope = m->profiler.scope("local");
+    const gpu::GlProgram& p = m->localProgram;
+    glUseProgram(p.id());
+    // Camera from the G-buffer matrices as dipole::DipoleSubsurfaceProvider does.
+    const Mat4f worldFromView = glm::inverse(g.viewFromWorld);
+    const Mat4f clipFromView = g.clipFromWorld * worldFromView;
+    const bool ortho = std::abs(clipFromView[2][3]) < 1e-6f;
+    const Vector3f forward = glm::normalize(-Vector3f(worldFromView[2]));
+    glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
+    glUniform1i(p.uniformLocation("u_ringCount"), int(m->kernel.ringOuter.size()));
+    glUniform1f(p.uniformLocation("u_splitRadius"), plan.splitRadius);
+    glUniform1i(p.uniformLocation("u_samples"), m->settings.localSamples);
+    glUniform1ui(p.uniformLocation("u_seed"), m->settings.dipole.seed);
+    glUniform1i(p.uniformLocation("u_meshId"), m->settings.meshId);
+    glUniformMatrix4fv(p.uniformLocation("u_clipFromWorld"), 1, GL_FALSE, &g.clipFromWorld[0][0]);
+    glUniform3f(p.uniformLocation("u_eye"), g.cameraPosition.x, g.cameraPosition.y,
+                g.cameraPosition.z);
+    glUniform3f(p.uniformLocation("u_viewDir"), forward.x, forward.y, forward.z);
+    glUniform1i(p.uniformLocation("u_ortho"), ortho ? 1 : 0);
+    glUniform1f(p.uniformLocation("u_eta"), m->settings.eta);
+    glBindTextureUnit(0, g.positionTexture);
+    glBindTextureUnit(1, g.normalTexture);
+    glBindTextureUnit(2, irradiance);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, m->kernelBuffer.id());
+    glBindImageTexture(2, m->local.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    glUseProgram(0);
+    m->localKey = std::move(key);
+    ++m->stats.localEstimates;
 }
 
 const CombinedProviderStats& CombinedSubsurfaceProvider::stats() const {
     return m->stats;
+}
+
+std::vector<gpu::PassTiming> CombinedSubsurfaceProvider::passTimes() const {
+    if (!m->created)
+        return {};
+    m->profiler.collect(/*wait=*/true);
+    return m->profiler.latest();
 }
 
 const SslpvSubsurfaceProvider& CombinedSubsurfaceProvider::sslpvProvider() const {

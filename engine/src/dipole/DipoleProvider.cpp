@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <vector>
 
@@ -64,6 +65,9 @@ void validateSettings(const ProviderSettings& s) {
                      s.lightViewThreshold < 1.f,
                  "ProviderSettings.lightViewThreshold must be in [0, 1) (got ",
                  s.lightViewThreshold, ")");
+    LUCENT_CHECK(s.previewSamples >= 0 && s.previewSamples <= 4096,
+                 "ProviderSettings.previewSamples must be in [0, 4096] (got ", s.previewSamples,
+                 ")");
 }
 
 bool sameSettings(const ProviderSettings& a, const ProviderSettings& b) {
@@ -74,7 +78,7 @@ bool sameSettings(const ProviderSettings& a, const ProviderSettings& b) {
            a.interleave == b.interleave && a.seed == b.seed && a.shadows == b.shadows &&
            a.meshId == b.meshId && a.lightViews == b.lightViews &&
            a.lightViewResolution == b.lightViewResolution &&
-           a.lightViewThreshold == b.lightViewThreshold;
+           a.lightViewThreshold == b.lightViewThreshold;  // previewSamples: no restart
 }
 
 /// The camera of a G-buffer as a view (clip matrix, centre of projection, orthographic flag and
@@ -110,6 +114,10 @@ Light sceneLight(const gpu::shared::GpuLight& gl) {
     return l;
 }
 
+/// Work (pixels × samples × (1 + gathered views)) of one part of an interactive frame: a 16-spp
+/// camera-only frame at 320×180, the app's default render size (docs/methods/dipole.md §3c).
+constexpr double INTERACTIVE_PART_WORK = 320.0 * 180.0 * 16.0;
+
 /// std430 element of dipole_provider.comp's LightViewBlock.
 struct GpuLightView {
     glm::mat4 clipFromWorld;
@@ -135,6 +143,8 @@ struct DipoleSubsurfaceProvider::Impl {
     /// dipole_provider.comp with MULTI_VIEW=0: the camera-only gather (no light view gathered),
     /// without the view-combination code, which slows the whole loop ≈ 2× on llvmpipe.
     gpu::GlProgram cameraGatherProgram;
+    /// dipole_provider.comp with RESOLVE_ONLY=1: the stored mean only, no gather code.
+    gpu::GlProgram resolveProgram;
 
     // Per-pixel images (renderer size).
     int width = 0, height = 0;
@@ -144,11 +154,50 @@ struct DipoleSubsurfaceProvider::Impl {
     // Light views (seed 004 §7.1): scratch images of one view, then the gathered views as
     // layers of three arrays, with their cameras and descriptors (LightViewBlock).
     gpu::GlProgram lightGbufferProgram, lightStatsProgram;
+    /// dipole_irradiance.comp with LIGHT_VIEW=1: E only (no material, no R′).
+    gpu::GlProgram lightIrradianceProgram;
     gpu::GlObject fbo, viewBuffer, partialBuffer;
     int lvSize = 0, lvLayers = 0;
-    gpu::GlObject lvPosition, lvNormal, lvIrradiance;  // 2-D arrays, one layer per gathered view
-    gpu::GlObject scratchPosition, scratchNormal, scratchE, scratchT, scratchS, scratchDepth;
-    std::vector<Camera> lvCameras;  ///< of the gathered views, in layer order
+    gpu::GlObject lvPosition, lvNormal, lvIrradiance;  // 2-D arrays, layer l = light l's view
+    gpu::GlObject scratchPosition, scratchNormal, scratchE, scratchDepth;
+
+    /// Light l's view (layer l). Kept while `lvKey` (what the views depend on) is unchanged.
+    struct ViewSlot {
+        bool done = false;      ///< rendered (or found impossible) for the current key
+        bool rendered = false;  ///< has a view (false: light inside the bounding sphere)
+        Camera camera;
+        Mat4f clip{1.f};
+    };
+    std::vector<ViewSlot> lvSlots;
+    std::vector<int> lvGathered;  ///< layers gathered (back-lit fraction > threshold), in order
+    /// What the light views depend on: meshes (revisions, geometry), lights, shadow maps and the
+    /// view settings — neither the camera nor the material (docs/methods/dipole.md §3d).
+    struct ViewKey {
+        std::vector<unsigned char> lights;
+        std::vector<uint64_t> meshes;
+        unsigned shadowMaps = 0;
+        bool shadows = false;
+        float eta = 0.f;
+        int resolution = 0, meshId = -2;
+        bool operator==(const ViewKey&) const = default;
+    };
+    ViewKey lvKey;
+    bool lvKeyValid = false;
+    /// The back-lit fractions and the gathered set are up to date for this accumulation (else
+    /// the camera-only estimator is accumulated, §3c "Bounded restarts").
+    bool viewsReady = false;
+    bool everRendered = false;  ///< a frame was drawn since create(): restarts are interactive
+    /// This accumulation began with an interactive restart: frames with light views are
+    /// split into 1 + views parts (one dispatch per provider frame, ProviderStats::frameParts).
+    bool interactiveAccum = false;
+    int part = 0;               ///< next part of the current frame
+    bool viewWorkDone = false;  ///< the last updateViews() rendered a view or the fractions
+    bool previewShown = false;  ///< the accumulation image holds this restart's preview
+
+    // GPU timestamps of the passes (ProviderStats::passMs), resolved at the end of a frame.
+    std::vector<gpu::GlObject> timerQueries;
+    std::vector<std::pair<size_t, float*>> pendingTimes;  ///< (begin query, output)
+    size_t nextQuery = 0;
 
     // What the accumulation was computed for.
     bool needReset = true;
@@ -156,6 +205,7 @@ struct DipoleSubsurfaceProvider::Impl {
     Point3f lastEye{0.f};
     std::vector<unsigned char> lastLights;
     bool lastShadows = false;
+    std::vector<uint64_t> lastMeshes;
 
     void destroyImages() {
         for (gpu::GlObject* o : {&irradiance, &sigmaT, &sigmaS, &accum})
@@ -179,27 +229,61 @@ struct DipoleSubsurfaceProvider::Impl {
     void resetAccumulation() {
         detail::restartAccumulation(stats);
         needReset = false;
+        part = 0;
+        previewShown = false;
+    }
+
+    /// Opens a timed pass: a GL_TIMESTAMP query now; closePass() stores its duration in `out`.
+    size_t openPass() {
+        if (nextQuery + 2 > timerQueries.size())
+            return SIZE_MAX;
+        glQueryCounter(timerQueries[nextQuery].id(), GL_TIMESTAMP);
+        nextQuery += 2;
+        return nextQuery - 2;
+    }
+    void closePass(size_t begin, float* out) {
+        if (begin == SIZE_MAX)
+            return;
+        glQueryCounter(timerQueries[begin + 1].id(), GL_TIMESTAMP);
+        pendingTimes.emplace_back(begin, out);
+    }
+    /// Reads the frame's timestamps (waits for its passes, which the gather's statistics
+    /// read-back did already).
+    void resolvePassTimes() {
+        for (const auto& [begin, out] : pendingTimes) {
+            GLuint64 t0 = 0, t1 = 0;
+            glGetQueryObjectui64v(timerQueries[begin].id(), GL_QUERY_RESULT, &t0);
+            glGetQueryObjectui64v(timerQueries[begin + 1].id(), GL_QUERY_RESULT, &t1);
+            *out += float(double(t1 - t0) * 1e-6);
+        }
+        pendingTimes.clear();
+        nextQuery = 0;
     }
 
     /// dipole_irradiance.comp over one view's (position, normal) images: E, σt, σs′ and R′.
     /// `radiusStats`: also the min/max of R′ over the object's pixels into stats.
+    /// `outT` = 0: a light view (lightIrradianceProgram, E only; the gather takes the profile
+    /// from x_o's material).
     void runIrradianceOn(const gpu::GBufferView& g, unsigned position, unsigned normal, int w,
                          int h, int meshId, unsigned outE, unsigned outT, unsigned outS,
                          bool radiusStats) {
-        const gpu::GlProgram& p = irradianceProgram;
+        const bool lightView = outT == 0;
+        const gpu::GlProgram& p = lightView ? lightIrradianceProgram : irradianceProgram;
         glUseProgram(p.id());
         glBindTextureUnit(0, position);
         glBindTextureUnit(1, normal);
         glBindTextureUnit(2, g.shadowMapTexture);
-        volume.bind(p, 3, 4);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, g.lightBuffer);  // LUCENT_BINDING_LIGHTS
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, g.shadowLayerBuffer);  // SHADOW_LAYERS
-        const uint32_t init[2] = {0x7f7fffffu, 0u};  // FLT_MAX, 0 (uint order of floats ≥ 0)
-        glNamedBufferSubData(radiusBuffer.id(), 0, sizeof(init), init);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, radiusBuffer.id());
         glBindImageTexture(0, outE, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        glBindImageTexture(1, outT, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        glBindImageTexture(2, outS, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        if (!lightView) {
+            volume.bind(p, 3, 4);
+            const uint32_t init[2] = {0x7f7fffffu, 0u};  // FLT_MAX, 0 (uint order of floats ≥ 0)
+            glNamedBufferSubData(radiusBuffer.id(), 0, sizeof(init), init);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, radiusBuffer.id());
+            glBindImageTexture(1, outT, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+            glBindImageTexture(2, outS, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        }
         glUniform2i(p.uniformLocation("u_size"), w, h);
         glUniform1i(p.uniformLocation("u_lightCount"), g.lightBuffer ? g.lightCount : 0);
         const bool shadows =
@@ -232,11 +316,10 @@ struct DipoleSubsurfaceProvider::Impl {
 
     void ensureLightViews(int size, int layers) {
         if (size != lvSize) {
-            for (gpu::GlObject* o : {&scratchPosition, &scratchNormal, &scratchE, &scratchT,
-                                     &scratchS, &scratchDepth, &partialBuffer})
-                o->destroy();
             for (gpu::GlObject* o :
-                 {&scratchPosition, &scratchNormal, &scratchE, &scratchT, &scratchS})
+                 {&scratchPosition, &scratchNormal, &scratchE, &scratchDepth, &partialBuffer})
+                o->destroy();
+            for (gpu::GlObject* o : {&scratchPosition, &scratchNormal, &scratchE})
                 *o = gpu::createTexture2D(GL_RGBA32F, size, size);
             scratchDepth = gpu::createTexture2D(GL_DEPTH_COMPONENT32F, size, size);
             const int groups = (size + 7) / 8;
@@ -287,13 +370,16 @@ struct DipoleSubsurfaceProvider::Impl {
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
     }
 
-    /// dipole_lightview.comp on the scratch view: backlitFluxFraction() against the camera.
-    float backlitFraction(const gpu::GBufferView& g, const Camera& cam, const Mat4f& clip) {
+    /// dipole_lightview.comp on light view `layer`: backlitFluxFraction() against the camera.
+    float backlitFraction(const gpu::GBufferView& g, int layer) {
+        const Camera& cam = lvSlots[size_t(layer)].camera;
+        const Mat4f& clip = lvSlots[size_t(layer)].clip;
         const gpu::GlProgram& p = lightStatsProgram;
         glUseProgram(p.id());
-        glBindTextureUnit(0, scratchPosition.id());
-        glBindTextureUnit(1, scratchNormal.id());
-        glBindTextureUnit(2, scratchE.id());
+        glUniform1i(p.uniformLocation("u_layer"), layer);
+        glBindTextureUnit(0, lvPosition.id());
+        glBindTextureUnit(1, lvNormal.id());
+        glBindTextureUnit(2, lvIrradiance.id());
         glBindTextureUnit(3, g.positionTexture);
         glBindTextureUnit(4, g.normalTexture);
         glBindTextureUnit(5, sigmaS.id());
@@ -322,44 +408,72 @@ struct DipoleSubsurfaceProvider::Impl {
         return total > 0.0 ? float(back / total) : 0.f;
     }
 
-    /// Seed 004 §7.1: renders every light's view of the object, computes its E (all lights,
-    /// shadow maps) and its back-lit flux fraction, and keeps those above the threshold as
-    /// layers of the light-view arrays for the gather (after runIrradiance: needs R′).
-    void runLightViews(const gpu::GBufferView& g) {
+    /// What the light views of frame `g` depend on (ViewKey).
+    ViewKey viewKey(const gpu::GBufferView& g, const std::vector<unsigned char>& lights) const {
+        ViewKey k;
+        k.lights = lights;
+        for (const gpu::GBufferView::MeshGeometry& m : g.meshes)
+            k.meshes.insert(k.meshes.end(),
+                            {m.revision, uint64_t(m.vertexArray), uint64_t(m.indexCount)});
+        k.shadowMaps = g.shadowMapTexture;
+        k.shadows = settings.shadows && g.shadows;
+        k.eta = settings.eta;
+        k.resolution = settings.lightViewResolution;
+        k.meshId = settings.meshId;
+        return k;
+    }
+
+    /// Seed 004 §7.1: brings the light views up to date for this accumulation. Views whose
+    /// inputs (ViewKey) changed are re-rendered (the object rasterised from the light, its E
+    /// with all lights and the shadow maps, into layer l of the view arrays); then every view's
+    /// back-lit flux fraction is computed against the camera (needs the camera's R′: after
+    /// runIrradiance) and those above the threshold are gathered. `all` false: at most one
+    /// view or the fraction pass per call (bounded interactive frames); returns whether the
+    /// views are ready (fractions done).
+    bool updateViews(const gpu::GBufferView& g, bool all) {
+        viewWorkDone = false;
         const int lightCount = g.lightBuffer ? std::max(g.lightCount, 0) : 0;
-        stats.lightViewsRendered = stats.lightViewsGathered = 0;
-        stats.backlitFractions.assign(size_t(lightCount), -1.f);
-        lvCameras.clear();
-        if (!settings.lightViews || lightCount == 0 ||
-            lastLights.size() < size_t(lightCount) * sizeof(gpu::shared::GpuLight))
-            return;
         Bounds3f bounds;
         for (size_t i = 0; i < g.meshes.size(); ++i)
             if (settings.meshId < 0 || int(i) == settings.meshId)
                 bounds.expand(g.meshes[i].bounds);
-        if (bounds.isEmpty())
-            return;
-        ensureLightViews(settings.lightViewResolution, lightCount);
-        std::vector<GpuLightView> views;
+        lvGathered.clear();
+        stats.lightViewsGathered = 0;
+        stats.backlitFractions.assign(size_t(lightCount), -1.f);
+        if (!settings.lightViews || lightCount == 0 || bounds.isEmpty() ||
+            lastLights.size() < size_t(lightCount) * sizeof(gpu::shared::GpuLight)) {
+            stats.lightViewsRendered = 0;
+            return true;
+        }
+        const ViewKey key = viewKey(g, lastLights);
+        if (!lvKeyValid || !(key == lvKey)) {
+            lvKey = key;
+            lvKeyValid = true;
+            lvSlots.assign(size_t(lightCount), ViewSlot{});
+            ensureLightViews(settings.lightViewResolution, lightCount);
+        }
+        // 1. Views to (re-)render.
+        const size_t t0 = openPass();
+        bool renderedOne = false;
         for (int l = 0; l < lightCount; ++l) {
+            ViewSlot& slot = lvSlots[size_t(l)];
+            if (slot.done)
+                continue;
+            if (renderedOne && !all)
+                break;
+            slot.done = true;
             gpu::shared::GpuLight gl;
             std::memcpy(&gl, lastLights.data() + size_t(l) * sizeof(gl), sizeof(gl));
-            Camera cam;
             try {
-                cam = lightViewCamera(sceneLight(gl), bounds, lvSize);
+                slot.camera = lightViewCamera(sceneLight(gl), bounds, lvSize);
             } catch (const ValueError&) {
                 continue;  // light inside the bounding sphere: no view (fraction stays −1)
             }
-            const Mat4f clip = cam.clipFromView() * cam.viewFromWorld();
-            rasterise(g, clip);
+            slot.clip = slot.camera.clipFromView() * slot.camera.viewFromWorld();
+            rasterise(g, slot.clip);
             runIrradianceOn(g, scratchPosition.id(), scratchNormal.id(), lvSize, lvSize, -1,
-                            scratchE.id(), scratchT.id(), scratchS.id(), /*radiusStats=*/false);
-            const float f = backlitFraction(g, cam, clip);
-            stats.backlitFractions[size_t(l)] = f;
-            ++stats.lightViewsRendered;
-            if (!(f > settings.lightViewThreshold))
-                continue;
-            const int layer = int(lvCameras.size());
+                            scratchE.id(), 0, 0, /*radiusStats=*/false);
+            // imageStore (E) and framebuffer writes → copies (texture update).
             glMemoryBarrier(GL_ALL_BARRIER_BITS);
             const std::pair<unsigned, unsigned> copies[3] = {
                 {scratchPosition.id(), lvPosition.id()},
@@ -367,21 +481,85 @@ struct DipoleSubsurfaceProvider::Impl {
                 {scratchE.id(), lvIrradiance.id()}};
             for (const auto& [src, dst] : copies)
                 glCopyImageSubData(src, GL_TEXTURE_2D, 0, 0, 0, 0, dst, GL_TEXTURE_2D_ARRAY, 0, 0,
-                                   0, layer, lvSize, lvSize, 1);
-            lvCameras.push_back(cam);
-            views.push_back({clip, glm::vec4(cam.position, cam.orthographic ? 1.f : 0.f),
-                             glm::vec4(glm::normalize(cam.target - cam.position), 0.f)});
+                                   0, l, lvSize, lvSize, 1);
+            slot.rendered = true;
+            renderedOne = viewWorkDone = true;
+            ++stats.lightViewPasses;
         }
-        stats.lightViewsGathered = int(lvCameras.size());
+        if (renderedOne)
+            closePass(t0, &stats.passMs.lightViews);
+        stats.lightViewsRendered = 0;
+        for (const ViewSlot& slot : lvSlots)
+            stats.lightViewsRendered += slot.rendered ? 1 : 0;
+        const bool pending =
+            std::any_of(lvSlots.begin(), lvSlots.end(), [](const ViewSlot& v) { return !v.done; });
+        if (pending || (renderedOne && !all))
+            return false;  // the fractions in the next frame
+        // 2. Back-lit fractions (they depend on the camera and R′, i.e. the material).
+        const size_t t1 = openPass();
+        viewWorkDone = true;
+        std::vector<GpuLightView> views;
+        for (int l = 0; l < lightCount; ++l) {
+            const ViewSlot& slot = lvSlots[size_t(l)];
+            if (!slot.rendered)
+                continue;
+            const float f = backlitFraction(g, l);
+            stats.backlitFractions[size_t(l)] = f;
+            if (!(f > settings.lightViewThreshold))
+                continue;
+            lvGathered.push_back(l);
+            views.push_back(
+                {slot.clip, glm::vec4(slot.camera.position, slot.camera.orthographic ? 1.f : 0.f),
+                 glm::vec4(glm::normalize(slot.camera.target - slot.camera.position), float(l))});
+        }
+        closePass(t1, &stats.passMs.fractions);
+        stats.lightViewsGathered = int(lvGathered.size());
         if (!views.empty())
             glNamedBufferSubData(viewBuffer.id(), 0, GLsizeiptr(views.size() * sizeof(views[0])),
                                  views.data());
-        glMemoryBarrier(GL_ALL_BARRIER_BITS);
+        return true;
     }
 
-    void runGather(const gpu::GBufferView& g, unsigned target, bool gather) {
-        const GatherSettings gs = settings.gatherSettings();
-        if (gather) {
+    /// What the RESOLVE_ONLY program reads besides the images bound for the gather: the size,
+    /// the exit Fresnel (η, camera) and the frame count / parts.
+    void setResolveUniforms(const gpu::GlProgram& p, const gpu::GBufferView& g, int framesBefore,
+                            int parts, int part) const {
+        const CameraView cv = cameraView(g);
+        glUniform3f(p.uniformLocation("u_eye"), g.cameraPosition.x, g.cameraPosition.y,
+                    g.cameraPosition.z);
+        glUniform3f(p.uniformLocation("u_viewDir"), cv.forward.x, cv.forward.y, cv.forward.z);
+        glUniform1i(p.uniformLocation("u_ortho"), cv.ortho ? 1 : 0);
+        glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
+        glUniform1f(p.uniformLocation("u_eta"), settings.eta);
+        glUniform1i(p.uniformLocation("u_framesBefore"), framesBefore);
+        glUniform1i(p.uniformLocation("u_parts"), parts);
+        glUniform1i(p.uniformLocation("u_part"), part);
+        glUniform1i(p.uniformLocation("u_previewInAccum"), previewShown ? 1 : 0);
+    }
+
+    /// One frame of the gather (`gather`) or only the resolve of the stored mean. `preview`:
+    /// the camera image only with settings.previewSamples samples, not accumulated (the next
+    /// frame overwrites it: stats.frames stays 0).
+    void runGather(const gpu::GBufferView& g, unsigned target, bool gather, bool preview) {
+        const size_t t0 = openPass();
+        ProviderSettings frameSettings = settings;
+        if (preview)
+            frameSettings.samplesPerFrame = settings.previewSamples;
+        const GatherSettings gs = frameSettings.gatherSettings();
+        // Light views join once their fractions are known (camera-only estimator before).
+        const int views = viewsReady && !preview ? int(lvGathered.size()) : 0;
+        // Interactive accumulations split a frame into parts over interleaved work groups, one
+        // per provider frame, each about one camera-only 16-spp frame at 320×180 (the app's
+        // default size; 80–130 ms on llvmpipe under load): a light view's visibility and density
+        // tests make the samples of a frame with views ≈ (1 + views)× dearer (§3d).
+        const double work = double(g.width) * double(g.height) *
+                            double(frameSettings.samplesPerFrame) * double(1 + views);
+        const int parts =
+            interactiveAccum && !preview && gather
+                ? std::clamp(int(std::ceil(work / INTERACTIVE_PART_WORK - 1e-9)), 1, 64)
+                : 1;
+        stats.frameParts = parts;
+        if (gather && part == 0) {
             GatherSettings frameGs = gs;
             frameGs.seed = frameSeed(settings.seed, stats.frames);
             const auto shifts = interleaveShifts(frameGs);
@@ -395,7 +573,9 @@ struct DipoleSubsurfaceProvider::Impl {
             const uint32_t zero[2] = {0u, 0u};
             glNamedBufferSubData(statsBuffer.id(), 0, sizeof(zero), zero);
         }
-        const gpu::GlProgram& p = lvCameras.empty() ? cameraGatherProgram : gatherProgram;
+        const gpu::GlProgram& p = !gather      ? resolveProgram
+                                  : views == 0 ? cameraGatherProgram
+                                               : gatherProgram;
         glUseProgram(p.id());
         glBindTextureUnit(0, g.positionTexture);
         glBindTextureUnit(1, g.normalTexture);
@@ -410,7 +590,7 @@ struct DipoleSubsurfaceProvider::Impl {
         glBindTextureUnit(5, lvPosition.id());
         glBindTextureUnit(6, lvNormal.id());
         glBindTextureUnit(7, lvIrradiance.id());
-        glUniform1i(p.uniformLocation("u_lightViews"), int(lvCameras.size()));
+        glUniform1i(p.uniformLocation("u_lightViews"), views);
         glUniform1i(p.uniformLocation("u_lightViewSize"), lvSize);
 
         const CameraView cv = cameraView(g);
@@ -436,13 +616,41 @@ struct DipoleSubsurfaceProvider::Impl {
         glUniform1f(p.uniformLocation("u_maxRadius"), gs.maxRadius);
         glUniform1i(p.uniformLocation("u_gather"), gather ? 1 : 0);
         glUniform1i(p.uniformLocation("u_framesBefore"), stats.frames);
-        glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
+        // Resolve only: rows with no frame yet show the preview (u_previewInAccum).
+        glUniform1i(p.uniformLocation("u_previewInAccum"), previewShown ? 1 : 0);
+        glUniform1i(p.uniformLocation("u_parts"), parts);
+        glUniform1i(p.uniformLocation("u_part"), gather ? part : 0);
+        const unsigned groupsX = unsigned(g.width + 7) / 8, groupsY = unsigned(g.height + 7) / 8;
+        if (parts > 1) {
+            // Every pixel's current mean first (rows of earlier parts hold one frame more),
+            // then part `part`'s rows gather (they overwrite their pixels).
+            const gpu::GlProgram& rp = resolveProgram;
+            glUseProgram(rp.id());
+            setResolveUniforms(rp, g, stats.frames, parts, part);
+            glDispatchCompute(groupsX, groupsY, 1);
+            glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+            glUseProgram(p.id());
+        }
+        const unsigned rows =
+            parts > 1 ? (groupsY > unsigned(part)
+                             ? (groupsY - unsigned(part) + unsigned(parts) - 1) / unsigned(parts)
+                             : 0u)
+                      : groupsY;
+        if (rows > 0)
+            glDispatchCompute(groupsX, rows, 1);
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
                         GL_BUFFER_UPDATE_BARRIER_BIT);
         glUseProgram(0);
-        if (gather)
-            detail::finishFrame(stats, statsBuffer.id(), settings.samplesPerFrame,
-                                settings.maxFrames, settings.convergenceThreshold);
+        closePass(t0, &stats.passMs.gather);
+        if (preview && gather)
+            previewShown = true;
+        if (!gather || preview)
+            return;
+        if (++part < parts)
+            return;  // the frame is complete after its last part
+        part = 0;
+        detail::finishFrame(stats, statsBuffer.id(), settings.samplesPerFrame, settings.maxFrames,
+                            settings.convergenceThreshold);
     }
 };
 
@@ -457,6 +665,8 @@ void DipoleSubsurfaceProvider::createGl(const gpu::ShaderLibrary& library) {
     m->gatherProgram = gpu::GlProgram::compute(library, "dipole_provider.comp");
     m->cameraGatherProgram =
         gpu::GlProgram::compute(library, "dipole_provider.comp", {"MULTI_VIEW=0"});
+    m->resolveProgram = gpu::GlProgram::compute(library, "dipole_provider.comp",
+                                                {"MULTI_VIEW=0", "RESOLVE_ONLY=1"});
     // Largest shift table: interleave 64 → 64² cells × 2 vec4.
     m->shiftBuffer =
         gpu::createBuffer(64 * 64 * 2 * sizeof(glm::vec4), nullptr, GL_DYNAMIC_STORAGE_BIT);
@@ -469,6 +679,11 @@ void DipoleSubsurfaceProvider::createGl(const gpu::ShaderLibrary& library) {
     m->lightGbufferProgram =
         gpu::GlProgram::graphics(library, "dirpole_gbuffer.vert", "dirpole_gbuffer.frag");
     m->lightStatsProgram = gpu::GlProgram::compute(library, "dipole_lightview.comp");
+    m->lightIrradianceProgram =
+        gpu::GlProgram::compute(library, "dipole_irradiance.comp", {"LIGHT_VIEW=1"});
+    m->timerQueries.clear();
+    for (int i = 0; i < 8; ++i)  // 4 passes × (begin, end) timestamps
+        m->timerQueries.push_back(gpu::GlObject::create(gpu::GlObjectKind::Query, GL_TIMESTAMP));
     m->fbo = gpu::GlObject::create(gpu::GlObjectKind::Framebuffer);
     const GLenum drawBuffers[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     glNamedFramebufferDrawBuffers(m->fbo.id(), 2, drawBuffers);
@@ -480,15 +695,24 @@ void DipoleSubsurfaceProvider::destroyGl() {
     m->irradianceProgram.destroy();
     m->gatherProgram.destroy();
     m->cameraGatherProgram.destroy();
+    m->resolveProgram.destroy();
     m->lightGbufferProgram.destroy();
     m->lightStatsProgram.destroy();
+    m->lightIrradianceProgram.destroy();
     for (gpu::GlObject* o :
          {&m->shiftBuffer, &m->statsBuffer, &m->radiusBuffer, &m->fbo, &m->viewBuffer,
           &m->partialBuffer, &m->lvPosition, &m->lvNormal, &m->lvIrradiance, &m->scratchPosition,
-          &m->scratchNormal, &m->scratchE, &m->scratchT, &m->scratchS, &m->scratchDepth})
+          &m->scratchNormal, &m->scratchE, &m->scratchDepth})
         o->destroy();
+    for (gpu::GlObject& q : m->timerQueries)
+        q.destroy();
+    m->timerQueries.clear();
+    m->pendingTimes.clear();
+    m->nextQuery = 0;
     m->lvSize = m->lvLayers = 0;
-    m->lvCameras.clear();
+    m->lvSlots.clear();
+    m->lvGathered.clear();
+    m->lvKeyValid = m->viewsReady = m->everRendered = false;
     m->destroyImages();
 }
 
@@ -507,6 +731,10 @@ void DipoleSubsurfaceProvider::restart() {
     m->needReset = true;
 }
 
+void DipoleSubsurfaceProvider::invalidateCaches() {
+    m->lvKeyValid = false;  // every light view is re-rendered at the next restart
+}
+
 std::vector<SurfaceBuffers> DipoleSubsurfaceProvider::debugLightViews() const {
     std::vector<SurfaceBuffers> views;
     const int n = m->lvSize;
@@ -514,8 +742,10 @@ std::vector<SurfaceBuffers> DipoleSubsurfaceProvider::debugLightViews() const {
     glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
     const GLsizei bytes = GLsizei(pos.size() * sizeof(glm::vec4));
-    for (size_t layer = 0; layer < m->lvCameras.size(); ++layer) {
-        const Camera& cam = m->lvCameras[layer];
+    if (!m->viewsReady)
+        return views;  // none joined the gather yet
+    for (const int layer : m->lvGathered) {
+        const Camera& cam = m->lvSlots[size_t(layer)].camera;
         const GLint z = GLint(layer);
         glGetTextureSubImage(m->lvPosition.id(), 0, 0, 0, z, n, n, 1, GL_RGBA, GL_FLOAT, bytes,
                              pos.data());
@@ -562,20 +792,65 @@ void DipoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsig
     std::vector<unsigned char> lights(size_t(std::max(g.lightCount, 0)) * 64);
     if (!lights.empty() && g.lightBuffer)
         glGetNamedBufferSubData(g.lightBuffer, 0, GLsizeiptr(lights.size()), lights.data());
+    // Meshes: an upload (updateMesh) changes what the G-buffer and the light views show even
+    // when nobody called reset().
+    std::vector<uint64_t> meshes;
+    for (const gpu::GBufferView::MeshGeometry& mg : g.meshes)
+        meshes.insert(meshes.end(),
+                      {mg.revision, uint64_t(mg.vertexArray), uint64_t(mg.indexCount)});
     if (g.clipFromWorld != r.lastClip || g.cameraPosition != r.lastEye || lights != r.lastLights ||
-        g.shadows != r.lastShadows) {
+        g.shadows != r.lastShadows || meshes != r.lastMeshes) {
         r.needReset = true;
         r.lastClip = g.clipFromWorld;
         r.lastEye = g.cameraPosition;
         r.lastLights = std::move(lights);
         r.lastShadows = g.shadows;
+        r.lastMeshes = std::move(meshes);
     }
+    r.stats.passMs = {};
+    bool preview = false, viewFrame = false;
     if (r.needReset) {
+        // Interactive restart (docs/methods/dipole.md §3c "Bounded restarts"): something was
+        // shown and is now discarded. The first frame is a cheap camera-only preview; the light
+        // views catch up in the following frames.
+        const bool interactive = r.everRendered && r.settings.previewSamples > 0;
         r.resetAccumulation();
+        r.interactiveAccum = interactive;
+        const size_t t0 = r.openPass();
         r.runIrradiance(g);
-        r.runLightViews(g);
+        r.closePass(t0, &r.stats.passMs.irradiance);
+        r.viewsReady = false;
+        r.stats.lightViewsGathered = 0;
+        if (interactive) {
+            preview = true;
+            ++r.stats.previewFrames;
+        } else {
+            r.viewsReady = r.updateViews(g, /*all=*/true);
+        }
+    } else if (!r.viewsReady) {
+        r.viewsReady = r.updateViews(g, /*all=*/false);
+        viewFrame = r.viewWorkDone;
+        if (r.viewsReady && !r.lvGathered.empty() && r.stats.frames > 0) {
+            // The light views join: restart with the full estimator (camera-only frames lack
+            // the hidden irradiance; mixing them in would bias the mean). Not a reset of the
+            // caller's (stats.resets unchanged).
+            r.stats.frames = r.stats.samplesPerPixel = 0;
+            r.stats.lastChange = 1.f;
+            r.part = 0;
+        }
     }
-    r.runGather(g, target, /*gather=*/!r.stats.converged);
+    // A pending frame does either light-view work or gather work, each bounded; the preview
+    // stays on screen meanwhile. While the views are pending the refinement may not end (a
+    // back-lit object can be black in the camera image), nor grow past maxFrames.
+    const bool gather =
+        !r.stats.converged && !viewFrame && (r.viewsReady || r.stats.frames < r.settings.maxFrames);
+    r.runGather(g, target, gather, preview);
+    if (!r.viewsReady)
+        r.stats.converged = false;
+    r.stats.preview = preview || !r.viewsReady;
+    r.stats.viewsPending = !r.viewsReady;
+    r.everRendered = true;
+    r.resolvePassTimes();
     gpu::checkGlError("DipoleSubsurfaceProvider::renderSubsurface");
 }
 

@@ -11,6 +11,7 @@
 #include <lucent/core/Error.h>
 #include <lucent/gpu/GlContext.h>
 #include <lucent/gpu/GlResources.h>
+#include <lucent/gpu/GpuTimer.h>
 #include <lucent/gpu/Shader.h>
 #include <lucent/material/MaterialVolume.h>
 #include <shared/LightingShared.h>
@@ -45,16 +46,45 @@ void validateSettings(const DirpoleSettings& s) {
                  s.bias, ")");
     LUCENT_CHECK(std::isfinite(s.slopeBias) && s.slopeBias >= 0.f && s.slopeBias <= 64.f,
                  "DirpoleSettings.slopeBias must be in [0, 64] (got ", s.slopeBias, ")");
+    LUCENT_CHECK(s.frameSampleBudget >= 0,
+                 "DirpoleSettings.frameSampleBudget must be >= 0 (0 = unlimited; got ",
+                 s.frameSampleBudget, ")");
+    LUCENT_CHECK(s.firstFrameSampleBudget >= 0,
+                 "DirpoleSettings.firstFrameSampleBudget must be >= 0 (0 = unlimited; got ",
+                 s.firstFrameSampleBudget, ")");
+    LUCENT_CHECK(int64_t(s.maxFrames) * s.samplesPerFrame < (int64_t(1) << 24),
+                 "DirpoleSettings: maxFrames x samplesPerFrame must be < 2^24 (per-texel sample "
+                 "counts are stored as floats; got ",
+                 s.maxFrames, " x ", s.samplesPerFrame, ")");
 }
 
-bool sameSettings(const DirpoleSettings& a, const DirpoleSettings& b) {
-    return a.eta == b.eta && a.samplesPerFrame == b.samplesPerFrame && a.maxFrames == b.maxFrames &&
-           a.convergenceThreshold == b.convergenceThreshold && a.lightMapSize == b.lightMapSize &&
-           a.cubeMapSize == b.cubeMapSize && a.gbufferShrink == b.gbufferShrink &&
-           a.shrink == b.shrink && a.cubemapIntrusion == b.cubemapIntrusion &&
-           a.intrusion == b.intrusion && a.shadowBias == b.shadowBias && a.bias == b.bias &&
-           a.slopeBias == b.slopeBias && a.energyNormalised == b.energyNormalised &&
-           a.seed == b.seed && a.meshId == b.meshId;
+/// The settings the light-view and cube-face G-buffers depend on.
+bool sameGeometry(const DirpoleSettings& a, const DirpoleSettings& b) {
+    return a.lightMapSize == b.lightMapSize && a.cubeMapSize == b.cubeMapSize &&
+           a.meshId == b.meshId;
+}
+
+/// The settings the accumulated sums (or their stopping rule) depend on: all but the budgets,
+/// which only spread the same per-texel samples over frames.
+bool sameAccumulation(const DirpoleSettings& a, const DirpoleSettings& b) {
+    return sameGeometry(a, b) && a.eta == b.eta && a.samplesPerFrame == b.samplesPerFrame &&
+           a.maxFrames == b.maxFrames && a.convergenceThreshold == b.convergenceThreshold &&
+           a.gbufferShrink == b.gbufferShrink && a.shrink == b.shrink &&
+           a.cubemapIntrusion == b.cubemapIntrusion && a.intrusion == b.intrusion &&
+           a.shadowBias == b.shadowBias && a.bias == b.bias && a.slopeBias == b.slopeBias &&
+           a.energyNormalised == b.energyNormalised && a.seed == b.seed;
+}
+
+/// Words of the frame statistics SSBO (DirpoleFrameStats in dirpole_common.glsl).
+enum FrameWord { MAX_CHANGE, MAX_MEAN, SAMPLED, COVERED, RESTARTED, LISTED, MIN_N, MAX_N, WORDS };
+
+/// Samples per texel and light for a frame that samples `texels` texels: as many as `budget`
+/// texel-samples allow (0 = unlimited), at least 1, at most samplesPerFrame.
+int framePlanSamples(int budget, int64_t texels, int lights, int samplesPerFrame) {
+    if (budget <= 0 || texels <= 0)
+        return samplesPerFrame;
+    const int64_t perSample = texels * std::max(lights, 1);
+    return int(std::clamp<int64_t>(budget / perSample, 1, samplesPerFrame));
 }
 
 /// Cube faces +x −x +y −y +z −z: face f's camera sits on the +axis side, looking along −axis.
@@ -76,13 +106,20 @@ struct DirpoleSubsurfaceProvider::Impl {
     DirpoleSettings settings;
     ProviderStats& stats;            ///< the base class's
     detail::VolumeTextures& volume;  ///< the material, 3-D textures (the base class's)
-    gpu::GlProgram gbufferProgram, gatherProgram, combineProgram;
+    gpu::GlProgram gbufferProgram, prepareProgram, gatherProgram, combineProgram;
+    gpu::GlProgram coverProgram;    ///< dirpole_compact.comp over the grid: covered texels
+    gpu::GlProgram compactProgram;  ///< dirpole_compact.comp FROM_LIST: the gather's work list
     gpu::GlObject fbo, statsBuffer;
+    gpu::GlObject coveredList;  ///< SSBO, one uint per face texel: the covered texels
+    gpu::GlObject workList;     ///< SSBO, one uint per face texel: the texels the gather samples
+    DirpoleStats passStats;
+    mutable gpu::GpuProfiler profiler;  ///< GL_TIMESTAMP pairs per pass (passTimes())
 
     // Light-view G-buffers (one layer per light) and cube faces (6 layers).
     gpu::GlObject lightPosition, lightNormal, lightDepth;
     int lightMapSize = 0, lightLayers = 0;
     gpu::GlObject facePosition, faceNormal, faceDepth, accum;
+    gpu::GlObject faceSigmaT, faceSigmaS;  ///< the material each texel's sum was computed for
     int faceSize = 0;
     std::vector<Mat4f> lightClip;
     std::array<Mat4f, 6> faceClip{};
@@ -93,21 +130,34 @@ struct DirpoleSubsurfaceProvider::Impl {
     std::vector<float> energyNodes;
     float energyEta = 0.f;
 
-    // What the accumulation was computed for.
-    bool needReset = true;
+    // What the G-buffers and the accumulation were computed for.
+    bool needGeometry = true;      ///< re-render the light and cube G-buffers
+    bool needClear = true;         ///< clear every texel's sum, count and material
+    bool needMaterialPass = true;  ///< run the prepare pass (material may have changed)
     std::vector<unsigned char> lastLights;
     std::vector<uint64_t> lastMeshes;  // (vertex array, revision) of the rasterised meshes
+    /// Fewest and most samples of a covered texel (exact: from the prepare pass after a
+    /// restart, then advanced with each frame's plan), and the covered texels.
+    int minN = 0, maxN = 0, covered = 0;
+    /// The level at which the accumulation converged (threshold or maxFrames), −1: not yet.
+    int convergedLevel = -1;
 
-    /// Restart at the next frame; `converged` is cleared at once so that callers polling it
-    /// schedule that frame.
-    void markReset() {
-        needReset = true;
-        stats.converged = false;
+    /// Material-only restart at the next frame (the texels whose material changed restart);
+    /// `converged` is cleared at once so that callers polling it schedule that frame.
+    void markRestart() {
+        detail::restartAccumulation(stats);
+        needMaterialPass = true;
+    }
+    /// Everything restarts at the next frame (settings, lights, meshes).
+    void markFullRestart() {
+        markRestart();
+        needClear = true;
     }
 
     void destroyMaps() {
-        for (gpu::GlObject* o : {&lightPosition, &lightNormal, &lightDepth, &facePosition,
-                                 &faceNormal, &faceDepth, &accum})
+        for (gpu::GlObject* o :
+             {&lightPosition, &lightNormal, &lightDepth, &facePosition, &faceNormal, &faceDepth,
+              &accum, &faceSigmaT, &faceSigmaS, &coveredList, &workList})
             o->destroy();
         lightMapSize = lightLayers = faceSize = 0;
     }
@@ -125,20 +175,40 @@ struct DirpoleSubsurfaceProvider::Impl {
             lightLayers = layers;
         }
         if (faceSize != settings.cubeMapSize) {
-            for (gpu::GlObject* o : {&facePosition, &faceNormal, &faceDepth, &accum})
+            for (gpu::GlObject* o :
+                 {&facePosition, &faceNormal, &faceDepth, &accum, &faceSigmaT, &faceSigmaS})
                 o->destroy();
             const int n = settings.cubeMapSize;
             facePosition = gpu::createTexture2DArray(GL_RGBA32F, n, n, 6);
             faceNormal = gpu::createTexture2DArray(GL_RGBA32F, n, n, 6);
             faceDepth = gpu::createTexture2DArray(GL_DEPTH_COMPONENT32F, n, n, 6);
             accum = gpu::createTexture2DArray(GL_RGBA32F, n, n, 6);
+            faceSigmaT = gpu::createTexture2DArray(GL_RGBA32F, n, n, 6);
+            faceSigmaS = gpu::createTexture2DArray(GL_RGBA32F, n, n, 6);
+            for (gpu::GlObject* o : {&coveredList, &workList}) {
+                o->destroy();
+                *o = gpu::createBuffer(size_t(6) * size_t(n) * size_t(n) * sizeof(uint32_t),
+                                       nullptr, 0);
+            }
             faceSize = n;
+            needClear = true;
         }
     }
 
-    void resetAccumulation() {
-        detail::restartAccumulation(stats);
-        needReset = false;
+    /// Every texel: no samples, no material (the prepare pass stores it).
+    void clearAccumulation() {
+        const float zero[4] = {0.f, 0.f, 0.f, 0.f};
+        for (const gpu::GlObject* o : {&accum, &faceSigmaT, &faceSigmaS})
+            if (o->isValid())
+                glClearTexImage(o->id(), 0, GL_RGBA, GL_FLOAT, zero);
+        minN = maxN = covered = 0;
+        convergedLevel = -1;
+        needClear = false;
+        needMaterialPass = true;
+        if (!haveGeometry)
+            return;
+        // The covered texels, which every per-texel pass runs over (dirpole_compact.comp).
+        covered = listTexels(coverProgram, coveredList, 0xffffffffu);
     }
 
     [[nodiscard]] bool rasterised(int mesh) const {
@@ -188,6 +258,8 @@ struct DirpoleSubsurfaceProvider::Impl {
         if (!haveGeometry)
             return;
         ensureMaps(int(ls.size()));
+        ++passStats.geometryRenders;
+        needClear = true;  // the texels now stand for other surface points
         const Point3f c = b.center();
         const float R = std::max(0.5f * glm::length(b.extent()), 1e-3f);  // bounding sphere
         glEnable(GL_DEPTH_TEST);
@@ -237,24 +309,86 @@ struct DirpoleSubsurfaceProvider::Impl {
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
     }
 
-    /// Seed 001 §4.1 step 2 accumulation: one more frame of disc samples per face texel.
-    void gather(const gpu::GBufferView& g) {
-        const uint32_t zero[2] = {0u, 0u};
-        glNamedBufferSubData(statsBuffer.id(), 0, sizeof(zero), zero);
+    /// Binds the frame-statistics SSBO with its words reset (min word = UINT32_MAX).
+    void resetFrameStats() {
+        std::array<uint32_t, WORDS> words{};
+        words[MIN_N] = 0xffffffffu;
+        glNamedBufferSubData(statsBuffer.id(), 0, sizeof(words), words.data());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, statsBuffer.id());
+    }
+    [[nodiscard]] std::array<uint32_t, WORDS> readFrameStats() const {
+        // Eight words, synchronous: the CPU plans the next pass from them.
+        std::array<uint32_t, WORDS> words{};
+        glGetNamedBufferSubData(statsBuffer.id(), 0, sizeof(words), words.data());
+        return words;
+    }
+
+    /// dirpole_prepare.comp: restarts the texels whose material changed (docs/methods/dipole.md
+    /// §7, "Latency") and counts. @return the statistics words.
+    std::array<uint32_t, WORDS> prepare() {
+        const gpu::GlProgram& p = prepareProgram;
+        glUseProgram(p.id());
+        resetFrameStats();
+        glBindTextureUnit(0, facePosition.id());
+        glBindTextureUnit(1, faceNormal.id());
+        glBindImageTexture(0, accum.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindImageTexture(1, faceSigmaT.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindImageTexture(2, faceSigmaS.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, coveredList.id());
+        volume.bind(p, 6, 7);
+        glUniform1ui(p.uniformLocation("u_sourceCount"), uint32_t(covered));
+        glDispatchCompute(unsigned(covered + 63) / 64, 1, 1);
+        // The gather reads the stored material as textures and the accumulator as an image;
+        // the CPU reads the counts.
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                        GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+        glUseProgram(0);
+        return readFrameStats();
+    }
+
+    /// dirpole_compact.comp: the covered texels with fewer than `target` samples into `out`,
+    /// with `program` = coverProgram (over the face grid) or compactProgram (over the covered
+    /// list). @return their number.
+    int listTexels(const gpu::GlProgram& program, const gpu::GlObject& out, uint32_t target) {
+        const bool fromList = &program == &compactProgram;
+        glUseProgram(program.id());
+        resetFrameStats();
+        glBindTextureUnit(0, facePosition.id());
+        glBindTextureUnit(1, accum.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, out.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, coveredList.id());
+        glUniform1i(program.uniformLocation("u_faceSize"), faceSize);
+        glUniform1ui(program.uniformLocation("u_sourceCount"), uint32_t(covered));
+        glUniform1ui(program.uniformLocation("u_target"), target);
+        const unsigned groups = unsigned(faceSize + 7) / 8;
+        if (fromList)
+            glDispatchCompute(unsigned(covered + 63) / 64, 1, 1);
+        else
+            glDispatchCompute(groups, groups, 6);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+        glUseProgram(0);
+        return int(readFrameStats()[LISTED]);
+    }
+
+    /// Seed 001 §4.1 step 2 accumulation: each of the `listed` texels of the work list with
+    /// fewer than `target` samples gets min(k, target − N) more. @return the statistics words.
+    std::array<uint32_t, WORDS> gather(const gpu::GBufferView& g, int k, int target, int listed) {
         const gpu::GlProgram& p = gatherProgram;
         glUseProgram(p.id());
+        resetFrameStats();
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, workList.id());
+        glUniform1ui(p.uniformLocation("u_listed"), uint32_t(listed));
         glBindTextureUnit(0, facePosition.id());
         glBindTextureUnit(1, faceNormal.id());
         glBindTextureUnit(2, lightPosition.id());
         glBindTextureUnit(3, lightNormal.id());
+        glBindTextureUnit(4, faceSigmaT.id());
+        glBindTextureUnit(5, faceSigmaS.id());
         glBindImageTexture(0, accum.id(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, LUCENT_BINDING_LIGHTS, g.lightBuffer);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, statsBuffer.id());
-        volume.bind(p, 6, 7);
         if (!lightClip.empty())
             glUniformMatrix4fv(0, GLsizei(lightClip.size()), GL_FALSE, &lightClip[0][0][0]);
         glUniform1i(p.uniformLocation("u_lightCount"), int(lightClip.size()));
-        glUniform1i(p.uniformLocation("u_faceSize"), faceSize);
         glUniform1i(p.uniformLocation("u_lightMapSize"), lightMapSize);
         glUniform1f(p.uniformLocation("u_eta"), settings.eta);
         const Boundary bd = Boundary::of(settings.eta);
@@ -276,17 +410,99 @@ struct DirpoleSubsurfaceProvider::Impl {
         if (settings.energyNormalised)
             glUniform1fv(p.uniformLocation("u_energyScale"), GLsizei(energyNodes.size()),
                          energyNodes.data());
-        glUniform1i(p.uniformLocation("u_samples"), settings.samplesPerFrame);
-        glUniform1i(p.uniformLocation("u_framesBefore"), stats.frames);
+        glUniform1ui(p.uniformLocation("u_k"), uint32_t(k));
+        glUniform1ui(p.uniformLocation("u_target"), uint32_t(target));
         glUniform1f(p.uniformLocation("u_shrink"), settings.gbufferShrink ? settings.shrink : 0.f);
         glUniform1ui(p.uniformLocation("u_seed"), settings.seed);
-        const unsigned groups = unsigned(faceSize + 7) / 8;
-        glDispatchCompute(groups, groups, 6);
+        glDispatchCompute(unsigned(listed + 63) / 64, 1, 1);
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
                         GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
         glUseProgram(0);
-        detail::finishFrame(stats, statsBuffer.id(), settings.samplesPerFrame, settings.maxFrames,
-                            settings.convergenceThreshold);
+        return readFrameStats();
+    }
+
+    /// One frame of the progressive accumulation: after a restart the prepare pass first (it
+    /// restarts the texels whose material changed and counts), then the frame's plan (target
+    /// count and k), the work list, the gather and the statistics.
+    void accumulate(const gpu::GBufferView& g) {
+        const int spf = settings.samplesPerFrame;
+        const int maxSamples = settings.maxFrames * spf;
+        const int lights = std::max(int(lightClip.size()), 1);
+        passStats.texelsRestarted = passStats.texelsSampled = passStats.samplesThisFrame = 0;
+        if (needMaterialPass) {
+            std::array<uint32_t, WORDS> prep{};
+            {
+                const auto scope = profiler.scope("prepare");
+                prep = prepare();
+            }
+            needMaterialPass = false;
+            LUCENT_ASSERT(int(prep[COVERED]) == covered);
+            passStats.texelsRestarted = int(prep[RESTARTED]);
+            minN = covered > 0 ? int(prep[MIN_N]) : 0;
+            maxN = int(prep[MAX_N]);
+        }
+        passStats.texelsCovered = covered;
+        passStats.minSamples = minN;
+        passStats.maxSamples = maxN;
+        if (covered == 0) {
+            stats.converged = true;  // no covered texel: black until something changes
+            return;
+        }
+        const bool catchUp = minN < maxN;
+        if (!catchUp && (maxN >= maxSamples || maxN == convergedLevel)) {
+            // Every texel is at a level that already converged (e.g. a stroke that changed no
+            // face texel's material): nothing to add.
+            stats.converged = true;
+            return;
+        }
+        // Catch-up: only the texels behind the most sampled ones (restarted by a material
+        // change) sample, up to that level; else every texel advances by k.
+        int listed = 0;
+        {
+            const auto scope = profiler.scope("compact");
+            listed = listTexels(compactProgram, workList, catchUp ? uint32_t(maxN) : 0xffffffffu);
+        }
+        const int budget =
+            stats.frames == 0 ? settings.firstFrameSampleBudget : settings.frameSampleBudget;
+        int k = framePlanSamples(budget, listed, lights, spf);
+        const int target = catchUp ? maxN : std::min(maxN + k, maxSamples);
+        if (!catchUp)
+            k = target - maxN;
+        std::array<uint32_t, WORDS> words{};
+        {
+            const auto scope = profiler.scope("gather");
+            words = gather(g, k, target, listed);
+        }
+        float maxChange = 0.f, maxMean = 0.f;
+        std::memcpy(&maxChange, &words[MAX_CHANGE], sizeof(float));
+        std::memcpy(&maxMean, &words[MAX_MEAN], sizeof(float));
+        const int before = maxN;
+        minN = std::min(minN + k, target);  // every listed texel got min(k, target − N)
+        maxN = target;
+        passStats.texelsSampled = int(words[SAMPLED]);
+        passStats.samplesThisFrame = k;
+        passStats.minSamples = minN;
+        passStats.maxSamples = maxN;
+        ++stats.frames;
+        stats.samplesPerPixel = minN;
+        if (catchUp) {
+            // Converged again once the restarted texels reach the level that had converged.
+            stats.converged = minN == target && target == convergedLevel;
+            return;
+        }
+        // Every texel advanced by k: the largest change of a texel's mean, relative to the
+        // brightest mean. Adding k samples at count N moves a mean by ≈ (k/(N + k))·σ/√k ∝ √k,
+        // so the change is scaled by √(samplesPerFrame/k) to the step the threshold is meant
+        // for: a smaller budget stops at about the same sample count, not earlier.
+        if (before > 0)
+            stats.lastChange =
+                maxMean > 0.f ? maxChange / maxMean * std::sqrt(float(spf) / float(k)) : 0.f;
+        const bool done = target >= maxSamples || !(maxMean > 0.f) ||
+                          (before > 0 && stats.lastChange < settings.convergenceThreshold);
+        if (done) {
+            convergedLevel = target;
+            stats.converged = true;
+        }
     }
 
     /// Seed 001 §4.1 step 3: six-face combination with the depth test, times T₂₁.
@@ -306,7 +522,6 @@ struct DirpoleSubsurfaceProvider::Impl {
         glUniform3fv(p.uniformLocation("u_faceAxis"), 6, &axes[0][0]);
         glUniform2f(p.uniformLocation("u_faceNearFar"), faceNear, faceFar);
         glUniform1i(p.uniformLocation("u_faceSize"), faceSize);
-        glUniform1i(p.uniformLocation("u_frames"), haveGeometry ? stats.frames : 0);
         glUniform1f(p.uniformLocation("u_intrusion"),
                     settings.cubemapIntrusion ? settings.intrusion : 0.f);
         // Without the §4.3.3 fix the test is a bare depth compare, with the float round-off of
@@ -328,7 +543,10 @@ struct DirpoleSubsurfaceProvider::Impl {
         glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
         glUniform1i(p.uniformLocation("u_meshId"), settings.meshId);
         glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
-        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+        // The target (imageStore) is read by the shading pass (texture fetch) and cleared by
+        // the renderer at the next frame (framebuffer clear or texture update, GL 4.5 §7.13.2).
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                        GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
         glUseProgram(0);
     }
 };
@@ -342,28 +560,37 @@ DirpoleSubsurfaceProvider::~DirpoleSubsurfaceProvider() = default;
 void DirpoleSubsurfaceProvider::createGl(const gpu::ShaderLibrary& library) {
     m->gbufferProgram =
         gpu::GlProgram::graphics(library, "dirpole_gbuffer.vert", "dirpole_gbuffer.frag");
+    m->prepareProgram = gpu::GlProgram::compute(library, "dirpole_prepare.comp");
+    m->coverProgram = gpu::GlProgram::compute(library, "dirpole_compact.comp");
+    m->compactProgram = gpu::GlProgram::compute(library, "dirpole_compact.comp", {"FROM_LIST"});
     m->gatherProgram = gpu::GlProgram::compute(library, "dirpole_gather.comp");
     m->combineProgram = gpu::GlProgram::compute(library, "dirpole_combine.comp");
     m->fbo = gpu::GlObject::create(gpu::GlObjectKind::Framebuffer);
     const GLenum bufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     glNamedFramebufferDrawBuffers(m->fbo.id(), 2, bufs);
-    m->statsBuffer =
-        gpu::createBuffer(2 * sizeof(uint32_t), nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
+    m->statsBuffer = gpu::createBuffer(WORDS * sizeof(uint32_t), nullptr,
+                                       GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
+    m->needGeometry = true;
 }
 
 void DirpoleSubsurfaceProvider::destroyGl() {
-    for (gpu::GlProgram* p : {&m->gbufferProgram, &m->gatherProgram, &m->combineProgram})
+    for (gpu::GlProgram* p : {&m->gbufferProgram, &m->prepareProgram, &m->coverProgram,
+                              &m->compactProgram, &m->gatherProgram, &m->combineProgram})
         p->destroy();
     for (gpu::GlObject* o : {&m->fbo, &m->statsBuffer})
         o->destroy();
     m->destroyMaps();
-    m->needReset = true;
+    m->profiler.destroy();
+    m->needGeometry = true;
+    m->markFullRestart();
 }
 
 void DirpoleSubsurfaceProvider::setSettings(const DirpoleSettings& settings) {
     validateSettings(settings);
-    if (!sameSettings(settings, m->settings))
-        m->markReset();
+    if (!sameGeometry(settings, m->settings))
+        m->needGeometry = true;
+    if (!sameAccumulation(settings, m->settings))
+        m->markFullRestart();
     m->settings = settings;
 }
 
@@ -372,7 +599,21 @@ const DirpoleSettings& DirpoleSubsurfaceProvider::settings() const {
 }
 
 void DirpoleSubsurfaceProvider::restart() {
-    m->markReset();
+    // setMaterial, uploadBricks, syncMaterial, reset(): the G-buffers depend on the lights,
+    // meshes (revisions are compared each frame) and map sizes only; the prepare pass restarts
+    // the texels whose material changed.
+    m->markRestart();
+}
+
+const DirpoleStats& DirpoleSubsurfaceProvider::dirpoleStats() const {
+    return m->passStats;
+}
+
+std::vector<gpu::PassTiming> DirpoleSubsurfaceProvider::passTimes() const {
+    if (!m_created)
+        return {};
+    m->profiler.collect(/*wait=*/true);
+    return m->profiler.latest();
 }
 
 DirpoleSubsurfaceProvider::DebugTextures DirpoleSubsurfaceProvider::debugTextures() const {
@@ -383,9 +624,11 @@ DirpoleSubsurfaceProvider::DebugTextures DirpoleSubsurfaceProvider::debugTexture
 void DirpoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsigned target) {
     requireCreated("renderSubsurface");
     Impl& r = *m;
-    // Material: a new grid or unreported edits (revision moved) re-upload everything.
+    r.profiler.beginFrame();
+    // Material: a new grid or unreported edits (revision moved) re-upload everything; the
+    // prepare pass then finds the texels whose material changed.
     if (r.volume.syncForFrame(r.stats))
-        r.markReset();
+        r.markRestart();
     // Lights (the renderer's SSBO, 64 bytes each) and the rasterised meshes' uploads. The
     // camera is not compared: the cube faces do not depend on it (seed 001 §4.1).
     const int lightCount = std::clamp(g.lightBuffer ? g.lightCount : 0, 0, LUCENT_MAX_LIGHTS);
@@ -398,23 +641,30 @@ void DirpoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsi
             meshes.insert(meshes.end(),
                           {uint64_t(i), g.meshes[i].vertexArray, g.meshes[i].revision});
     if (lightBytes != r.lastLights || meshes != r.lastMeshes) {
-        r.needReset = true;
+        r.needGeometry = true;
+        r.markFullRestart();
         r.lastLights = lightBytes;
         r.lastMeshes = std::move(meshes);
     }
-    if (r.needReset) {
-        r.resetAccumulation();
+    if (r.needGeometry) {
+        const auto scope = r.profiler.scope("geometry");
         std::vector<gpu::shared::GpuLight> lights(static_cast<size_t>(lightCount));
         if (!lights.empty())
             std::memcpy(lights.data(), lightBytes.data(), lightBytes.size());
         r.renderGeometry(g, lights);
+        r.needGeometry = false;
     }
+    if (r.needClear)
+        r.clearAccumulation();
     if (!r.haveGeometry)
         r.stats.converged = true;  // nothing to rasterise: black until something changes
-    if (!r.stats.converged)
-        r.gather(g);
-    if (r.haveGeometry)
+    if (r.haveGeometry && (!r.stats.converged || r.needMaterialPass))
+        r.accumulate(g);
+    if (r.haveGeometry) {
+        const auto scope = r.profiler.scope("combine");
         r.combine(g, target);
+    }
+    r.profiler.endFrame();
     gpu::checkGlError("DirpoleSubsurfaceProvider::renderSubsurface");
 }
 

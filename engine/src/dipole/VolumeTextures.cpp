@@ -64,6 +64,7 @@ void MaterialSubsurfaceProvider::syncMaterial(MaterialVolume& volume) {
 }
 
 void MaterialSubsurfaceProvider::reset() {
+    invalidateCaches();
     restart();
 }
 
@@ -199,7 +200,7 @@ void VolumeTextures::uploadAll(ProviderStats& stats) {
 }
 
 void restartAccumulation(ProviderStats& stats) {
-    if (stats.frames > 0 || stats.converged)
+    if (stats.frames > 0 || stats.converged || stats.preview)  // shown work is discarded
         ++stats.resets;
     stats.frames = 0;
     stats.samplesPerPixel = 0;

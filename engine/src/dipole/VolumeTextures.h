@@ -70,7 +70,8 @@ private:
     bool m_stale = true;  ///< full upload at the next syncForFrame()
 };
 
-/// ProviderStats after a reset: no frames, not converged (counts a restart if any work is lost).
+/// ProviderStats after a reset: no frames, not converged (counts a restart if any work is lost:
+/// accumulated frames or a preview frame).
 void restartAccumulation(ProviderStats& stats);
 
 /// Finishes one accumulated frame: frames, samplesPerPixel, lastChange from the two statistics

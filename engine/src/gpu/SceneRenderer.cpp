@@ -84,6 +84,27 @@ void validateSurface(const SurfaceMaterial& s) {
                  "SurfaceMaterial.shininess must be >= 1, got ", s.shininess);
 }
 
+/// Fixed-function state every pass of the renderer relies on, whatever a provider (which runs
+/// between the G-buffer and the shade pass) or the host (Qt's paint engine) left: no scissor (it
+/// also limits glClear*), no culling (the full-screen triangle is drawn whatever the winding
+/// convention), no blending, stencil or rasteriser discard, filled polygons, all colour channels
+/// written, and GL's default depth convention (the shaders map clip z in [−1, 1] to [0, 1]).
+/// Each pass then enables what it needs (depth test, polygon offset).
+void setPassRasterState() {
+    glDisable(GL_SCISSOR_TEST);
+    glDisable(GL_RASTERIZER_DISCARD);
+    glDisable(GL_CULL_FACE);
+    glDisable(GL_BLEND);
+    glDisable(GL_STENCIL_TEST);
+    glDisable(GL_DEPTH_CLAMP);
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glDisable(GL_FRAMEBUFFER_SRGB);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    glDepthRange(0.0, 1.0);
+    glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+}
+
 }  // namespace
 
 struct SceneRenderer::Impl {
@@ -359,10 +380,10 @@ struct SceneRenderer::Impl {
         ++counters.shadowsRendered;
         glBindFramebuffer(GL_FRAMEBUFFER, shadowFbo.id());
         glViewport(0, 0, shadowSizeAllocated, shadowSizeAllocated);
+        setPassRasterState();
         glEnable(GL_DEPTH_TEST);
         glDepthFunc(GL_LESS);
         glDepthMask(GL_TRUE);
-        glDisable(GL_CULL_FACE);
         // Slope-scaled depth bias against self-shadowing acne.
         glEnable(GL_POLYGON_OFFSET_FILL);
         glPolygonOffset(2.f, 4.f);
@@ -375,6 +396,9 @@ struct SceneRenderer::Impl {
             drawMeshes(false);
         }
         glDisable(GL_POLYGON_OFFSET_FILL);
+        // The maps are sampled by the shade pass: leave them attached to no framebuffer (no
+        // attachment survives a reallocation of the array either).
+        glNamedFramebufferTexture(shadowFbo.id(), GL_DEPTH_ATTACHMENT, 0, 0);
         shadowsDirty = false;
         return true;
     }
@@ -385,9 +409,8 @@ struct SceneRenderer::Impl {
     void tonemapInto(GLuint fbo, int w, int h) {
         glBindFramebuffer(GL_FRAMEBUFFER, fbo);
         glViewport(0, 0, w, h);
+        setPassRasterState();
         glDisable(GL_DEPTH_TEST);
-        glDisable(GL_BLEND);
-        glDisable(GL_FRAMEBUFFER_SRGB);
         glUseProgram(tonemapProgram.id());
         glBindBufferBase(GL_UNIFORM_BUFFER, LUCENT_BINDING_FRAME, frameUbo.id());
         glBindTextureUnit(0, radiance.id());
@@ -629,6 +652,7 @@ void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int
         auto s = r.profiler.scope("gbuffer");
         glBindFramebuffer(GL_FRAMEBUFFER, r.gFbo.id());
         glViewport(0, 0, r.width, r.height);
+        setPassRasterState();  // before the clears: a scissor left enabled would limit them
         const float zero[4] = {0.f, 0.f, 0.f, 0.f};
         const float one = 1.f;
         glClearNamedFramebufferfv(r.gFbo.id(), GL_COLOR, 0, zero);
@@ -637,8 +661,6 @@ void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int
         glEnable(GL_DEPTH_TEST);
         glDepthFunc(GL_LESS);
         glDepthMask(GL_TRUE);
-        glDisable(GL_CULL_FACE);
-        glDisable(GL_BLEND);
         glUseProgram(r.gbufferProgram.id());
         glBindBufferBase(GL_UNIFORM_BUFFER, LUCENT_BINDING_FRAME, r.frameUbo.id());
         r.drawMeshes(true);
@@ -648,6 +670,7 @@ void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int
     }
     {
         auto s = r.profiler.scope("subsurface");
+        setPassRasterState();  // the clear below honours the scissor test and the colour mask
         const float zero[4] = {0.f, 0.f, 0.f, 0.f};
         glClearNamedFramebufferfv(r.subsurfaceFbo.id(), GL_COLOR, 0, zero);
         if (r.provider) {
@@ -660,8 +683,8 @@ void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int
         auto s = r.profiler.scope("shade");
         glBindFramebuffer(GL_FRAMEBUFFER, renderDirect ? r.directFbo.id() : r.radianceFbo.id());
         glViewport(0, 0, r.width, r.height);
+        setPassRasterState();  // the provider ran just before and may leave any state
         glDisable(GL_DEPTH_TEST);
-        glDisable(GL_BLEND);
         glUseProgram(renderDirect ? r.shadeProgram.id() : r.shadeReuseProgram.id());
         glBindBufferBase(GL_UNIFORM_BUFFER, LUCENT_BINDING_FRAME, r.frameUbo.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, LUCENT_BINDING_LIGHTS, r.lightSsbo.id());

@@ -229,7 +229,12 @@ void SslpvGlPropagator::writeTextures(const unsigned textures[4]) const {
         glBindImageTexture(i, textures[i], 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     const unsigned g = unsigned(s.res + 3) / 4;
     glDispatchCompute(g, g, g);
-    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    // The textures are written with imageStore (incoherent): made visible to texture fetches and
+    // image loads (the sample pass), and to glGetTexImage / glTexSubImage (a read-back, or the
+    // CPU upload of SslpvSubsurfaceProvider after a backend switch, which must also wait for these
+    // writes), GL 4.5 §7.13.2.
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
+                    GL_TEXTURE_UPDATE_BARRIER_BIT);
     glUseProgram(0);
     gpu::checkGlError("SslpvGlPropagator::writeTextures");
 }
@@ -408,7 +413,10 @@ void SslpvGlPropagator::propagate(const SslpvSolver& solver) {
             next = 1 - next;
         }
     }
-    // Grids no step assigned are zero (as the CPU solver's).
+    // Grids no step assigned are zero (as the CPU solver's). The clear is a buffer update: it
+    // must wait for the shader writes of an earlier propagate() to the same grid (§7.13.2).
+    if (!accWritten || !exitWritten)
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     if (!accWritten)
         glClearNamedBufferData(s.acc.id(), GL_R8, GL_RED, GL_UNSIGNED_BYTE, nullptr);
     if (!exitWritten)

@@ -395,7 +395,11 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
     glProgramUniform1f(p, s.program.uniformLocation("u_Y00"), SH_Y00);
     glProgramUniform1f(p, s.program.uniformLocation("u_K1"), SH_K1);
     glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
-    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+    // The target is written with imageStore: visible to texture fetches (the shade pass), image
+    // loads, framebuffer clears/draws (the next frame's clear) and glGetTexImage read-backs
+    // (GL 4.5 §7.13.2), also when the provider is used without gpu::SceneRenderer.
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                    GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
     glUseProgram(0);
     if (query) {
         glEndQuery(GL_TIME_ELAPSED);

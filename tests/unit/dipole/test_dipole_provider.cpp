@@ -122,6 +122,9 @@ TEST(DipoleProviderSettings, RejectsBadSettingsWithoutGl) {
     s = {};
     s.lightViewThreshold = 1.f;
     EXPECT_THROW(p.setSettings(s), ValueError);
+    s = {};
+    s.previewSamples = -1;
+    EXPECT_THROW(p.setSettings(s), ValueError);
     EXPECT_THROW(p.uploadBricks({0}), ValueError);  // not created
     EXPECT_FALSE(p.isCreated());
 }
@@ -135,6 +138,7 @@ TEST_F(ProviderFixture, FirstFrameMatchesCpuGatherOnALitSphere) {
         ps.model = model;
         ps.eta = 1.3f;
         ps.samplesPerFrame = 32;
+        ps.previewSamples = 0;  // the second model's restart also computes everything at once
         if (!scene)
             load(s, ps);
         provider.setSettings(ps);
@@ -295,6 +299,7 @@ TEST_F(ProviderFixture, AccumulationResetsOnChangeAndStopsWhenConverged) {
     ProviderSettings ps;
     ps.samplesPerFrame = 8;
     ps.convergenceThreshold = 0.f;
+    ps.previewSamples = 0;  // every restart's first frame is an accumulated one (see below)
     load(s, ps);
     (void)s.objects[0].material->takeDirtyBricks();  // the initial state: uploaded in full
     const auto frames = [&] { return provider.stats().frames; };
@@ -534,4 +539,152 @@ TEST_F(ProviderFixture, BackLitSlabIsLitThroughTheLightView) {
         // 4 SE, plus 2e-3 relative for the shadow-map PCF on the lit face and float arithmetic.
         EXPECT_NEAR(mean, exact, 4 * se + 2e-3 * exact) << "channel " << c;
     }
+}
+
+// Light views depend on the meshes, the lights and the shadow maps only: a material change (a
+// paint stroke) or a camera move re-renders none of them (only their back-lit fractions, which
+// depend on R′ and the camera); a light change, reset() and a mesh upload re-render them.
+TEST_F(ProviderFixture, MaterialAndCameraRestartsReuseTheLightViews) {
+    Scene s = testutil::pointLitSphere(4, 64, 48);
+    ProviderSettings ps;
+    ps.samplesPerFrame = 4;
+    load(s, ps);
+    renderer.render();
+    ASSERT_EQ(provider.stats().lightViewPasses, 1);
+    ASSERT_EQ(provider.stats().lightViewsGathered, 1);  // the side light's view (fraction 0.24)
+    const float fraction0 = provider.stats().backlitFractions.at(0);
+    const auto settle = [&] {  // the preview, then the frames that bring the views up to date
+        for (int i = 0; i < 4; ++i)
+            renderer.render();
+        EXPECT_FALSE(provider.stats().viewsPending);
+        EXPECT_EQ(provider.stats().lightViewsGathered, 1);
+    };
+    // Paint stroke: material only.
+    MaterialVolume& vol = *s.objects[0].material;
+    MaterialSample painted = testutil::skinMaterial();
+    painted.sigma_s = painted.sigma_s * 0.5f;  // a smaller R′ where painted
+    painted.sigma_t = painted.sigma_s + Rgb(0.02f, 0.08f, 0.2f);
+    for (int z = 0; z < 32; ++z)
+        vol.set({16, 16, z}, painted);
+    provider.syncMaterial(vol);
+    settle();
+    EXPECT_EQ(provider.stats().lightViewPasses, 1);
+    // Camera move: the views are kept, the fraction is recomputed for the new camera.
+    Camera cam = s.camera;
+    cam.position = {8.f, 4.f, 38.f};
+    renderer.setCamera(cam);
+    settle();
+    EXPECT_EQ(provider.stats().lightViewPasses, 1);
+    EXPECT_NE(provider.stats().backlitFractions.at(0), fraction0);
+    // A light change re-renders the view; so do reset() and a mesh upload.
+    std::vector<Light> lights = s.lights;
+    lights[0].position.x += 5.f;
+    renderer.setLights(lights);
+    settle();
+    EXPECT_EQ(provider.stats().lightViewPasses, 2);
+    provider.reset();
+    settle();
+    EXPECT_EQ(provider.stats().lightViewPasses, 3);
+    renderer.updateMesh(0, makeSphere(10.5f, 4));
+    settle();
+    EXPECT_EQ(provider.stats().lightViewPasses, 4);
+}
+
+// Bounded interactive restarts (ProviderSettings::previewSamples, docs/methods/dipole.md §3c):
+// the frame of a restart that discards shown samples runs only the camera irradiance and a
+// camera-only preview gather; the light views join in the next frames; from then on the frames
+// are those of the full estimator started from scratch, so the converged image equals the
+// previewSamples = 0 provider's. Same seeds, same inputs (the cached views hold what a fresh
+// render produces) and the same arithmetic: the images agree to float rounding, not just
+// within a Monte Carlo bound; 1e-6 of the peak allows for nothing but rounding.
+TEST_F(ProviderFixture, InteractiveRestartPreviewsThenEqualsTheFullEstimator) {
+    Scene s = testutil::pointLitSphere(4, 96, 64);
+    ProviderSettings ps;
+    // 160 spp: a frame with the light view is 96·64·160·2 = 2.1 units of 320·180·16, so the
+    // interactive frames run in 3 parts (ProviderStats::frameParts).
+    ps.samplesPerFrame = 160;
+    ps.maxFrames = 3;
+    ps.convergenceThreshold = 0.f;
+    load(s, ps);
+    MaterialVolume& vol = *s.objects[0].material;
+    (void)vol.takeDirtyBricks();
+    renderer.render();
+    renderer.render();
+    // A stroke and its undo: the material ends as it started.
+    const MaterialSample original = vol.at({16, 16, 28});
+    MaterialSample red = original;
+    red.sigma_t.r *= 3.f;
+    vol.set({16, 16, 28}, red);
+    provider.syncMaterial(vol);
+    renderer.render();
+    vol.set({16, 16, 28}, original);
+    provider.syncMaterial(vol);
+    const int passes = provider.stats().lightViewPasses;
+    renderer.render();  // the preview frame
+    {
+        const ProviderStats& st = provider.stats();
+        EXPECT_TRUE(st.preview);
+        EXPECT_TRUE(st.viewsPending);
+        EXPECT_EQ(st.frames, 0);
+        EXPECT_EQ(st.previewFrames, 2);
+        EXPECT_EQ(st.passMs.lightViews, 0.f);
+        EXPECT_EQ(st.passMs.fractions, 0.f);
+        EXPECT_GT(st.passMs.gather, 0.f);
+        EXPECT_FALSE(st.converged);
+        const ImageRgb preview = renderer.readRadiance();
+        EXPECT_GT(luminance(preview.at(48, 32)), 0.f);  // the lit sphere shows at once
+        // Next frame: the back-lit fraction of the kept view only (no gather); the preview
+        // stays on screen.
+        renderer.render();
+        EXPECT_GT(st.passMs.fractions, 0.f);
+        EXPECT_EQ(st.passMs.lightViews, 0.f);
+        EXPECT_EQ(st.frames, 0);
+        EXPECT_FALSE(st.viewsPending);
+        EXPECT_EQ(renderer.readRadiance().pixels(), preview.pixels());
+        // The first part gathers a third of the rows; the others keep showing the preview.
+        renderer.render();
+        EXPECT_EQ(st.frames, 0);
+        const ImageRgb part0 = renderer.readRadiance();
+        int lost = 0;
+        for (int y = 0; y < preview.height(); ++y)
+            for (int x = 0; x < preview.width(); ++x)
+                lost += luminance(preview.at(x, y)) > 0.f && !(luminance(part0.at(x, y)) > 0.f);
+        EXPECT_EQ(lost, 0);
+    }
+    renderUntilConverged(3 * ps.maxFrames + 2);
+    ASSERT_TRUE(provider.stats().converged);
+    EXPECT_EQ(provider.stats().frameParts, 3);
+    EXPECT_FALSE(provider.stats().viewsPending);
+    EXPECT_EQ(provider.stats().frames, ps.maxFrames);
+    EXPECT_EQ(provider.stats().lightViewsGathered, 1);
+    EXPECT_EQ(provider.stats().lightViewPasses, passes);  // no view re-rendered
+    const ImageRgb interactive = renderer.readRadiance();
+
+    // The old scheme: a fresh provider computing everything in its first frame.
+    DipoleSubsurfaceProvider full;
+    full.create();
+    ProviderSettings fs = ps;
+    fs.previewSamples = 0;
+    full.setSettings(fs);
+    full.setMaterial(&vol);
+    renderer.setSubsurfaceProvider(&full);
+    for (int i = 0; i < 20 && !full.stats().converged; ++i)
+        renderer.render();
+    const ImageRgb reference = renderer.readRadiance();
+    EXPECT_EQ(full.stats().frames, ps.maxFrames);
+    EXPECT_EQ(full.stats().lightViewsGathered, 1);
+    renderer.setSubsurfaceProvider(&provider);
+    full.destroy();
+    float peak = 0.f, maxDiff = 0.f;
+    for (int y = 0; y < reference.height(); ++y)
+        for (int x = 0; x < reference.width(); ++x)
+            for (int c = 0; c < 3; ++c) {
+                peak = std::max(peak, reference.at(x, y)[c]);
+                maxDiff =
+                    std::max(maxDiff, std::abs(interactive.at(x, y)[c] - reference.at(x, y)[c]));
+            }
+    std::printf("interactive vs full restart: max |diff| %.3g of peak %.3g\n", double(maxDiff),
+                double(peak));
+    ASSERT_GT(peak, 0.f);
+    EXPECT_LE(maxDiff, 1e-6f * peak);
 }

@@ -35,7 +35,7 @@ class DirpoleFixture
 protected:
     void load(const Scene& s, const DirpoleSettings& ds) { loadScene(s, ds, /*ownMeshId=*/true); }
     /// η = 1.3, `spp` samples per frame, at most `maxFrames`, small maps (256² light view, 128²
-    /// faces: enough for the 48² sphere images).
+    /// faces: enough for the 48² sphere images), no frame budget (every frame adds `spp`).
     static DirpoleSettings smallMaps(int spp, int maxFrames) {
         DirpoleSettings ds;
         ds.eta = 1.3f;
@@ -43,9 +43,32 @@ protected:
         ds.maxFrames = maxFrames;
         ds.lightMapSize = 256;
         ds.cubeMapSize = 128;
+        ds.frameSampleBudget = ds.firstFrameSampleBudget = 0;
         return ds;
     }
+    /// Forces a full restart (new G-buffers, every texel cleared) without changing the result:
+    /// a frame with other map sizes, then `ds` again.
+    void fullRestart(DirpoleSettings ds) {  // a copy: callers may pass provider.settings()
+        DirpoleSettings other = ds;
+        other.cubeMapSize = ds.cubeMapSize / 2;
+        provider.setSettings(other);
+        renderer.render();
+        provider.setSettings(ds);
+    }
 };
+
+/// max over pixels of |a − b| / (|b| + 1e-3·peak(b)) per channel.
+double maxRelativeDifference(const ImageRgb& a, const ImageRgb& b) {
+    float peak = 0.f;
+    for (const Rgb& v : b.pixels())
+        peak = std::max({peak, v.r, v.g, v.b});
+    double worst = 0.0;
+    for (size_t i = 0; i < a.pixels().size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            worst = std::max(worst, double(std::abs(a.pixels()[i][c] - b.pixels()[i][c])) /
+                                        (std::abs(b.pixels()[i][c]) + 1e-3 * peak));
+    return worst;
+}
 
 /// The mesh with one vertex per triangle corner and the facet normal (oriented like the vertex
 /// normals): GL's interpolated normals then equal the CPU ray caster's geometric normals (a
@@ -98,6 +121,19 @@ Scene pointLitSphere() {
     return testutil::pointLitSphere(3, 48, 48);
 }
 
+/// Paints every voxel of the brick holding `c` with the centre voxel's material plus
+/// `extraAbsorption` (mm⁻¹) of σa.
+void paintBrick(MaterialVolume& vol, const Coord& c, float extraAbsorption) {
+    MaterialSample dark = vol.at(Coord(16));
+    dark.sigma_t = dark.sigma_s + Rgb(extraAbsorption);
+    const Coord o = vol.brickOrigin(vol.brickIndexOf(c));
+    for (int z = 0; z < MaterialVolume::BRICK; ++z)
+        for (int y = 0; y < MaterialVolume::BRICK; ++y)
+            for (int x = 0; x < MaterialVolume::BRICK; ++x)
+                if (vol.spec().contains(o + Coord(x, y, z)))
+                    vol.set(o + Coord(x, y, z), dark);
+}
+
 bool allFinite(const ImageRgb& img) {
     return std::all_of(img.pixels().begin(), img.pixels().end(), [](const Rgb& v) {
         return isFinite(v) && glm::all(glm::greaterThanEqual(v, Rgb(0.f)));
@@ -124,6 +160,12 @@ TEST(DirpoleSettings, RejectsBadSettingsWithoutGl) {
     expectThrow([](DirpoleSettings& s) { s.intrusion = INFINITY; });
     expectThrow([](DirpoleSettings& s) { s.bias = -1.f; });
     expectThrow([](DirpoleSettings& s) { s.meshId = -2; });
+    expectThrow([](DirpoleSettings& s) { s.frameSampleBudget = -1; });
+    expectThrow([](DirpoleSettings& s) { s.firstFrameSampleBudget = -1; });
+    expectThrow([](DirpoleSettings& s) {  // per-texel counts are floats: < 2^24 samples
+        s.maxFrames = 1 << 20;
+        s.samplesPerFrame = 16;
+    });
     try {
         DirpoleSettings s;
         s.bias = -1.f;
@@ -168,6 +210,7 @@ TEST_F(DirpoleFixture, MatchesCpuPipelineOnLitBox) {
     ds.convergenceThreshold = 0.f;
     ds.lightMapSize = 512;
     ds.cubeMapSize = 256;
+    ds.frameSampleBudget = ds.firstFrameSampleBudget = 0;  // 32 samples a frame, as the CPU
     load(s, ds);
     // The published model and the energy-normalised one (the GL side resamples
     // DirpoleEnergyTable::scale at 256 nodes: < 1e-4 relative, inside δ).
@@ -327,14 +370,7 @@ TEST_F(DirpoleFixture, PaintingUploadsDirtyBricksAndRestarts) {
     EXPECT_EQ(provider.stats().fullUploads, 1);
     const ImageRgb before = renderer.readRadiance();
     // Paint every voxel of one brick with a strongly absorbing material.
-    MaterialSample dark = vol.at(Coord(16));
-    dark.sigma_t = dark.sigma_s + Rgb(5.f);
-    const Coord o = vol.brickOrigin(vol.brickIndexOf(Coord(16, 16, 31)));
-    for (int z = 0; z < MaterialVolume::BRICK; ++z)
-        for (int y = 0; y < MaterialVolume::BRICK; ++y)
-            for (int x = 0; x < MaterialVolume::BRICK; ++x)
-                if (vol.spec().contains(o + Coord(x, y, z)))
-                    vol.set(o + Coord(x, y, z), dark);
+    paintBrick(vol, Coord(16, 16, 31), /*extraAbsorption=*/5.f);
     const int resets = provider.stats().resets;
     provider.syncMaterial(vol);
     EXPECT_EQ(provider.stats().lastUploadBricks, 1);
@@ -369,6 +405,7 @@ TEST_F(DirpoleFixture, DistantPointLightMatchesDirectionalLight) {
     ds.maxFrames = 2;
     ds.lightMapSize = 512;
     ds.cubeMapSize = 256;
+    ds.frameSampleBudget = ds.firstFrameSampleBudget = 0;
     load(s, ds);
     renderUntilConverged(10);
     const ImageRgb directional = renderer.readRadiance();
@@ -394,4 +431,106 @@ TEST_F(DirpoleFixture, DistantPointLightMatchesDirectionalLight) {
         EXPECT_GT(a, 0.0);
         EXPECT_NEAR(b / a, 1.0, 2e-3) << "channel " << c;
     }
+}
+
+// A paint stroke changes only the material. The light and cube-face G-buffers do not depend on
+// it (geometryRenders stays), and a texel's sum depends on the material only at x_o, so only
+// the texels under the stroke restart: after they catch up, the image equals a render from
+// scratch with the new material at the same samples per texel. The per-texel sample sequence is
+// indexed by the texel's own count, so both sums hold the same samples and differ only by the
+// float rounding of their different summation order (a few ulp per addition, ≤ 64 additions:
+// < 1e-5 relative; 1e-4 allowed). A light change re-renders the G-buffers.
+TEST_F(DirpoleFixture, MaterialChangeKeepsGeometryAndRestartsOnlyChangedTexels) {
+    Scene s = pointLitSphere();
+    DirpoleSettings ds = smallMaps(8, 4);
+    ds.convergenceThreshold = 0.f;  // stop at maxFrames × 8 = 32 samples per texel
+    load(s, ds);
+    renderUntilConverged(20);
+    ASSERT_TRUE(provider.stats().converged);
+    EXPECT_EQ(provider.dirpoleStats().geometryRenders, 1);
+    EXPECT_EQ(provider.dirpoleStats().minSamples, 32);
+    const int covered = provider.dirpoleStats().texelsCovered;
+    EXPECT_GT(covered, 10000);
+
+    // Paint one brick on the lit side (+z, towards the camera and the light).
+    MaterialVolume& vol = *s.objects[0].material;
+    paintBrick(vol, Coord(16, 16, 28), /*extraAbsorption=*/2.f);
+    provider.syncMaterial(vol);
+    EXPECT_FALSE(provider.stats().converged);
+    renderer.render();
+    const DirpoleStats st = provider.dirpoleStats();
+    EXPECT_EQ(st.geometryRenders, 1);  // no G-buffer re-rendered
+    EXPECT_GT(st.texelsRestarted, 0);
+    EXPECT_LT(st.texelsRestarted, covered / 4);       // one brick of 64: a few % of the surface
+    EXPECT_EQ(st.texelsSampled, st.texelsRestarted);  // only they sample (catch-up)
+    EXPECT_EQ(st.maxSamples, 32);
+    renderUntilConverged(20);
+    ASSERT_TRUE(provider.stats().converged);
+    EXPECT_EQ(provider.dirpoleStats().minSamples, 32);
+    EXPECT_EQ(provider.dirpoleStats().geometryRenders, 1);
+    const ImageRgb incremental = renderer.readRadiance();
+
+    fullRestart(provider.settings());
+    renderer.render();
+    EXPECT_EQ(provider.dirpoleStats().geometryRenders, 3);  // the two map-size changes
+    EXPECT_EQ(provider.dirpoleStats().texelsRestarted, covered);
+    renderUntilConverged(20);
+    const ImageRgb scratch = renderer.readRadiance();
+    const double diff = maxRelativeDifference(incremental, scratch);
+    std::printf("dirpole stroke catch-up vs from scratch: max relative difference %.2e\n", diff);
+    EXPECT_LT(diff, 1e-4);
+
+    // A light change re-renders the G-buffers and restarts every texel.
+    std::vector<Light> lights = s.lights;
+    lights[0].position.x = -25.f;
+    renderer.setLights(lights);
+    renderer.render();
+    EXPECT_EQ(provider.dirpoleStats().geometryRenders, 4);
+    EXPECT_EQ(provider.dirpoleStats().texelsRestarted, covered);
+}
+
+// The frame budgets bound a frame's work (texels × k × lights ≤ budget while k > 1), with a
+// small first frame after a restart, and do not change the image: after the same samples per
+// texel (threshold 0: maxFrames × samplesPerFrame) it equals the unbudgeted render up to the
+// float summation order (1e-4, as above). Changing a budget restarts nothing.
+TEST_F(DirpoleFixture, FrameBudgetsBoundFramesWithoutChangingTheImage) {
+    const Scene s = pointLitSphere();
+    DirpoleSettings ds = smallMaps(16, 4);
+    ds.convergenceThreshold = 0.f;
+    load(s, ds);
+    renderUntilConverged(20);
+    EXPECT_EQ(provider.stats().frames, 4);
+    const ImageRgb unlimited = renderer.readRadiance();
+    const int covered = provider.dirpoleStats().texelsCovered;
+    ASSERT_GT(covered, 0);
+
+    // First frame: about 2 samples per texel, later frames about 6 (of 16).
+    ds = provider.settings();  // with the mesh id load() set
+    ds.firstFrameSampleBudget = 2 * covered;
+    ds.frameSampleBudget = 6 * covered + covered / 2;
+    const int resets = provider.stats().resets;
+    provider.setSettings(ds);
+    EXPECT_EQ(provider.stats().resets, resets);  // a budget change restarts nothing
+    EXPECT_TRUE(provider.stats().converged);
+    fullRestart(ds);
+    std::vector<int> ks;
+    for (int i = 0; i < 40 && !provider.stats().converged; ++i) {
+        renderer.render();
+        const DirpoleStats& st = provider.dirpoleStats();
+        ks.push_back(st.samplesThisFrame);
+        EXPECT_EQ(st.texelsSampled, covered);
+        EXPECT_LE(int64_t(st.texelsSampled) * st.samplesThisFrame,
+                  i == 0 ? ds.firstFrameSampleBudget : ds.frameSampleBudget);
+    }
+    ASSERT_TRUE(provider.stats().converged);
+    ASSERT_GE(ks.size(), 3u);
+    EXPECT_EQ(ks[0], 2);
+    EXPECT_EQ(ks[1], 6);
+    EXPECT_EQ(provider.dirpoleStats().minSamples, 64);
+    const double diff = maxRelativeDifference(renderer.readRadiance(), unlimited);
+    std::printf(
+        "dirpole budgeted (%zu frames) vs unlimited (4 frames): max relative difference "
+        "%.2e\n",
+        ks.size(), diff);
+    EXPECT_LT(diff, 1e-4);
 }

@@ -6,8 +6,11 @@
 
 #include <lucent/gpu/GlContext.h>
 
+#include <epoxy/gl.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstring>
 #include <memory>
 #include <string>
 
@@ -29,6 +32,34 @@ inline GlContext* sharedContext(std::string* reason = nullptr) {
     if (ctx)
         ctx->makeCurrent();
     return ctx.get();
+}
+
+/// Empties the shared context's debug log (errors and messages), e.g. before a test whose own GL
+/// calls are then judged by the log, or after one that provoked diagnostics on purpose.
+inline void drainDebugLog() {
+    if (GlContext* ctx = sharedContext()) {
+        ctx->debugLog().takeErrors();
+        ctx->debugLog().takeMessages();
+    }
+}
+
+/// Compiles `source` as a shader stage of `type` (GL_COMPUTE_SHADER...) in the current context,
+/// deletes it, and returns its info log; `ok` receives GL_COMPILE_STATUS.
+inline std::string compileStage(unsigned type, const std::string& source, bool& ok) {
+    const GLuint sh = glCreateShader(type);
+    const char* text = source.c_str();
+    glShaderSource(sh, 1, &text, nullptr);
+    glCompileShader(sh);
+    GLint status = 0;
+    glGetShaderiv(sh, GL_COMPILE_STATUS, &status);
+    GLint length = 0;
+    glGetShaderiv(sh, GL_INFO_LOG_LENGTH, &length);
+    std::string log(size_t(std::max(length, 1)), '\0');
+    glGetShaderInfoLog(sh, GLsizei(log.size()), nullptr, log.data());
+    log.resize(std::strlen(log.c_str()));
+    glDeleteShader(sh);
+    ok = status != 0;
+    return log;
 }
 
 }  // namespace lucent::gpu::test

@@ -56,6 +56,9 @@ struct RendererFixture : ::testing::Test {
     SceneRenderer r;
     void SetUp() override {
         LUCENT_REQUIRE_GL();
+        // The log belongs to the process-wide context: what earlier tests left in it is theirs,
+        // not this test's (TearDown judges only the GL calls made by this test).
+        test::drainDebugLog();
         r.create();
     }
     void TearDown() override {
@@ -63,7 +66,10 @@ struct RendererFixture : ::testing::Test {
             r.destroy();
         if (auto* ctx = test::sharedContext()) {
             const auto errors = ctx->debugLog().takeErrors();
-            EXPECT_TRUE(errors.empty()) << errors.front();
+            std::string all;
+            for (const std::string& e : errors)
+                all += e + "\n";
+            EXPECT_TRUE(errors.empty()) << all;
         }
     }
 };
@@ -369,6 +375,108 @@ TEST_F(RendererFixture, SubsurfaceProviderIsAddedAndIsolated) {
         EXPECT_EQ(onlyNone.at(c, c)[k], 0.f);  // --subsurface-only with no provider: black
     }
     EXPECT_GT(direct.at(c, c).r, 0.f);
+}
+
+namespace {
+/// Test provider that, after its constant term, leaves every piece of fixed-function state a
+/// provider or Qt's paint engine may leave behind and that would change the renderer's passes
+/// if they relied on GL defaults: a 1×1 scissor (limits clears and draws), clockwise front faces
+/// with back-face culling (culls the full-screen triangle), a partial colour mask, wire-frame
+/// polygons, rasteriser discard (drops draws and clears), [0, 1] clip depth and a narrowed depth
+/// range (moves every depth the shadow and G-buffer passes write).
+class HostileStateSubsurface : public ConstantSubsurface {
+public:
+    using ConstantSubsurface::ConstantSubsurface;
+    void renderSubsurface(const GBufferView& g, unsigned target) override {
+        ConstantSubsurface::renderSubsurface(g, target);
+        glEnable(GL_SCISSOR_TEST);
+        glScissor(0, 0, 1, 1);
+        glFrontFace(GL_CW);
+        glCullFace(GL_BACK);
+        glEnable(GL_CULL_FACE);
+        glColorMask(GL_TRUE, GL_FALSE, GL_TRUE, GL_FALSE);
+        glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+        glEnable(GL_RASTERIZER_DISCARD);
+        glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+        glDepthRange(0.25, 0.75);
+    }
+    /// GL defaults again (the test context is shared by the following tests).
+    static void restoreDefaults() {
+        glDisable(GL_SCISSOR_TEST);
+        glFrontFace(GL_CCW);
+        glDisable(GL_CULL_FACE);
+        glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+        glDisable(GL_RASTERIZER_DISCARD);
+        glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+        glDepthRange(0.0, 1.0);
+    }
+};
+}  // namespace
+
+TEST_F(RendererFixture, ProviderStateDoesNotLeakIntoPasses) {
+    // Sphere over a ground quad under a point light: every pass (shadow maps, G-buffer, shade,
+    // tone map) has content. Frame 1 runs with camera/light A, frame 2 with B after the provider
+    // of frame 1 left its state: frame 2 must equal, bit for bit, a fresh renderer that drew B
+    // with GL defaults and a provider adding exactly 0 (same shaders, same inputs, and the shade
+    // pass adds the same stored f32 subsurface value 0). Without per-pass state the 1×1 scissor
+    // or rasteriser discard would keep frame A's G-buffer and shadow maps, the culled full-screen
+    // triangle would leave the radiance target unwritten.
+    const TriangleMesh sphere = uvSphere(8.f, Point3f(0.f, 10.f, 0.f), 32, 16);
+    Light lightA;
+    lightA.position = {10.f, 60.f, 20.f};
+    lightA.intensity = Rgb(5000.f);
+    Light lightB = lightA;
+    lightB.position = {-20.f, 50.f, 10.f};
+    Camera camA;
+    camA.position = {0.f, 40.f, 70.f};
+    camA.target = {0.f, 5.f, 0.f};
+    camA.width = 80;
+    camA.height = 48;
+    Camera camB = camA;
+    camB.position = {15.f, 35.f, 65.f};
+    DirectSettings s;
+    s.shadowMapSize = 256;
+
+    // The scene, a provider, then frames under (light, camera) pairs; returns the last frame's
+    // radiance and display images.
+    auto run = [&](SceneRenderer& renderer, SubsurfaceProvider& provider,
+                   const std::vector<std::pair<Light, Camera>>& frames) {
+        renderer.addMesh(sphere, {Rgb(0.6f), Rgb(0.05f), 32.f});
+        renderer.addMesh(groundQuad(80.f, 0.f));
+        renderer.setSettings(s);
+        renderer.setSubsurfaceProvider(&provider);
+        for (const auto& [light, camera] : frames) {
+            renderer.setLights({light});
+            renderer.setCamera(camera);
+            renderer.render();
+        }
+        std::pair<ImageRgb, ImageRgb> out{renderer.readRadiance(), renderer.readDisplay()};
+        renderer.setSubsurfaceProvider(nullptr);
+        return out;
+    };
+    // Frame 2 runs every pass again, after the state frame 1's provider left.
+    HostileStateSubsurface hostile(Rgb(0.f));
+    const auto [got, gotDisplay] = run(r, hostile, {{lightA, camA}, {lightB, camB}});
+    hostile.destroy();
+    HostileStateSubsurface::restoreDefaults();
+    ConstantSubsurface zero(Rgb(0.f));
+    SceneRenderer clean;
+    clean.create();
+    const auto [want, wantDisplay] = run(clean, zero, {{lightB, camB}});
+    clean.destroy();
+    zero.destroy();
+
+    int lit = 0;
+    int mismatches = 0;
+    for (int y = 0; y < camB.height; ++y)
+        for (int x = 0; x < camB.width; ++x) {
+            mismatches +=
+                got.at(x, y) != want.at(x, y) || gotDisplay.at(x, y) != wantDisplay.at(x, y);
+            lit += want.at(x, y).r > 0.f ? 1 : 0;
+        }
+    EXPECT_EQ(mismatches, 0) << "of " << camB.width * camB.height << " pixels";
+    EXPECT_GT(lit, camB.width * camB.height / 4);  // the comparison covers lit geometry
 }
 
 TEST_F(RendererFixture, MaterialEditReusesShadowsGbufferAndDirectTerm) {

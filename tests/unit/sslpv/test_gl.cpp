@@ -62,9 +62,9 @@ class SslpvGl : public ::testing::Test {
 protected:
     void SetUp() override {
         std::string reason;
-        if (!gpu::GlContext::isHeadlessAvailable(&reason))
+        m_ctx = test::headlessContextOrNull(reason);
+        if (!m_ctx)
             GTEST_SKIP() << "no headless OpenGL 4.5 context: " << reason;
-        m_ctx = gpu::GlContext::createHeadless();
     }
     std::unique_ptr<gpu::GlContext> m_ctx;
 };

@@ -10,6 +10,8 @@
 #include <lucent/mesh/Procedural.h>
 #include <lucent/mesh/Voxelize.h>
 
+#include "SslpvTestGrids.h"
+
 #include <epoxy/gl.h>
 #include <gtest/gtest.h>
 
@@ -96,9 +98,9 @@ class SslpvProviderGl : public ::testing::Test {
 protected:
     void SetUp() override {
         std::string reason;
-        if (!gpu::GlContext::isHeadlessAvailable(&reason))
+        m_ctx = test::headlessContextOrNull(reason);
+        if (!m_ctx)
             GTEST_SKIP() << "no headless OpenGL 4.5 context: " << reason;
-        m_ctx = gpu::GlContext::createHeadless();
         m_renderer.create();
         gpu::DirectSettings ds;
         ds.shadows = false;

@@ -23,6 +23,7 @@
 
 #include <lucent/combined/Combined.h>
 #include <lucent/dipole/DipoleProvider.h>
+#include <lucent/gpu/GpuTimer.h>
 #include <lucent/gpu/SceneRenderer.h>
 #include <lucent/sslpv/SslpvProvider.h>
 
@@ -61,7 +62,10 @@ struct CombinedProviderStats {
     SslpvProviderStats sslpv;      ///< solves/uploads of the SSLPV part
     SplitPlan plan;                ///< the split in use (valid once a material is set)
     int frames = 0;                ///< renderSubsurface calls
-    bool converged = false;        ///< the dipole part converged (SSLPV is deterministic)
+    /// the dipole part converged (SSLPV is deterministic) and the kernel is up to date (a
+    /// stroke's kernel update runs at the frame after the stroke's)
+    bool converged = false;
+    int localEstimates = 0;  ///< Kernel split: computations of the local SSLPV estimate L̂
 };
 
 /// gpu::SubsurfaceProvider summing the windowed dipole and SSLPV (minus its local kernel part in
@@ -108,6 +112,9 @@ public:
     void renderSubsurface(const gpu::GBufferView& gbuffer, unsigned targetTexture) override;
 
     [[nodiscard]] const CombinedProviderStats& stats() const;
+    /// GPU and CPU time of the parts ("sslpv", "dipole", "kernel", "add") in the most recent
+    /// frame whose timer queries are available (context current: may wait for the last frame).
+    [[nodiscard]] std::vector<gpu::PassTiming> passTimes() const;
     //! @{ \name The parts (for tests, timings and the statistics panel)
     [[nodiscard]] const SslpvSubsurfaceProvider& sslpvProvider() const;
     [[nodiscard]] const dipole::DipoleSubsurfaceProvider& dipoleProvider() const;
@@ -117,6 +124,8 @@ public:
 
 private:
     void applySplit();
+    /// L̂ into the `local` image when anything it depends on changed (Kernel split).
+    void updateLocalEstimate(const gpu::GBufferView& g);
     struct Impl;
     std::unique_ptr<Impl> m;
 };

@@ -8,15 +8,18 @@
 ///  1. (after a reset only) irradiance pass: per covered G-buffer pixel, the Fresnel-transmitted
 ///     irradiance E = Σ_lights F_t(η, cos θ_i) E⊥ cos θ_i V (seed 004 Eq. 5; V from the
 ///     renderer's shadow maps) and the painted material just inside the surface (the volume is a
-///     3-D texture, re-uploaded brick by brick); then one light view per light (§7.1: the
-///     object rasterised from the light, its E, its back-lit flux fraction), kept for the
-///     gather when back-lit (ProviderSettings::lightViews);
+///     3-D texture, re-uploaded brick by brick); then the light views (§7.1: the object
+///     rasterised from each light and its E, kept while meshes, lights and shadow maps are
+///     unchanged; each view's back-lit flux fraction, redone per reset), gathered when back-lit
+///     (ProviderSettings::lightViews);
 ///  2. gather pass: one more set of samples of the dipole gather (same estimator as
 ///     gatherImageSpace(), a new Cranley–Patterson rotation per frame) added to a running sum;
 ///  3. resolve: L = F_t(η, ω_o) B̄/π (Eq. 3) into the renderer's subsurface texture.
-/// Accumulation restarts when the camera, the lights, the material or the settings change (or on
-/// reset()); it stops adding samples when the largest per-pixel change of the mean falls below
-/// ProviderSettings::convergenceThreshold times the brightest pixel, or after maxFrames.
+/// Accumulation restarts when the camera, the lights, the meshes, the material or the settings
+/// change (or on reset()); it stops adding samples when the largest per-pixel change of the mean
+/// falls below ProviderSettings::convergenceThreshold times the brightest pixel, or after
+/// maxFrames. A restart while an image is shown is bounded (ProviderSettings::previewSamples):
+/// a camera-only preview first, the light views' work spread over the following frames.
 ///
 /// Usage (Qt: create in initializeGL, destroy on aboutToBeDestroyed, context current):
 /// @code
@@ -72,6 +75,15 @@ struct ProviderSettings {
     bool lightViews = true;
     int lightViewResolution = 512;     ///< texels per side of a light view, [16, 4096]
     float lightViewThreshold = 1e-3f;  ///< LightViewSettings::threshold, [0, 1)
+    /// Interactive restarts (docs/methods/dipole.md §3c "Bounded restarts"), [0, 4096]: a restart
+    /// that discards a shown image (not the first frame after create()) first draws one
+    /// *preview* frame: the camera image only, this many samples per pixel, not accumulated.
+    /// The next frames bring the light views up to date (at most one re-rendered view or the
+    /// back-lit-fraction pass per frame, the preview staying on screen); then the full
+    /// estimator accumulates exactly as after a restart with previewSamples = 0, its frames
+    /// split into ProviderStats::frameParts parts. Camera-only and light-view frames are never
+    /// mixed (that would be biased). 0: every restart computes everything in its first frame.
+    int previewSamples = 4;
 
     /// The CPU gather settings of frame 0 (importance = samplesPerFrame − uniform).
     [[nodiscard]] GatherSettings gatherSettings() const;
@@ -95,6 +107,25 @@ struct ProviderStats {
     /// Per light: backlitFluxFraction() of its view; −1 when none was rendered (light views
     /// off, or the light inside the object's bounding sphere).
     std::vector<float> backlitFractions;
+    /// Light views rasterised and lit (E) since create(). Views are kept while the meshes, the
+    /// lights, the shadow setting and the view settings (η, resolution, meshId) are unchanged: a
+    /// camera or material change re-renders none (only their back-lit fractions are redone).
+    int lightViewPasses = 0;
+    int previewFrames = 0;      ///< preview frames drawn since create() (ProviderSettings)
+    bool preview = false;       ///< the last frame showed the preview or camera-only estimate
+    bool viewsPending = false;  ///< light views or their fractions are still being updated
+    /// Provider frames (dispatches) per accumulated frame: 1, or in an accumulation that began
+    /// with an interactive restart ⌈pixels × samplesPerFrame × (1 + gathered views) /
+    /// (320·180·16)⌉ (bounded idle frames; every pixel gets the samples of one frame either way).
+    int frameParts = 1;
+    /// GPU time (ms, GL timer queries) of the provider's passes in the last frame; 0 for a pass
+    /// that did not run.
+    struct PassTimes {
+        float irradiance = 0.f;  ///< camera irradiance, material and R′ (after a reset)
+        float lightViews = 0.f;  ///< light-view raster + E (re-rendered views only)
+        float fractions = 0.f;   ///< back-lit fractions of the views
+        float gather = 0.f;      ///< gather + resolve
+    } passMs;
 };
 
 namespace detail {
@@ -128,7 +159,8 @@ public:
     /// when there are any (context current).
     void syncMaterial(MaterialVolume& volume);
     /// Restarts the accumulation (e.g. after updateMesh() on a deforming mesh: G-buffer content
-    /// changes that the camera, lights and material do not reveal).
+    /// changes that the camera, lights and material do not reveal) and drops cached
+    /// mesh-dependent data (the dipole provider's light views).
     void reset();
     [[nodiscard]] const ProviderStats& stats() const { return m_stats; }
 
@@ -137,6 +169,9 @@ protected:
     explicit MaterialSubsurfaceProvider(const char* name);
     /// Restarts the accumulation at the next frame (each provider's rule).
     virtual void restart() = 0;
+    /// reset() calls this before restart(): drop caches of anything derived from the G-buffer
+    /// or the meshes (default: nothing cached).
+    virtual void invalidateCaches() {}
     /// The provider's programs and GL objects; on a throw, destroyGl() frees what was made.
     virtual void createGl(const gpu::ShaderLibrary& library) = 0;
     /// Frees them (must accept a partly created state).
@@ -180,6 +215,7 @@ public:
 
 private:
     void restart() override;
+    void invalidateCaches() override;
     /// Compiles dipole_irradiance.comp, dipole_provider.comp (two variants), the light-view
     /// G-buffer (dirpole_gbuffer.*) and dipole_lightview.comp.
     void createGl(const gpu::ShaderLibrary& library) override;

@@ -12,14 +12,28 @@
 ///     orthographic cameras around its bounding-box centre (positions, normals, depth);
 ///  3. gather (every frame until converged; §4.1 step 2): per cube-face fragment x_o, new disc
 ///     samples around x_o in each light's view add Σ E⊥ T₁₂(ω_i) S_d(x_i, ω₁₂; x_o) ΔA⊥ to a
-///     running sum (x_i, n_i from the light G-buffer texel hit by the sample);
+///     running sum (x_i, n_i from the light G-buffer texel hit by the sample); after a restart a
+///     prepare pass first restarts the texels whose material changed, and the gather runs over
+///     a list of the texels to sample (dirpole_prepare.comp, dirpole_compact.comp);
 ///  4. combination (every frame; §4.1 step 3): each camera pixel averages the faces that see
 ///     it (depth test) and multiplies by T₂₁(ω_o) into the renderer's subsurface texture.
 /// The three artefact fixes of §4.3 (G-buffer shrink ε_g, cube-map intrusion ε_c, world-space
 /// shadow bias ε_b) are switchable in DirpoleSettings.
 ///
 /// The cube faces are view-independent (only T₂₁ depends on the eye, §4.1): moving the camera
-/// keeps the accumulation; lights, material, settings or mesh uploads restart it.
+/// keeps the accumulation; lights, settings or mesh uploads restart it.
+///
+/// Interactive painting (docs/methods/dipole.md §7, "Latency"): what a reset re-renders depends
+/// on what changed. The light and cube-face G-buffers depend on the lights, the rasterised
+/// meshes and the map sizes only, so a material change (setMaterial, uploadBricks,
+/// syncMaterial, reset) keeps them. A face texel's running sum depends on the material only
+/// through σt, σs′ at x_o (the gather reads x_o's material), so every frame first compares each
+/// texel's material with the one its sum was computed for and restarts only the texels whose
+/// material changed (a paint stroke restarts the texels under the stroke; the rest keep their
+/// converged sums). Samples are counted per texel (the sample sequence is indexed by the
+/// texel's own count), so the image after N samples per texel does not depend on how the N
+/// samples were spread over frames; a frame adds at most `samplesPerFrame` per texel and at
+/// most a budget of texel-samples in total (a small one on the first frame after a restart).
 ///
 /// Usage (the same pattern as dipole::DipoleSubsurfaceProvider):
 /// @code
@@ -37,6 +51,7 @@
 /// Units: mm, mm⁻¹, irradiance W/mm², intensity W/sr, radiance W/(mm²·sr).
 
 #include <lucent/dipole/DipoleProvider.h>
+#include <lucent/gpu/GpuTimer.h>
 #include <lucent/gpu/SceneRenderer.h>
 
 #include <cstdint>
@@ -77,9 +92,30 @@ struct DirpoleSettings {
     /// published model.
     bool energyNormalised = true;
     uint32_t seed = 1;  ///< sample sequence (per texel Cranley–Patterson offsets)
+    /// Most texel-samples a frame adds (Σ over the texels it samples of k × lights), ≥ 0;
+    /// 0 = unlimited. The frame's k = clamp(budget / (texels × lights), 1, samplesPerFrame).
+    /// Bounds a frame's gather cost (llvmpipe, 2 loaded cores: ≈ 0.2–0.4 µs per texel-sample,
+    /// 2^18 ≈ 50–100 ms; docs/methods/dipole.md §7); the image after N samples per texel is
+    /// the same for any budget, so changing it restarts nothing.
+    int frameSampleBudget = 1 << 18;
+    /// The budget of the first frame after any restart (material, lights, settings), ≥ 0, 0 =
+    /// unlimited: a small first frame keeps stroke → frame latency low; later frames use
+    /// frameSampleBudget. Changing it restarts nothing.
+    int firstFrameSampleBudget = 1 << 16;
     /// SceneRenderer mesh id (addMesh's return) holding the material: only it is rasterised into
     /// the light and cube G-buffers and only its pixels get the term. −1: every mesh.
     int meshId = -1;
+};
+
+/// What the directional-dipole provider did (beyond ProviderStats), for tests and timings.
+struct DirpoleStats {
+    int geometryRenders = 0;   ///< light-view + cube-face G-buffer renders so far
+    int texelsCovered = 0;     ///< covered cube-face texels (as of the last prepare pass)
+    int texelsRestarted = 0;   ///< texels the last frame restarted (material changed), or 0
+    int texelsSampled = 0;     ///< texels the last frame added samples to (its work list)
+    int samplesThisFrame = 0;  ///< k of the last frame (per texel and light)
+    int minSamples = 0;        ///< fewest samples of any covered texel after the last frame
+    int maxSamples = 0;        ///< most samples of any covered texel after the last frame
 };
 
 /// gpu::SubsurfaceProvider running seed 001 §4 on the GPU, progressively. Create/destroy
@@ -98,10 +134,21 @@ public:
 
     // create, destroy, setMaterial, uploadBricks, syncMaterial, reset and stats():
     // MaterialSubsurfaceProvider.
-    // stats(): frames, samplesPerPixel (= frames × samplesPerFrame per cube texel and light),
-    // lastChange, converged, resets, lastUploadBricks, fullUploads as for the image-space
-    // dipole. setSettings (with a change), setMaterial, uploadBricks and reset() clear
-    // `converged` at once, so a caller that renders while !converged picks the change up.
+    // stats(): frames (since the last restart), samplesPerPixel (the fewest samples per cube
+    // texel and light of any covered texel), lastChange, converged, resets, lastUploadBricks,
+    // fullUploads as for the image-space dipole. setSettings (with a change), setMaterial,
+    // uploadBricks and reset() clear `converged` at once, so a caller that renders while
+    // !converged picks the change up. A material change restarts only the texels whose
+    // material changed (see the file comment): `resets` counts it, `frames` restarts at 0.
+
+    /// Counters of the passes (geometry renders, restarted and sampled texels).
+    [[nodiscard]] const DirpoleStats& dirpoleStats() const;
+    /// GPU and CPU time of the passes ("geometry": light-view and cube-face G-buffers,
+    /// "prepare": per-texel material check, "compact": the gather's work list, "gather",
+    /// "combine") in the most recent frame whose timer queries are available (context current:
+    /// may wait for the last frame's). On llvmpipe the CPU time of a compute pass includes its
+    /// execution (dispatches run synchronously); rasterisation runs at the next flush.
+    [[nodiscard]] std::vector<gpu::PassTiming> passTimes() const;
 
     /// GL names of the intermediate textures (valid after a frame; tests and debugging).
     struct DebugTextures {
@@ -110,7 +157,9 @@ public:
         unsigned facePosition = 0;   ///< RGBA32F 2-D array, 6 layers (+x −x +y −y +z −z)
         unsigned faceNormal = 0;     ///< RGBA32F 2-D array, 6 layers
         unsigned faceDepth = 0;      ///< DEPTH_COMPONENT32F 2-D array, 6 layers
-        unsigned accumulation = 0;   ///< RGBA32F 2-D array, 6 layers: rgb Σ_frames C (W/mm²/sr)
+        /// RGBA32F 2-D array, 6 layers: rgb Σ over the texel's samples of the one-sample
+        /// estimate of C (W/mm²/sr), a = the texel's sample count N (mean = rgb / a)
+        unsigned accumulation = 0;
     };
     [[nodiscard]] DebugTextures debugTextures() const;
 
@@ -119,7 +168,8 @@ public:
 
 private:
     void restart() override;
-    /// Compiles dirpole_gbuffer.{vert,frag}, dirpole_gather.comp and dirpole_combine.comp.
+    /// Compiles dirpole_gbuffer.{vert,frag}, dirpole_prepare.comp, dirpole_compact.comp (two
+    /// variants), dirpole_gather.comp and dirpole_combine.comp.
     void createGl(const gpu::ShaderLibrary& library) override;
     void destroyGl() override;
     struct Impl;

@@ -40,7 +40,9 @@ public:
     /// Whether install() succeeded (the context supports KHR_debug).
     [[nodiscard]] bool isInstalled() const { return m_installed; }
 
-    /// Returns and clears the collected error messages ("GL error [api] id 1282: ...").
+    /// Returns and clears the collected error messages ("GL error [api] id 1282: ..."): the
+    /// messages of type GL_DEBUG_TYPE_ERROR or GL_DEBUG_TYPE_UNDEFINED_BEHAVIOR, whatever their
+    /// severity (shader compiler warnings, which Mesa sends with high severity, are not errors).
     std::vector<std::string> takeErrors();
     /// Returns and clears the other messages (warnings, performance, notifications excluded).
     std::vector<std::string> takeMessages();
@@ -75,7 +77,8 @@ public:
     static std::unique_ptr<GlContext> createHeadless(const GlContextOptions& options = {});
 
     /// Whether a headless context can be created here; on failure `reason` says why. Cheap
-    /// after the first call (the answer is cached). Used by tests to GTEST_SKIP cleanly.
+    /// after the first call (the answer is cached). Used by tests to GTEST_SKIP cleanly. The
+    /// calling thread's current EGL context, if any, is current again on return.
     static bool isHeadlessAvailable(std::string* reason = nullptr);
 
     ~GlContext();
