@@ -8,6 +8,7 @@
 #include <lucent/scene/SceneFile.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace lucent::app {
 
@@ -97,6 +98,112 @@ void Document::setLights(std::vector<Light> lights, const QString& label) {
     m_scene.lights = std::move(lights);
     commitLights(before, label);
     Q_EMIT sceneEdited();
+}
+
+Light convertLight(const Light& light, Light::Type type, const Point3f& target,
+                   float objectRadius) {
+    if (light.type == type)
+        return light;
+    const float handleDistance = 1.5f * objectRadius;  // Viewport::gizmoSphere
+    // Where the light is (p), the unit axis from it to the target (w), its distance (d), and
+    // the irradiance E it gives there at normal incidence (W/mm²).
+    Point3f p = light.position;
+    Vector3f w{0.f, -1.f, 0.f};
+    float d = handleDistance;
+    Rgb irradiance{0.f};
+    const float dirLength = glm::length(light.direction);
+    const Vector3f ownDir = dirLength > 0.f ? light.direction / dirLength : w;
+    if (light.type == Light::Type::Directional) {
+        w = ownDir;
+        p = target - d * w;
+        irradiance = light.intensity;
+    } else {
+        const Vector3f toTarget = target - light.position;
+        const float distance = glm::length(toTarget);
+        if (distance > 1e-4f * objectRadius) {
+            w = toTarget / distance;
+            d = distance;
+        } else {  // a light at the target has no direction to it: step back along its own
+            w = light.type == Light::Type::Spot ? ownDir : w;
+            p = target - d * w;
+        }
+        // Radiant intensity toward the target (W/sr): a spot's on-axis value; a uniform sphere
+        // of radiance L and radius R seen from outside: I = L·πR².
+        Rgb intensity = light.intensity;
+        if (light.type == Light::Type::Sphere)
+            intensity = light.intensity * (PI * light.radius * light.radius);
+        irradiance = intensity / (d * d);  // inverse-square law
+    }
+    Light out = light;
+    out.type = type;
+    switch (type) {
+        case Light::Type::Point:
+            out.position = p;
+            out.intensity = irradiance * (d * d);
+            break;
+        case Light::Type::Spot: {
+            out.position = p;
+            out.direction = w;
+            out.intensity = irradiance * (d * d);
+            // Half-angle under which the object's bounding sphere is seen from the light.
+            const float alphaDeg = glm::degrees(std::asin(std::min(1.f, objectRadius / d)));
+            out.spotInnerDeg = std::clamp(alphaDeg, 1.f, 80.f);
+            out.spotOuterDeg = out.spotInnerDeg + 5.f;
+            break;
+        }
+        case Light::Type::Directional:
+            out.direction = w;
+            out.intensity = irradiance;
+            break;
+        case Light::Type::Sphere: {
+            out.position = p;
+            out.radius = std::min(0.1f * objectRadius, 0.5f * d);
+            // E = πL·R²/d²  ⇒  L = E·d² / (πR²).
+            out.intensity = irradiance * (d * d / (PI * out.radius * out.radius));
+            break;
+        }
+    }
+    return out;
+}
+
+void Document::lightTarget(Point3f& center, float& radius) const {
+    const TriangleMesh* m = mesh();
+    if (m && !m->isEmpty()) {
+        const Bounds3f b = m->bounds();
+        center = b.center();
+        radius = std::max(0.5f * glm::length(b.extent()), 1e-3f);
+    } else {
+        center = Point3f(0.f);
+        radius = 20.f;
+    }
+}
+
+void Document::setLightType(int index, Light::Type type) {
+    LUCENT_CHECK(index >= 0 && size_t(index) < m_scene.lights.size(), "light ", index,
+                 " does not exist (the scene has ", m_scene.lights.size(), " lights)");
+    Point3f center;
+    float radius = 0.f;
+    lightTarget(center, radius);
+    std::vector<Light> lights = m_scene.lights;
+    lights[size_t(index)] = convertLight(lights[size_t(index)], type, center, radius);
+    setLights(std::move(lights), tr("Change the type of light %1").arg(index));
+}
+
+void Document::setEta(float eta) {
+    LUCENT_CHECK(std::isfinite(eta) && eta >= 1.f && eta <= 3.f, "η = ", eta, " is outside [1, 3]");
+    const float before = m_scene.eta;
+    if (eta == before)
+        return;
+    const auto apply = [this](float value) {
+        m_scene.eta = value;
+        if (MaterialVolume* v = material())
+            v->setEta(value);
+        Q_EMIT sceneEdited();
+    };
+    apply(eta);
+    m_undo.push(new HistoryCommand(
+        tr("Set η to %1").arg(double(eta)), [apply, before] { apply(before); },
+        [apply, eta] { apply(eta); }));
 }
 
 void Document::pushHistoryStep(const QString& label) {

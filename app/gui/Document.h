@@ -16,6 +16,18 @@
 
 namespace lucent::app {
 
+/// `light` as a light of type `type` that gives the same irradiance (W/mm², at normal
+/// incidence) at `target` and keeps its place: a positioned light (point, spot, sphere) keeps
+/// its position and aims at `target`; a directional light keeps its direction and becomes a
+/// positioned light at distance 1.5·`objectRadius` from `target` (where its viewport handle
+/// is, Viewport::gizmoSphere). Irradiance at distance d: point/spot E = I/d² (inverse-square
+/// law); sphere E = L·πR²/d², from the irradiance integral E = ∫ L cosθ dω (pbrt, 4th ed.,
+/// Sec. 4.1) over the cap of half-angle α, sin α = R/d, that the sphere covers:
+/// 2πL ∫₀^α cosθ sinθ dθ = πL·sin²α; directional: E is its value. New spot cones open to the
+/// object's angular radius asin(objectRadius/d) (+5° outer); a new sphere gets radius
+/// min(0.1·objectRadius, 0.5·d). Same type: `light` unchanged.
+Light convertLight(const Light& light, Light::Type type, const Point3f& target, float objectRadius);
+
 class Document : public QObject {
     Q_OBJECT
 public:
@@ -77,9 +89,19 @@ public:
     void commitLights(const std::vector<Light>& before, const QString& label);
     /// Replaces every light (edit, add, remove) as one undo step. Emits sceneEdited.
     void setLights(std::vector<Light> lights, const QString& label);
+    /// Changes the type of light `index` (convertLight towards lightTarget()) as one undo step.
+    /// @throw ValueError when `index` is not a light of the scene.
+    void setLightType(int index, Light::Type type);
+    /// Where new and converted lights aim: the object's bounding-box centre (mm) and its
+    /// bounding-sphere radius (mm); the origin and 20 mm without a mesh.
+    void lightTarget(Point3f& center, float& radius) const;
     //! @}
 
-    /// Call after changing the camera or η (not undoable): marks the document modified.
+    /// Sets the relative index of refraction η of the scene and its material as one undo step.
+    /// Emits sceneEdited. @throw ValueError unless 1 ≤ η ≤ 3 (the Lights dock's range).
+    void setEta(float eta);
+
+    /// Call after changing the camera (not undoable): marks the document modified.
     void noteSceneEdited();
 
 Q_SIGNALS:

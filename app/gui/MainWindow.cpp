@@ -13,6 +13,7 @@
 #include <lucent/core/Image.h>
 #include <lucent/mesh/Voxelize.h>
 #if LUCENT_APP_HAS_IO
+#include <lucent/io/MitsubaIO.h>
 #include <lucent/io/VdbIO.h>
 #endif
 #if LUCENT_APP_HAS_MESHIO
@@ -28,21 +29,30 @@
 #include <QAction>
 #include <QApplication>
 #include <QCloseEvent>
+#include <QCheckBox>
+#include <QDialog>
+#include <QDialogButtonBox>
 #include <QDir>
 #include <QDockWidget>
 #include <QElapsedTimer>
 #include <QFileDialog>
 #include <QFileInfo>
+#include <QFormLayout>
+#include <QInputDialog>
 #include <QLabel>
+#include <QLineEdit>
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QMimeData>
 #include <QProgressDialog>
+#include <QRadioButton>
 #include <QSettings>
 #include <QStandardPaths>
 #include <QStatusBar>
+#include <QSurfaceFormat>
 #include <QThread>
 #include <QUndoStack>
+#include <QUrl>
 
 #include <atomic>
 #include <cstdio>
@@ -53,8 +63,18 @@ namespace lucent::app {
 namespace {
 constexpr int MAX_RECENT = 8;
 constexpr int AUTOSAVE_INTERVAL_MS = 120 * 1000;
+/// Factor of one [ / ] step on the brush radius (eight steps ≈ ×6).
+constexpr double BRUSH_STEP = 1.25;
 const QStringList MESH_SUFFIXES = {"obj", "ply", "off", "stl", "vtp", "vtk"};
 }  // namespace
+
+void MainWindow::useGlSurfaceFormat() {
+    QSurfaceFormat fmt;
+    fmt.setVersion(4, 5);
+    fmt.setProfile(QSurfaceFormat::CoreProfile);
+    fmt.setDepthBufferSize(24);
+    QSurfaceFormat::setDefaultFormat(fmt);
+}
 
 bool MainWindow::hasVdbSupport() {
     return LUCENT_APP_HAS_IO != 0;
@@ -68,6 +88,10 @@ bool MainWindow::hasMeshEdit() {
 }
 
 bool MainWindow::applyMeshEdit(MeshEditKind kind) {
+    return applyMeshEdit(kind, MeshEditParams{});
+}
+
+bool MainWindow::applyMeshEdit(MeshEditKind kind, const MeshEditParams& params) {
 #if LUCENT_APP_HAS_MESHEDIT
     try {
         if (!m_doc->hasObject() || m_doc->mesh()->isEmpty())
@@ -76,17 +100,23 @@ bool MainWindow::applyMeshEdit(MeshEditKind kind) {
         TriangleMesh edited;
         switch (kind) {
             case MeshEditKind::Decimate:
-                edited = decimate(mesh, std::max<size_t>(4, mesh.triangleCount() / 2));
+                if (!(params.decimateFraction > 0.0 && params.decimateFraction < 1.0))
+                    LUCENT_THROW(ValueError, "decimate: the fraction of triangles kept (",
+                                 params.decimateFraction, ") must lie in (0, 1)");
+                edited = decimate(mesh, std::max<size_t>(4, size_t(params.decimateFraction *
+                                                                   double(mesh.triangleCount()))));
                 break;
             case MeshEditKind::Subdivide:
-                edited = subdivideLoop(mesh, 1);
+                edited = subdivideLoop(mesh, params.subdivideIterations);
                 break;
             case MeshEditKind::Smooth:
-                edited = smoothLaplacian(mesh, 5);
+                edited = smoothLaplacian(mesh, params.smoothIterations);
                 break;
             case MeshEditKind::FillHoles:
-                // Holes up to a tenth of the object's diagonal (mm).
-                edited = fillHoles(mesh, 0.1f * glm::length(mesh.bounds().extent()));
+                // Default: holes up to a tenth of the object's diagonal (mm).
+                edited = fillHoles(mesh, params.maxHoleMm > 0.0
+                                             ? float(params.maxHoleMm)
+                                             : 0.1f * glm::length(mesh.bounds().extent()));
                 break;
         }
         Scene scene = m_doc->scene();
@@ -110,6 +140,7 @@ bool MainWindow::applyMeshEdit(MeshEditKind kind) {
     }
 #else
     (void)kind;
+    (void)params;
     return false;
 #endif
 }
@@ -134,7 +165,11 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
     connect(m_viewport, &Viewport::paintError, this,
             [this](const QString& m) { statusBar()->showMessage(tr("Paint: %1").arg(m), 5000); });
     connect(m_doc, &Document::modifiedChanged, this, [this] { updateTitle(); });
-    connect(m_doc, &Document::sceneReplaced, this, [this] { updateTitle(); });
+    connect(m_doc, &Document::sceneReplaced, this, [this] {
+        updateTitle();
+        loadBookmarks();
+    });
+    connect(m_render, &RenderPanel::bookmarksChanged, this, &MainWindow::storeBookmarks);
     updateTitle();
     resize(1400, 900);
     if (m_useSettings) {
@@ -142,6 +177,13 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
         restoreGeometry(s.value("window/geometry").toByteArray());
         m_layoutRestored = restoreState(s.value("window/state").toByteArray());
         m_recent = s.value("recentFiles").toStringList();
+        m_vdbChoice.rendererGrids = s.value("export/rendererGrids", true).toBool();
+        m_vdbChoice.mitsubaVol = s.value("export/mitsubaVol", false).toBool();
+        // Preferences: the brush, the render settings and the light handles as last left.
+        restorePanelSettings(m_brush, s, QStringLiteral("brush"));
+        restorePanelSettings(m_render, s, QStringLiteral("render"));
+        if (auto* gizmos = findChild<QAction*>(QStringLiteral("actionLightGizmos")))
+            gizmos->setChecked(s.value("view/lightGizmos", true).toBool());
         m_autosave.setInterval(AUTOSAVE_INTERVAL_MS);
         connect(&m_autosave, &QTimer::timeout, this, &MainWindow::autosaveNow);
         m_autosave.start();
@@ -225,18 +267,24 @@ void MainWindow::createActions() {
             m_doc->newDefault();
     });
     a->setShortcut(QKeySequence::New);
+    a->setObjectName(QStringLiteral("actionNew"));
     a = file->addAction(tr("&Open…"), this, [this] {
         if (!maybeSave())
             return;
         const QString p = QFileDialog::getOpenFileName(
             this, tr("Open project"), QString(),
-            tr("Lucent projects (*.json);;Meshes (*.obj *.ply *.off *.stl *.vtp *.vtk);;"
+            tr("Everything Lucent opens (*.json *.obj *.ply *.off *.stl *.vtp *.vtk *.vdb);;"
+               "Lucent projects (*.json);;Meshes (*.obj *.ply *.off *.stl *.vtp *.vtk);;"
                "OpenVDB materials (*.vdb);;All files (*)"));
         if (!p.isEmpty())
             openFile(p);
     });
     a->setShortcut(QKeySequence::Open);
+    a->setObjectName(QStringLiteral("actionOpen"));
     m_recentMenu = file->addMenu(tr("Open &Recent"));
+    m_recentMenu->setObjectName(QStringLiteral("menuRecent"));
+    // Rebuilt when shown, so files deleted meanwhile show as missing.
+    connect(m_recentMenu, &QMenu::aboutToShow, this, &MainWindow::rebuildRecentMenu);
     a = file->addAction(tr("&Save"), this, [this] {
         if (m_doc->filePath().isEmpty()) {
             const QString p = QFileDialog::getSaveFileName(this, tr("Save project"),
@@ -249,6 +297,7 @@ void MainWindow::createActions() {
         }
     });
     a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_S));
+    a->setObjectName(QStringLiteral("actionSave"));
     a = file->addAction(tr("Save &As…"), this, [this] {
         const QString p = QFileDialog::getSaveFileName(
             this, tr("Save project as"), m_doc->filePath(), tr("Lucent projects (*.json)"));
@@ -256,15 +305,18 @@ void MainWindow::createActions() {
             saveTo(p);
     });
     a->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S));
+    a->setObjectName(QStringLiteral("actionSaveAs"));
     file->addSeparator();
     if (hasMeshImport()) {
-        file->addAction(tr("&Import Mesh…"), this, [this] {
+        a = file->addAction(tr("&Import Mesh…"), this, [this] {
             const QString p =
                 QFileDialog::getOpenFileName(this, tr("Import mesh"), QString(),
                                              tr("Meshes (*.obj *.ply *.off *.stl *.vtp *.vtk)"));
             if (!p.isEmpty() && maybeSave())
                 importMesh(p);
         });
+        a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_I));
+        a->setObjectName(QStringLiteral("actionImportMesh"));
     }
     if (hasVdbSupport()) {
         file->addAction(tr("Import &VDB Material…"), this, [this] {
@@ -276,32 +328,72 @@ void MainWindow::createActions() {
         a = file->addAction(tr("&Export VDB…"), this, [this] {
             const QString p = QFileDialog::getSaveFileName(
                 this, tr("Export VDB"), QStringLiteral("material.vdb"), tr("OpenVDB (*.vdb)"));
-            if (!p.isEmpty())
+            if (!p.isEmpty() && askVdbExportChoice())
                 exportVdbTo(p);
         });
         a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_E));
+        a->setObjectName(QStringLiteral("actionExportVdb"));
     }
-    file->addAction(tr("Export &Render…"), this, [this] {
+    a = file->addAction(tr("Export &Render…"), this, [this] {
         const QString p =
             QFileDialog::getSaveFileName(this, tr("Export render"), QStringLiteral("render.png"),
                                          tr("PNG (*.png);;OpenEXR (*.exr)"));
         if (!p.isEmpty())
             exportRenderTo(p);
     });
+    a->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_E));
+    a->setObjectName(QStringLiteral("actionExportRender"));
     file->addSeparator();
     a = file->addAction(tr("&Quit"), this, &QWidget::close);
     a->setShortcut(QKeySequence::Quit);
+    a->setObjectName(QStringLiteral("actionQuit"));
 
     if (hasMeshEdit()) {
         QMenu* meshMenu = menuBar()->addMenu(tr("&Mesh"));
-        meshMenu->addAction(tr("&Decimate to Half"), this,
-                            [this] { applyMeshEdit(MeshEditKind::Decimate); });
-        meshMenu->addAction(tr("&Subdivide (Loop)"), this,
-                            [this] { applyMeshEdit(MeshEditKind::Subdivide); });
-        meshMenu->addAction(tr("S&mooth (Laplacian ×5)"), this,
-                            [this] { applyMeshEdit(MeshEditKind::Smooth); });
-        meshMenu->addAction(tr("&Fill Holes"), this,
-                            [this] { applyMeshEdit(MeshEditKind::FillHoles); });
+        // Each edit asks for its parameter, starting from the value used last.
+        meshMenu->addAction(tr("&Decimate…"), this, [this] {
+            bool ok = false;
+            const double percent =
+                QInputDialog::getDouble(this, tr("Decimate"), tr("Triangles to keep (%):"),
+                                        100.0 * m_meshEdit.decimateFraction, 1.0, 99.0, 0, &ok);
+            if (!ok)
+                return;
+            m_meshEdit.decimateFraction = percent / 100.0;
+            applyMeshEdit(MeshEditKind::Decimate, m_meshEdit);
+        });
+        // An iteration count, then the edit.
+        const auto iterationsEdit = [this](const QString& title, const QString& label, int& value,
+                                           int max, MeshEditKind kind) {
+            bool ok = false;
+            const int n = QInputDialog::getInt(this, title, label, value, 1, max, 1, &ok);
+            if (!ok)
+                return;
+            value = n;
+            applyMeshEdit(kind, m_meshEdit);
+        };
+        meshMenu->addAction(tr("&Subdivide (Loop)…"), this, [this, iterationsEdit] {
+            iterationsEdit(tr("Subdivide"), tr("Iterations (×4 triangles each):"),
+                           m_meshEdit.subdivideIterations, 5, MeshEditKind::Subdivide);
+        });
+        meshMenu->addAction(tr("S&mooth (Laplacian)…"), this, [this, iterationsEdit] {
+            iterationsEdit(tr("Smooth"), tr("Iterations:"), m_meshEdit.smoothIterations, 1000,
+                           MeshEditKind::Smooth);
+        });
+        meshMenu->addAction(tr("&Fill Holes…"), this, [this] {
+            const TriangleMesh* mesh = m_doc->mesh();
+            const double suggested = m_meshEdit.maxHoleMm > 0.0 ? m_meshEdit.maxHoleMm
+                                     : mesh && !mesh->isEmpty()
+                                         ? 0.1 * double(glm::length(mesh->bounds().extent()))
+                                         : 1.0;
+            bool ok = false;
+            const double mm = QInputDialog::getDouble(this, tr("Fill holes"),
+                                                      tr("Largest hole radius to close (mm):"),
+                                                      suggested, 0.001, 1e6, 3, &ok);
+            if (!ok)
+                return;
+            m_meshEdit.maxHoleMm = mm;
+            applyMeshEdit(MeshEditKind::FillHoles, m_meshEdit);
+        });
     }
     QMenu* edit = menuBar()->addMenu(tr("&Edit"));
     QAction* undo = m_doc->undoStack()->createUndoAction(this, tr("&Undo"));
@@ -313,6 +405,22 @@ void MainWindow::createActions() {
     redo->setObjectName(QStringLiteral("actionRedo"));
     edit->addAction(undo);
     edit->addAction(redo);
+
+    // Brush shortcuts as in painting tools: [ and ] resize, B paints, I picks.
+    QMenu* brush = menuBar()->addMenu(tr("&Brush"));
+    a = brush->addAction(tr("&Paint"), this, [this] { m_brush->setEyedropper(false); });
+    a->setObjectName(QStringLiteral("actionBrushPaint"));
+    a->setShortcut(QKeySequence(Qt::Key_B));
+    a = brush->addAction(tr("&Eyedropper"), this, [this] { m_brush->setEyedropper(true); });
+    a->setObjectName(QStringLiteral("actionEyedropper"));
+    a->setShortcut(QKeySequence(Qt::Key_I));
+    brush->addSeparator();
+    a = brush->addAction(tr("&Larger"), this, [this] { m_brush->scaleRadius(BRUSH_STEP); });
+    a->setObjectName(QStringLiteral("actionBrushLarger"));
+    a->setShortcut(QKeySequence(Qt::Key_BracketRight));
+    a = brush->addAction(tr("&Smaller"), this, [this] { m_brush->scaleRadius(1.0 / BRUSH_STEP); });
+    a->setObjectName(QStringLiteral("actionBrushSmaller"));
+    a->setShortcut(QKeySequence(Qt::Key_BracketLeft));
 
     m_viewMenu = menuBar()->addMenu(tr("&View"));
     a = m_viewMenu->addAction(tr("&Frame Object"), m_viewport, &Viewport::frameObject);
@@ -376,9 +484,34 @@ bool MainWindow::openFile(const QString& path) {
     }
 }
 
+namespace {
+/// QSettings key of the camera bookmarks of the project at `path`.
+QString bookmarksKey(const QString& path) {
+    return QStringLiteral("cameraBookmarks/") +
+           QString::fromLatin1(QUrl::toPercentEncoding(QFileInfo(path).absoluteFilePath()));
+}
+}  // namespace
+
+void MainWindow::storeBookmarks() {
+    if (!m_useSettings || m_doc->filePath().isEmpty())
+        return;  // an unsaved project keeps them until it is saved
+    QSettings s;
+    const QStringList b = m_render->bookmarks();
+    if (b.isEmpty())
+        s.remove(bookmarksKey(m_doc->filePath()));
+    else
+        s.setValue(bookmarksKey(m_doc->filePath()), b);
+}
+
+void MainWindow::loadBookmarks() {
+    if (m_useSettings && !m_doc->filePath().isEmpty())
+        m_render->setBookmarks(QSettings().value(bookmarksKey(m_doc->filePath())).toStringList());
+}
+
 bool MainWindow::saveTo(const QString& path) {
     try {
         m_doc->save(path);
+        storeBookmarks();  // under the new path
         addRecent(path);
         if (m_useSettings)
             removeAutosave();  // the saved project holds everything the autosave did
@@ -456,6 +589,10 @@ bool MainWindow::importVdb(const QString& path) {
 }
 
 bool MainWindow::exportVdbTo(const QString& path, bool wait) {
+    return exportVdbTo(path, m_vdbChoice, wait);
+}
+
+bool MainWindow::exportVdbTo(const QString& path, const VdbExportChoice& choice, bool wait) {
 #if LUCENT_APP_HAS_IO
     if (m_exporting || !m_doc->material())
         return false;
@@ -463,19 +600,45 @@ bool MainWindow::exportVdbTo(const QString& path, bool wait) {
     // The export works on a copy so painting can go on while the worker writes.
     auto copy = std::make_shared<MaterialVolume>(*m_doc->material());
     auto error = std::make_shared<std::string>();
+    auto done = std::make_shared<std::atomic<int>>(0);
     const std::string target = path.toStdString();
-    QThread* worker = QThread::create([copy, error, target] {
-        try {
-            exportVdb(*copy, target, {});
-        } catch (const std::exception& ex) {
-            *error = ex.what();
-        }
-    });
-    auto* progress = new QProgressDialog(tr("Exporting %1…").arg(path), QString(), 0, 0, this);
+    const QFileInfo info(path);
+    const std::string mitsubaPrefix =
+        (info.path() + QStringLiteral("/") + info.completeBaseName()).toStdString();
+    VdbExportOptions vdbOptions;
+    vdbOptions.rendererGrids = choice.rendererGrids;
+    vdbOptions.materialName = choice.materialName.toStdString();
+    MitsubaExportOptions mitsubaOptions;
+    mitsubaOptions.materialName = vdbOptions.materialName;
+    const bool mitsuba = choice.mitsubaVol;
+    // One step per file: the VDB, then the Mitsuba grids σt, albedo and the medium XML (one
+    // engine call writes those three).
+    const int steps = mitsuba ? 4 : 1;
+    m_exportSteps = steps;
+    QThread* worker = QThread::create(
+        [copy, error, done, target, vdbOptions, mitsuba, mitsubaPrefix, mitsubaOptions] {
+            try {
+                exportVdb(*copy, target, vdbOptions);
+                done->store(1);
+                if (mitsuba) {
+                    exportMitsubaVol(*copy, mitsubaPrefix, mitsubaOptions);
+                    done->store(4);
+                }
+            } catch (const std::exception& ex) {
+                *error = ex.what();
+            }
+        });
+    auto* progress = new QProgressDialog(tr("Exporting %1…").arg(path), QString(), 0, steps, this);
+    progress->setObjectName(QStringLiteral("exportProgress"));
     progress->setWindowModality(Qt::WindowModal);
     progress->setMinimumDuration(300);
+    progress->setValue(0);
+    auto* poll = new QTimer(progress);
+    connect(poll, &QTimer::timeout, progress, [progress, done] { progress->setValue(*done); });
+    poll->start(50);
     auto ok = std::make_shared<bool>(false);
-    connect(worker, &QThread::finished, this, [this, worker, progress, error, path, ok] {
+    connect(worker, &QThread::finished, this, [this, worker, progress, error, path, ok, done] {
+        progress->setValue(*done);
         progress->deleteLater();
         worker->deleteLater();
         m_exporting = false;
@@ -495,9 +658,42 @@ bool MainWindow::exportVdbTo(const QString& path, bool wait) {
     return true;
 #else
     (void)path;
+    (void)choice;
     (void)wait;
     return false;
 #endif
+}
+
+bool MainWindow::askVdbExportChoice() {
+    QDialog dialog(this);
+    dialog.setWindowTitle(tr("Export VDB"));
+    auto* form = new QFormLayout(&dialog);
+    auto* native = new QRadioButton(tr("Native grids only (σt, σs′, g per RGB channel)"));
+    auto* ready = new QRadioButton(
+        tr("Native + renderer-ready grids for Blender / Mitsuba (density, albedo, color)"));
+    (m_vdbChoice.rendererGrids ? ready : native)->setChecked(true);
+    auto* mitsuba = new QCheckBox(tr("Also Mitsuba 3 .vol grids and medium XML"));
+    mitsuba->setChecked(m_vdbChoice.mitsubaVol);
+    auto* name = new QLineEdit(m_vdbChoice.materialName);
+    form->addRow(native);
+    form->addRow(ready);
+    form->addRow(mitsuba);
+    form->addRow(tr("Material name"), name);
+    auto* buttons = new QDialogButtonBox(QDialogButtonBox::Ok | QDialogButtonBox::Cancel);
+    form->addRow(buttons);
+    connect(buttons, &QDialogButtonBox::accepted, &dialog, &QDialog::accept);
+    connect(buttons, &QDialogButtonBox::rejected, &dialog, &QDialog::reject);
+    if (dialog.exec() != QDialog::Accepted)
+        return false;
+    m_vdbChoice.rendererGrids = ready->isChecked();
+    m_vdbChoice.mitsubaVol = mitsuba->isChecked();
+    m_vdbChoice.materialName = name->text();
+    if (m_useSettings) {
+        QSettings s;
+        s.setValue("export/rendererGrids", m_vdbChoice.rendererGrids);
+        s.setValue("export/mitsubaVol", m_vdbChoice.mitsubaVol);
+    }
+    return true;
 }
 
 bool MainWindow::exportRenderTo(const QString& path) {
@@ -538,14 +734,28 @@ void MainWindow::addRecent(const QString& path) {
 
 void MainWindow::rebuildRecentMenu() {
     m_recentMenu->clear();
-    for (const QString& p : m_recent)
-        m_recentMenu
-            ->addAction(QFileInfo(p).fileName(), this,
-                        [this, p] {
-                            if (maybeSave())
-                                openFile(p);
-                        })
-            ->setToolTip(p);
+    for (const QString& p : m_recent) {
+        const bool exists = QFileInfo::exists(p);
+        QAction* a = m_recentMenu->addAction(
+            exists ? QFileInfo(p).fileName() : tr("%1 (missing)").arg(QFileInfo(p).fileName()),
+            this, [this, p] {
+                if (maybeSave())
+                    openFile(p);
+            });
+        a->setToolTip(p);
+        a->setEnabled(exists);
+    }
+    if (!m_recent.isEmpty()) {
+        m_recentMenu->addSeparator();
+        QAction* clear = m_recentMenu->addAction(tr("&Clear Menu"), this, [this] {
+            m_recent.clear();
+            if (m_useSettings)
+                QSettings().setValue("recentFiles", m_recent);
+            // Not from inside the handler of an action the rebuild deletes.
+            QMetaObject::invokeMethod(this, &MainWindow::rebuildRecentMenu, Qt::QueuedConnection);
+        });
+        clear->setObjectName(QStringLiteral("actionClearRecent"));
+    }
     m_recentMenu->setEnabled(!m_recent.isEmpty());
 }
 
@@ -603,19 +813,33 @@ void MainWindow::closeEvent(QCloseEvent* e) {
         QSettings s;
         s.setValue("window/geometry", saveGeometry());
         s.setValue("window/state", saveState());
+        savePanelSettings(m_brush, s, QStringLiteral("brush"));
+        savePanelSettings(m_render, s, QStringLiteral("render"));
+        s.setValue("view/lightGizmos", m_viewport->lightGizmosVisible());
         removeAutosave();  // clean exit: nothing to recover
     }
     e->accept();
 }
 
+bool MainWindow::canOpen(const QString& path) {
+    const QString suffix = QFileInfo(path).suffix().toLower();
+    return suffix == QLatin1String("json") || (suffix == QLatin1String("vdb") && hasVdbSupport()) ||
+           (MESH_SUFFIXES.contains(suffix) && hasMeshImport());
+}
+
 void MainWindow::dragEnterEvent(QDragEnterEvent* e) {
-    if (e->mimeData()->hasUrls())
-        e->acceptProposedAction();
+    // Only what File ▸ Open takes: the cursor shows at once that other files are refused.
+    for (const QUrl& url : e->mimeData()->urls())
+        if (url.isLocalFile() && canOpen(url.toLocalFile())) {
+            e->acceptProposedAction();
+            return;
+        }
+    e->ignore();
 }
 
 void MainWindow::dropEvent(QDropEvent* e) {
     for (const QUrl& url : e->mimeData()->urls()) {
-        if (!url.isLocalFile())
+        if (!url.isLocalFile() || !canOpen(url.toLocalFile()))
             continue;
         if (maybeSave())
             openFile(url.toLocalFile());

@@ -44,9 +44,24 @@ public:
     //! @{ \name File operations; each reports errors in a message box and returns false
     bool openFile(const QString& path);
     bool saveTo(const QString& path);
-    /// Exports the painted volume as OpenVDB on a worker thread with a progress dialog.
+    /// What File ▸ Export VDB writes (its options dialog; remembered in QSettings).
+    struct VdbExportChoice {
+        /// Also the renderer-ready grids `density`, `albedo`, `color` (Blender's and Mitsuba's
+        /// names; lucent/io/VdbIO.h). false: only the native grids σt, σs′, g.
+        bool rendererGrids = true;
+        /// Also Mitsuba 3 `.vol` grids and a medium XML next to the VDB
+        /// (`<dir>/<stem>_sigma_t.vol`, `_albedo.vol`, `_medium.xml`; lucent/io/MitsubaIO.h).
+        bool mitsubaVol = false;
+        QString materialName;  ///< metadata `lucent_material_name` / the XML comment
+    };
+    /// Exports the painted volume as OpenVDB (and optionally Mitsuba 3) on a worker thread,
+    /// with a progress dialog counting the files written.
     /// @param wait block (running the event loop) until the export finished.
     bool exportVdbTo(const QString& path, bool wait = false);
+    bool exportVdbTo(const QString& path, const VdbExportChoice& choice, bool wait = false);
+    /// Files the last export wrote (or was writing) and how many of them are done; the
+    /// progress dialog shows the same count (for tests).
+    [[nodiscard]] int lastExportSteps() const { return m_exportSteps; }
     /// Writes the current render without gizmos or brush cursor. PNG: the tone-mapped display
     /// image at the viewport's size. EXR: the linear radiance W/(mm²·sr) at render resolution
     /// (Viewport::linearImage), independent of the exposure.
@@ -58,16 +73,32 @@ public:
 
     /// Mesh edits of the Mesh menu (engine lucent/mesh/MeshEdit.h).
     enum class MeshEditKind { Decimate, Subdivide, Smooth, FillHoles };
+    /// Parameters of the mesh edits (the Mesh menu asks for the one of its edit).
+    struct MeshEditParams {
+        double decimateFraction = 0.5;  ///< decimate: target triangles / current, in (0, 1)
+        int subdivideIterations = 1;    ///< Loop subdivision iterations, [1, 5] (×4 each)
+        int smoothIterations = 5;       ///< Laplacian smoothing iterations, [1, 1000]
+        /// fill holes: largest hole radius closed (mm); ≤ 0: a tenth of the object's diagonal
+        double maxHoleMm = -1.0;
+    };
     /// Replaces the object's mesh by the edited one and re-voxelises it into the same grid, so
     /// the paint inside is kept (voxels that become inside get the base material). Clears the
-    /// undo history. Reports errors like the file operations. @return false on failure.
+    /// undo history. Reports errors (a parameter out of range names it) like the file
+    /// operations; the scene is unchanged then. @return false on failure.
     bool applyMeshEdit(MeshEditKind kind);
+    bool applyMeshEdit(MeshEditKind kind, const MeshEditParams& params);
     static bool hasMeshEdit();
 
+    /// Makes OpenGL 4.5 core with a 24-bit depth buffer (what the viewport renders with) the
+    /// default surface format. Call before the QApplication is created.
+    static void useGlSurfaceFormat();
     /// True when VDB export/import is compiled in (the io module is present).
     static bool hasVdbSupport();
     /// True when mesh import is compiled in (mesh/MeshIO).
     static bool hasMeshImport();
+    /// True when File ▸ Open (and a drop on the window) takes `path`: a project (.json), a
+    /// mesh when mesh import is compiled in, a .vdb when VDB support is.
+    static bool canOpen(const QString& path);
     /// Path of the autosave project (AppLocalDataLocation/autosave/autosave.json). Its presence
     /// at start-up means the last session did not exit cleanly (a clean exit removes it).
     static QString autosavePath();
@@ -92,6 +123,11 @@ private:
     bool importMesh(const QString& path);
     bool importVdb(const QString& path);
     void offerRecovery();
+    /// Camera bookmarks of the open project, kept in QSettings under its path.
+    void storeBookmarks();
+    void loadBookmarks();
+    /// The Export VDB options dialog; false when cancelled.
+    bool askVdbExportChoice();
     void removeAutosave();
     void reportError(const QString& what, const std::exception& ex);
 
@@ -111,6 +147,9 @@ private:
     QTimer m_autosave;
     bool m_useSettings;
     bool m_exporting = false;
+    int m_exportSteps = 0;
+    VdbExportChoice m_vdbChoice;
+    MeshEditParams m_meshEdit;  ///< last values asked by the Mesh menu
     bool m_layoutRestored = false;
 };
 

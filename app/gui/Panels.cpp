@@ -26,6 +26,9 @@
 #include <QStandardItemModel>
 #include <QVBoxLayout>
 
+#include <QSettings>
+
+#include <cmath>
 #include <initializer_list>
 
 namespace lucent::app {
@@ -56,6 +59,9 @@ QWidget* row(std::initializer_list<QWidget*> widgets) {
     return w;
 }
 
+/// Dynamic property marking a named field that is not a preference (derived or a mode).
+constexpr const char* TRANSIENT = "lucentTransient";
+
 void reportError(QWidget* parent, const QString& what, const std::exception& ex) {
     QMessageBox::warning(parent, what, QString::fromUtf8(ex.what()));
 }
@@ -70,7 +76,9 @@ BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
     auto* form = new QFormLayout;
     outer->addLayout(form);
     m_paintTool = new QRadioButton(tr("Paint"));
+    m_paintTool->setObjectName(QStringLiteral("brushToolPaint"));
     m_eyedropTool = new QRadioButton(tr("Eyedropper"));
+    m_eyedropTool->setObjectName(QStringLiteral("brushToolEyedropper"));
     m_paintTool->setChecked(true);
     form->addRow(tr("Tool"), row({m_paintTool, m_eyedropTool}));
     const BrushSettings defaults;
@@ -85,7 +93,16 @@ BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
     m_mode = new QComboBox;
     m_mode->addItems(
         {tr("Set"), tr("Add"), tr("Subtract"), tr("Multiply"), tr("Smooth"), tr("Reset to base")});
-    form->addRow(tr("Radius"), m_radius);
+    // The same radius on screen, at the depth of the camera's target (the orbit centre).
+    m_radiusPx = new QSpinBox;
+    m_radiusPx->setObjectName(QStringLiteral("brushRadiusPx"));
+    m_radiusPx->setRange(1, 5000);
+    m_radiusPx->setSuffix(tr(" px"));
+    m_radiusPx->setKeyboardTracking(false);
+    m_radiusPx->setProperty(TRANSIENT, true);  // derived from the radius in mm
+    m_radiusPx->setToolTip(
+        tr("Brush radius in screen pixels at the depth of the orbit centre; follows zooming."));
+    form->addRow(tr("Radius"), row({m_radius, m_radiusPx}));
     form->addRow(tr("Depth below surface"), m_depth);
     form->addRow(tr("Falloff"), m_falloff);
     form->addRow(tr("Strength"), m_strength);
@@ -125,15 +142,81 @@ BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
     auto* fillButton = new QPushButton(tr("Fill interior with brush value"));
     fl->addRow(fillButton);
     m_pattern = new QComboBox;
-    m_pattern->addItems({tr("Turbulence"), tr("Marble")});
-    m_patternScale = spin(0.1, 1e4, 10.0, 1, tr(" mm"), 1.0);
-    auto* procButton = new QPushButton(tr("Procedural fill (base → brush)"));
+    m_pattern->setObjectName(QStringLiteral("brushPattern"));
+    // Order = ProceduralPattern.
+    m_pattern->addItems({tr("Turbulence"), tr("Marble"), tr("Surface layer")});
+    m_pattern->setToolTip(
+        tr("Turbulence and Marble blend from the base material to the brush value; Surface "
+           "layer puts the brush value in a layer of the given thickness under the surface, "
+           "over the base."));
+    const ProceduralFill fillDefaults;
+    m_patternScale = spin(0.1, 1e4, double(fillDefaults.scale), 1, tr(" mm"), 1.0);
+    m_patternScale->setToolTip(tr("Noise period"));
+    m_octaves = new QSpinBox;
+    m_octaves->setObjectName(QStringLiteral("brushPatternOctaves"));
+    m_octaves->setRange(1, 12);
+    m_octaves->setValue(fillDefaults.octaves);
+    m_seed = new QSpinBox;
+    m_seed->setObjectName(QStringLiteral("brushPatternSeed"));
+    m_seed->setRange(1, 1000000);
+    m_seed->setValue(int(fillDefaults.seed));
+    m_marbleAmplitude = spin(0.0, 100.0, double(fillDefaults.amplitude), 2, tr(" rad"), 0.5);
+    m_marbleAmplitude->setObjectName(QStringLiteral("brushMarbleAmplitude"));
+    m_marbleAmplitude->setToolTip(tr("Marble: how far turbulence bends the veins"));
+    m_layerThickness = spin(0.01, 1e4, 1.0, 2, tr(" mm"), 0.25);
+    m_layerThickness->setObjectName(QStringLiteral("brushLayerThickness"));
+    m_layerJitter = spin(0.0, 1e4, 0.0, 2, tr(" mm"), 0.1);
+    m_layerJitter->setObjectName(QStringLiteral("brushLayerJitter"));
+    m_layerJitter->setToolTip(tr("Surface layer: noise on the depth (± mm), at the noise scale"));
+    auto* procButton = new QPushButton(tr("Procedural fill"));
     fl->addRow(tr("Pattern"), m_pattern);
     fl->addRow(tr("Scale"), m_patternScale);
+    fl->addRow(tr("Octaves"), m_octaves);
+    fl->addRow(tr("Seed"), m_seed);
+    fl->addRow(tr("Vein turbulence"), m_marbleAmplitude);
+    fl->addRow(tr("Layer thickness"), m_layerThickness);
+    fl->addRow(tr("Depth jitter"), m_layerJitter);
     fl->addRow(procButton);
+    // Only the fields of the chosen pattern.
+    const auto showPatternFields = [this, fl] {
+        const auto p = ProceduralPattern(m_pattern->currentIndex());
+        const bool layered = p == ProceduralPattern::Layered;
+        fl->setRowVisible(m_octaves, !layered);
+        fl->setRowVisible(m_marbleAmplitude, p == ProceduralPattern::Marble);
+        fl->setRowVisible(m_layerThickness, layered);
+        fl->setRowVisible(m_layerJitter, layered);
+    };
+    connect(m_pattern, &QComboBox::currentIndexChanged, this, showPatternFields);
+    showPatternFields();
     outer->addWidget(fills);
     outer->addStretch(1);
 
+    m_patternScale->setObjectName(QStringLiteral("brushPatternScale"));
+    fillButton->setObjectName(QStringLiteral("brushFill"));
+    procButton->setObjectName(QStringLiteral("brushProceduralFill"));
+    // Names for tests and the saved preferences (savePanelSettings).
+    m_radius->setObjectName(QStringLiteral("brushRadius"));
+    m_depth->setObjectName(QStringLiteral("brushDepth"));
+    m_falloff->setObjectName(QStringLiteral("brushFalloff"));
+    m_strength->setObjectName(QStringLiteral("brushStrength"));
+    m_spacing->setObjectName(QStringLiteral("brushSpacing"));
+    m_mode->setObjectName(QStringLiteral("brushMode"));
+    m_chSigmaT->setObjectName(QStringLiteral("brushChannelSigmaT"));
+    m_chSigmaS->setObjectName(QStringLiteral("brushChannelSigmaS"));
+    m_chG->setObjectName(QStringLiteral("brushChannelG"));
+    for (int c = 0; c < 3; ++c) {
+        m_sigmaT[size_t(c)]->setObjectName(QStringLiteral("brushSigmaT%1").arg(c));
+        m_sigmaS[size_t(c)]->setObjectName(QStringLiteral("brushSigmaS%1").arg(c));
+    }
+    m_g->setObjectName(QStringLiteral("brushG"));
+    connect(m_radius, &QDoubleSpinBox::valueChanged, this, [this] { updateRadiusPx(); });
+    connect(m_radiusPx, &QSpinBox::valueChanged, this, [this](int px) {
+        const double perMm = pixelsPerMm();
+        if (perMm > 0.0)
+            m_radius->setValue(double(px) / perMm);
+    });
+    // Zooming changes the on-screen size of the same radius in mm.
+    connect(m_viewport, &Viewport::frameRendered, this, [this] { updateRadiusPx(); });
     const auto applyLater = [this] { apply(); };
     for (QDoubleSpinBox* s : {m_radius, m_depth, m_strength, m_spacing, m_g})
         connect(s, &QDoubleSpinBox::valueChanged, this, applyLater);
@@ -173,19 +256,55 @@ BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
     connect(procButton, &QPushButton::clicked, this, [this] {
         try {
             apply();
-            ProceduralFill f;
-            f.pattern = m_pattern->currentIndex() == 0 ? ProceduralPattern::Turbulence
-                                                       : ProceduralPattern::Marble;
-            f.materialA = m_doc->material() ? m_doc->material()->base() : MaterialSample{};
-            f.materialB = m_viewport->brush().engine.value;
-            f.scale = float(m_patternScale->value());
-            f.channels = m_viewport->brush().engine.channels;
-            m_doc->fillProcedural(f);
+            m_doc->fillProcedural(proceduralFill());
         } catch (const std::exception& ex) {
             reportError(this, tr("Procedural fill"), ex);
         }
     });
     apply();
+}
+
+ProceduralFill BrushPanel::proceduralFill() const {
+    const AppBrush& b = m_viewport->brush();
+    ProceduralFill f;
+    f.pattern = ProceduralPattern(m_pattern->currentIndex());
+    f.materialA = m_doc->material() ? m_doc->material()->base() : MaterialSample{};
+    f.materialB = b.engine.value;
+    f.scale = float(m_patternScale->value());
+    f.octaves = m_octaves->value();
+    f.seed = uint64_t(m_seed->value());
+    f.channels = b.engine.channels;
+    if (f.pattern == ProceduralPattern::Layered) {
+        // The brush value from the surface down to the thickness, the base below (the last
+        // layer extends inwards without end).
+        f.layers = {MaterialLayer{float(m_layerThickness->value()), f.materialB},
+                    MaterialLayer{1.f, f.materialA}};
+        f.amplitude = float(m_layerJitter->value());
+    } else if (f.pattern == ProceduralPattern::Marble) {
+        f.amplitude = float(m_marbleAmplitude->value());
+    }
+    return f;
+}
+
+double BrushPanel::pixelsPerMm() const {
+    // Perspective: a length r at distance D across the view spans r·H / (2·D·tan(fovY/2))
+    // pixels of a view H pixels high.
+    const OrbitCamera& c = m_viewport->camera();
+    const double viewMm = 2.0 * double(c.distance) * std::tan(glm::radians(double(c.fovYDeg)) / 2);
+    return viewMm > 0.0 ? double(m_viewport->height()) / viewMm : 0.0;
+}
+
+void BrushPanel::updateRadiusPx() {
+    const QSignalBlocker block(m_radiusPx);
+    m_radiusPx->setValue(int(std::lround(m_radius->value() * pixelsPerMm())));
+}
+
+void BrushPanel::scaleRadius(double factor) {
+    m_radius->setValue(m_radius->value() * factor);
+}
+
+void BrushPanel::setEyedropper(bool on) {
+    (on ? m_eyedropTool : m_paintTool)->setChecked(true);
 }
 
 void BrushPanel::setBrushValue(const MaterialSample& s) {
@@ -228,6 +347,64 @@ void BrushPanel::updateSwatch() {
                                       std::clamp(a.b, 0.f, 1.f));
     m_swatch->setStyleSheet(QStringLiteral("background-color: %1; color: %2")
                                 .arg(c.name(), c.lightnessF() > 0.5 ? "black" : "white"));
+}
+
+// ---- Preferences ----------------------------------------------------------------------------
+
+namespace {
+/// The named fields of `panel` that hold preferences.
+template <class Fn>
+void forEachPreference(QWidget* panel, Fn&& fn) {
+    for (QWidget* w : panel->findChildren<QWidget*>()) {
+        if (w->objectName().isEmpty() || w->property(TRANSIENT).toBool())
+            continue;
+        fn(w, w->objectName());
+    }
+}
+}  // namespace
+
+void savePanelSettings(QWidget* panel, QSettings& settings, const QString& group) {
+    settings.beginGroup(group);
+    forEachPreference(panel, [&settings](QWidget* w, const QString& key) {
+        if (auto* d = qobject_cast<QDoubleSpinBox*>(w))
+            settings.setValue(key, d->value());
+        else if (auto* i = qobject_cast<QSpinBox*>(w))
+            settings.setValue(key, i->value());
+        else if (auto* c = qobject_cast<QComboBox*>(w))
+            settings.setValue(key, c->currentIndex());
+        else if (auto* b = qobject_cast<QCheckBox*>(w))
+            settings.setValue(key, b->isChecked());
+    });
+    settings.endGroup();
+}
+
+void restorePanelSettings(QWidget* panel, QSettings& settings, const QString& group) {
+    settings.beginGroup(group);
+    forEachPreference(panel, [&settings](QWidget* w, const QString& key) {
+        const QVariant v = settings.value(key);
+        bool ok = false;
+        if (!v.isValid())
+            return;
+        if (auto* d = qobject_cast<QDoubleSpinBox*>(w)) {
+            const double x = v.toDouble(&ok);
+            if (ok && std::isfinite(x))
+                d->setValue(x);
+        } else if (auto* i = qobject_cast<QSpinBox*>(w)) {
+            const int x = v.toInt(&ok);
+            if (ok)
+                i->setValue(x);
+        } else if (auto* c = qobject_cast<QComboBox*>(w)) {
+            const int x = v.toInt(&ok);
+            // Only enabled entries (a method this build lacks stays unselectable).
+            const auto* model = qobject_cast<const QStandardItemModel*>(c->model());
+            if (ok && x >= 0 && x < c->count() &&
+                (!model || !model->item(x) || model->item(x)->isEnabled()))
+                c->setCurrentIndex(x);
+        } else if (auto* b = qobject_cast<QCheckBox*>(w)) {
+            b->setChecked(v.toBool());
+        }
+    });
+    settings.endGroup();
 }
 
 // ---- PresetPanel ----------------------------------------------------------------------------
@@ -279,35 +456,78 @@ PresetPanel::PresetPanel(Document* doc, BrushPanel* brush, QWidget* parent)
 
 // ---- LightPanel -----------------------------------------------------------------------------
 
+namespace {
+/// Light type names, in Light::Type order.
+const char* const LIGHT_TYPE_NAMES[] = {"point", "spot", "directional", "sphere"};
+}  // namespace
+
 LightPanel::LightPanel(Document* doc, QWidget* parent) : QWidget(parent), m_doc(doc) {
-    auto* form = new QFormLayout(this);
+    m_form = new QFormLayout(this);
     m_light = new QComboBox;
+    m_light->setObjectName(QStringLiteral("lightList"));
     m_light->setToolTip(tr("Select a light here or click its handle in the viewport."));
-    m_type = new QLabel;
-    form->addRow(tr("Light"), m_light);
-    form->addRow(tr("Type"), m_type);
+    m_type = new QComboBox;
+    m_type->setObjectName(QStringLiteral("lightType"));
+    // Order = Light::Type.
+    m_type->addItems({tr("Point"), tr("Spot"), tr("Directional"), tr("Sphere")});
+    m_type->setToolTip(
+        tr("Changing the type keeps the light's place and the irradiance it gives at the "
+           "object's centre."));
+    m_form->addRow(tr("Light"), m_light);
+    m_form->addRow(tr("Type"), m_type);
     for (int c = 0; c < 3; ++c) {
         m_pos[size_t(c)] = spin(-1e5, 1e5, 0.0, 2, QString(), 1.0);
         m_pos[size_t(c)]->setObjectName(QStringLiteral("lightPos%1").arg(c));
         m_dir[size_t(c)] = spin(-1.0, 1.0, 0.0, 3, QString(), 0.05);
         m_dir[size_t(c)]->setObjectName(QStringLiteral("lightDir%1").arg(c));
         m_intensity[size_t(c)] = spin(0.0, 1e9, 0.0, 3, QString(), 10.0);
+        m_intensity[size_t(c)]->setObjectName(QStringLiteral("lightIntensity%1").arg(c));
     }
-    form->addRow(tr("Position x y z (mm)"), row({m_pos[0], m_pos[1], m_pos[2]}));
-    form->addRow(tr("Direction x y z"), row({m_dir[0], m_dir[1], m_dir[2]}));
-    form->addRow(tr("Intensity R G B"), row({m_intensity[0], m_intensity[1], m_intensity[2]}));
-    form->addRow(new QLabel(tr("Units: point/spot W/sr, directional W/mm², sphere W/(mm²·sr)")));
+    m_posRow = row({m_pos[0], m_pos[1], m_pos[2]});
+    m_dirRow = row({m_dir[0], m_dir[1], m_dir[2]});
+    m_intensityRow = row({m_intensity[0], m_intensity[1], m_intensity[2]});
+    m_form->addRow(tr("Position x y z (mm)"), m_posRow);
+    m_form->addRow(tr("Direction x y z"), m_dirRow);
+    // Cone half-angles: intensity is full inside the inner one and falls to 0 at the outer one.
+    m_spotInner = spin(0.0, 90.0, 25.0, 1, tr("°"), 1.0);
+    m_spotInner->setObjectName(QStringLiteral("lightSpotInner"));
+    m_spotOuter = spin(0.1, 90.0, 30.0, 1, tr("°"), 1.0);
+    m_spotOuter->setObjectName(QStringLiteral("lightSpotOuter"));
+    m_form->addRow(tr("Cone inner / outer"), row({m_spotInner, m_spotOuter}));
+    m_radius = spin(0.001, 1e5, 1.0, 3, tr(" mm"), 0.5);
+    m_radius->setObjectName(QStringLiteral("lightRadius"));
+    m_form->addRow(tr("Radius"), m_radius);
+    m_form->addRow(tr("Intensity R G B"), m_intensityRow);
+    m_colour = new QPushButton(tr("Colour…"));
+    m_colour->setObjectName(QStringLiteral("lightColour"));
+    m_colour->setToolTip(tr("Pick the light's colour; the brightest channel keeps its intensity."));
+    m_form->addRow(tr("Colour"), m_colour);
     auto* addPoint = new QPushButton(tr("Add point"));
+    addPoint->setObjectName(QStringLiteral("lightAddPoint"));
     auto* addDirectional = new QPushButton(tr("Add directional"));
     addDirectional->setObjectName(QStringLiteral("lightAddDirectional"));
+    auto* addSpot = new QPushButton(tr("Add spot"));
+    addSpot->setObjectName(QStringLiteral("lightAddSpot"));
+    auto* addSphere = new QPushButton(tr("Add sphere"));
+    addSphere->setObjectName(QStringLiteral("lightAddSphere"));
     m_remove = new QPushButton(tr("Remove"));
-    form->addRow(row({addPoint, addDirectional, m_remove}));
+    m_remove->setObjectName(QStringLiteral("lightRemove"));
+    m_form->addRow(row({addPoint, addSpot}));
+    m_form->addRow(row({addDirectional, addSphere}));
+    m_form->addRow(m_remove);
     m_eta = spin(1.0, 3.0, 1.3, 3, QString(), 0.01);
-    form->addRow(tr("η (relative IOR)"), m_eta);
+    m_eta->setObjectName(QStringLiteral("lightEta"));
+    m_form->addRow(tr("η (relative IOR)"), m_eta);
     connect(m_light, &QComboBox::currentIndexChanged, this, [this](int i) {
         load();
         if (!m_loading)
             Q_EMIT currentLightChanged(i);
+    });
+    connect(m_type, &QComboBox::currentIndexChanged, this, [this](int t) {
+        const int i = m_light->currentIndex();
+        if (m_loading || i < 0 || t < 0)
+            return;
+        m_doc->setLightType(i, Light::Type(t));
     });
     for (int c = 0; c < 3; ++c) {
         connect(m_pos[size_t(c)], &QDoubleSpinBox::valueChanged, this,
@@ -317,17 +537,34 @@ LightPanel::LightPanel(Document* doc, QWidget* parent) : QWidget(parent), m_doc(
         connect(m_intensity[size_t(c)], &QDoubleSpinBox::valueChanged, this,
                 [this, c] { store(Field::Intensity, c); });
     }
+    connect(m_spotInner, &QDoubleSpinBox::valueChanged, this,
+            [this] { store(Field::SpotInner, 0); });
+    connect(m_spotOuter, &QDoubleSpinBox::valueChanged, this,
+            [this] { store(Field::SpotOuter, 0); });
+    connect(m_radius, &QDoubleSpinBox::valueChanged, this, [this] { store(Field::Radius, 0); });
+    connect(m_colour, &QPushButton::clicked, this, [this] {
+        const int i = m_light->currentIndex();
+        const auto& lights = m_doc->scene().lights;
+        if (i < 0 || i >= int(lights.size()))
+            return;
+        const Rgb v = lights[size_t(i)].intensity;
+        const float peak = std::max({v.r, v.g, v.b});
+        const QColor initial =
+            peak > 0.f ? QColor::fromRgbF(v.r / peak, v.g / peak, v.b / peak) : QColor(Qt::white);
+        const QColor c = QColorDialog::getColor(initial, this, tr("Light colour"));
+        if (c.isValid())
+            setCurrentLightColour(c);
+    });
     connect(m_eta, &QDoubleSpinBox::valueChanged, this, [this] {
         if (m_loading)
             return;
-        m_doc->scene().eta = float(m_eta->value());
-        if (MaterialVolume* v = m_doc->material())
-            v->setEta(float(m_eta->value()));
-        m_doc->noteSceneEdited();
+        m_doc->setEta(float(m_eta->value()));
     });
     connect(addPoint, &QPushButton::clicked, this, [this] { addLight(Light::Type::Point); });
+    connect(addSpot, &QPushButton::clicked, this, [this] { addLight(Light::Type::Spot); });
     connect(addDirectional, &QPushButton::clicked, this,
             [this] { addLight(Light::Type::Directional); });
+    connect(addSphere, &QPushButton::clicked, this, [this] { addLight(Light::Type::Sphere); });
     connect(m_remove, &QPushButton::clicked, this, [this] {
         const int i = m_light->currentIndex();
         std::vector<Light> lights = m_doc->scene().lights;
@@ -358,18 +595,53 @@ void LightPanel::setCurrentLight(int index) {
         m_light->setCurrentIndex(index);
 }
 
-void LightPanel::syncList() {
-    const int n = int(m_doc->scene().lights.size());
-    if (m_light->count() == n)
+bool LightPanel::isFieldShown(QWidget* field) const {
+    // The field itself or the row widget holding it (position, direction, cone angles).
+    for (QWidget* w = field; w && w != this; w = w->parentWidget()) {
+        int rowIndex = -1;
+        QFormLayout::ItemRole role{};
+        m_form->getWidgetPosition(w, &rowIndex, &role);
+        if (rowIndex >= 0)
+            return m_form->isRowVisible(rowIndex);
+    }
+    return false;
+}
+
+void LightPanel::setCurrentLightColour(const QColor& colour) {
+    const int i = m_light->currentIndex();
+    std::vector<Light> lights = m_doc->scene().lights;
+    if (i < 0 || i >= int(lights.size()) || !colour.isValid())
         return;
+    const Rgb c(float(colour.redF()), float(colour.greenF()), float(colour.blueF()));
+    const float colourPeak = std::max({c.r, c.g, c.b});
+    Light& l = lights[size_t(i)];
+    const float peak = std::max({l.intensity.r, l.intensity.g, l.intensity.b});
+    if (colourPeak <= 0.f)
+        return;  // black would switch the light off: use the intensity fields for that
+    // A light at 0 keeps 0: the colour alone does not make it shine.
+    l.intensity = c * (peak / colourPeak);
+    m_doc->setLights(std::move(lights), tr("Colour of light %1").arg(i));
+}
+
+void LightPanel::syncList() {
+    const auto& lights = m_doc->scene().lights;
+    const int n = int(lights.size());
+    const bool countChanged = m_light->count() != n;
     const int previous = m_light->currentIndex();
     m_loading = true;
-    m_light->clear();
+    if (countChanged) {
+        m_light->clear();
+        for (int i = 0; i < n; ++i)
+            m_light->addItem(QString());
+        m_light->setCurrentIndex(n == 0 ? -1 : std::clamp(previous, 0, n - 1));
+    }
+    // Names follow type changes, which keep the count.
     for (int i = 0; i < n; ++i)
-        m_light->addItem(tr("Light %1").arg(i));
-    m_light->setCurrentIndex(n == 0 ? -1 : std::clamp(previous, 0, n - 1));
+        m_light->setItemText(
+            i, tr("L%1 (%2)").arg(i).arg(tr(LIGHT_TYPE_NAMES[int(lights[size_t(i)].type)])));
     m_loading = false;
-    Q_EMIT currentLightChanged(m_light->currentIndex());
+    if (countChanged)
+        Q_EMIT currentLightChanged(m_light->currentIndex());
 }
 
 void LightPanel::load() {
@@ -378,26 +650,38 @@ void LightPanel::load() {
     const auto& lights = m_doc->scene().lights;
     const int i = m_light->currentIndex();
     const bool valid = i >= 0 && i < int(lights.size());
-    const bool directed = valid && (lights[size_t(i)].type == Light::Type::Directional ||
-                                    lights[size_t(i)].type == Light::Type::Spot);
-    const bool positioned = valid && lights[size_t(i)].type != Light::Type::Directional;
+    const Light::Type type = valid ? lights[size_t(i)].type : Light::Type::Point;
+    const bool directed = valid && (type == Light::Type::Directional || type == Light::Type::Spot);
+    const bool positioned = valid && type != Light::Type::Directional;
+    m_form->setRowVisible(m_posRow, !valid || positioned);
+    m_form->setRowVisible(m_dirRow, !valid || directed);
+    m_form->setRowVisible(m_spotInner->parentWidget(), valid && type == Light::Type::Spot);
+    m_form->setRowVisible(m_radius, valid && type == Light::Type::Sphere);
     for (int c = 0; c < 3; ++c) {
         m_pos[size_t(c)]->setEnabled(positioned);
         m_dir[size_t(c)]->setEnabled(directed);
         m_intensity[size_t(c)]->setEnabled(valid);
     }
+    m_type->setEnabled(valid);
+    m_colour->setEnabled(valid);
     m_remove->setEnabled(valid);
+    // The intensity's unit depends on the type (Scene.h, Light::intensity).
+    static const char* const units[] = {"W/sr", "W/sr", "W/mm²", "W/(mm²·sr)"};
+    if (auto* label = qobject_cast<QLabel*>(m_form->labelForField(m_intensityRow)))
+        label->setText(tr("Intensity R G B (%1)").arg(QString::fromUtf8(units[int(type)])));
     if (valid) {
         const Light& l = lights[size_t(i)];
-        static const char* names[] = {"point", "spot", "directional", "sphere"};
-        m_type->setText(QString::fromLatin1(names[int(l.type)]));
+        m_type->setCurrentIndex(int(l.type));
         for (int c = 0; c < 3; ++c) {
             m_pos[size_t(c)]->setValue(double(l.position[c]));
             m_dir[size_t(c)]->setValue(double(l.direction[c]));
             m_intensity[size_t(c)]->setValue(double(l.intensity[c]));
         }
+        m_spotInner->setValue(double(l.spotInnerDeg));
+        m_spotOuter->setValue(double(l.spotOuterDeg));
+        m_radius->setValue(double(l.radius));
     } else {
-        m_type->setText(tr("(no lights)"));
+        m_type->setCurrentIndex(-1);
     }
     m_eta->setValue(double(m_doc->scene().eta));
     m_loading = wasLoading;
@@ -428,25 +712,41 @@ void LightPanel::store(Field field, int c) {
         case Field::Intensity:
             l.intensity[c] = float(m_intensity[size_t(c)]->value());
             break;
+        // The scene format needs 0 ≤ inner ≤ outer ≤ 90° (SceneFile, "spot"): the other angle
+        // follows an edit that would cross it.
+        case Field::SpotInner:
+            l.spotInnerDeg = float(m_spotInner->value());
+            l.spotOuterDeg = std::max(l.spotOuterDeg, l.spotInnerDeg);
+            break;
+        case Field::SpotOuter:
+            l.spotOuterDeg = float(m_spotOuter->value());
+            l.spotInnerDeg = std::min(l.spotInnerDeg, l.spotOuterDeg);
+            break;
+        case Field::Radius:
+            l.radius = float(m_radius->value());
+            break;
     }
     m_doc->setLights(std::move(lights), tr("Edit light %1").arg(i));
 }
 
 void LightPanel::addLight(Light::Type type) {
     std::vector<Light> lights = m_doc->scene().lights;
+    Point3f center;
+    float radius = 0.f;
+    m_doc->lightTarget(center, radius);
+    const float size = 2.f * radius;  // the object's diagonal (mm)
     Light l;
-    l.type = type;
-    const TriangleMesh* mesh = m_doc->mesh();
-    const Bounds3f b = mesh && !mesh->isEmpty() ? mesh->bounds() : Bounds3f{};
-    const Point3f c = mesh && !mesh->isEmpty() ? b.center() : Point3f(0.f);
-    const float size = mesh && !mesh->isEmpty() ? glm::length(b.extent()) : 40.f;
     if (type == Light::Type::Directional) {
+        l.type = type;
         l.direction = glm::normalize(Vector3f(-0.3f, -1.f, -0.4f));  // from above, front right
         l.intensity = Rgb(1.f);                                      // W/mm²
     } else {
-        l.position = c + Vector3f(0.f, size, size);  // above and in front of the object
+        l.type = Light::Type::Point;
+        l.position = center + Vector3f(0.f, size, size);  // above and in front of the object
         // W/sr giving ≈ 1 W/mm² at the object: I / d², d = √2·size mm.
         l.intensity = Rgb(2.f * size * size);
+        // Spot and sphere: the same place and irradiance at the object (aimed at it).
+        l = convertLight(l, type, center, radius);
     }
     lights.push_back(l);
     const int index = int(lights.size()) - 1;
@@ -478,21 +778,27 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     m_method->setToolTip(
         tr("Subsurface method added to the direct lighting of gpu::SceneRenderer."));
     m_sslpvMode = new QComboBox;
+    m_sslpvMode->setObjectName(QStringLiteral("renderSslpvMode"));
     m_sslpvMode->addItems({tr("Paper"), tr("Calibrated")});
     m_sslpvMode->setCurrentIndex(d.sslpvCalibrated ? 1 : 0);
     m_sslpvGrid = new QComboBox;
+    m_sslpvGrid->setObjectName(QStringLiteral("renderSslpvGrid"));
     m_sslpvGrid->addItems({QStringLiteral("16³"), QStringLiteral("32³"), QStringLiteral("64³")});
     m_sslpvGrid->setCurrentIndex(d.sslpvGrid <= 16 ? 0 : d.sslpvGrid <= 32 ? 1 : 2);
     m_sslpvSteps = new QSpinBox;
+    m_sslpvSteps->setObjectName(QStringLiteral("renderSslpvSteps"));
     m_sslpvSteps->setRange(1, 512);
     m_sslpvSteps->setValue(d.sslpvSteps);
     m_sslpvOrder = new QComboBox;
+    m_sslpvOrder->setObjectName(QStringLiteral("renderSslpvOrder"));
     m_sslpvOrder->addItems({tr("1 (4 coefficients)"), tr("2 (9 coefficients)")});
     m_sslpvOrder->setCurrentIndex(d.sslpvOrder == 2 ? 1 : 0);
     m_sslpvSolve = new QComboBox;
+    m_sslpvSolve->setObjectName(QStringLiteral("renderSslpvSolve"));
     m_sslpvSolve->addItems({tr("CPU"), tr("GPU (GL compute)")});
     m_sslpvSolve->setCurrentIndex(d.sslpvGlSolve ? 1 : 0);
     m_dipoleSpp = new QSpinBox;
+    m_dipoleSpp->setObjectName(QStringLiteral("renderDipoleSpp"));
     m_dipoleSpp->setRange(1, 4096);
     m_dipoleSpp->setValue(d.dipoleSpp);
     m_dipoleSpp->setToolTip(
@@ -511,6 +817,7 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
         tr("Combined: the dipole gathers light that entered within this "
            "radius; SSLPV carries what travels further."));
     m_subsurfaceOnly = new QCheckBox(tr("Subsurface term only (debug)"));
+    m_subsurfaceOnly->setObjectName(QStringLiteral("renderSubsurfaceOnly"));
     m_steps = new QSpinBox;
     m_steps->setRange(1, 512);
     m_steps->setValue(d.steps);
@@ -520,9 +827,17 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     m_exposure = spin(-20.0, 20.0, double(d.exposureStops), 1, tr(" stops"), 0.5);
     m_ambient = spin(0.0, 1e6, double(d.ambient), 4, tr(" W/mm²"), 0.001);
     m_turntable = new QCheckBox(tr("Turntable (30°/s)"));
+    m_turntable->setObjectName(QStringLiteral("renderTurntable"));
+    m_turntable->setProperty(TRANSIENT, true);  // an animation, not a preference
     m_smooth = new QCheckBox(tr("Smooth voxels (trilinear, display only)"));
+    m_smooth->setObjectName(QStringLiteral("renderSmooth"));
+    m_steps->setObjectName(QStringLiteral("renderSteps"));
+    m_lightSteps->setObjectName(QStringLiteral("renderLightSteps"));
+    m_exposure->setObjectName(QStringLiteral("renderExposure"));
+    m_ambient->setObjectName(QStringLiteral("renderAmbient"));
     form->addRow(tr("Method"), m_method);
     m_scale = new QComboBox;
+    m_scale->setObjectName(QStringLiteral("renderScale"));
     m_scale->addItems({tr("Full"), tr("Half"), tr("Quarter")});
     m_scale->setCurrentIndex(d.resolutionScale >= 1.f ? 0 : d.resolutionScale >= 0.5f ? 1 : 2);
     m_scale->setToolTip(tr("Preview resolution; lower is faster on software OpenGL."));
@@ -571,13 +886,22 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     form->addRow(m_subsurfaceOnly);
     if (Viewport::hasDeformation()) {
         m_deform = new QCheckBox(tr("Deformation animation (twist; pauses painting)"));
+        m_deform->setObjectName(QStringLiteral("renderDeform"));
+        m_deform->setProperty(TRANSIENT, true);  // an animation, not a preference
         form->addRow(m_deform);
         connect(m_deform, &QCheckBox::toggled, this, [this] { apply(); });
     }
     m_bookmarks = new QComboBox;
+    m_bookmarks->setObjectName(QStringLiteral("renderBookmarks"));
+    m_bookmarks->setProperty(TRANSIENT, true);  // saved per project (MainWindow)
     auto* save = new QPushButton(tr("Save view"));
+    save->setObjectName(QStringLiteral("renderBookmarkSave"));
     auto* go = new QPushButton(tr("Go"));
-    form->addRow(tr("Camera bookmarks"), row({m_bookmarks, save, go}));
+    go->setObjectName(QStringLiteral("renderBookmarkGo"));
+    auto* remove = new QPushButton(tr("Delete"));
+    remove->setObjectName(QStringLiteral("renderBookmarkDelete"));
+    form->addRow(tr("Camera bookmarks"), m_bookmarks);
+    form->addRow(row({save, go, remove}));
     connect(m_method, &QComboBox::currentIndexChanged, this, [this] { apply(); });
     connect(m_steps, &QSpinBox::valueChanged, this, [this] { apply(); });
     connect(m_lightSteps, &QSpinBox::valueChanged, this, [this] { apply(); });
@@ -587,11 +911,17 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     connect(m_smooth, &QCheckBox::toggled, this, [this] { apply(); });
     connect(save, &QPushButton::clicked, this, [this] {
         const OrbitCamera& c = m_viewport->camera();
+        // Names stay unique after deletions: one past the highest number in use.
+        int next = 1;
+        for (int i = 0; i < m_bookmarks->count(); ++i)
+            next =
+                std::max(next, m_bookmarks->itemText(i).section(QLatin1Char(' '), -1).toInt() + 1);
         m_bookmarks->addItem(
-            tr("View %1").arg(m_bookmarks->count() + 1),
+            tr("View %1").arg(next),
             QVariantList{double(c.target.x), double(c.target.y), double(c.target.z),
                          double(c.distance), double(c.yawDeg), double(c.pitchDeg)});
         m_bookmarks->setCurrentIndex(m_bookmarks->count() - 1);
+        Q_EMIT bookmarksChanged();
     });
     connect(go, &QPushButton::clicked, this, [this] {
         const QVariantList v = m_bookmarks->currentData().toList();
@@ -603,6 +933,12 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
         c.yawDeg = v[4].toFloat();
         c.pitchDeg = v[5].toFloat();
         m_viewport->update();
+    });
+    connect(remove, &QPushButton::clicked, this, [this] {
+        if (m_bookmarks->currentIndex() < 0)
+            return;
+        m_bookmarks->removeItem(m_bookmarks->currentIndex());
+        Q_EMIT bookmarksChanged();
     });
     connect(doc, &Document::sceneReplaced, m_bookmarks, &QComboBox::clear);
     apply();
@@ -652,6 +988,35 @@ void RenderPanel::apply() {
     m_splitRadius->setEnabled(combined);
     m_subsurfaceOnly->setEnabled(s.method != M::Direct);
     m_viewport->setRenderSettings(s);
+}
+
+QStringList RenderPanel::bookmarks() const {
+    QStringList out;
+    for (int i = 0; i < m_bookmarks->count(); ++i) {
+        QStringList fields{m_bookmarks->itemText(i)};
+        for (const QVariant& v : m_bookmarks->itemData(i).toList())
+            fields.push_back(QString::number(v.toDouble(), 'g', 9));  // float32 round trip
+        out.push_back(fields.join(QLatin1Char(';')));
+    }
+    return out;
+}
+
+void RenderPanel::setBookmarks(const QStringList& bookmarks) {
+    m_bookmarks->clear();
+    for (const QString& b : bookmarks) {
+        const QStringList fields = b.split(QLatin1Char(';'));
+        if (fields.size() != 7)
+            continue;  // not written by bookmarks(): ignored
+        QVariantList values;
+        bool ok = true;
+        for (int i = 1; i < 7 && ok; ++i) {
+            const double x = fields[i].toDouble(&ok);
+            ok = ok && std::isfinite(x);
+            values.push_back(x);
+        }
+        if (ok && values[3].toDouble() > 0.0)  // a positive orbit distance
+            m_bookmarks->addItem(fields[0], values);
+    }
 }
 
 void RenderPanel::setMethod(int method) {

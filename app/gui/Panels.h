@@ -5,19 +5,24 @@
 /// Each edits the Document / Viewport directly; values are in physical units (mm, mm⁻¹, W/sr).
 
 #include <lucent/material/Medium.h>
+#include <lucent/material/Procedural.h>
 #include <lucent/scene/Scene.h>
 
+#include <QStringList>
 #include <QWidget>
 
 #include <array>
 
 class QCheckBox;
+class QColor;
 class QComboBox;
 class QDoubleSpinBox;
+class QFormLayout;
 class QLabel;
 class QListWidget;
 class QPushButton;
 class QRadioButton;
+class QSettings;
 class QSpinBox;
 
 namespace lucent::app {
@@ -34,14 +39,27 @@ public:
     void setBrushValue(const MaterialSample& s);
     /// Pushes every widget value into the viewport's brush.
     void apply();
+    /// Multiplies the radius (mm) by `factor` (the [ and ] shortcuts), within its range.
+    void scaleRadius(double factor);
+    /// Selects the eyedropper (true) or the paint tool (false).
+    void setEyedropper(bool on);
+    /// The procedural fill the Fills fields describe (pattern, scale, octaves, seed, vein
+    /// turbulence or layer thickness and jitter) from the base material to the brush value,
+    /// on the brush's channels; what the Procedural fill button applies.
+    [[nodiscard]] ProceduralFill proceduralFill() const;
+    /// Screen pixels per mm at the depth of the camera's target (0 before the viewport has a
+    /// size): the radius field in px is the radius in mm times this.
+    [[nodiscard]] double pixelsPerMm() const;
 
 private:
     void updateSwatch();
+    void updateRadiusPx();
     Document* m_doc;
     Viewport* m_viewport;
     QRadioButton* m_paintTool;
     QRadioButton* m_eyedropTool;
     QDoubleSpinBox* m_radius;
+    QSpinBox* m_radiusPx;
     QDoubleSpinBox* m_depth;
     QComboBox* m_falloff;
     QDoubleSpinBox* m_strength;
@@ -56,8 +74,20 @@ private:
     QPushButton* m_swatch;
     QComboBox* m_pattern;
     QDoubleSpinBox* m_patternScale;
+    QSpinBox* m_octaves;
+    QSpinBox* m_seed;
+    QDoubleSpinBox* m_marbleAmplitude;
+    QDoubleSpinBox* m_layerThickness;
+    QDoubleSpinBox* m_layerJitter;
     QComboBox* m_pressure;
 };
+
+/// Preferences: saves the value of every named field of `panel` (spin boxes, combo boxes,
+/// check boxes; widgets with an objectName) under `group` of `settings`.
+void savePanelSettings(QWidget* panel, QSettings& settings, const QString& group);
+/// Restores what savePanelSettings wrote, through the widgets (so their signals apply the
+/// values); values out of a field's range are clamped by it, unknown entries are ignored.
+void restorePanelSettings(QWidget* panel, QSettings& settings, const QString& group);
 
 /// Material presets (Jensen et al. 2001 measured, plus artist presets).
 class PresetPanel : public QWidget {
@@ -70,8 +100,10 @@ private:
     QListWidget* m_list;
 };
 
-/// Lights and η of the scene. Light edits (fields, add, remove) are undo steps; the fields
-/// follow gizmo drags and undo/redo (Document::sceneEdited).
+/// Lights and η of the scene. Light edits (fields, type, colour, add, remove) are undo steps;
+/// the fields follow gizmo drags and undo/redo (Document::sceneEdited). Only the fields of the
+/// current light's type are shown: position (point, spot, sphere), direction (spot,
+/// directional), cone angles (spot), radius (sphere).
 class LightPanel : public QWidget {
     Q_OBJECT
 public:
@@ -79,23 +111,37 @@ public:
     /// Shows light `index` (−1: none) in the fields; emits currentLightChanged when it changes.
     void setCurrentLight(int index);
     [[nodiscard]] int currentLight() const;
+    /// Gives the current light the chromaticity of `colour` (one undo step): the intensity's
+    /// largest channel is kept, the others follow the colour's ratios. What the Colour… button
+    /// does after its dialog.
+    void setCurrentLightColour(const QColor& colour);
+    /// Whether the form row holding `field` is shown (for tests).
+    [[nodiscard]] bool isFieldShown(QWidget* field) const;
 
 Q_SIGNALS:
     void currentLightChanged(int index);
 
 private:
     void syncList();
-    enum class Field { Position, Direction, Intensity };
+    enum class Field { Position, Direction, Intensity, SpotInner, SpotOuter, Radius };
     void load();
     /// Writes component `c` of `field` of the current light (one undo step).
     void store(Field field, int c);
     void addLight(Light::Type type);
     Document* m_doc;
+    QFormLayout* m_form;
     QComboBox* m_light;
-    QLabel* m_type;
+    QComboBox* m_type;
     std::array<QDoubleSpinBox*, 3> m_pos{};
     std::array<QDoubleSpinBox*, 3> m_dir{};
     std::array<QDoubleSpinBox*, 3> m_intensity{};
+    QWidget* m_posRow;
+    QWidget* m_dirRow;
+    QWidget* m_intensityRow;
+    QDoubleSpinBox* m_spotInner;
+    QDoubleSpinBox* m_spotOuter;
+    QDoubleSpinBox* m_radius;
+    QPushButton* m_colour;
     QPushButton* m_remove;
     QDoubleSpinBox* m_eta;
     bool m_loading = false;
@@ -108,6 +154,15 @@ public:
     RenderPanel(Document* doc, Viewport* viewport, QWidget* parent = nullptr);
     /// Selects a preview method (index = RenderSettings::Method) as the combo box does.
     void setMethod(int method);
+    /// Camera bookmarks as text, one per entry: "name;target x;y;z (mm);distance (mm);yaw°;
+    /// pitch°" (how MainWindow keeps them per project in QSettings).
+    [[nodiscard]] QStringList bookmarks() const;
+    /// Replaces the bookmarks; malformed entries are skipped.
+    void setBookmarks(const QStringList& bookmarks);
+
+Q_SIGNALS:
+    /// A bookmark was saved or deleted by the user.
+    void bookmarksChanged();
 
 private:
     void apply();

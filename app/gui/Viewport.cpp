@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 /// @file
-/// @brief Viewport: GL resources, camera, picking and painting interaction.
+/// @brief Viewport: GL resources, camera, picking and painting interaction; the QOpenGLWindow
+/// that draws, hosted in a window container.
 
 #include "Viewport.h"
 
@@ -12,12 +13,18 @@
 #include <lucent/mesh/Deform.h>
 #endif
 
+#include <QCoreApplication>
+#include <QDropEvent>
 #include <QKeyEvent>
 #include <QMouseEvent>
 #include <QOpenGLContext>
+#include <QOpenGLFramebufferObject>
+#include <QOpenGLFunctions>
 #include <QOpenGLPaintDevice>
+#include <QOpenGLWindow>
 #include <QPainter>
 #include <QTabletEvent>
+#include <QVBoxLayout>
 #include <QWheelEvent>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -56,12 +63,142 @@ void OrbitCamera::lookAt(const Point3f& eyePos, const Point3f& targetPos) {
     yawDeg = glm::degrees(std::atan2(d.x, d.z));
 }
 
+// ---- ViewportWindow -------------------------------------------------------------------------
+
+/// The native GL window of a Viewport. It owns the context and the swap; everything else (the
+/// frame, the GL resources, the interaction) lives in the facade, to which it hands its GL
+/// callbacks and input events. Its geometry equals the facade's (the container fills it), so
+/// event positions need no mapping.
+class ViewportWindow final : public QOpenGLWindow {
+public:
+    explicit ViewportWindow(Viewport* owner)
+        : QOpenGLWindow(QOpenGLWindow::NoPartialUpdate), m_owner(owner) {}
+
+    /// Schedules a frame at the next pass of the event loop; calls before it coalesce.
+    /// QPaintDeviceWindow::update() marks the window dirty and asks the platform for an
+    /// update request, which Qt's default platform window delivers from a 5 ms timer
+    /// (QPlatformWindow::requestUpdate, "idle time to gather system events"): 5 ms or more of
+    /// latency per frame. The request posted here paints at once. Update requests that arrive
+    /// with no frame due (the timer's, after the posted one painted) are dropped: Qt 6.4
+    /// would paint a second, identical frame for them (measured: every other frame twice).
+    void scheduleFrame() {
+        m_frameDue = true;
+        QOpenGLWindow::update();
+        if (!m_framePosted) {
+            m_framePosted = true;
+            QCoreApplication::postEvent(this, new QEvent(QEvent::UpdateRequest));
+        }
+    }
+
+protected:
+    // Exposure and size changes need a frame, whichever event Qt paints it from.
+    void exposeEvent(QExposeEvent* e) override {
+        m_frameDue = true;
+        QOpenGLWindow::exposeEvent(e);
+    }
+    void resizeEvent(QResizeEvent* e) override {
+        m_frameDue = true;
+        QOpenGLWindow::resizeEvent(e);
+    }
+    void initializeGL() override { m_owner->initializeGL(); }
+    void paintGL() override {
+        m_frameDue = false;  // whatever asked for it (update request, expose, resize)
+        m_owner->paintGL();
+    }
+    void mousePressEvent(QMouseEvent* e) override {
+        m_owner->setFocus(Qt::MouseFocusReason);  // keys then reach the viewport
+        m_owner->mousePressEvent(e);
+    }
+    void mouseMoveEvent(QMouseEvent* e) override { m_owner->mouseMoveEvent(e); }
+    void mouseReleaseEvent(QMouseEvent* e) override { m_owner->mouseReleaseEvent(e); }
+    void wheelEvent(QWheelEvent* e) override { m_owner->wheelEvent(e); }
+    void keyPressEvent(QKeyEvent* e) override { m_owner->keyPressEvent(e); }
+    // Ignored (hover, modifiers, the eyedropper): Qt then synthesises mouse events for this
+    // window from it, as it does for widgets.
+    void tabletEvent(QTabletEvent* e) override { m_owner->tabletEvent(e); }
+
+    bool event(QEvent* e) override {
+        switch (e->type()) {
+            case QEvent::UpdateRequest:
+                // Hidden or minimised: the frame stays due and the next expose draws it.
+                m_framePosted = false;
+                return m_frameDue && isExposed() ? QOpenGLWindow::event(e) : true;
+            case QEvent::Leave:
+                m_owner->leaveEvent(e);
+                return true;
+            case QEvent::DragEnter:
+            case QEvent::DragMove:
+            case QEvent::DragLeave:
+            case QEvent::Drop:
+                forwardDrag(e);
+                return true;
+            case QEvent::ContextMenu:
+                // The widget path: the facade, then (ignored) its parents.
+                QCoreApplication::sendEvent(m_owner, e);
+                return true;
+            default:
+                return QOpenGLWindow::event(e);
+        }
+    }
+
+private:
+    /// Drag-and-drop over the GL window goes to the nearest ancestor widget that accepts drops
+    /// (the main window: meshes, VDBs, projects), as it would over a plain child widget; the
+    /// answer (accepted, drop action) comes back to the window system through `e`.
+    void forwardDrag(QEvent* e) {
+        QWidget* target = m_owner;
+        while (target && !target->acceptDrops())
+            target = target->parentWidget();
+        if (!target) {
+            e->ignore();
+            return;
+        }
+        if (e->type() == QEvent::DragLeave) {
+            QDragLeaveEvent leave;
+            QCoreApplication::sendEvent(target, &leave);
+            return;
+        }
+        auto* d = static_cast<QDropEvent*>(e);
+        const QPoint pos = m_owner->mapTo(target, d->position().toPoint());
+        const auto forward = [&](QDropEvent&& f) {
+            f.setDropAction(d->dropAction());
+            f.setAccepted(d->isAccepted());
+            QCoreApplication::sendEvent(target, &f);
+            d->setDropAction(f.dropAction());
+            d->setAccepted(f.isAccepted());
+        };
+        if (e->type() == QEvent::DragEnter)
+            forward(QDragEnterEvent(pos, d->possibleActions(), d->mimeData(), d->buttons(),
+                                    d->modifiers()));
+        else if (e->type() == QEvent::DragMove)
+            forward(QDragMoveEvent(pos, d->possibleActions(), d->mimeData(), d->buttons(),
+                                   d->modifiers()));
+        else
+            forward(QDropEvent(QPointF(pos), d->possibleActions(), d->mimeData(), d->buttons(),
+                               d->modifiers()));
+    }
+
+    Viewport* m_owner;
+    bool m_framePosted = false;  ///< an UpdateRequest of scheduleFrame() is in the queue
+    bool m_frameDue = false;     ///< scheduleFrame() was called since the last paintGL
+};
+
 // ---- Viewport -------------------------------------------------------------------------------
 
-Viewport::Viewport(Document* doc, QWidget* parent) : QOpenGLWidget(parent), m_doc(doc) {
+Viewport::Viewport(Document* doc, QWidget* parent) : QWidget(parent), m_doc(doc) {
     setMouseTracking(true);
     setFocusPolicy(Qt::StrongFocus);
     setMinimumSize(320, 180);
+    // The GL window in a container filling the facade; focus given to the facade goes to the
+    // container, which activates the window (its key events then reach keyPressEvent).
+    m_window = new ViewportWindow(this);
+    m_container = QWidget::createWindowContainer(m_window, this);
+    m_container->setFocusPolicy(Qt::StrongFocus);
+    m_container->setMouseTracking(true);
+    setFocusProxy(m_container);
+    auto* layout = new QVBoxLayout(this);
+    layout->setContentsMargins(0, 0, 0, 0);
+    layout->addWidget(m_container);
     connect(m_doc, &Document::sceneReplaced, this, &Viewport::onSceneReplaced);
     connect(m_doc, &Document::materialEdited, this, [this] { update(); });
     connect(m_doc, &Document::sceneEdited, this, [this] { update(); });
@@ -84,11 +221,33 @@ bool Viewport::hasDeformation() {
 }
 
 Viewport::~Viewport() {
-    if (m_glReady && context()) {
-        makeCurrent();
+    if (m_glReady && m_window->context()) {
+        m_window->makeCurrent();
         cleanupGL();
-        doneCurrent();
+        m_window->doneCurrent();
     }
+    // The container deletes the GL window and its context; the renderer is released already.
+    if (m_window->context())
+        m_window->context()->disconnect(this);
+    delete m_container;
+}
+
+void Viewport::update() {
+    m_window->scheduleFrame();
+}
+
+void Viewport::paintEvent(QPaintEvent*) {
+    // The facade is covered by the GL window; a repaint of it asks for a GL frame.
+    m_window->scheduleFrame();
+}
+
+QWindow* Viewport::glWindow() const {
+    return m_window;
+}
+
+void Viewport::setViewCursor(Qt::CursorShape shape) {
+    setCursor(shape);
+    m_window->setCursor(shape);  // the native window shows its own cursor
 }
 
 void Viewport::setRenderSettings(const RenderSettings& s) {
@@ -334,7 +493,7 @@ int Viewport::lightAt(const QPointF& pos) const {
 }
 
 void Viewport::beginLightDrag(int index, const QPointF& pos) {
-    setCursor(Qt::ClosedHandCursor);
+    setViewCursor(Qt::ClosedHandCursor);
     m_selectedLight = index;
     Q_EMIT lightSelected(index);
     m_lightsBeforeDrag = m_doc->scene().lights;
@@ -395,25 +554,23 @@ void Viewport::continueLightDrag(const QPointF& pos) {
 }
 
 void Viewport::endLightDrag() {
-    setCursor(Qt::OpenHandCursor);
+    setViewCursor(Qt::OpenHandCursor);
     m_drag = Drag::None;
     m_doc->commitLights(m_lightsBeforeDrag, tr("Move light %1").arg(m_selectedLight));
     m_lightsBeforeDrag.clear();
 }
 
-void Viewport::drawOverlay() {
+void Viewport::drawOverlay(unsigned framebuffer, int w, int h) {
     if (!m_gizmosVisible || m_hideOverlays)
         return;
     const auto& lights = m_doc->scene().lights;
     if (lights.empty())
         return;
-    // A paint device on the widget's framebuffer rather than QPainter(this): QWidget::grab()
-    // redirects widget painters to its pixmap and then draws the framebuffer over them, which
-    // would drop the overlay from window screenshots.
-    const qreal dpr = devicePixelRatioF();
-    glBindFramebuffer(GL_FRAMEBUFFER, defaultFramebufferObject());
-    QOpenGLPaintDevice device(std::max(1, int(width() * dpr)), std::max(1, int(height() * dpr)));
-    device.setDevicePixelRatio(dpr);
+    // QPainter through a GL paint device on the frame's framebuffer (the window's or a grab's),
+    // so the overlay is part of every frame and of every grab; coordinates in logical pixels.
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+    QOpenGLPaintDevice device(w, h);
+    device.setDevicePixelRatio(m_window->devicePixelRatio());
     QPainter painter(&device);
     painter.setRenderHint(QPainter::Antialiasing);
     QFont font = painter.font();
@@ -549,7 +706,7 @@ void Viewport::mouseMoveEvent(QMouseEvent* e) {
             break;
         case Drag::None:
             // A light handle under the cursor can be grabbed.
-            setCursor(lightAt(e->position()) >= 0 ? Qt::OpenHandCursor : Qt::ArrowCursor);
+            setViewCursor(lightAt(e->position()) >= 0 ? Qt::OpenHandCursor : Qt::ArrowCursor);
             updateHover(e->position());
             break;
     }
@@ -609,7 +766,7 @@ void Viewport::keyPressEvent(QKeyEvent* e) {
         frameObject();
         return;
     }
-    QOpenGLWidget::keyPressEvent(e);
+    QWidget::keyPressEvent(e);
 }
 
 void Viewport::leaveEvent(QEvent*) {
@@ -620,12 +777,58 @@ void Viewport::leaveEvent(QEvent*) {
 ImageRgb Viewport::linearImage() {
     if (!m_glReady || m_stats.frames == 0)
         LUCENT_THROW(GpuError, "the viewport has not rendered a frame yet");
-    makeCurrent();
+    m_window->makeCurrent();
     ImageRgb img = m_preview.linearImage();
-    doneCurrent();
+    m_window->doneCurrent();
     if (img.isEmpty())
         LUCENT_THROW(GpuError, "the preview renderer has no linear image");
     return img;
+}
+
+QImage Viewport::grabFramebuffer() {
+    if (!m_window->context())
+        return {};  // never shown: no context yet
+    m_window->makeCurrent();
+    const qreal dpr = m_window->devicePixelRatio();
+    const int w = std::max(1, int(width() * dpr)), h = std::max(1, int(height() * dpr));
+    QImage img;
+    {
+        // RGBA8 like the window's back buffer, with depth/stencil like its default format.
+        QOpenGLFramebufferObject fbo(w, h, QOpenGLFramebufferObject::CombinedDepthStencil);
+        renderFrame(fbo.handle(), w, h);
+        img = QImage(w, h, QImage::Format_RGBA8888);
+        QOpenGLFunctions* gl = m_window->context()->functions();
+        gl->glBindFramebuffer(GL_FRAMEBUFFER, fbo.handle());
+        gl->glPixelStorei(GL_PACK_ALIGNMENT, 4);  // 4 bytes a pixel: rows are always aligned
+        gl->glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, img.bits());
+        while (m_glReady && glGetError() != GL_NO_ERROR)
+            ++m_stats.glErrors;
+    }
+    m_window->doneCurrent();
+    // GL rows run bottom-up; the frame is opaque (what the window shows), whatever the alpha
+    // the passes left.
+    img = img.mirrored(false, true);
+    for (int y = 0; y < h; ++y) {
+        uchar* row = img.scanLine(y);
+        for (int x = 0; x < w; ++x)
+            row[4 * x + 3] = 255;
+    }
+    img = img.convertToFormat(QImage::Format_RGB32);
+    img.setDevicePixelRatio(dpr);
+    return img;
+}
+
+QPixmap Viewport::grabWithFrame(QWidget* widget) {
+    QPixmap shot = widget->grab();
+    if (!isVisible() || !(widget == this || widget->isAncestorOf(this)))
+        return shot;
+    const QImage frame = grabFramebuffer();
+    if (frame.isNull())
+        return shot;
+    QPainter painter(&shot);  // logical coordinates: the pixmap and the frame carry the DPR
+    painter.drawImage(QRectF(QPointF(mapTo(widget, QPoint(0, 0))), QSizeF(size())), frame);
+    painter.end();
+    return shot;
 }
 
 QImage Viewport::grabRender() {
@@ -642,18 +845,22 @@ void Viewport::initializeGL() {
     try {
         if (!initializeOpenGLFunctions())
             LUCENT_THROW(GpuError, "OpenGL 4.5 core functions are not available (got ",
-                         context()->format().majorVersion(), ".",
-                         context()->format().minorVersion(), ")");
+                         m_window->format().majorVersion(), ".", m_window->format().minorVersion(),
+                         ")");
         m_stats.glRenderer =
             QStringLiteral("%1 — %2").arg(reinterpret_cast<const char*>(glGetString(GL_RENDERER)),
                                           reinterpret_cast<const char*>(glGetString(GL_VERSION)));
         m_preview.create();  // programs from the engine's shader library (shaders/)
         m_glReady = true;
         m_meshDirty = m_sceneReplaced = true;
-        connect(context(), &QOpenGLContext::aboutToBeDestroyed, this, [this] {
-            makeCurrent();
-            cleanupGL();
-            doneCurrent();
+        // The window's context dies with the window (its destructor makes it current first):
+        // release the renderer's GL objects while it is still current. Never reached from
+        // ~Viewport, which cleans up before it deletes the window.
+        QOpenGLContext* ctx = m_window->context();
+        connect(ctx, &QOpenGLContext::aboutToBeDestroyed, this, [this, ctx] {
+            if (QOpenGLContext::currentContext() == ctx)
+                cleanupGL();
+            m_glReady = false;
         });
     } catch (const std::exception& ex) {
         m_stats.initError = QString::fromUtf8(ex.what());
@@ -668,8 +875,6 @@ void Viewport::cleanupGL() {
     m_preview.destroy();
     m_glReady = false;
 }
-
-void Viewport::resizeGL(int, int) {}
 
 const TriangleMesh* Viewport::shownMesh() {
     const TriangleMesh* mesh = m_doc->mesh();
@@ -692,15 +897,32 @@ const TriangleMesh* Viewport::shownMesh() {
 }
 
 void Viewport::paintGL() {
+    // The window's own framebuffer (0 with NoPartialUpdate), at the window's device size.
+    const qreal dpr = m_window->devicePixelRatio();
+    renderFrame(m_window->defaultFramebufferObject(),
+                std::max(1, int(std::lround(m_window->width() * dpr))),
+                std::max(1, int(std::lround(m_window->height() * dpr))));
+}
+
+void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
     Timer timer;
-    const qreal dpr = devicePixelRatioF();
-    const int fullW = std::max(1, int(width() * dpr)), fullH = std::max(1, int(height() * dpr));
-    glBindFramebuffer(GL_FRAMEBUFFER, defaultFramebufferObject());
-    glViewport(0, 0, fullW, fullH);
-    glClearColor(0.16f, 0.17f, 0.19f, 1.f);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    if (!m_glReady || !m_doc->hasObject())
+    // A clear only where no frame is drawn: the tone map writes every pixel of a frame.
+    const auto clear = [&] {
+        QOpenGLContext* ctx = QOpenGLContext::currentContext();
+        if (!ctx)
+            return;                               // no context could be made (initError says why)
+        QOpenGLFunctions* gl = ctx->functions();  // even when the 4.5 functions are missing
+        gl->glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+        gl->glViewport(0, 0, fullW, fullH);
+        gl->glClearColor(0.16f, 0.17f, 0.19f, 1.f);
+        gl->glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    };
+    if (!m_glReady || !m_doc->hasObject()) {
+        clear();
+        if (!m_glReady)
+            Q_EMIT frameRendered();  // no frame, but the Statistics dock shows initError
         return;
+    }
 
     PreviewFrame f;
     f.scene = &m_doc->scene();
@@ -726,7 +948,7 @@ void Viewport::paintGL() {
     if (m_cursor && m_tool == Tool::Paint && !m_hideOverlays)
         f.cursor = m_cursor;
     f.brushRadius = m_brush.engine.radius * m_brush.radiusScale(m_pressure);
-    f.framebuffer = defaultFramebufferObject();
+    f.framebuffer = framebuffer;
     f.framebufferWidth = fullW;
     f.framebufferHeight = fullH;
     try {
@@ -738,6 +960,7 @@ void Viewport::paintGL() {
         m_stats.initError = QString::fromUtf8(ex.what());
         ++m_stats.glErrors;
         m_sceneReplaced = true;
+        clear();
     }
     m_stats.preview = m_preview.stats();
     m_stats.uploadMs = m_stats.preview.uploadMs;
@@ -745,14 +968,14 @@ void Viewport::paintGL() {
     glFinish();  // so the frame time includes the (software) rasterisation
     while (glGetError() != GL_NO_ERROR)
         ++m_stats.glErrors;
-    drawOverlay();  // QPainter on the widget's framebuffer, after the frame
+    drawOverlay(framebuffer, fullW, fullH);  // QPainter over the frame
     while (glGetError() != GL_NO_ERROR)
         ++m_stats.glErrors;
     m_stats.frameMs = timer.elapsedMs();
     ++m_stats.frames;
     // Progressive methods (dipoles) refine while the user is idle.
     if (m_preview.wantsAnotherFrame())
-        QTimer::singleShot(0, this, qOverload<>(&QWidget::update));
+        QTimer::singleShot(0, this, [this] { update(); });
     Q_EMIT frameRendered();
 }
 

@@ -13,22 +13,38 @@
 /// point, spot and sphere lights move on the view-aligned plane through their position;
 /// directional lights move on a sphere around the object and shine towards its centre.
 /// Tablet pens paint with pressure (AppBrush::pressureMode); the mouse is pressure 1.
+///
+/// Hosting: Viewport is a plain QWidget facade; the GL drawing happens in a QOpenGLWindow
+/// (ViewportWindow, Viewport.cpp) embedded with QWidget::createWindowContainer and filling the
+/// facade. A QOpenGLWidget would make Qt compose the whole top-level window on every frame
+/// (18–79 ms a frame on llvmpipe/Xvfb, docs/benchmarks.md "App latency"); the native GL window
+/// swaps on its own (3–4 ms). Input reaching the GL window (mouse, wheel, keys, tablet, hover,
+/// leave, drag-and-drop, context menu) is handed to the facade's handlers, so events sent to
+/// either behave the same.
+///
+///     auto* vp = new Viewport(doc, parent);   // a widget: lay it out, size it, connect it
+///     vp->update();                           // schedules a GL frame
+///     QImage frame = vp->grabFramebuffer();   // renders a frame offscreen and reads it back
 
 #include "BrushTool.h"
 #include "MeshPicker.h"
 #include "PreviewRenderer.h"
 
-#include <QOpenGLFunctions_4_5_Core>
-#include <QOpenGLWidget>
 #include <QElapsedTimer>
+#include <QOpenGLFunctions_4_5_Core>
+#include <QPixmap>
 #include <QTimer>
+#include <QWidget>
 
 #include <memory>
 #include <optional>
 
+class QWindow;
+
 namespace lucent::app {
 
 class Document;
+class ViewportWindow;
 
 /// Orbit camera around a target point; +y is up.
 struct OrbitCamera {
@@ -57,7 +73,7 @@ struct ViewportStats {
     QString initError;       ///< non-empty when GL set-up failed
 };
 
-class Viewport : public QOpenGLWidget, protected QOpenGLFunctions_4_5_Core {
+class Viewport : public QWidget, protected QOpenGLFunctions_4_5_Core {
     Q_OBJECT
 public:
     enum class Tool { Paint, Eyedropper };
@@ -107,6 +123,23 @@ public:
     [[nodiscard]] std::optional<QPointF> project(const Point3f& p) const;
     //! @}
 
+    //! @{ \name GL window
+    /// Schedules a frame of the GL window; calls before it is drawn coalesce into one. Hides
+    /// QWidget::update() (the facade itself draws nothing; a QWidget::update() through a base
+    /// pointer reaches paintEvent, which schedules a frame too).
+    void update();
+    /// Renders a frame, overlays included, into an offscreen framebuffer of the viewport's
+    /// size in device pixels and returns it (display sRGB, opaque). Null before the GL window
+    /// has been shown once (no context yet).
+    [[nodiscard]] QImage grabFramebuffer();
+    /// `widget->grab()` with the viewport's frame (grabFramebuffer) painted where the viewport
+    /// sits: QWidget::grab() cannot read the native GL window. `widget`: the viewport or one of
+    /// its ancestors (e.g. the main window); for another widget it is a plain grab().
+    [[nodiscard]] QPixmap grabWithFrame(QWidget* widget);
+    /// The QOpenGLWindow that draws and receives the real input events.
+    [[nodiscard]] QWindow* glWindow() const;
+    //! @}
+
     /// The last frame's linear radiance at render resolution, W/(mm²·sr)
     /// (PreviewRenderer::linearImage). @throw GpuError when nothing has been rendered.
     [[nodiscard]] ImageRgb linearImage();
@@ -114,6 +147,8 @@ public:
     [[nodiscard]] QImage grabRender();
 
 Q_SIGNALS:
+    /// A frame was drawn (stats() updated); also after a failed GL set-up (stats().initError
+    /// non-empty, stats().frames unchanged), so the failure can be shown.
     void frameRendered();
     void eyedropped(const lucent::MaterialSample& sample);
     void hoverVoxel(const QString& text);
@@ -122,9 +157,7 @@ Q_SIGNALS:
     void lightSelected(int index);
 
 protected:
-    void initializeGL() override;
-    void resizeGL(int w, int h) override;
-    void paintGL() override;
+    void paintEvent(QPaintEvent* e) override;
     void mousePressEvent(QMouseEvent* e) override;
     void mouseMoveEvent(QMouseEvent* e) override;
     void mouseReleaseEvent(QMouseEvent* e) override;
@@ -134,6 +167,14 @@ protected:
     void tabletEvent(QTabletEvent* e) override;
 
 private:
+    friend class ViewportWindow;  // hands its GL callbacks and input events to the facade
+
+    void initializeGL();
+    void paintGL();
+    /// One frame into `framebuffer` (w × h device pixels): the preview, then the overlays.
+    void renderFrame(unsigned framebuffer, int w, int h);
+    /// Sets the cursor shape on the facade and on the GL window (which shows it).
+    void setViewCursor(Qt::CursorShape shape);
     void onSceneReplaced();
     void cleanupGL();
     void beginStroke(const PickHit& hit);
@@ -144,7 +185,7 @@ private:
     void beginLightDrag(int index, const QPointF& pos);
     void continueLightDrag(const QPointF& pos);
     void endLightDrag();
-    void drawOverlay();
+    void drawOverlay(unsigned framebuffer, int w, int h);
     /// The rest mesh, or the twisted one while the deformation animation runs (into m_posed).
     const TriangleMesh* shownMesh();
 
@@ -175,7 +216,9 @@ private:
     QTimer m_animation;
     QElapsedTimer m_clock;
 
-    // Rendering (GL objects valid while the context lives).
+    // Rendering (GL objects valid while the GL window's context lives).
+    ViewportWindow* m_window = nullptr;  ///< owned by m_container
+    QWidget* m_container = nullptr;      ///< child widget hosting m_window
     bool m_glReady = false;
     PreviewRenderer m_preview;
     TriangleMesh m_posed;

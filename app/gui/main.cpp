@@ -5,11 +5,13 @@
 ///     lucent [PROJECT|MESH|VDB] [--screenshot PATH] [--frames N] [--benchmark]
 ///            [--benchmark-json PATH] [--viewport WxH]
 ///            [--method direct|single|sslpv|dipole|better-dipole|dirpole|combined]
+///                (also the selector's long names: single-scattering, directional-dipole)
 ///            [--paint-demo] [--reference SPP] [--raise DOCKS] [--no-settings]
 ///            [--swap-interval N] [--compose-experiment]
 /// --screenshot grabs the whole window after N rendered frames (default 3) and exits;
 /// --benchmark measures start-up to first frame, idle frame time and stroke-to-frame latency;
-/// --compose-experiment measures what Qt adds around paintGL for three ways to host GL.
+/// --compose-experiment measures what Qt adds around paintGL for three ways to host GL and for
+/// the app's own viewport (a QOpenGLWindow in a window container, see Viewport.h).
 
 #include "Document.h"
 #include "MainWindow.h"
@@ -46,15 +48,18 @@ namespace {
 using lucent::Timer;
 using lucent::app::MainWindow;
 
-/// Preview method from its command-line name. @return false for an unknown name.
+/// Preview method from its command-line name (every entry of the Render dock's selector, short
+/// or long name). @return false for an unknown name or a method not compiled in.
 bool parseMethod(const QString& name, lucent::app::RenderSettings::Method& out) {
     using M = lucent::app::RenderSettings::Method;
     const std::pair<const char*, M> names[] = {{"direct", M::Direct},
                                                {"single", M::SingleScattering},
+                                               {"single-scattering", M::SingleScattering},
                                                {"sslpv", M::Sslpv},
                                                {"dipole", M::Dipole},
                                                {"better-dipole", M::BetterDipole},
                                                {"dirpole", M::DirectionalDipole},
+                                               {"directional-dipole", M::DirectionalDipole},
                                                {"combined", M::Combined}};
     for (const auto& [n, m] : names)
         if (name == QLatin1String(n) && lucent::app::PreviewRenderer::hasMethod(m)) {
@@ -231,7 +236,33 @@ void showInLargeWindow(QMainWindow& win, QWidget* view) {
     win.show();
 }
 
-/// Runs the three hosts one after the other and prints frame, paintGL and Qt's share.
+/// The app's own viewport (MainWindow at 1400×1100, viewport 640×360, Direct): update() → frame
+/// done, `frames` times after 3 warm-up frames. @return medians (total, paintGL) in ms.
+std::pair<double, double> timeAppViewport(int frames) {
+    MainWindow win(/*restoreSettings=*/false);
+    lucent::app::Viewport* vp = win.viewport();
+    vp->setFixedSize(640, 360);
+    lucent::app::RenderSettings rs = vp->renderSettings();
+    rs.method = lucent::app::RenderSettings::Method::Direct;
+    rs.resolutionScale = 1.f;
+    vp->setRenderSettings(rs);
+    win.resize(1400, 1100);
+    win.show();
+    for (int i = 0; i < 20; ++i)
+        QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
+    std::vector<double> total, paint;
+    for (int i = 0; i < frames + 3; ++i) {
+        Timer t;
+        renderFrame(vp);  // returns after paintGL and the window's swap (same paint event)
+        if (i >= 3) {
+            total.push_back(t.elapsedMs());
+            paint.push_back(vp->stats().frameMs);
+        }
+    }
+    return {median(total), median(paint)};
+}
+
+/// Runs the hosts one after the other and prints frame, paintGL and Qt's share.
 int runComposeExperiment() {
     lucent::Scene scene = lucent::makeDefaultScene();
     const int frames = 20;
@@ -276,6 +307,10 @@ int runComposeExperiment() {
         const auto [t, p] = timeHost(
             gl, [glWindow] { glWindow->update(); }, frames);
         results.push_back({"QOpenGLWindow in container, 1400x1100", t, p});
+    }
+    {  // 4. the app: MainWindow with its docks, the Viewport (QOpenGLWindow in a container)
+        const auto [t, p] = timeAppViewport(frames);
+        results.push_back({"app Viewport in MainWindow, 1400x1100", t, p});
     }
     const QSurfaceFormat f = QSurfaceFormat::defaultFormat();
     std::printf(
@@ -444,15 +479,16 @@ int main(int argc, char** argv) {
                                  QStringLiteral("SPP"));
     QCommandLineOption composeExperiment(
         QStringLiteral("compose-experiment"),
-        QStringLiteral("Measure Qt's composition around paintGL for three GL hosts, then exit."));
+        QStringLiteral("Measure Qt's composition around paintGL for three GL hosts and the "
+                       "app's viewport, then exit."));
     QCommandLineOption swapInterval(
         QStringLiteral("swap-interval"),
         QStringLiteral("QSurfaceFormat swap interval (default: Qt's, 1); 0 disables vsync."),
         QStringLiteral("N"));
     QCommandLineOption method(
         QStringLiteral("method"),
-        QStringLiteral("Preview method: direct, single, sslpv, dipole, better-dipole, dirpole or "
-                       "combined."),
+        QStringLiteral("Preview method: direct, single (single-scattering), sslpv, dipole, "
+                       "better-dipole, dirpole (directional-dipole) or combined."),
         QStringLiteral("M"));
     parser.addOptions({shot, frames, bench, benchJson, viewportSize, noSettings, paintDemo,
                        raiseDock, method, reference, composeExperiment, swapInterval});
@@ -483,9 +519,14 @@ int main(int argc, char** argv) {
         lucent::app::RenderSettings rs = window.viewport()->renderSettings();
         if (!parseMethod(parser.value(method), rs.method)) {
             std::fprintf(stderr,
-                         "lucent: --method expects direct, single, sslpv, dipole, "
-                         "better-dipole, dirpole or combined (got '%s')\n",
-                         qPrintable(parser.value(method)));
+                         "lucent: --method expects direct, single (single-scattering), sslpv, "
+                         "dipole, better-dipole, dirpole (directional-dipole) or combined "
+                         "(got '%s'%s)\n",
+                         qPrintable(parser.value(method)),
+                         lucent::app::PreviewRenderer::hasMethod(
+                             lucent::app::RenderSettings::Method::Combined)
+                             ? ""
+                             : "; combined is not built in");
             return 2;
         }
         window.setRenderMethod(int(rs.method));
@@ -511,6 +552,13 @@ int main(int argc, char** argv) {
         if (done)
             return;
         const auto& st = window.viewport()->stats();
+        if (st.frames == 0 && !st.initError.isEmpty()) {  // GL set-up failed: no frame comes
+            done = true;
+            std::fprintf(stderr, "lucent: %s\n", qPrintable(st.initError));
+            if (scripted)
+                QTimer::singleShot(0, &window, [] { QApplication::exit(4); });
+            return;
+        }
         if (parser.isSet(bench) && st.frames >= 1) {
             done = true;
             const double startupMs = startup.elapsedMs();
@@ -544,7 +592,7 @@ int main(int argc, char** argv) {
             if (auto* ref = window.referencePanel()) {
                 ref->setParameters(200, std::max(3, parser.value(reference).toInt()));
                 QObject::connect(ref, &lucent::app::ReferencePanel::finished, window.viewport(),
-                                 qOverload<>(&QWidget::update));
+                                 [&window] { window.viewport()->update(); });
                 ref->start();
             }
 #endif
@@ -552,7 +600,9 @@ int main(int argc, char** argv) {
             done = true;
             QTimer::singleShot(100, &window, [&] {
                 const QString path = parser.value(shot);
-                const bool ok = window.grab().save(path);
+                // The window with the viewport's frame painted in (QWidget::grab cannot read
+                // the native GL window).
+                const bool ok = window.viewport()->grabWithFrame(&window).save(path);
                 std::fprintf(stderr, "lucent: screenshot %s %s (%lld frames, %d GL errors)\n",
                              qPrintable(path), ok ? "written" : "FAILED",
                              window.viewport()->stats().frames,
@@ -561,10 +611,8 @@ int main(int argc, char** argv) {
             });
         } else if (parser.isSet(shot)) {
             QTimer::singleShot(referenceRunning() ? 250 : 0, window.viewport(),
-                               qOverload<>(&QWidget::update));
+                               [&window] { window.viewport()->update(); });
         }
     });
-    if (!window.viewport()->stats().initError.isEmpty())
-        std::fprintf(stderr, "lucent: %s\n", qPrintable(window.viewport()->stats().initError));
     return QApplication::exec();
 }

@@ -4,7 +4,9 @@
 /// a non-blank viewport with every preview method (direct, single scattering, SSLPV, dipoles),
 /// a stroke changing the SSLPV preview near it through an incremental (dirty-brick) update,
 /// simulated mouse strokes changing the expected voxels, undo/redo
-/// through the UI actions, eyedropper, slice view, and the save/open/export round trips.
+/// through the UI actions, eyedropper, slice view, and the save/open/export round trips; input,
+/// drops and screenshots through the viewport's real GL window (a QOpenGLWindow in a window
+/// container).
 
 #include "Document.h"
 #include "MainWindow.h"
@@ -29,6 +31,8 @@
 #include <QMessageBox>
 #include <QPointingDevice>
 #include <QPushButton>
+#include <QScreen>
+#include <QSignalSpy>
 #include <QSpinBox>
 #include <QStandardItemModel>
 #include <QStandardPaths>
@@ -40,6 +44,8 @@
 #include <QUrl>
 #include <QSurfaceFormat>
 #include <QTest>
+#include <QWheelEvent>
+#include <QWindow>
 
 #include <gtest/gtest.h>
 
@@ -152,6 +158,44 @@ double meanAbsDiff(const QImage& a, const QImage& b, const QRect& rect) {
             n += 3;
         }
     return n > 0 ? sum / double(n) : 0.0;
+}
+
+/// Rightmost pixel column of row `y` whose centre hits the object, −1 for none.
+int rightEndOnRow(const Viewport* vp, int y) {
+    for (int x = vp->width() - 1; x >= 0; --x)
+        if (vp->pickAt(QPointF(x + 0.5, y + 0.5)))
+            return x;
+    return -1;
+}
+
+/// The shared test mesh of the drop tests.
+QString suzannePath() {
+    return QStringLiteral(LUCENT_SHARED_DIR "/meshes/suzanne.obj");
+}
+
+/// Why the drop tests cannot run; empty when they can.
+std::string meshDropSkipReason() {
+    if (!MainWindow::hasMeshImport())
+        return "mesh import not built";
+    if (!QFile::exists(suzannePath()))
+        return "test mesh absent: " + suzannePath().toStdString();
+    return {};
+}
+
+/// Drag data of the test mesh as a file manager sends it.
+std::unique_ptr<QMimeData> suzanneDragData() {
+    auto data = std::make_unique<QMimeData>();
+    data->setUrls({QUrl::fromLocalFile(suzannePath())});
+    return data;
+}
+
+/// The document holds Suzanne (~1k triangles; the default mesh has 20 480).
+void expectSuzanneOpened(MainWindow& w) {
+    ASSERT_TRUE(w.lastError().isEmpty()) << w.lastError().toStdString();
+    const TriangleMesh* m = w.document()->mesh();
+    ASSERT_NE(m, nullptr);
+    EXPECT_LT(m->triangleCount(), 2000u);
+    EXPECT_GT(m->triangleCount(), 900u);
 }
 
 QAction* findAction(MainWindow& w, const char* name) {
@@ -269,10 +313,7 @@ TEST(AppPaint, StrokeChangesSslpvPixelsNearTheStroke) {
     // Find the right end of the object on the middle row and paint a vertical stroke of a
     // strong absorber (σt 5 mm⁻¹, σs′ 0: albedo 0, no light comes back) over the right ear.
     const int cy = before.height() / 2;
-    int xr = -1;
-    for (int x = before.width() - 1; x >= 0 && xr < 0; --x)
-        if (vp->pickAt(QPointF(x + 0.5, cy + 0.5)))
-            xr = x;
+    const int xr = rightEndOnRow(vp, cy);
     ASSERT_GT(xr, before.width() / 2) << "object not found on the middle row";
     const int xs = xr - 30;
     setExactBrush(vp, {Rgb(5.f), Rgb(0.f), Rgb(0.f)}, 4.f);
@@ -625,7 +666,7 @@ TEST(AppLights, DragMovesDirectionalLightOnTheGizmoSphere) {
     }
     renderOneFrame(vp);
     EXPECT_EQ(vp->stats().glErrors, 0);
-    w->grab().save(outputPath("app_light_gizmo_window.png"));
+    vp->grabWithFrame(w.get()).save(outputPath("app_light_gizmo_window.png"));
     // Undo: the drag, then the added light.
     QAction* undo = findAction(*w, "actionUndo");
     undo->trigger();
@@ -637,12 +678,20 @@ TEST(AppLights, DragMovesDirectionalLightOnTheGizmoSphere) {
 
 // ---- Tablet pressure ------------------------------------------------------------------------
 
-/// Sends a tablet event of a pen at `pos` with `pressure`. @return whether it was accepted.
-bool sendTablet(QWidget* w, QEvent::Type type, QPointF pos, double pressure) {
+/// The simulated pen of the tablet tests (one device for every test).
+const QPointingDevice& testPen() {
     static const QPointingDevice pen(
         QStringLiteral("test pen"), 4242, QInputDevice::DeviceType::Stylus,
         QPointingDevice::PointerType::Pen,
         QInputDevice::Capability::Position | QInputDevice::Capability::Pressure, 1, 3);
+    return pen;
+}
+
+/// Sends a tablet event of a pen at `pos` with `pressure` to a widget or a window. @return
+/// whether it was accepted.
+template <class Target>
+bool sendTablet(Target* w, QEvent::Type type, QPointF pos, double pressure) {
+    const QPointingDevice& pen = testPen();
     const Qt::MouseButton button = type == QEvent::TabletMove ? Qt::NoButton : Qt::LeftButton;
     const Qt::MouseButtons buttons =
         type == QEvent::TabletRelease ? Qt::NoButton : Qt::MouseButtons(Qt::LeftButton);
@@ -650,6 +699,142 @@ bool sendTablet(QWidget* w, QEvent::Type type, QPointF pos, double pressure) {
                    Qt::NoModifier, button, buttons);
     QApplication::sendEvent(w, &e);
     return e.isAccepted();
+}
+
+// ---- The GL window: real input, drops and screenshots ---------------------------------------
+// The viewport draws in a QOpenGLWindow hosted by QWidget::createWindowContainer; the tests
+// above send events to the facade widget, these send them to the GL window itself, where the
+// window system delivers them.
+
+/// Simulated LMB drag on a window from a to b in `steps` moves.
+void dragOnWindow(QWindow* win, QPoint a, QPoint b, int steps = 12) {
+    QTest::mousePress(win, Qt::LeftButton, Qt::NoModifier, a);
+    for (int i = 1; i <= steps; ++i)
+        QTest::mouseMove(win, a + (b - a) * i / steps);
+    QTest::mouseRelease(win, Qt::LeftButton, Qt::NoModifier, b);
+}
+
+TEST(AppWindow, StrokeOnTheGlWindowChangesVoxelsAndThePreview) {
+    auto w = shownWindow(1);
+    Viewport* vp = w->viewport();
+    QWindow* gl = vp->glWindow();
+    ASSERT_NE(gl, nullptr);
+    ASSERT_TRUE(gl->isExposed());
+    // The container fills the facade: window and widget positions are the same.
+    EXPECT_EQ(gl->size(), vp->size());
+    EXPECT_EQ(gl->mapToGlobal(QPoint(0, 0)), vp->mapToGlobal(QPoint(0, 0)));
+    w->setRenderMethod(int(RenderSettings::Method::Sslpv));
+    renderOneFrame(vp);
+    const QImage before = vp->grabRender().convertToFormat(QImage::Format_RGB32);
+    // As AppPaint.StrokeChangesSslpvPixelsNearTheStroke: a strong absorber (albedo 0) over the
+    // back-lit right ear darkens the SSLPV glow there.
+    const int cy = before.height() / 2;
+    const int xr = rightEndOnRow(vp, cy);
+    ASSERT_GT(xr, before.width() / 2) << "object not found on the middle row";
+    const int xs = xr - 30;
+    setExactBrush(vp, {Rgb(5.f), Rgb(0.f), Rgb(0.f)}, 4.f);
+    MaterialVolume* vol = w->document()->material();
+    const std::vector<float> voxelsBefore = snapshot(*vol);
+    dragOnWindow(gl, QPoint(xs, cy - 30), QPoint(xs, cy + 30));
+    EXPECT_EQ(w->document()->undoStack()->count(), 1) << "one stroke, one undo step";
+    EXPECT_NE(snapshot(*vol), voxelsBefore) << "the stroke on the GL window painted nothing";
+    renderOneFrame(vp);
+    const QImage after = vp->grabRender().convertToFormat(QImage::Format_RGB32);
+    EXPECT_EQ(vp->stats().glErrors, 0);
+    const double dNear = meanAbsDiff(before, after, QRect(xs - 20, cy - 45, 40, 90));
+    EXPECT_GT(dNear, 2.0) << "the preview did not change near the stroke";
+    // Undo through the UI restores the voxels.
+    findAction(*w, "actionUndo")->trigger();
+    EXPECT_EQ(snapshot(*vol), voxelsBefore);
+}
+
+TEST(AppWindow, ScreenshotsShowTheFrameNotABlankWindow) {
+    auto w = shownWindow(2);
+    Viewport* vp = w->viewport();
+    QWindow* gl = vp->glWindow();
+    renderOneFrame(vp);
+    // What the X server shows in the GL window (the swapped frame itself).
+    const QImage onScreen =
+        gl->screen()->grabWindow(gl->winId()).toImage().convertToFormat(QImage::Format_RGB32);
+    onScreen.save(outputPath("app_glwindow_screen.png"));
+    ASSERT_FALSE(onScreen.isNull());
+    const auto [screenCoverage, screenLevels] = objectCoverage(onScreen);
+    EXPECT_GT(screenCoverage, 0.02) << "the GL window shows no object";
+    EXPECT_GT(screenLevels, 8u) << "the GL window shows no shading";
+    // The whole window as --screenshot writes it: the frame painted where the viewport sits.
+    const QImage shot = vp->grabWithFrame(w.get()).toImage().convertToFormat(QImage::Format_RGB32);
+    shot.save(outputPath("app_window_screenshot.png"));
+    const qreal dpr = shot.devicePixelRatio();
+    const QRect vpRect(vp->mapTo(w.get(), QPoint(0, 0)) * dpr, vp->size() * dpr);
+    ASSERT_TRUE(shot.rect().contains(vpRect));
+    const QImage inShot = shot.copy(vpRect);
+    const auto [coverage, levels] = objectCoverage(inShot);
+    EXPECT_GT(coverage, 0.02) << "object covers " << coverage << " of the viewport's area";
+    EXPECT_GT(levels, 8u);
+    // It is the viewport's frame: the same deterministic frame as a grab of the viewport
+    // (SSLPV/direct frames repeat exactly; the last bits may differ in the window grab's
+    // blending, so compare within 8-bit rounding).
+    const QImage direct = vp->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
+    ASSERT_EQ(direct.size(), inShot.size());
+    EXPECT_LT(meanAbsDiff(direct, inShot, direct.rect()), 1.0);
+    // and the on-screen frame matches it too.
+    if (onScreen.size() == direct.size()) {
+        EXPECT_LT(meanAbsDiff(direct, onScreen, direct.rect()), 1.0);
+    }
+    EXPECT_EQ(vp->stats().glErrors, 0);
+}
+
+TEST(AppWindow, InputOnTheGlWindowReachesTheViewport) {
+    auto w = shownWindow(1);
+    Viewport* vp = w->viewport();
+    QWindow* gl = vp->glWindow();
+    const QPoint c(vp->width() / 2, vp->height() / 2);
+    // Wheel: one notch (120 units) towards the object scales the distance by 0.9.
+    const float d0 = vp->camera().distance;
+    QWheelEvent wheel(QPointF(c), gl->mapToGlobal(QPointF(c)), QPoint(), QPoint(0, 120),
+                      Qt::NoButton, Qt::NoModifier, Qt::NoScrollPhase, false);
+    QCoreApplication::sendEvent(gl, &wheel);
+    EXPECT_NEAR(vp->camera().distance, 0.9f * d0, 1e-5f * d0);  // float rounding
+    // F frames the object (key events of the GL window reach the viewport).
+    vp->camera().distance = 10.f * d0;
+    QTest::keyClick(gl, Qt::Key_F);
+    EXPECT_LT(vp->camera().distance, 2.f * d0) << "F did not frame the object";
+    vp->frameObject();
+    renderOneFrame(vp);
+    // Hover over the object reports the voxel under the cursor.
+    QSignalSpy hover(vp, &Viewport::hoverVoxel);
+    QTest::mouseMove(gl, c);
+    EXPECT_GE(hover.count(), 1) << "no hover report from the GL window";
+    // The cursor shape is the GL window's: an open hand over a light handle, else an arrow.
+    const auto h = vp->lightHandle(0);
+    ASSERT_TRUE(h);
+    QTest::mouseMove(gl, h->toPoint());
+    EXPECT_EQ(gl->cursor().shape(), Qt::OpenHandCursor);
+    QTest::mouseMove(gl, c);
+    EXPECT_EQ(gl->cursor().shape(), Qt::ArrowCursor);
+    // A click on the GL window gives the viewport the keyboard focus.
+    w->brushPanel()->setFocus();
+    vp->setTool(Viewport::Tool::Eyedropper);  // the click picks, it does not paint
+    ASSERT_NE(w->focusWidget(), vp->focusProxy());
+    QTest::mouseClick(gl, Qt::LeftButton, Qt::NoModifier, c);
+    // The facade's focus proxy is the window container (which activates the GL window).
+    EXPECT_EQ(w->focusWidget(), vp->focusProxy());
+    // A pen dab on the GL window paints one undo step (pressure path of the window).
+    setExactBrush(vp, PAINT, 4.f * w->document()->material()->spec().voxelSize);
+    EXPECT_TRUE(sendTablet(gl, QEvent::TabletPress, QPointF(c), 0.8));
+    EXPECT_TRUE(sendTablet(gl, QEvent::TabletRelease, QPointF(c), 0.8));
+    EXPECT_EQ(w->document()->undoStack()->count(), 1);
+    // A pen hovering (no press) is left to the mouse path.
+    EXPECT_FALSE(sendTablet(gl, QEvent::TabletMove, QPointF(c), 0.0));
+    // Resizing the viewport resizes the GL window, which draws a frame at the new size with
+    // no update() call.
+    const long long f = vp->stats().frames;
+    vp->setFixedSize(480, 270);
+    EXPECT_TRUE(QTest::qWaitFor([&] { return vp->stats().frames > f; }, 10000))
+        << "no frame after a resize";
+    EXPECT_EQ(gl->size(), QSize(480, 270));
+    EXPECT_EQ(vp->grabFramebuffer().size(), QSize(480, 270) * gl->devicePixelRatio());
+    EXPECT_EQ(vp->stats().glErrors, 0);
 }
 
 TEST(AppPaint, TabletPressureScalesTheStamp) {
@@ -794,7 +979,7 @@ TEST(AppRender, VolumeOverlayControlsReachTheRenderer) {
     EXPECT_TRUE(vp->stats().initError.isEmpty()) << vp->stats().initError.toStdString();
     const QImage on = vp->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
     on.save(outputPath("app_volume_overlay.png"));
-    w->grab().save(outputPath("app_volume_overlay_window.png"));
+    vp->grabWithFrame(w.get()).save(outputPath("app_volume_overlay_window.png"));
     // The overlay covers the object: the picture changes by more than 8-bit rounding.
     EXPECT_GT(meanAbsDiff(off, on, off.rect()), 1.0);
     overlay->setChecked(false);
@@ -834,7 +1019,7 @@ TEST(AppDocs, Screenshots) {
     raise("dockLights");
     for (int i = 0; i < 3; ++i)
         renderOneFrame(vp);
-    ASSERT_TRUE(w.grab().save(dir + QStringLiteral("/app-light-gizmo.png")));
+    ASSERT_TRUE(vp->grabWithFrame(&w).save(dir + QStringLiteral("/app-light-gizmo.png")));
     // The volume overlay of σt through the Render settings dock.
     w.findChild<QCheckBox*>(QStringLiteral("renderOverlay"))->setChecked(true);
     w.findChild<QDoubleSpinBox*>(QStringLiteral("renderOverlayOpacity"))->setValue(0.7);
@@ -842,7 +1027,7 @@ TEST(AppDocs, Screenshots) {
     raise("dockRender");
     for (int i = 0; i < 3; ++i)
         renderOneFrame(vp);
-    ASSERT_TRUE(w.grab().save(dir + QStringLiteral("/app-volume-overlay.png")));
+    ASSERT_TRUE(vp->grabWithFrame(&w).save(dir + QStringLiteral("/app-volume-overlay.png")));
     EXPECT_EQ(vp->stats().glErrors, 0);
 }
 
@@ -934,23 +1119,15 @@ TEST(AppFiles, ExportVdbOfUntouchedDefaultScene) {
 }
 
 TEST(AppFiles, ImportMeshByDragAndDrop) {
-    if (!MainWindow::hasMeshImport())
-        GTEST_SKIP() << "mesh import not built";
-    const QString mesh = QStringLiteral(LUCENT_SHARED_DIR "/meshes/suzanne.obj");
-    if (!QFile::exists(mesh))
-        GTEST_SKIP() << "test mesh absent: " << mesh.toStdString();
+    if (const std::string why = meshDropSkipReason(); !why.empty())
+        GTEST_SKIP() << why;
     auto w = shownWindow();
-    QMimeData data;
-    data.setUrls({QUrl::fromLocalFile(mesh)});
-    QDropEvent drop(QPointF(10, 10), Qt::CopyAction, &data, Qt::LeftButton, Qt::NoModifier);
+    const auto data = suzanneDragData();
+    QDropEvent drop(QPointF(10, 10), Qt::CopyAction, data.get(), Qt::LeftButton, Qt::NoModifier);
     // Delivered straight to the window's event handler (QApplication's drop routing wants a
     // live QDrag session, which a synthetic event does not have).
     static_cast<QObject*>(w.get())->event(&drop);
-    ASSERT_TRUE(w->lastError().isEmpty()) << w->lastError().toStdString();
-    const TriangleMesh* m = w->document()->mesh();
-    ASSERT_NE(m, nullptr);
-    EXPECT_LT(m->triangleCount(), 2000u);  // Suzanne: ~1k triangles (the default mesh: 20 480)
-    EXPECT_GT(m->triangleCount(), 900u);
+    expectSuzanneOpened(*w);
     const MaterialVolume* v = w->document()->material();
     ASSERT_NE(v, nullptr);
     size_t inside = 0;
@@ -962,6 +1139,26 @@ TEST(AppFiles, ImportMeshByDragAndDrop) {
     const long long f = w->viewport()->stats().frames;
     w->viewport()->update();
     EXPECT_TRUE(QTest::qWaitFor([&] { return w->viewport()->stats().frames > f; }, 10000));
+    EXPECT_EQ(w->viewport()->stats().glErrors, 0);
+}
+
+TEST(AppFiles, ImportMeshByDropOnTheGlWindow) {
+    if (const std::string why = meshDropSkipReason(); !why.empty())
+        GTEST_SKIP() << why;
+    auto w = shownWindow();
+    QWindow* gl = w->viewport()->glWindow();
+    const auto data = suzanneDragData();
+    // The window system sends drags over the viewport to the GL window; it hands them to the
+    // main window, which accepts files.
+    const QPoint pos(w->viewport()->width() / 2, w->viewport()->height() / 2);
+    QDragEnterEvent enter(pos, Qt::CopyAction, data.get(), Qt::LeftButton, Qt::NoModifier);
+    QCoreApplication::sendEvent(gl, &enter);
+    EXPECT_TRUE(enter.isAccepted()) << "the drag over the GL window was refused";
+    EXPECT_EQ(enter.dropAction(), Qt::CopyAction);
+    QDropEvent drop(QPointF(pos), Qt::CopyAction, data.get(), Qt::LeftButton, Qt::NoModifier);
+    QCoreApplication::sendEvent(gl, &drop);
+    expectSuzanneOpened(*w);
+    renderOneFrame(w->viewport());
     EXPECT_EQ(w->viewport()->stats().glErrors, 0);
 }
 
