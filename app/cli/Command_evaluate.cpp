@@ -15,6 +15,8 @@
 #include <lucent/core/Image.h>
 #include <lucent/gpu/GlContext.h>
 #include <lucent/gpu/SceneRenderer.h>
+#include <lucent/material/MaterialVolume.h>
+#include <lucent/material/Presets.h>
 #include <lucent/reference/PathTracer.h>
 #include <lucent/scene/SceneFile.h>
 
@@ -27,9 +29,11 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -61,9 +65,17 @@ constexpr int TEST_PT_SEED = 7;
 // Methods, variants and quality settings
 
 /// The options the method functions read (a superset of theirs; see Command_render.cpp).
-const std::vector<std::string> METHOD_VALUE_OPTIONS = {
-    "spp",  "seed",        "grid",      "steps",   "sh",
-    "mode", "attenuation", "spp-frame", "threads", "boundary"};
+const std::vector<std::string> METHOD_VALUE_OPTIONS = {"spp",
+                                                       "seed",
+                                                       "grid",
+                                                       "steps",
+                                                       "sh",
+                                                       "mode",
+                                                       "attenuation",
+                                                       "spp-frame",
+                                                       "threads",
+                                                       "boundary",
+                                                       "dirpole-normalise"};
 const std::vector<std::string> METHOD_FLAG_OPTIONS = {"cpu", "gl"};
 
 /// One quality setting of a variant: a label and the method's command-line options.
@@ -122,8 +134,14 @@ Variant parseVariant(const std::string& entry) {
             badSuffix("cpu, gl");
         v.settings = sppSettings({8, 32, 128});
     } else if (v.method == "dirpole") {
-        if (!v.suffix.empty())
-            badSuffix("none");
+        // Default: the GPU pipeline with S_d energy-normalised to the better dipole's total
+        // (docs/methods/dipole.md §1); raw: the published model as is; cpu: the CPU pipeline.
+        if (v.suffix == "raw")
+            v.extraArgv = {"--dirpole-normalise", "off"};
+        else if (v.suffix == "cpu")
+            v.extraArgv = {"--cpu"};
+        else if (!v.suffix.empty())
+            badSuffix("raw, cpu");
         v.settings = sppSettings({8, 32, 128});
     } else if (v.method == "combined") {
         if (v.suffix == "cpu")
@@ -138,7 +156,7 @@ Variant parseVariant(const std::string& entry) {
     } else {
         LUCENT_THROW(ValueError, "--methods: unknown method '", v.method, "' in '", entry,
                      "' (known: direct, sslpv[:paper|:calibrated|:gl], dipole[:cpu|:gl], "
-                     "better-dipole[:cpu|:gl], dirpole, combined[:cpu], reference)");
+                     "better-dipole[:cpu|:gl], dirpole[:raw|:cpu], combined[:cpu], reference)");
     }
     return v;
 }
@@ -250,8 +268,11 @@ struct Reference {
     std::string path;
 };
 
+/// @param overrides the --presets/--etas overrides applied to the scene ("" for none): part of
+/// the cache key, since the scene file alone no longer determines the image.
 Reference referenceFor(const Scene& scene, const std::string& scenePath, const std::string& stem,
-                       const fs::path& dir, int spp, bool subsurfaceOnly) {
+                       const std::string& overrides, const fs::path& dir, int spp,
+                       bool subsurfaceOnly) {
     const int w = scene.camera.width, h = scene.camera.height;
     std::ostringstream name;
     name << stem << "_ref_" << w << "x" << h << "_" << spp << "spp"
@@ -261,7 +282,8 @@ Reference referenceFor(const Scene& scene, const std::string& scenePath, const s
     std::ostringstream key;
     key << "scene-fnv1a=" << std::hex << hashFile(scenePath) << std::dec << " width=" << w
         << " height=" << h << " spp=" << spp << " seed=" << REFERENCE_SEED
-        << " boundary=dielectric subsurface-only=" << subsurfaceOnly << "\n";
+        << " boundary=dielectric subsurface-only=" << subsurfaceOnly
+        << (overrides.empty() ? "" : " " + overrides) << "\n";
     Reference ref;
     ref.path = exr.string();
     if (fs::exists(exr) && fs::exists(keyFile)) {
@@ -295,6 +317,38 @@ Reference referenceFor(const Scene& scene, const std::string& scenePath, const s
     ref.spp = img.spp;
     ref.seconds = img.seconds;
     return ref;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scene overrides (--presets, --etas): every scene × preset × η is evaluated as its own case
+
+/// Replaces every object's material by the uniform preset, on the grid the scene file gave
+/// (GridSpec::around the mesh at the object's resolution, as SceneFile builds a preset material).
+void applyPreset(Scene& scene, const MaterialPreset& preset) {
+    for (SceneObject& obj : scene.objects) {
+        const int res = obj.material ? obj.material->resolution() : obj.materialSource.resolution;
+        obj.material = std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), res),
+                                                        preset.sample());
+        obj.materialSource.vdbFile.clear();
+        obj.materialSource.uniform = false;
+        obj.materialSource.preset = preset.name;
+        obj.materialSource.value = preset.sample();
+        obj.materialSource.resolution = res;
+    }
+}
+
+/// "--etas 1.3,1": each a finite relative index in [1, 3] (the range the methods accept).
+std::vector<float> parseEtas(const std::vector<std::string>& items) {
+    std::vector<float> out;
+    for (const std::string& item : items) {
+        char* end = nullptr;
+        const double v = std::strtod(item.c_str(), &end);
+        if (end == item.c_str() || *end != '\0' || !std::isfinite(v) || v < 1.0 || v > 3.0)
+            LUCENT_THROW(ValueError, "--etas: '", item,
+                         "' is not a relative index of refraction in [1, 3]");
+        out.push_back(float(v));
+    }
+    return out;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -783,8 +837,10 @@ std::vector<std::string> splitComma(const std::string& s) {
 }
 
 int runEvaluate(const std::vector<std::string>& argv) {
-    const Args args(argv, {"methods", "ref-spp", "width", "height", "out", "repeats", "levels"},
-                    {"subsurface-only", "json", "verbose"});
+    const Args args(
+        argv,
+        {"methods", "ref-spp", "width", "height", "out", "repeats", "levels", "presets", "etas"},
+        {"subsurface-only", "json", "verbose"});
     if (args.positional().empty())
         LUCENT_THROW(ValueError, "expected at least one SCENE.json (see --help)");
     const auto outDir = args.value("out");
@@ -830,16 +886,57 @@ int runEvaluate(const std::vector<std::string>& argv) {
     }
     info.width = scenes.front().camera.width;
     info.height = scenes.front().camera.height;
-    info.scenes = stems;
+
+    // Cases: every scene × --presets × --etas (an empty list keeps the scene's own value),
+    // named "<stem>[-<preset>][-eta<η>]"; the overridden scenes are built one at a time.
+    std::vector<const MaterialPreset*> presets;
+    for (const std::string& name : splitComma(args.valueOr("presets", "")))
+        presets.push_back(&findPreset(name));  // ValueError listing the valid names
+    const std::vector<float> etas = parseEtas(splitComma(args.valueOr("etas", "")));
+    if (args.value("presets") && presets.empty())
+        LUCENT_THROW(ValueError, "--presets: no preset given");
+    if (args.value("etas") && etas.empty())
+        LUCENT_THROW(ValueError, "--etas: no value given");
+    struct Case {
+        size_t file = 0;
+        const MaterialPreset* preset = nullptr;
+        float eta = 0.f;  ///< 0: the scene's own
+        std::string name, overrides;
+    };
+    std::vector<Case> cases;
+    for (size_t fi = 0; fi < scenes.size(); ++fi)
+        for (size_t pi = 0; pi < std::max<size_t>(presets.size(), 1); ++pi)
+            for (size_t ei = 0; ei < std::max<size_t>(etas.size(), 1); ++ei) {
+                Case c;
+                c.file = fi;
+                c.name = stems[fi];
+                if (!presets.empty()) {
+                    c.preset = presets[pi];
+                    c.name.append("-").append(c.preset->name);
+                    c.overrides.append("preset=").append(c.preset->name);
+                }
+                if (!etas.empty()) {
+                    c.eta = etas[ei];
+                    c.name.append("-eta").append(fmt(c.eta, "%g"));
+                    c.overrides.append(c.overrides.empty() ? "eta=" : " eta=")
+                        .append(fmt(c.eta, "%.9g"));
+                }
+                info.scenes.push_back(c.name);
+                cases.push_back(std::move(c));
+            }
 
     std::vector<Result> results;
-    for (size_t si = 0; si < scenes.size(); ++si) {
-        const Scene& scene = scenes[si];
-        const Reference ref = referenceFor(scene, args.positional()[si], stems[si], dir,
-                                           info.refSpp, info.subsurfaceOnly);
+    for (const Case& c : cases) {
+        Scene scene = scenes[c.file];  // shares the file's material unless a preset replaces it
+        if (c.preset)
+            applyPreset(scene, *c.preset);
+        if (c.eta > 0.f)
+            scene.eta = c.eta;
+        const Reference ref = referenceFor(scene, args.positional()[c.file], c.name, c.overrides,
+                                           dir, info.refSpp, info.subsurfaceOnly);
         const std::vector<uint8_t> mask = maskFromImage(ref.coverage);
         writePng(ref.mean, ref.path.substr(0, ref.path.size() - 4) + ".png", previewToneMap());
-        std::fprintf(log, "%s: reference %s (%d spp%s)\n", stems[si].c_str(), ref.path.c_str(),
+        std::fprintf(log, "%s: reference %s (%d spp%s)\n", c.name.c_str(), ref.path.c_str(),
                      ref.spp,
                      ref.cached ? ", cached" : (", " + fmt(ref.seconds, "%.1f") + " s").c_str());
         std::fflush(log);
@@ -848,7 +945,7 @@ int runEvaluate(const std::vector<std::string>& argv) {
             for (int q = 0; q < n; ++q) {
                 const Setting& s = v.settings[size_t(q)];
                 Result r;
-                r.scene = stems[si];
+                r.scene = c.name;
                 r.variant = v.name;
                 r.setting = s.label;
                 r.quality = q;
@@ -867,13 +964,13 @@ int runEvaluate(const std::vector<std::string>& argv) {
                     }
                 } catch (const std::exception& e) {
                     const std::string why =
-                        stems[si] + ": " + v.name + " (" + s.label + "): " + e.what();
+                        c.name + ": " + v.name + " (" + s.label + "): " + e.what();
                     std::fprintf(stderr, "evaluate: skipping %s\n", why.c_str());
                     info.skipped.push_back(why);
                     break;  // the other settings of this variant would fail the same way
                 }
                 if (image.width() != ref.mean.width() || image.height() != ref.mean.height()) {
-                    const std::string why = stems[si] + ": " + v.name + " (" + s.label +
+                    const std::string why = c.name + ": " + v.name + " (" + s.label +
                                             "): image size differs from the reference";
                     std::fprintf(stderr, "evaluate: skipping %s\n", why.c_str());
                     info.skipped.push_back(why);
@@ -884,7 +981,7 @@ int runEvaluate(const std::vector<std::string>& argv) {
                     rep = compareImages(image, ref.mean, &ref.variance, nullptr, &mask);
                 } catch (const ValueError& e) {  // e.g. a non-finite pixel in the method's image
                     const std::string why =
-                        stems[si] + ": " + v.name + " (" + s.label + "): " + e.what();
+                        c.name + ": " + v.name + " (" + s.label + "): " + e.what();
                     std::fprintf(stderr, "evaluate: skipping %s\n", why.c_str());
                     info.skipped.push_back(why);
                     continue;
@@ -901,7 +998,7 @@ int runEvaluate(const std::vector<std::string>& argv) {
                 r.msMedian = median(ms);
                 r.msMin = *std::min_element(ms.begin(), ms.end());
                 r.runs = int(ms.size());
-                std::string file = stems[si] + "_" + v.name + "_q" + std::to_string(q) + ".exr";
+                std::string file = c.name + "_" + v.name + "_q" + std::to_string(q) + ".exr";
                 std::replace(file.begin(), file.end(), ':', '-');
                 writeExr(image, (dir / file).string());
                 writePng(image, (dir / (file.substr(0, file.size() - 4) + ".png")).string(),
@@ -922,9 +1019,9 @@ int runEvaluate(const std::vector<std::string>& argv) {
     std::vector<std::string> names;
     for (const Variant& v : variants)
         names.push_back(v.name);
-    drawChart(results, names, stems, info, dir / "runtime_vs_error.png");
-    if (stems.size() > 1)  // one chart per scene as well (the combined one gets busy)
-        for (const std::string& stem : stems) {
+    drawChart(results, names, info.scenes, info, dir / "runtime_vs_error.png");
+    if (info.scenes.size() > 1)  // one chart per scene as well (the combined one gets busy)
+        for (const std::string& stem : info.scenes) {
             std::vector<Result> mine;
             for (const Result& r : results)
                 if (r.scene == stem)
@@ -948,8 +1045,8 @@ const Command evaluateCommand{
     "evaluate", "run time vs error of the methods against the path-traced reference (chart)",
     "usage: lucent-cli evaluate SCENE.json [SCENE2.json ...] --out DIR\n"
     "                           [--methods M1,M2,...] [--ref-spp N] [--width W] [--height H]\n"
-    "                           [--repeats R] [--levels L] [--subsurface-only] [--json]\n"
-    "                           [--verbose]\n"
+    "                           [--repeats R] [--levels L] [--presets P1,P2,...]\n"
+    "                           [--etas E1,E2,...] [--subsurface-only] [--json] [--verbose]\n"
     "\n"
     "For each scene: the path-traced reference with variance and coverage (seed 1, dielectric\n"
     "boundary), cached in DIR and reused when the scene file and the parameters match; then\n"
@@ -963,11 +1060,13 @@ const Command evaluateCommand{
     "and a PNG preview (ACES tone map).\n"
     "\n"
     "  --methods LIST    comma-separated (default direct,sslpv:paper,sslpv:calibrated,dipole,\n"
-    "                    better-dipole,dirpole). Methods and their quality settings:\n"
+    "                    better-dipole,dirpole,combined). Methods and their quality settings:\n"
     "                      direct                  one setting\n"
     "                      sslpv[:paper|:calibrated|:gl]   grid 16/32/64, steps = grid\n"
     "                      dipole, better-dipole [:cpu|:gl]   8/32/128 spp\n"
-    "                      dirpole                 8/32/128 spp\n"
+    "                      dirpole[:raw|:cpu]      8/32/128 spp (GPU pipeline, energy-normalised\n"
+    "                                              S_d; raw: the published S_d unscaled;\n"
+    "                                              cpu: CPU pipeline, directional lights)\n"
     "                      combined[:cpu]          dipole + SSLPV 32^3, 8/32/128 spp\n"
     "                      reference               path tracer, seed 7, 4/16/64 spp\n"
     "                    A variant this binary or scene cannot render is skipped with a message.\n"
@@ -975,6 +1074,13 @@ const Command evaluateCommand{
     "  --width, --height override the scenes' image size (pixels)\n"
     "  --repeats R       timed runs per setting (default 3)\n"
     "  --levels L        at most L quality settings per method, cheapest first (default 3)\n"
+    "  --presets LIST    evaluate every scene once per material preset (e.g. skin1,marble,\n"
+    "                    wholemilk): the objects' material becomes that uniform preset on the\n"
+    "                    scene's grid\n"
+    "  --etas LIST       evaluate every scene (and preset) once per relative index of\n"
+    "                    refraction in [1, 3] (e.g. 1.3,1; 1 = index-matched boundary).\n"
+    "                    Cases are named <scene>[-<preset>][-eta<E>] in the outputs; the\n"
+    "                    overrides are part of the reference cache key\n"
     "  --subsurface-only reference and methods without the surface reflection\n"
     "  --json            print results.json to stdout (progress goes to stderr)\n"
     "  --verbose         keep the methods' own logs on stderr\n",

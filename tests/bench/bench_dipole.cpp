@@ -3,7 +3,9 @@
 /// @brief Image-space dipole gather on the CPU (seed 004 §5–6): time at 640×360 and 1280×720 for
 /// 8…256 samples per pixel on a lit sphere, against two baselines measured in the same run: the
 /// camera-view irradiance pass (one primary + one shadow ray per pixel, Embree) and a single
-/// R_d evaluation per pixel-sample (the arithmetic floor of the gather); `--light-view-cost`: the
+/// R_d evaluation per pixel-sample (the arithmetic floor of the gather). Variants: camera image
+/// only, camera + light views (shared budget, as the renderer gathers), the combined mode's
+/// local-radius window, the better dipole; GL compute (camera only). `--light-view-cost`: the
 /// light views' share of a frame (back-lit scene, CPU and GL). Results:
 /// docs/benchmarks.md, "Dipoles".
 #include <lucent/dipole/DipoleProvider.h>
@@ -61,6 +63,26 @@ const SurfaceBuffers& buffers(int w) {
     return it->second;
 }
 
+/// The camera image plus the light views the renderer would gather (buildImageSpaceViews with the
+/// default LightViewSettings: 512² views, skip criterion), per image width.
+const ImageSpaceViews& views(int w) {
+    static std::map<int, ImageSpaceViews> cache;
+    auto it = cache.find(w);
+    if (it == cache.end()) {
+        GatherSettings gs;
+        gs.eta = 1.3f;
+        it = cache
+                 .emplace(w,
+                          buildImageSpaceViews(sphereScene(w, w * 9 / 16), gs, LightViewSettings{}))
+                 .first;
+    }
+    return it->second;
+}
+
+/// The local-radius window of the combined mode (docs/methods/combined.md): r ≤ 4 cells of a
+/// 32³ SSLPV grid over the 20 mm sphere, 4 · 20/32 = 2.5 mm.
+constexpr float WINDOW_RADIUS_MM = 2.5f;
+
 size_t coveredPixels(const SurfaceBuffers& b) {
     size_t n = 0;
     for (uint8_t c : b.covered)
@@ -95,15 +117,33 @@ void BM_ProfileFloor(benchmark::State& state) {
         benchmark::Counter(double(n) / 1e6, benchmark::Counter::kIsIterationInvariantRate);
 }
 
+/// Gather variants (third argument of BM_Gather / BM_GpuGather).
+enum GatherMode : int {
+    CAMERA = 0,       ///< dipole, camera irradiance image only (seed 004 as published)
+    BETTER = 1,       ///< better dipole, camera only
+    LIGHT_VIEWS = 2,  ///< dipole, camera + light views sharing the per-pixel budget (§3d)
+    WINDOW = 3,       ///< dipole, camera only, r ≤ WINDOW_RADIUS_MM (combined mode's local part)
+};
+
 void BM_Gather(benchmark::State& state) {
     const int w = int(state.range(0)), spp = int(state.range(1));
+    const auto mode = GatherMode(state.range(2));
     const SurfaceBuffers& b = buffers(w);
     GatherSettings gs;
-    gs.model = state.range(2) ? Model::BetterDipole : Model::Dipole;
+    gs.model = mode == BETTER ? Model::BetterDipole : Model::Dipole;
     gs.uniformSamples = spp / 4;  // ¼ uniform disc samples, ¾ importance (balance heuristic)
     gs.importanceSamples = spp - gs.uniformSamples;
-    for (auto _ : state)
-        benchmark::DoNotOptimize(gatherImageSpace(b, gs));
+    if (mode == WINDOW)
+        gs.maxRadius = WINDOW_RADIUS_MM;
+    if (mode == LIGHT_VIEWS) {
+        const ImageSpaceViews& v = views(w);
+        state.counters["light views"] = double(v.lights.size());
+        for (auto _ : state)
+            benchmark::DoNotOptimize(gatherImageSpace(v.camera, v.lights, gs));
+    } else {
+        for (auto _ : state)
+            benchmark::DoNotOptimize(gatherImageSpace(b, gs));
+    }
     const double samples = double(coveredPixels(b)) * spp;
     state.counters["Msamples/s"] =
         benchmark::Counter(samples / 1e6, benchmark::Counter::kIsIterationInvariantRate);
@@ -122,6 +162,8 @@ void BM_GpuGather(benchmark::State& state) {
     GatherSettings gs;
     gs.uniformSamples = spp / 4;
     gs.importanceSamples = spp - gs.uniformSamples;
+    if (GatherMode(state.range(2)) == WINDOW)
+        gs.maxRadius = WINDOW_RADIUS_MM;
     GpuGather gather{gpu::ShaderLibrary{}};
     for (auto _ : state)
         benchmark::DoNotOptimize(gather.run(b, gs));
@@ -139,15 +181,25 @@ BENCHMARK(BM_ProfileFloor)
     ->Args({1280, 32})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+/// Camera-only and light-view rows interleaved per size and spp, so that a load change on the
+/// shared box hits both sides of the ratio alike.
+void gatherArgs(benchmark::internal::Benchmark* b) {
+    for (int w : {640, 1280}) {
+        for (int spp : {8, 32, 128, 256})
+            for (int mode : {CAMERA, LIGHT_VIEWS})
+                b->Args({w, spp, mode});
+        for (int mode : {BETTER, WINDOW})
+            b->Args({w, 32, mode});
+    }
+}
 BENCHMARK(BM_Gather)
-    ->ArgsProduct({{640}, {8, 32, 128, 256}, {0}})
-    ->ArgsProduct({{1280}, {8, 32, 128, 256}, {0}})
-    ->ArgsProduct({{1280}, {32}, {1}})
+    ->Apply(gatherArgs)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(1);
 BENCHMARK(BM_GpuGather)
-    ->ArgsProduct({{640, 1280}, {8, 32, 128}})
+    ->ArgsProduct({{640, 1280}, {8, 32, 128, 256}, {CAMERA}})
+    ->ArgsProduct({{640, 1280}, {32}, {WINDOW}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(1);
@@ -230,6 +282,16 @@ int referenceError(float eta) {
         "%+.1f%%, %+.1f%%)\n",
         "dirpole", dir.r, dir.g, dir.b, 100.f * (dir.r / ptMean.r - 1.f),
         100.f * (dir.g / ptMean.g - 1.f), 100.f * (dir.b / ptMean.b - 1.f));
+    // Energy-normalised directional dipole (the renderers' default, docs/methods/dipole.md §1):
+    // S_d × dirpoleEnergyScale(α′, η), α′ = σs′/σt′ (g = 0 here, so σs′ = σs).
+    Rgb dirN;
+    for (int c = 0; c < 3; ++c)
+        dirN[c] = dir[c] * float(dirpoleEnergyScale(double(m.sigma_s[c] / m.sigma_t[c]), eta));
+    std::printf(
+        "%-14s normalised:   L = (%.5f, %.5f, %.5f), relative error vs reference (%+.1f%%, "
+        "%+.1f%%, %+.1f%%)\n",
+        "dirpole", dirN.r, dirN.g, dirN.b, 100.f * (dirN.r / ptMean.r - 1.f),
+        100.f * (dirN.g / ptMean.g - 1.f), 100.f * (dirN.b / ptMean.b - 1.f));
     return 0;
 }
 

@@ -3,7 +3,8 @@
 # End-to-end test of `lucent-cli evaluate` on a tiny render (32x32, reference 64 spp, two CPU
 # methods with two quality settings each, so no GL is needed): checks the CSV rows and columns,
 # that every error is finite and non-negative, results.json, the PNG chart, the reference cache
-# and the errors for unknown method names. Fails (FATAL_ERROR) with the reason.
+# and the errors for unknown method names; the --presets/--etas overrides (named cases, their own
+# cached references) and their usage errors. Fails (FATAL_ERROR) with the reason.
 
 function(run prefix)
     execute_process(COMMAND ${CLI} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -20,26 +21,41 @@ function(expect_contains prefix text needle)
     endif()
 endfunction()
 
+# Runs `evaluate ARGN` writing to `dir`, expects exit 0 and `rows` results none skipped, and
+# returns results.csv's lines (header first) in ${prefix}_LINES.
+function(evaluate_ok prefix dir rows)
+    run(r evaluate ${ARGN} --out ${dir})
+    if(NOT r_RC STREQUAL "0")
+        message(FATAL_ERROR "${prefix}: expected exit 0, got '${r_RC}': ${r_ERR}")
+    endif()
+    expect_contains(${prefix} "${r_OUT}" "${rows} results, 0 skipped")
+    file(STRINGS ${dir}/results.csv lines)
+    list(LENGTH lines n)
+    math(EXPR expected "${rows} + 1")
+    if(NOT n EQUAL expected)
+        message(FATAL_ERROR "${prefix}: results.csv has ${n} lines, expected a header and ${rows} rows")
+    endif()
+    set(${prefix}_LINES "${lines}" PARENT_SCOPE)
+endfunction()
+
+# A CSV row as a list; a quoted field ("grid 16, 16 steps") becomes Q.
+function(csv_columns row out)
+    string(REGEX REPLACE "\"[^\"]*\"" "Q" flat "${row}")
+    string(REPLACE "," ";" cols "${flat}")
+    set(${out} "${cols}" PARENT_SCOPE)
+endfunction()
+
 # A finite, non-negative decimal as printed by %.6g (no nan, inf or minus sign).
 set(nonneg "^[0-9]+(\\.[0-9]*)?(e[-+][0-9]+)?$")
 
 set(dir ${OUT}/evaluate)
 file(REMOVE_RECURSE ${dir})
 set(common ${SCENE} --methods sslpv:paper,dirpole --levels 2 --repeats 1 --width 32 --height 32
-    --ref-spp 64 --out ${dir})
-
-run(ev evaluate ${common})
-if(NOT ev_RC STREQUAL "0")
-    message(FATAL_ERROR "evaluate: expected exit 0, got '${ev_RC}': ${ev_ERR}")
-endif()
-expect_contains(ev "${ev_OUT}" "4 results, 0 skipped")
+    --ref-spp 64)
 
 # results.csv: the header and 2 methods x 2 settings = 4 rows of 14 columns.
-file(STRINGS ${dir}/results.csv lines)
-list(LENGTH lines n)
-if(NOT n EQUAL 5)
-    message(FATAL_ERROR "results.csv: expected a header and 4 rows, got ${n} lines")
-endif()
+evaluate_ok(ev ${dir} 4 ${common})
+set(lines "${ev_LINES}")
 list(GET lines 0 header)
 set(expected_header "scene,method,setting,quality,ms_median,ms_min,runs,rel_rmse,rel_rmse_floor,rmse,mean_rel_error,mean_reference,mean_ratio,pixels")
 if(NOT header STREQUAL expected_header)
@@ -48,9 +64,7 @@ endif()
 list(SUBLIST lines 1 4 rows)
 set(methods_seen)
 foreach(row IN LISTS rows)
-    # The setting may be quoted ("grid 16, 16 steps"): replace quoted fields before splitting.
-    string(REGEX REPLACE "\"[^\"]*\"" "Q" flat "${row}")
-    string(REPLACE "," ";" cols "${flat}")
+    csv_columns("${row}" cols)
     list(LENGTH cols ncols)
     if(NOT ncols EQUAL 14)
         message(FATAL_ERROR "results.csv: row '${row}' has ${ncols} columns, expected 14")
@@ -111,7 +125,7 @@ if(png_size LESS 2000)
 endif()
 
 # Second run: the reference comes from the cache; --json prints the same document.
-run(again evaluate ${common} --json)
+run(again evaluate ${common} --out ${dir} --json)
 if(NOT again_RC STREQUAL "0")
     message(FATAL_ERROR "evaluate (cached): exit '${again_RC}': ${again_ERR}")
 endif()
@@ -135,3 +149,46 @@ expect_contains(badv "${badv_ERR}" "unknown variant 'fast'")
 if(EXISTS ${dir}/bad/results.csv)
     message(FATAL_ERROR "a failed evaluate wrote results")
 endif()
+
+# Overrides: --presets marble --etas 1,1.3 evaluates the scene twice, as named cases with their
+# own references (the overrides are part of the cache key): the two references' mean luminance
+# differs (the boundary's Fresnel transmittance changes with eta) and both keys name the preset.
+set(ovdir ${dir}/overrides)
+evaluate_ok(ov ${ovdir} 2 ${SCENE} --methods sslpv:paper --levels 1 --repeats 1 --width 32
+    --height 32 --ref-spp 16 --presets marble --etas 1,1.3)
+set(ovscenes)
+set(ovrefs)
+foreach(i 1 2)
+    list(GET ov_LINES ${i} row)
+    csv_columns("${row}" cols)
+    list(GET cols 0 scene)
+    list(GET cols 11 meanref)
+    list(APPEND ovscenes ${scene})
+    list(APPEND ovrefs ${meanref})
+endforeach()
+if(NOT ovscenes STREQUAL "skin_sphere-marble-eta1;skin_sphere-marble-eta1.3")
+    message(FATAL_ERROR "overrides: cases '${ovscenes}'")
+endif()
+list(GET ovrefs 0 ref_eta1)
+list(GET ovrefs 1 ref_eta13)
+if(ref_eta1 STREQUAL ref_eta13)
+    message(FATAL_ERROR "overrides: both references have mean ${ref_eta1}: eta not applied")
+endif()
+foreach(case eta1 eta1.3)
+    set(key ${ovdir}/skin_sphere-marble-${case}_ref_32x32_16spp.key)
+    if(NOT EXISTS ${key})
+        message(FATAL_ERROR "overrides: ${key} missing")
+    endif()
+    file(READ ${key} keytext)
+    expect_contains(key "${keytext}" "preset=marble")
+endforeach()
+run(badeta evaluate ${SCENE} --etas 0.5 --out ${dir}/bad)
+if(NOT badeta_RC STREQUAL "2")
+    message(FATAL_ERROR "--etas 0.5: expected exit 2, got '${badeta_RC}'")
+endif()
+expect_contains(badeta "${badeta_ERR}" "--etas: '0.5'")
+run(badpreset evaluate ${SCENE} --presets granite --out ${dir}/bad)
+if(NOT badpreset_RC STREQUAL "2")
+    message(FATAL_ERROR "--presets granite: expected exit 2, got '${badpreset_RC}'")
+endif()
+expect_contains(badpreset "${badpreset_ERR}" "granite")
