@@ -4,25 +4,29 @@
 // lucent::combined::CombinedSubsurfaceProvider: the SSLPV term (Borlum et al. 2011, seed 000,
 // Eq. 4/7) is already in the target, the windowed image-space dipole term (Mertens et al. 2005,
 // seed 004, Eq. 3 restricted to r <= r_s) is in u_addend. Steps split: target += addend.
-// Kernel split: SSLPV's own estimate of its local part is removed as well,
-//   L(x_o) = max(0, L_sslpv + L_dipole,r<=r_s - F_t(eta, w_o)/pi * B_lpv),
-//   B_lpv = (pi r_s^2 / N) sum_i R_lpv(r_i) E(p_i)   (uniform disc samples, r_i <= r_s),
-// line for line as lucent::combined::localSslpvEstimate (engine/src/combined/Combined.cpp).
-// Two programs: with LOCAL_ESTIMATE, F_t(eta, w_o)/pi * B_lpv into u_local (it depends on the
-// G-buffer, the irradiance image and the kernel, not on the painted material or the dipole's
-// progress, so the provider computes it only when those change); without, the per-frame sum
-// target = max(0, target + addend - local) (local read only in the Kernel split).
+// Kernel split: SSLPV's own local part is removed as well,
+//   L(x_o) = max(0, L_sslpv + L_dipole,r<=r_s - min(Lhat, f L_sslpv)),
+//   Lhat = F_t(eta, w_o)/pi B_near,  f = B_near / (B_near + B_far),
+//   B = (area / N) sum_i R_lpv(r_i) E(p_i)
+// (uniform samples on the disc r <= r_s and on the annulus r_s < r <= outer ring), line for
+// line as lucent::combined::localSslpvEstimate / localSslpvFraction (engine/src/combined/
+// Combined.cpp). Two programs: with LOCAL_ESTIMATE, Lhat into u_local and f into u_fraction
+// (they depend on the G-buffer, the irradiance image and the kernel, not on the painted
+// material or the dipole's progress, so the provider computes them only when those change);
+// without, the per-frame sum (Lhat and f read only in the Kernel split).
 
 #include "dipole_fresnel.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
 #ifdef LOCAL_ESTIMATE
-layout(rgba32f, binding = 2) writeonly uniform image2D u_local;  // F_t/pi B_lpv, a own pixel
+layout(rgba32f, binding = 2) writeonly uniform image2D u_local;     // Lhat, a own pixel
+layout(rgba32f, binding = 3) writeonly uniform image2D u_fraction;  // f (near share)
 #else
 layout(rgba32f, binding = 0) uniform image2D u_target;           // SSLPV term in, sum out
 layout(rgba32f, binding = 1) readonly uniform image2D u_addend;  // the dipole term
-layout(rgba32f, binding = 2) readonly uniform image2D u_local;   // F_t/pi B_lpv (Kernel split)
+layout(rgba32f, binding = 2) readonly uniform image2D u_local;     // Lhat (Kernel split)
+layout(rgba32f, binding = 3) readonly uniform image2D u_fraction;  // f (Kernel split)
 #endif
 
 layout(binding = 0) uniform sampler2D u_position;    // xyz mm, a coverage
@@ -91,7 +95,7 @@ void main() {
     const ivec2 xy = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(xy, u_size)))
         return;
-    vec3 local = vec3(0.0);
+    vec3 local = vec3(0.0), frac = vec3(0.0);
     bool own = ownPixel(xy);
     if (own) {
         vec3 xo = texelFetch(u_position, xy, 0).xyz;
@@ -103,24 +107,40 @@ void main() {
         vec3 ft = vec3(bb, sgn + no.y * no.y * aa, -no.y);
         int yTop = u_size.y - 1 - xy.y;
         vec2 shift = pixelShift(xy.x, yTop);
-        vec3 B = vec3(0.0);
+        // lucent::combined::localSslpvFraction: near disc r <= r_s and far annulus
+        // (r_s, outer] with the same stratified samples; f = near / (near + far).
+        float outer = u_ringCount > 0 ? max(b_ring[u_ringCount - 1].x, u_splitRadius)
+                                      : u_splitRadius;
+        vec3 Bn = vec3(0.0), Bf = vec3(0.0);
         for (int i = 0; i < u_samples; ++i) {
             vec2 h = vec2((float(i) + 0.5) / float(u_samples), radicalInverse2(uint(i)));
             float u = fract(h.x + shift.x), v = fract(h.y + shift.y);
-            float r = u_splitRadius * sqrt(u), phi = 2.0 * PI * v;
-            vec3 p = xo + r * (cos(phi) * fs + sin(phi) * ft);
+            float phi = 2.0 * PI * v;
+            vec3 dir = cos(phi) * fs + sin(phi) * ft;
+            float rn = u_splitRadius * sqrt(u);
+            float rf = sqrt(u_splitRadius * u_splitRadius +
+                            u * (outer * outer - u_splitRadius * u_splitRadius));
             ivec2 top;
-            if (!projectTop(p, top)) continue;
-            ivec2 pix = ivec2(top.x, u_size.y - 1 - top.y);
-            if (!ownPixel(pix)) continue;
-            B += kernelAt(r) * texelFetch(u_irradiance, pix, 0).rgb;
+            if (projectTop(xo + rn * dir, top)) {
+                ivec2 pix = ivec2(top.x, u_size.y - 1 - top.y);
+                if (ownPixel(pix)) Bn += kernelAt(rn) * texelFetch(u_irradiance, pix, 0).rgb;
+            }
+            if (outer > u_splitRadius && projectTop(xo + rf * dir, top)) {
+                ivec2 pix = ivec2(top.x, u_size.y - 1 - top.y);
+                if (ownPixel(pix)) Bf += kernelAt(rf) * texelFetch(u_irradiance, pix, 0).rgb;
+            }
         }
-        B *= PI * u_splitRadius * u_splitRadius / float(u_samples);
+        Bn *= PI * u_splitRadius * u_splitRadius / float(u_samples);
+        Bf *= PI * (outer * outer - u_splitRadius * u_splitRadius) / float(u_samples);
+        vec3 all = Bn + Bf;
+        for (int c = 0; c < 3; ++c)
+            frac[c] = all[c] > 0.0 ? clamp(Bn[c] / all[c], 0.0, 1.0) : 0.0;
         float cosO = max(0.0, dot(no, towardEye(xo)));
         float fto = 1.0 - dipoleFresnelReflectance(cosO, u_eta);
-        local = B * (fto / PI);
+        local = Bn * (fto / PI);
     }
-    imageStore(u_local, xy, vec4(local, own ? 1.0 : 0.0));  // a: the pixel is the object's
+    imageStore(u_local, xy, vec4(local, own ? 1.0 : 0.0));
+    imageStore(u_fraction, xy, vec4(frac, own ? 1.0 : 0.0));  // a: the pixel is the object's
 }
 #else
 void main() {
@@ -132,7 +152,10 @@ void main() {
     vec3 sum = a.rgb + d.rgb;
     if (u_kernel != 0) {
         vec4 local = imageLoad(u_local, xy);
-        if (local.a != 0.0) sum = max(sum - local.rgb, vec3(0.0));
+        // SSLPV's local part: the kernel's estimate Lhat, but at most the near share f of
+        // SSLPV's own radiance (docs/methods/combined.md, "The split's fix").
+        vec3 frac = imageLoad(u_fraction, xy).rgb;
+        if (local.a != 0.0) sum = max(sum - min(local.rgb, frac * a.rgb), vec3(0.0));
     }
     imageStore(u_target, xy, vec4(sum, max(a.a, d.a)));
 }

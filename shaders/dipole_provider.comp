@@ -12,7 +12,8 @@
 // Light views (seed 004 §7.1): the camera and the gathered light views split the pixel's sample
 // budget (viewSamples) and are combined by the balance heuristic with sample counts in
 // surface-area measure (dipole_lightview.glsl; docs/methods/dipole.md §3d); maxRadius > 0
-// truncates the samplers to the local window.
+// truncates the camera's samplers to the local window, a light view's are truncated to the disc
+// A′ (r′ ≤ R′, seed 004 §5: the issue-6 firefly fix, as ImageSpace.cpp).
 // MULTI_VIEW 0 (a second program of the provider, used when no light view is gathered): the
 // camera gather alone, without the code of the view combination: on llvmpipe that code slowed
 // even the camera-only loop ≈ 2× (23 → 12 ms per frame on the back-lit scene at 256×192; a
@@ -122,7 +123,8 @@ float halton3(uint i) {
 // constants only where it matters (llvmpipe lowers dynamic indices of private arrays to
 // per-lane selects).
 Profile g_prof[3];
-vec3 g_masses[3];
+vec3 g_masses[3];    // window u_maxRadius (the camera's techniques)
+vec3 g_lvMasses[3];  // window g_R, the disc A′ (the light views' techniques, see below)
 int g_channels[3];  // the valid channels, in order
 int g_slot[3];      // channel → its round-robin slot in g_channels (−1: invalid)
 int g_channelCount;
@@ -141,12 +143,16 @@ bool setUpTechniques(ivec2 xy) {
         g_prof[c] = makeProfile(u_model, max(sigT[c] - sigS[c], 0.0), sigS[c], u_boundary);
         g_masses[c] = windowMasses(g_prof[c], u_maxRadius);
         g_slot[c] = -1;
+        g_lvMasses[c] = vec3(1.0);
         if (g_prof[c].zr > 0.0) {
             g_slot[c] = g_channelCount;
             g_channels[g_channelCount++] = c;
         }
     }
     g_pUniform = g_R > 0.0 ? 1.0 / (PI * g_R * g_R) : 0.0;
+#if MULTI_VIEW
+    for (int c = 0; c < 3; ++c) g_lvMasses[c] = windowMasses(g_prof[c], g_R);
+#endif
     return g_channelCount > 0;
 }
 
@@ -159,15 +165,19 @@ ivec2 viewSamples(int nImp, int nUni, int views, int v) {
     return total == 0 ? ivec2(1, 0) : ivec2(imp, total - imp);
 }
 
-// Multi-sample balance heuristic over the techniques of a view with `counts` samples
+// Multi-sample balance heuristic over the techniques of view v with `counts` samples
 // (Veach 1997 Eq. 9.13; seed 004 §6.1): Σ_t n_t p_t at tangent-plane radius r′, the importance
-// samples assigned to the valid channels round robin.
-float techniquePdf(ivec2 counts, float rPlane) {
+// samples assigned to the valid channels round robin. The camera's samplers have the window
+// u_maxRadius; a light view's are conditioned on the disc A′ (r′ ≤ g_R, seed 004 §5), as in
+// ImageSpace.cpp (docs/methods/dipole.md §3d "Light views sample the disc A′").
+float techniquePdf(int v, ivec2 counts, float rPlane) {
     float sum = rPlane <= g_R ? float(counts.y) * g_pUniform : 0.0;
     for (int c = 0; c < 3; ++c) {
         int s = g_slot[c];
         int n = s >= 0 && counts.x > s ? (counts.x - s - 1) / g_channelCount + 1 : 0;
-        if (n > 0) sum += float(n) * pdfWindowed(g_prof[c], g_masses[c], u_maxRadius, rPlane);
+        if (n > 0)
+            sum += float(n) * (v == 0 ? pdfWindowed(g_prof[c], g_masses[c], u_maxRadius, rPlane)
+                                      : pdfWindowed(g_prof[c], g_lvMasses[c], g_R, rPlane));
     }
     return sum;
 }
@@ -200,7 +210,8 @@ vec3 gatherExitance(ivec2 xy, vec3 xo, vec3 no) {
                 float uSrc = fract(halton3(uint(i)) + s0.x + rot);
                 float uR = fract(h.x + s0.y + rot), uPhi = fract(h.y + s0.z + rot);
                 int c = g_channels[i % g_channelCount];
-                rPlane = sampleWindowed(g_prof[c], g_masses[c], u_maxRadius, uSrc, uR);
+                rPlane = v == 0 ? sampleWindowed(g_prof[c], g_masses[c], u_maxRadius, uSrc, uR)
+                                : sampleWindowed(g_prof[c], g_lvMasses[c], g_R, uSrc, uR);
                 phi = 2.0 * PI * uPhi;
             } else {
                 int j = i - counts.x;
@@ -217,7 +228,7 @@ vec3 gatherExitance(ivec2 xy, vec3 xo, vec3 no) {
             if (u_maxRadius > 0.0 && r > u_maxRadius) continue;  // outside the local window
             float J = areaJacobian(v, hit.p, hit.n, pPlane, no, jac, u_maxJacobian);
             if (!(J > 0.0)) continue;
-            float own = techniquePdf(counts, rPlane);
+            float own = techniquePdf(v, counts, rPlane);
             if (!(own > 0.0)) continue;
             // Balance heuristic across the views' techniques in surface-area measure (seed 004
             // §7.1): w = 1/Σ_j q_j, q_j = Σ_t n_jt p_t(r′_j)/J_j over the views j in which hit.p
@@ -232,7 +243,7 @@ vec3 gatherExitance(ivec2 xy, vec3 xo, vec3 no) {
                 if (!visibleIn(j, hit.p, fp) || !tangentPlanePoint(j, hit.p, xo, no, pj)) continue;
                 float Jj = areaJacobian(j, hit.p, hit.n, pj, no, jac, u_maxJacobian);
                 ivec2 countsJ = viewSamples(u_nImp, nUni, views, j);
-                if (Jj > 0.0) sum += techniquePdf(countsJ, length(pj - xo)) / Jj;
+                if (Jj > 0.0) sum += techniquePdf(j, countsJ, length(pj - xo)) / Jj;
             }
 #endif
             float w = 1.0 / sum;

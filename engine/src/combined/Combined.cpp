@@ -213,15 +213,16 @@ Point2f pixelShift(int x, int y, uint32_t seed) {
     return {float(h1 >> 8u) * 0x1p-24f, float(h2 >> 8u) * 0x1p-24f};
 }
 
-ImageRgb localSslpvEstimate(const dipole::SurfaceBuffers& buf, const SslpvSurfaceKernel& kernel,
-                            float splitRadius, float eta, int samples, uint32_t seed) {
-    LUCENT_CHECK(std::isfinite(splitRadius) && splitRadius > 0.f,
-                 "combined: the local estimate needs a finite split radius > 0 mm");
-    LUCENT_CHECK(samples >= 1 && samples <= 4096,
-                 "combined: localSamples must be in [1, 4096] (got ", samples, ")");
-    buf.validate();
-    ImageRgb out(buf.width, buf.height);
-    const double area = PI_D * double(splitRadius) * double(splitRadius);
+namespace {
+
+/// ∫_{r0 ≤ |x_i − x_o| ≤ r1} R_lpv(r) E(x_i) dA on the tangent plane of every covered pixel
+/// (W/mm², before the exit factor F_t/π), by `samples` stratified uniform samples on the
+/// annulus (r = √(r0² + u (r1² − r0²)), pdf 1/(π (r1² − r0²)); r0 = 0: r = r1 √u, the disc).
+/// Calls out(x, y, xo, no, B) for every covered pixel.
+template <typename Out>
+void kernelIrradianceIntegral(const dipole::SurfaceBuffers& buf, const SslpvSurfaceKernel& kernel,
+                              float r0, float r1, int samples, uint32_t seed, Out&& out) {
+    const double area = PI_D * (double(r1) * double(r1) - double(r0) * double(r0));
     parallelFor(
         0, buf.height,
         [&](int64_t y0, int64_t y1) {
@@ -235,12 +236,13 @@ ImageRgb localSslpvEstimate(const dipole::SurfaceBuffers& buf, const SslpvSurfac
                     const Frame frame(no);
                     const Point2f shift = pixelShift(x, y, seed);
                     glm::dvec3 B(0.0);
-                    for (int i = 0; i < samples; ++i) {
-                        // Uniform on the disc r ≤ r_s: pdf 1/(π r_s²) on the tangent plane.
+                    for (int i = 0; i < samples && area > 0.0; ++i) {
                         const Point2f h = hammersley(uint32_t(i), uint32_t(samples));
                         const float u = h.x + shift.x - std::floor(h.x + shift.x);
                         const float v = h.y + shift.y - std::floor(h.y + shift.y);
-                        const float r = splitRadius * std::sqrt(u), phi = 2.f * PI * v;
+                        const float r = r0 == 0.f ? r1 * std::sqrt(u)
+                                                  : std::sqrt(r0 * r0 + u * (r1 * r1 - r0 * r0));
+                        const float phi = 2.f * PI * v;
                         const Point3f p =
                             xo + r * (std::cos(phi) * frame.s + std::sin(phi) * frame.t);
                         Point2f px;
@@ -253,14 +255,57 @@ ImageRgb localSslpvEstimate(const dipole::SurfaceBuffers& buf, const SslpvSurfac
                         const Rgb& E = buf.irradiance[j];
                         B += glm::dvec3(k.r * E.r, k.g * E.g, k.b * E.b);
                     }
-                    B *= area / double(samples);
-                    // Seed 004 Eq. 3: L = F_t(η, ω_o) B/π, the dipole's exit.
-                    const double cosO = std::max(0.0, double(glm::dot(no, buf.towardEye(xo))));
-                    const double ft = 1.0 - dipole::fresnelReflectance(cosO, eta);
-                    out.at(x, y) = Rgb(glm::vec3(B * (ft / PI_D)));
+                    out(x, y, xo, no, B * (area / double(samples)));
                 }
         },
         /*grain=*/1);
+}
+
+void checkLocalArgs(float splitRadius, int samples) {
+    LUCENT_CHECK(std::isfinite(splitRadius) && splitRadius > 0.f,
+                 "combined: the local estimate needs a finite split radius > 0 mm");
+    LUCENT_CHECK(samples >= 1 && samples <= 4096,
+                 "combined: localSamples must be in [1, 4096] (got ", samples, ")");
+}
+
+}  // namespace
+
+ImageRgb localSslpvEstimate(const dipole::SurfaceBuffers& buf, const SslpvSurfaceKernel& kernel,
+                            float splitRadius, float eta, int samples, uint32_t seed) {
+    checkLocalArgs(splitRadius, samples);
+    buf.validate();
+    ImageRgb out(buf.width, buf.height);
+    kernelIrradianceIntegral(
+        buf, kernel, 0.f, splitRadius, samples, seed,
+        [&](int x, int y, const Point3f& xo, const Normal3f& no, const glm::dvec3& B) {
+            // Seed 004 Eq. 3: L = F_t(η, ω_o) B/π, the dipole's exit.
+            const double cosO = std::max(0.0, double(glm::dot(no, buf.towardEye(xo))));
+            const double ft = 1.0 - dipole::fresnelReflectance(cosO, eta);
+            out.at(x, y) = Rgb(glm::vec3(B * (ft / PI_D)));
+        });
+    return out;
+}
+
+ImageRgb localSslpvFraction(const dipole::SurfaceBuffers& buf, const SslpvSurfaceKernel& kernel,
+                            float splitRadius, int samples, uint32_t seed) {
+    checkLocalArgs(splitRadius, samples);
+    buf.validate();
+    const float outer = kernel.ringOuter.empty() ? 0.f : kernel.ringOuter.back();
+    ImageRgb nearPart(buf.width, buf.height), out(buf.width, buf.height);
+    kernelIrradianceIntegral(buf, kernel, 0.f, splitRadius, samples, seed,
+                             [&](int x, int y, const Point3f&, const Normal3f&,
+                                 const glm::dvec3& B) { nearPart.at(x, y) = Rgb(glm::vec3(B)); });
+    // The far annulus (r_s, ρ_last] with the same per-pixel shifts; empty when r_s ≥ ρ_last.
+    const float r1 = std::max(outer, splitRadius);
+    kernelIrradianceIntegral(
+        buf, kernel, splitRadius, r1, samples, seed,
+        [&](int x, int y, const Point3f&, const Normal3f&, const glm::dvec3& B) {
+            const Rgb n = nearPart.at(x, y), all = n + Rgb(glm::vec3(B));
+            Rgb f(0.f);
+            for (int c = 0; c < 3; ++c)
+                f[c] = all[c] > 0.f ? std::clamp(n[c] / all[c], 0.f, 1.f) : 0.f;
+            out.at(x, y) = f;
+        });
     return out;
 }
 
@@ -317,9 +362,16 @@ CombinedResult renderCombined(const Scene& scene, const CombinedSettings& settin
         const SslpvSurfaceKernel kernel =
             computeSslpvSurfaceKernel(meanInsideMaterial(volume), scene.eta, settings.sslpv.solver,
                                       out.plan.cellSize, out.plan.splitRadius);
-        out.local =
-            localSslpvEstimate(dipole::buildSurfaceBuffers(scene), kernel, out.plan.splitRadius,
-                               scene.eta, settings.localSamples, settings.dipole.seed);
+        // SSLPV's local part: the kernel's estimate L̂, at most the kernel's near share f of
+        // SSLPV's own radiance (docs/methods/combined.md, "The split's fix").
+        const dipole::SurfaceBuffers buf = dipole::buildSurfaceBuffers(scene);
+        const ImageRgb lhat = localSslpvEstimate(buf, kernel, out.plan.splitRadius, scene.eta,
+                                                 settings.localSamples, settings.dipole.seed);
+        const ImageRgb f = localSslpvFraction(buf, kernel, out.plan.splitRadius,
+                                              settings.localSamples, settings.dipole.seed);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                out.local.at(x, y) = glm::min(lhat.at(x, y), f.at(x, y) * out.sslpv.at(x, y));
     }
     LUCENT_ASSERT(out.dipole.width() == w && out.sslpv.width() == w && out.local.width() == w);
     out.radiance = ImageRgb(w, h);

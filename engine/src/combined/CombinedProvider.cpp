@@ -26,7 +26,7 @@ struct CombinedSubsurfaceProvider::Impl {
         SslpvProviderOptions{.render = CombinedSettings::defaultSslpvOptions()}};
     dipole::DipoleSubsurfaceProvider dipole;
     gpu::GlProgram addProgram;
-    gpu::GlProgram localProgram;  ///< combined_add.comp LOCAL_ESTIMATE: L̂ into `local`
+    gpu::GlProgram localProgram;  ///< combined_add.comp LOCAL_ESTIMATE: L̂, f
     gpu::GlObject scratch;        ///< RGBA32F, the dipole part before it is added to the target
     int scratchW = 0, scratchH = 0;
     const MaterialVolume* volume = nullptr;
@@ -40,10 +40,13 @@ struct CombinedSubsurfaceProvider::Impl {
     /// stroke frame does not pay the half-space solve; the image converges to the same result.
     bool kernelDeferred = false;
     uint64_t kernelVersion = 0;  ///< counts kernel recomputes (part of the L̂ key)
-    /// L̂ = F_t/π ∫_{r≤r_s} R_lpv E dA per pixel (RGBA32F, a = the object's pixel). It depends
+    /// L̂ = F_t/π ∫_{r≤r_s} R_lpv E dA (`local`) and the kernel's near fraction
+    /// f = ∫_{r≤r_s} R_lpv E dA / ∫ R_lpv E dA (`fraction`, localSslpvFraction) per pixel
+    /// (RGBA32F, a = the object's pixel). They depend
     /// on the G-buffer, the lights, η, the dipole's irradiance image and the kernel, not on the
     /// painted material or the dipole's progress: recomputed only when its key changes.
     gpu::GlObject local;
+    gpu::GlObject fraction;
     std::vector<unsigned char> localKey;
     bool created = false;
     CombinedProviderStats stats;
@@ -74,6 +77,7 @@ void CombinedSubsurfaceProvider::destroy() {
     m->profiler.destroy();
     m->scratch.destroy();
     m->local.destroy();
+    m->fraction.destroy();
     m->localKey.clear();
     m->kernelBuffer.destroy();
     m->kernelDirty = true;
@@ -192,7 +196,7 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
             m->pendingBricks.clear();
         }
         if (m->scratchW != g.width || m->scratchH != g.height) {
-            for (gpu::GlObject* o : {&m->scratch, &m->local}) {
+            for (gpu::GlObject* o : {&m->scratch, &m->local, &m->fraction}) {
                 o->destroy();
                 *o = gpu::createTexture2D(GL_RGBA32F, g.width, g.height);
             }
@@ -229,7 +233,7 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
                         GL_TEXTURE_FETCH_BARRIER_BIT);
         if (subtract)
             updateLocalEstimate(g);
-        // target = max(0, target + scratch − L̂) (shaders/combined_add.comp).
+        // target = max(0, target + scratch − min(L̂, f·target)) (shaders/combined_add.comp).
         const auto scope = m->profiler.scope("add");
         const gpu::GlProgram& p = m->addProgram;
         glUseProgram(p.id());
@@ -238,6 +242,7 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
         glBindImageTexture(0, targetTexture, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         glBindImageTexture(1, m->scratch.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
         glBindImageTexture(2, m->local.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+        glBindImageTexture(3, m->fraction.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
         glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
         // The target is read by the shading pass (texture fetch) and cleared by the renderer
         // at the next frame (framebuffer clear or texture update), as the SSLPV provider does.
@@ -313,6 +318,7 @@ void CombinedSubsurfaceProvider::updateLocalEstimate(const gpu::GBufferView& g) 
     glBindTextureUnit(2, irradiance);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, m->kernelBuffer.id());
     glBindImageTexture(2, m->local.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glBindImageTexture(3, m->fraction.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     glUseProgram(0);

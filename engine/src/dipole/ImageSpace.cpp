@@ -30,6 +30,9 @@ struct PixelMaterial {
     bool valid = false;
     std::array<DipoleProfile, 3> profile;
     std::array<DipoleSampler, 3> sampler;
+    /// The light views' samplers: conditioned on the disc A′ (r′ ≤ discRadius, seed 004 §5;
+    /// docs/methods/dipole.md §3d "Light views sample the disc A′").
+    std::array<DipoleSampler, 3> lightSampler;
     std::array<int, 3> channels{};  // channels whose sampler is valid
     int channelCount = 0;
     double discRadius = 0.0;
@@ -53,6 +56,8 @@ struct PixelMaterial {
         }
         if (gs.maxRadius > 0.f)
             discRadius = std::min(discRadius, double(gs.maxRadius));
+        for (int c = 0; c < 3; ++c)
+            lightSampler[c] = DipoleSampler(profile[c]).truncated(discRadius);
     }
 };
 
@@ -385,10 +390,11 @@ GatherResult gatherImageSpace(const SurfaceBuffers& buf, const std::vector<Surfa
                     const auto techniquePdf = [&](int v, double rPlane) {
                         const ViewSamples& a = alloc[size_t(v)];
                         double sum = rPlane <= R ? a.uniform * pUniform : 0.0;
+                        const auto& samplers = v == 0 ? pm.sampler : pm.lightSampler;
                         for (int c = 0; c < 3; ++c)
                             if (a.perChannel[size_t(c)] > 0)
                                 sum +=
-                                    a.perChannel[size_t(c)] * pm.sampler[size_t(c)].pdfArea(rPlane);
+                                    a.perChannel[size_t(c)] * samplers[size_t(c)].pdfArea(rPlane);
                         return sum;
                     };
 
@@ -449,7 +455,9 @@ GatherResult gatherImageSpace(const SurfaceBuffers& buf, const std::vector<Surfa
                             const float uR = fract(h.x + shift[1] + rot),
                                         uPhi = fract(h.y + shift[2] + rot);
                             const int c = pm.channels[size_t(i % pm.channelCount)];
-                            addSample(v, pm.sampler[size_t(c)].sample(uSrc, uR), 2.f * PI * uPhi);
+                            const DipoleSampler& smp =
+                                v == 0 ? pm.sampler[size_t(c)] : pm.lightSampler[size_t(c)];
+                            addSample(v, smp.sample(uSrc, uR), 2.f * PI * uPhi);
                         }
                         for (int i = 0; i < vUni; ++i) {
                             const Point2f h = hammersley(uint32_t(i), uint32_t(vUni));

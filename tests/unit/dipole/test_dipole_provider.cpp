@@ -9,7 +9,9 @@
 #include <lucent/dipole/IrradiancePass.h>
 #include <lucent/gpu/GlContext.h>
 #include <lucent/material/MaterialVolume.h>
+#include <lucent/material/Presets.h>
 #include <lucent/mesh/Procedural.h>
+#include <lucent/scene/SceneFile.h>
 
 #include "DipoleTestUtil.h"
 
@@ -34,6 +36,34 @@ std::vector<glm::vec4> readRgba(unsigned tex, int w, int h) {
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
     glGetTextureImage(tex, 0, GL_RGBA, GL_FLOAT, GLsizei(v.size() * sizeof(glm::vec4)), v.data());
     return v;  // GL rows, bottom first
+}
+
+/// What the GPU gathered frame 0 from, as CPU buffers: the renderer's G-buffer (camera at `eye`)
+/// with the provider's irradiance E and material per pixel (rows flipped to top first).
+SurfaceBuffers cameraBuffers(const gpu::GBufferView& g,
+                             const DipoleSubsurfaceProvider::DebugTextures& dbg, Point3f eye) {
+    const int w = g.width, h = g.height;
+    const auto pos = readRgba(g.positionTexture, w, h);
+    const auto nrm = readRgba(g.normalTexture, w, h);
+    const auto E = readRgba(dbg.irradiance, w, h);
+    const auto st = readRgba(dbg.sigmaT, w, h);
+    const auto ss = readRgba(dbg.sigmaS, w, h);
+    SurfaceBuffers buf;
+    buf.resize(w, h);
+    buf.clipFromWorld = g.clipFromWorld;
+    buf.eye = eye;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t gi = size_t(h - 1 - y) * size_t(w) + size_t(x), i = buf.index(x, y);
+            if (pos[gi].w == 0.f)
+                continue;
+            buf.covered[i] = 1;
+            buf.position[i] = Point3f(pos[gi]);
+            buf.normal[i] = glm::normalize(Normal3f(nrm[gi]));
+            buf.irradiance[i] = Rgb(E[gi]);
+            buf.material[i] = {Rgb(st[gi]), Rgb(ss[gi]), Rgb(0.f)};
+        }
+    return buf;
 }
 
 /// Headless context + renderer + provider for one scene (one object, its material attached).
@@ -148,27 +178,13 @@ TEST_F(ProviderFixture, FirstFrameMatchesCpuGatherOnALitSphere) {
 
         const gpu::GBufferView g = renderer.gbuffer();
         const int w = g.width, h = g.height;
-        const auto pos = readRgba(g.positionTexture, w, h);
-        const auto nrm = readRgba(g.normalTexture, w, h);
-        const auto dbg = provider.debugTextures();
-        const auto E = readRgba(dbg.irradiance, w, h);
-        const auto st = readRgba(dbg.sigmaT, w, h);
-        const auto ss = readRgba(dbg.sigmaS, w, h);
-        SurfaceBuffers buf;
-        buf.resize(w, h);
-        buf.clipFromWorld = g.clipFromWorld;
-        buf.eye = s.camera.position;
+        const SurfaceBuffers buf = cameraBuffers(g, provider.debugTextures(), s.camera.position);
         int lit = 0;
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {
-                const size_t gi = size_t(h - 1 - y) * size_t(w) + size_t(x), i = buf.index(x, y);
-                if (pos[gi].w == 0.f)
+                const size_t i = buf.index(x, y);
+                if (!buf.covered[i])
                     continue;
-                buf.covered[i] = 1;
-                buf.position[i] = Point3f(pos[gi]);
-                buf.normal[i] = glm::normalize(Normal3f(nrm[gi]));
-                buf.irradiance[i] = Rgb(E[gi]);
-                buf.material[i] = {Rgb(st[gi]), Rgb(ss[gi]), Rgb(0.f)};
                 // The irradiance pass against Eq. 5 on the CPU: equal where the shadow map
                 // cannot matter (cos θ_i > 0.3, far from the terminator of the convex sphere);
                 // float vs float-with-double-Fresnel arithmetic: 1e-4 relative.
@@ -687,4 +703,84 @@ TEST_F(ProviderFixture, InteractiveRestartPreviewsThenEqualsTheFullEstimator) {
                 double(peak));
     ASSERT_GT(peak, 0.f);
     EXPECT_LE(maxDiff, 1e-6f * peak);
+}
+
+// Issue 6 regression (a firefly of the light views): `lucent-cli evaluate` on minimal.json with
+// --presets skin1 --etas 1, 16 spp per frame, seed 1. Frame 0 gave pixel (81, 84), on the light's
+// terminator, B_r = 1330 W/mm² (the fixed frame peaks at 3.7): a light-view importance sample at
+// tangent-plane radius r′ = 27.9 mm, twice the disc radius R′ = 13.9 mm, whose light ray met the
+// sphere's hidden side at r = 9.2 mm, with p(r′) = 2.3e-7 mm⁻² and no other technique there
+// (neither the camera nor the light view's disc samples reach it): w = J/p = 2.4e7. The CPU
+// gather on the same buffers gave the same value (the estimator, not float). Light views now
+// sample the disc A′ (r′ ≤ R′, seed 004 §5; docs/methods/dipole.md §3d).
+//
+// Bound: a sample whose surface point lies where the tangent plane puts it (r = r′) contributes
+// R_d,c(r)·E·w ≤ R_d,c(r)·E·J/(n_c p_c(r)) = ρ_c E J/n_c (the channel sampler is exact for the
+// Jensen profile, R_d,c/p_c = ρ_c, seed 004 §4; balance heuristic w ≤ J/(n_c p_c)), so one
+// frame of N samples gives B_c ≤ N·J_max·ρ_c·E_max/n_c, n_c the fewest importance samples a
+// view gives channel c. The old frame exceeds it 6.7×; the fixed one stays 50× below it.
+TEST_F(ProviderFixture, LightViewsAddNoFireflyOnTheTerminator) {
+    Scene s = parseScene(R"({"mesh": {"procedural": "sphere", "radius": 10},
+        "material": {"preset": "skin1"}, "eta": 1,
+        "lights": [{"type": "point", "position": [30, 30, 30], "intensity": [1e4, 1e4, 1e4]}],
+        "camera": {"position": [0, 0, 60], "target": [0, 0, 0], "up": [0, 1, 0],
+                   "fov_y_deg": 40, "width": 128, "height": 128}})");
+    ProviderSettings ps;  // as `lucent-cli render --method dipole --spp 32 --seed 1`
+    ps.model = Model::Dipole;
+    ps.eta = s.eta;
+    ps.samplesPerFrame = 16;
+    ps.maxFrames = 2;
+    ps.seed = 1;
+    load(s, ps);
+    renderer.render();
+    ASSERT_EQ(provider.stats().frames, 1);
+    ASSERT_EQ(provider.stats().lightViewsGathered, 1);  // the light's view joins (terminator)
+    const gpu::GBufferView g = renderer.gbuffer();
+    const int w = g.width, h = g.height;
+    const auto dbg = provider.debugTextures();
+    const auto accum = readRgba(dbg.accumulation, w, h);  // one frame: B of frame 0
+    const SurfaceBuffers buf = cameraBuffers(g, dbg, s.camera.position);
+    const std::vector<SurfaceBuffers> views = provider.debugLightViews();
+    ASSERT_EQ(views.size(), 1u);
+    float eMax = 0.f;
+    for (const SurfaceBuffers* b : {&buf, &views[0]})
+        for (size_t i = 0; i < b->covered.size(); ++i)
+            if (b->covered[i])
+                eMax = std::max({eMax, b->irradiance[i].r, b->irradiance[i].g, b->irradiance[i].b});
+    ASSERT_GT(eMax, 0.f);
+    const GatherSettings gs = ps.gatherSettings();
+    int nMin = gs.importanceSamples;  // fewest importance samples per channel in a view
+    for (int v = 0; v < 2; ++v)
+        nMin = std::min(nMin,
+                        viewSamples(gs.importanceSamples, gs.uniformSamples, 2, v).importance / 3);
+    ASSERT_GE(nMin, 1);
+    const MaterialSample m = findPreset("skin1").sample();
+    double worst = 0.0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (!buf.covered[buf.index(x, y)])
+                continue;
+            const glm::vec4 B = accum[size_t(h - 1 - y) * size_t(w) + size_t(x)];
+            for (int c = 0; c < 3; ++c) {
+                const double rho =
+                    totalReflectance(ps.model, fromReduced(m.sigma_t[c], m.sigma_s[c], ps.eta));
+                const double bound = double(ps.samplesPerFrame) * double(ps.maxJacobian) * rho *
+                                     double(eMax) / double(nMin);
+                worst = std::max(worst, double(B[c]) / bound);
+                EXPECT_LE(double(B[c]), bound) << "pixel " << x << "," << y << " channel " << c;
+            }
+        }
+    std::printf("frame 0: largest B_c / bound %.3g (E_max %.3g W/mm^2, n_c >= %d)\n", worst,
+                double(eMax), nMin);
+    // The same frame on the CPU (ImageSpace.cpp, same samples): the fix is in both.
+    const GatherResult cpu = gatherImageSpace(buf, views, gs);
+    double sumCpu = 0.0, sumGl = 0.0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const glm::vec4 B = accum[size_t(h - 1 - y) * size_t(w) + size_t(x)];
+            sumGl += double(B.r + B.g + B.b);
+            const Rgb& b = cpu.exitance.at(x, y);
+            sumCpu += double(b.r + b.g + b.b);
+        }
+    EXPECT_NEAR(sumGl / sumCpu, 1.0, 1e-3);  // as FirstFrameMatchesCpuGatherOnALitSphere
 }

@@ -8,10 +8,13 @@
 ///
 ///  - SplitMode::Kernel (default): SSLPV's own estimate of its local part is replaced by the
 ///    dipole's,
-///      L(x_o) = L_sslpv(x_o) + F_t(ω_o)/π ∫_{|x_i−x_o|≤r_s} (R_d(r) − R_lpv(r)) E(x_i) dA,
+///      L(x_o) = L_sslpv + F_t(ω_o)/π ∫_{|x_i−x_o|≤r_s} R_d(r) E(x_i) dA − min(L̂, f·L_sslpv),
+///      L̂ = F_t(ω_o)/π ∫_{|x_i−x_o|≤r_s} R_lpv(r) E(x_i) dA,
 ///    R_lpv the radial surface kernel of SSLPV itself (a point-injection solve on a homogeneous
 ///    half-space with the same options, SslpvSurfaceKernel), E the Fresnel-transmitted
-///    irradiance the dipole gathers. Exact bookkeeping for uniform irradiance on a flat surface.
+///    irradiance the dipole gathers, f the kernel's near share of ∫ R_lpv E dA
+///    (localSslpvFraction): SSLPV's local part is never taken larger than the near share of
+///    SSLPV's own radiance. Exact bookkeeping for uniform irradiance on a flat surface.
 ///  - SplitMode::Steps: L(x_o) = L_dipole,r≤r_s(x_o) + L_sslpv,n>k(x_o), k = max(k₀,
 ///    round(r_s/Δx)): SSLPV skips its first k propagation steps (SslpvOptions::
 ///    skipAccumulateSteps, §4). Light from beyond k·Δx needs more than k steps, so nothing
@@ -121,6 +124,17 @@ MaterialSample meanInsideMaterial(const MaterialVolume& volume);
 ImageRgb localSslpvEstimate(const dipole::SurfaceBuffers& buffers, const SslpvSurfaceKernel& kernel,
                             float splitRadius, float eta, int samples, uint32_t seed);
 
+/// The kernel's near fraction at every covered pixel,
+///   f(x_o) = ∫_{r ≤ r_s} R_lpv E dA / ∫_{r ≤ ρ_last} R_lpv E dA ∈ [0, 1] (per channel; 0 where
+/// both vanish), ρ_last the kernel's outer radius; both integrals by `samples` stratified
+/// uniform samples (the disc as in localSslpvEstimate, the annulus (r_s, ρ_last] with the same
+/// per-pixel shifts). The Kernel split subtracts min(L̂, f·L_sslpv): the flat half-space
+/// kernel's absolute value overstates what SSLPV deposits on a voxelised curved object (at
+/// η = 1 more than SSLPV's whole radiance, docs/methods/combined.md), its share f does not.
+/// @throw ValueError as localSslpvEstimate.
+ImageRgb localSslpvFraction(const dipole::SurfaceBuffers& buffers, const SslpvSurfaceKernel& kernel,
+                            float splitRadius, int samples, uint32_t seed);
+
 /// Per-pixel shift pair in [0, 1)² of localSslpvEstimate (PCG hash of x, y, seed; the GLSL
 /// copy in shaders/combined_add.comp is bit-identical).
 Point2f pixelShift(int x, int y, uint32_t seed);
@@ -155,14 +169,15 @@ struct CombinedResult {
     ImageRgb radiance;  ///< dipole + sslpv
     ImageRgb dipole;    ///< the windowed dipole term (black when the plan disables it)
     ImageRgb sslpv;     ///< the SSLPV term (Steps: late steps only; black when disabled)
-    ImageRgb local;     ///< Kernel mode: SSLPV's local estimate that was subtracted
+    ImageRgb local;  ///< Kernel mode: SSLPV's local part that was subtracted, min(L̂, f·L_sslpv)
     SplitPlan plan;
 };
 
 /// CPU combined render of scene.objects[0]: CPU irradiance pass + image-space gather
 /// (dipole::renderImageSpaceDipole with maxRadius = r_s) and the CPU SslpvRenderer; Kernel mode
-/// subtracts localSslpvEstimate() on the camera's surface buffers (the sum clamped at 0 per
-/// channel), Steps mode skips k propagation steps. @throw ValueError for a scene without
+/// subtracts min(localSslpvEstimate(), localSslpvFraction() · L_sslpv) (camera's surface
+/// buffers; `local` holds it; the sum clamped at 0 per channel),
+/// Steps mode skips k propagation steps. @throw ValueError for a scene without
 /// object/material or bad settings (message names the field).
 CombinedResult renderCombined(const Scene& scene, const CombinedSettings& settings);
 

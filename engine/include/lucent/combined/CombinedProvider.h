@@ -107,7 +107,7 @@ public:
     //! @}
 
     /// gpu::SubsurfaceProvider: SSLPV into the target, the dipole into a scratch image, then
-    /// target = max(0, target + scratch − local SSLPV estimate) (Kernel split; the estimate
+    /// target = max(0, target + scratch − min(L̂, f·target)) (Kernel split; L̂ and f
     /// reads the dipole part's irradiance image) or target += scratch (Steps). Context current.
     void renderSubsurface(const gpu::GBufferView& gbuffer, unsigned targetTexture) override;
 
