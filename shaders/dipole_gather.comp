@@ -130,6 +130,13 @@ void main() {
         vec3 dir = u_ortho != 0 ? normalize(u_viewDir) : normalize(pPlane - u_eye);
         float denom = dot(dir, np);
         if (abs(denom) > 0.1) p = origin + dir * (dot(p - origin, np) / denom);
+        // x_o's own pixel: its tangent plane holds pPlane, so the ray meets it at pPlane (r = r')
+        // at any angle; the grazing fallback above gave r = 0 (issue-6 edge outlier; as
+        // ImageSpace.cpp, docs/methods/dipole.md §3).
+        if (j == idx) {
+            p = pPlane;
+            np = no;
+        }
         float r = length(p - xo);
         if (u_maxRadius > 0.0 && r > u_maxRadius) continue;  // outside the local-radius window
         float J = 1.0;

@@ -222,6 +222,13 @@ vec3 gatherExitance(ivec2 xy, vec3 xo, vec3 no) {
             vec3 pPlane = xo + rPlane * (cos(phi) * fs + sin(phi) * ft);
             ViewHit hit;
             if (!lookUp(v, pPlane, hit)) continue;
+            // x_o's own camera pixel: its tangent plane holds pPlane, so the eye ray meets it at
+            // pPlane (r = r') at any angle; lookUp's grazing fallback gave r = 0 (issue-6 edge
+            // outlier; as ImageSpace.cpp, docs/methods/dipole.md §3).
+            if (v == 0 && hit.pix == xy) {
+                hit.p = pPlane;
+                hit.n = no;
+            }
             vec3 E = viewIrradiance(v, hit.pix);
             if (E == vec3(0.0)) continue;  // unlit sample: contributes exactly 0
             float r = length(hit.p - xo);

@@ -406,6 +406,15 @@ GatherResult gatherImageSpace(const SurfaceBuffers& buf, const std::vector<Surfa
                         ImageHit hit;
                         if (!lookUp(img, pPlane, hit))
                             return;
+                        if (view == 0 && hit.pixel == idx) {
+                            // x_o's own pixel: its tangent plane is x_o's, which holds p′, so
+                            // the eye ray through p′ meets it at p′ itself (r = r′) at any
+                            // angle. lookUp's fallback for grazing rays (|cos| ≤ 0.1: the
+                            // pixel's point) gave r = 0, R_d(0) over the whole grazing
+                            // footprint: the issue-6 edge outlier (docs/methods/dipole.md §3).
+                            hit.p = pPlane;
+                            hit.n = no;
+                        }
                         const Rgb& E = img.irradiance[hit.pixel];
                         if (E == Rgb(0.f))
                             return;  // unlit (shadowed) sample: contributes exactly 0

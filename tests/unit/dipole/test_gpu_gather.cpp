@@ -65,3 +65,15 @@ TEST(GpuGather, MatchesCpuGatherOnALitSphere) {
         EXPECT_LT(rel[rel.size() * 95 / 100], 1e-4) << modelName(model);
     }
 }
+
+TEST(GpuGather, GrazingOwnPixelIntegratesItsFootprint) {
+    // Issue 6 in dipole_gather.comp, as ImageSpace.GrazingOwnPixelIntegratesItsFootprint.
+    std::string reason;
+    if (!gpu::GlContext::isHeadlessAvailable(&reason))
+        GTEST_SKIP() << "no headless GL: " << reason;
+    auto ctx = gpu::GlContext::createHeadless();
+    GpuGather gather{gpu::ShaderLibrary{}};
+    testutil::expectGrazingPixelUnbiased(
+        [&](const SurfaceBuffers& b, const GatherSettings& gs) { return gather.run(b, gs); }, "GL");
+    gather.destroy();
+}

@@ -299,3 +299,10 @@ TEST(ImageSpace, LocalRadiusWindowIntegratesOnlyTheDisc) {
     bad.maxRadius = -1.f;
     EXPECT_THROW(gatherImageSpace(b, bad), ValueError);
 }
+
+TEST(ImageSpace, GrazingOwnPixelIntegratesItsFootprint) {
+    // Issue 6: see testutil::GrazingPixel (the old look-up fallback gave R_d(0)·strip).
+    expectGrazingPixelUnbiased(
+        [](const SurfaceBuffers& b, const GatherSettings& gs) { return gatherImageSpace(b, gs); },
+        "CPU");
+}
