@@ -41,8 +41,10 @@ namespace {
 constexpr float INF_F = std::numeric_limits<float>::infinity();
 constexpr double PI_D = 3.14159265358979323846;
 
-// The shared dipole test fixtures (tests/unit/dipole/DipoleTestUtil.h): the skin-like medium
-// and the point-lit 10 mm sphere (32³ material, 1000 W/sr at (25, 20, 25) mm, η = 1.3).
+// The shared dipole test fixtures (tests/unit/dipole/DipoleTestUtil.h): the skin-like medium,
+// the point-lit 10 mm sphere (32³ material, 1000 W/sr at (25, 20, 25) mm, η = 1.3) and the
+// top-lit box.
+using dipole::testutil::boxScene;
 using dipole::testutil::skinMaterial;
 
 /// 10 mm sphere (4 subdivisions), 32³ skin-like material, point light, 40×40 pixels.
@@ -332,24 +334,11 @@ TEST(CombinedCpu, KernelSplitIsSslpvPlusDipoleMinusItsLocalPart) {
 //   f = ∫_{≤r_s} R_lpv / ∫ R_lpv,
 // within the Monte Carlo error of the two gathers (per-pixel spread over a block).
 TEST(CombinedCpu, KernelSplitOnFrontLitSlabMatchesItsBookkeeping) {
-    Scene s;
-    SceneObject obj;
-    obj.mesh = makeBox({240.f, 240.f, 20.f});
-    obj.material =
-        std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), 64), skinMaterial());
-    s.objects.push_back(std::move(obj));
-    Light l;
-    l.type = Light::Type::Directional;
-    l.direction = {0.f, 0.f, -1.f};
-    l.intensity = Rgb(1.f);
-    s.lights.push_back(l);
-    s.camera.position = {0.f, 0.f, 100.f};
-    s.camera.target = {0.f, 0.f, 0.f};
-    s.camera.orthographic = true;
-    s.camera.orthoHeight = 160.f;
-    s.camera.width = 48;
-    s.camera.height = 48;
-    s.eta = 1.3f;
+    const Scene s = boxScene(skinMaterial(), {.size = {240.f, 240.f, 20.f},
+                                              .grid = 64,
+                                              .cameraHeight = 100.f,
+                                              .viewHeight = 160.f,
+                                              .pixels = 48});
     CombinedSettings cs;
     cs.sslpv.gridResolution = 32;
     cs.splitRadius = 40.f;  // mm: ≈ 5 cells of 7.9 mm, inside the image around the centre

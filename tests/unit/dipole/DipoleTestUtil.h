@@ -126,6 +126,39 @@ inline Scene pointLitSphere(int subdivisions, int w, int h) {
     return s;
 }
 
+/// How boxScene() lays out its box, light and camera.
+struct BoxLayout {
+    Vector3f size;                            ///< box extent, mm, centred at the origin
+    int grid = 32;                            ///< volume cells along the box's longest axis
+    Vector3f lightDirection{0.f, 0.f, -1.f};  ///< directional light of 1 W/mm², travel direction
+    float cameraHeight = 50.f;                ///< mm above the origin on +z, looking down −z
+    float viewHeight = 10.f;                  ///< orthographic view height, mm
+    int pixels = 100;                         ///< square image, pixels per side
+};
+
+/// A box of material `m` (GridSpec::around its bounds), one directional light and an
+/// orthographic camera looking straight down at its +z face: the slab scenes of the
+/// irradiance, light-view, provider and combined tests (η left at the Scene default).
+inline Scene boxScene(const MaterialSample& m, const BoxLayout& b) {
+    Scene s;
+    SceneObject obj;
+    obj.mesh = makeBox(b.size);
+    obj.material = std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), b.grid), m);
+    s.objects.push_back(std::move(obj));
+    Light l;
+    l.type = Light::Type::Directional;
+    l.direction = b.lightDirection;
+    l.intensity = Rgb(1.f);
+    s.lights.push_back(l);
+    s.camera.position = {0.f, 0.f, b.cameraHeight};
+    s.camera.target = {0.f, 0.f, 0.f};
+    s.camera.orthographic = true;
+    s.camera.orthoHeight = b.viewHeight;
+    s.camera.width = b.pixels;
+    s.camera.height = b.pixels;
+    return s;
+}
+
 /// Headless context + gpu::SceneRenderer + one subsurface provider (DipoleSubsurfaceProvider
 /// or DirpoleSubsurfaceProvider) for one scene: every test skips cleanly without EGL and fails
 /// on any GL error the debug log recorded.

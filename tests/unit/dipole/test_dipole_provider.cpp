@@ -87,23 +87,9 @@ Scene litSphere() {
 /// A 240×240×20 mm slab seen from above (orthographic, 64² pixels over 160 mm), lit by a
 /// directional light along −z of 1 W/mm².
 Scene largeSlab(const MaterialSample& m) {
-    Scene s;
-    SceneObject obj;
-    obj.mesh = makeBox({240.f, 240.f, 20.f});
-    obj.material = std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), 32), m);
-    s.objects.push_back(std::move(obj));
-    Light l;
-    l.type = Light::Type::Directional;
-    l.direction = {0.f, 0.f, -1.f};
-    l.intensity = Rgb(1.f);
-    s.lights.push_back(l);
-    s.camera.position = {0.f, 0.f, 100.f};
-    s.camera.target = {0.f, 0.f, 0.f};
-    s.camera.orthographic = true;
-    s.camera.orthoHeight = 160.f;
-    s.camera.width = 64;
-    s.camera.height = 64;
-    return s;
+    return testutil::boxScene(
+        m,
+        {.size = {240.f, 240.f, 20.f}, .cameraHeight = 100.f, .viewHeight = 160.f, .pixels = 64});
 }
 
 /// Mean of channel c over the central 16×16 pixels of a 64×64 image and its standard error:

@@ -25,25 +25,8 @@ MaterialSample slabMaterial() {
 /// A 40×30×10 mm box; an orthographic camera looks straight down at its +z face (z = 5 mm)
 /// with 0.1 mm pixels; a directional light shines straight down with 1 W/mm².
 Scene slabScene() {
-    Scene s;
-    SceneObject obj;
-    obj.mesh = makeBox({40.f, 30.f, 10.f});
-    obj.material =
-        std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), 32), slabMaterial());
-    s.objects.push_back(std::move(obj));
-    Light l;
-    l.type = Light::Type::Directional;
-    l.direction = {0.f, 0.f, -1.f};
-    l.intensity = Rgb(1.f);
-    s.lights.push_back(l);
-    s.camera.position = {0.f, 0.f, 50.f};
-    s.camera.target = {0.f, 0.f, 0.f};
-    s.camera.orthographic = true;
-    s.camera.orthoHeight = 12.f;
-    s.camera.width = 120;
-    s.camera.height = 120;
-    s.eta = 1.3f;
-    return s;
+    return testutil::boxScene(slabMaterial(),
+                              {.size = {40.f, 30.f, 10.f}, .viewHeight = 12.f, .pixels = 120});
 }
 
 }  // namespace

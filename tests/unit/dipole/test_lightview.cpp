@@ -154,25 +154,10 @@ namespace {
 /// A 30×30×`thickness` mm slab (faces z = ±thickness/2) with a directional light from below
 /// and an orthographic camera from above (0.1 mm pixels, 10×10 mm in view).
 Scene backlitSlab(float thickness) {
-    Scene s;
-    SceneObject obj;
-    obj.mesh = makeBox({30.f, 30.f, thickness});
-    obj.material =
-        std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), 64), rgbMaterial());
-    s.objects.push_back(std::move(obj));
-    Light l;
-    l.type = Light::Type::Directional;
-    l.direction = {0.f, 0.f, 1.f};  // travelling up: lights the bottom face
-    l.intensity = Rgb(1.f);
-    s.lights.push_back(l);
-    s.camera.position = {0.f, 0.f, 50.f};
-    s.camera.target = {0.f, 0.f, 0.f};
-    s.camera.orthographic = true;
-    s.camera.orthoHeight = 10.f;
-    s.camera.width = 100;
-    s.camera.height = 100;
-    s.eta = 1.3f;
-    return s;
+    // The light travels up (+z): it lights the bottom face.
+    return testutil::boxScene(
+        rgbMaterial(),
+        {.size = {30.f, 30.f, thickness}, .grid = 64, .lightDirection = {0.f, 0.f, 1.f}});
 }
 
 }  // namespace
