@@ -32,6 +32,12 @@ constexpr int MAX_SURFACE_EVENTS = 1 << 16;
 constexpr float ROULETTE_WEIGHT = 0.5f;
 /// Ratio-tracking roulette threshold on the running transmittance.
 constexpr float RATIO_ROULETTE = 0.1f;
+/// Refracted next-event estimation runs every time within this many mean free paths (σt at the
+/// scattering point) of the surface towards the light, and with probability e^{−(τ − this)}
+/// beyond (Russian roulette, unbiased; refractedLighting).
+constexpr float NEE_FULL_DEPTH = 2.f;
+/// ... but never with probability below this.
+constexpr float NEE_MIN_Q = 1.f / 256.f;
 
 Vector3f reflect(const Vector3f& d, const Normal3f& n) {
     return d - 2.f * glm::dot(d, n) * n;
@@ -143,8 +149,28 @@ float fresnelDielectric(float cosI, float eta) {
     return 0.5f * (rs * rs + rp * rp);
 }
 
-VolumeScene::VolumeScene(const TriangleMesh& mesh, GridMedium medium, std::vector<Light> lights)
-    : m_boundary(mesh), m_medium(std::move(medium)), m_lights(std::move(lights)) {
+const char* boundaryModelName(BoundaryModel model) {
+    switch (model) {
+        case BoundaryModel::Matched:
+            return "matched";
+        case BoundaryModel::Dielectric:
+            return "dielectric";
+        case BoundaryModel::Straight:
+            return "straight";
+    }
+    return "?";
+}
+
+VolumeScene::VolumeScene(const TriangleMesh& mesh, GridMedium medium, std::vector<Light> lights,
+                         const Rgb& environment)
+    : m_boundary(mesh),
+      m_refractions(mesh),
+      m_medium(std::move(medium)),
+      m_lights(std::move(lights)),
+      m_environment(environment) {
+    LUCENT_CHECK(isFinite(environment) && environment.r >= 0.f && environment.g >= 0.f &&
+                     environment.b >= 0.f,
+                 "environment radiance must be finite and ≥ 0 W/(mm²·sr)");
     for (size_t i = 0; i < m_lights.size(); ++i) {
         const Light& l = m_lights[i];
         LUCENT_CHECK(isFinite(l.position) && isFinite(l.direction) && isFinite(l.intensity) &&
@@ -175,7 +201,7 @@ bool enterSurface(const Point3f& x, const Normal3f& n, float off, bool specularC
         inside = true;
         return true;
     }
-    if (options.boundary != BoundaryModel::Dielectric) {
+    if (options.boundary == BoundaryModel::Matched) {
         pos = x - n * off;
         inside = true;
         return true;
@@ -193,8 +219,8 @@ bool enterSurface(const Point3f& x, const Normal3f& n, float off, bool specularC
         return false;  // impossible entering a denser medium; rounding guard
     // Radiance is not symmetric under refraction: L_outside = T·L_inside/η²
     // (Veach 1997 §5.2; pbrt-v3 §8.2.3), so a camera path entering the object
-    // carries 1/η². The straight shadow connections need no factor: for a point
-    // light the refracted fluence equals T·I/d² to first order in depth/d.
+    // carries 1/η². Next-event estimation needs no factor: it carries irradiance,
+    // and flux is conserved through the surface (RefractionSearch.h).
     weight /= double(options.eta) * options.eta;
     dir = *t;
     pos = x - n * off;
@@ -206,7 +232,7 @@ bool enterSurface(const Point3f& x, const Normal3f& n, float off, bool specularC
 /// reflection back inside, or refraction out with the inverse radiance scaling η².
 void exitSurface(const Point3f& x, const Normal3f& n, float off, Point3f& pos, Vector3f& dir,
                  bool& inside, double& weight, Pcg32& rng, const TransportOptions& options) {
-    if (options.boundary == BoundaryModel::Dielectric) {
+    if (options.boundary != BoundaryModel::Matched) {
         const float cosO = std::abs(glm::dot(dir, n));
         const float f = fresnelDielectric(cosO, 1.f / options.eta);
         const std::optional<Vector3f> t =
@@ -535,7 +561,7 @@ typename Channels::Value traceShadowRay(const VolumeScene& scene, const Point3f&
                                         const TransportOptions& options, TrackingStats* stats) {
     using Value = typename Channels::Value;
     const MeshBoundary& boundary = scene.boundary();
-    const bool dielectric = options.boundary == BoundaryModel::Dielectric;
+    const bool dielectric = options.boundary != BoundaryModel::Matched;
     Value tr(1.f);
     Point3f pos = p;
     float remaining = dist;
@@ -564,33 +590,190 @@ typename Channels::Value traceShadowRay(const VolumeScene& scene, const Point3f&
     return tr;
 }
 
-/// Next-event estimation from a real collision at x (inside the object): Σ over lights of
-/// phase · transmittance · radiance / pdf. `dirIn` is the path's travel direction at x.
+/// True when the segment o + t·d, t ∈ (0, tMax), meets a sphere light other than `except`
+/// (sphere lights are opaque emitters, for shadow rays as for camera rays).
+bool blockedBySphereLight(const VolumeScene& scene, const Point3f& o, const Vector3f& d, float tMax,
+                          const Light* except) {
+    for (const Light& light : scene.lights())
+        if (light.type == Light::Type::Sphere && &light != except &&
+            intersectSphere(o, d, light.position, light.radius) < tMax)
+            return true;
+    return false;
+}
+
+/// True when next-event estimation connects through RefractionSearch (the exact dielectric
+/// boundary); otherwise shadow rays go straight (exact for the matched boundary, and for a
+/// dielectric of η = 1, which refracts nothing).
+bool refractedNextEvent(const TransportOptions& options) {
+    return options.boundary == BoundaryModel::Dielectric && options.eta != 1.f;
+}
+
+/// A direction drawn uniformly on the unit sphere (pdf 1/4π).
+Vector3f uniformSphereDirection(Pcg32& rng) {
+    const float z = 1.f - 2.f * rng.uniform();
+    const float r = std::sqrt(std::max(0.f, 1.f - z * z));
+    const float phi = 2.f * PI * rng.uniform();
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+/// Next-event estimation with straight shadow rays from a real collision at x (inside the
+/// object): Σ over lights of phase · transmittance · radiance / pdf, plus the environment
+/// (one direction drawn uniformly). `dirIn` is the path's travel direction at x. Exact for the
+/// matched boundary; the Straight approximation with Fresnel factors otherwise.
+template <typename Path>
+typename Path::Value straightLighting(const VolumeScene& scene, const Point3f& x,
+                                      const Vector3f& dirIn, const typename Path::Value& g,
+                                      const Path& path, Pcg32& rng, const TransportOptions& options,
+                                      TrackingStats* stats) {
+    using Value = typename Path::Value;
+    const auto& tracker = static_cast<const typename Path::Tracker&>(path);
+    Value sum(0.f);
+    const auto connect = [&](const Vector3f& wi, float dist, const Rgb& radianceOverPdf,
+                             const Light* source) {
+        const Value le = path.pick(radianceOverPdf);
+        if (!(path.largest(le) > 0.f))
+            return;
+        // HG phase value for the angle between the path's travel direction and wi (the
+        // light's travel direction −wi against −dirIn gives the same cosine).
+        const Value phase = path.phase(g, glm::dot(dirIn, wi));
+        if (!(path.largest(phase) > 0.f))
+            return;  // hgPhase > 0 unless rounding of 1 + g² − 2g·cos bites (|g| ≳ 0.9995)
+        if (blockedBySphereLight(scene, x, wi, dist, source))
+            return;
+        const Value tr =
+            traceShadowRay(scene, x, wi, dist, /*pInside=*/true, tracker, rng, options, stats);
+        sum += phase * tr * le;
+    };
+    for (const Light& light : scene.lights())
+        if (const std::optional<LightSample> ls = sampleLightFrom(light, x, rng))
+            connect(ls->wi, ls->dist, ls->le, &light);
+    if (scene.environment() != Rgb(0.f))
+        connect(uniformSphereDirection(rng), INF, scene.environment() * (4.f * PI), nullptr);
+    return sum;
+}
+
+/// Next-event estimation through the exact dielectric boundary from a real collision at x:
+/// for every light (a point on a sphere light and a direction of the environment drawn
+/// uniformly), every refraction point p that RefractionSearch finds, with the visibility of
+/// x → p and p → light, the medium's transmittance along x → p, the Fresnel transmittance and
+/// the irradiance gain of the refracted pencil (docs/reference.md, "Refracted next-event
+/// estimation"). For sphere lights and the environment, light that reaches x through any other
+/// chain of surface events is found by the camera path itself (tracePath); for point, spot and
+/// directional lights such chains are not sampled yet (docs/reference.md, "Known bias").
+template <typename Path>
+typename Path::Value refractedLighting(const VolumeScene& scene, const Point3f& x,
+                                       const Vector3f& dirIn, const typename Path::Value& g,
+                                       const Path& path, Pcg32& rng,
+                                       const TransportOptions& options, TrackingStats* stats) {
+    using Value = typename Path::Value;
+    const MeshBoundary& boundary = scene.boundary();
+    const RefractionSearch& search = scene.refractions();
+    const auto& tracker = static_cast<const typename Path::Tracker&>(path);
+    const float eta = options.eta;
+    Value sum(0.f);
+    // strength: the source's intensity toward p (W/sr) or irradiance (W/mm²), per channel.
+    const auto connect = [&](const Refraction& r, const Rgb& strength, const Light* source) {
+        const Value le = path.pick(strength);
+        if (!(path.largest(le) > 0.f))
+            return;
+        const Vector3f wi = -r.transmitted;  // from x towards p
+        const Value phase = path.phase(g, glm::dot(dirIn, wi));
+        if (!(path.largest(phase) > 0.f))
+            return;
+        const float off = boundary.offsetAt(r.p);
+        if (r.distInside > 2.f * off && boundary.occluded(x, wi, 0.f, r.distInside - off))
+            return;  // another face between x and p: the path would have left the medium
+        const Point3f outside = r.p + r.normal * off;
+        const float reach = std::isfinite(r.distOutside) ? r.distOutside - off : INF;
+        if (boundary.occluded(outside, -r.incident, 0.f, reach) ||
+            blockedBySphereLight(scene, outside, -r.incident, reach, source))
+            return;
+        const Value tr =
+            trackTransmittance(scene.medium(), x, wi, r.distInside, tracker, rng, stats);
+        sum += phase * tr * le * (r.fresnelTransmittance * r.irradianceGain);
+    };
+    // Russian roulette on the connection (unbiased: kept with probability q, weighted 1/q).
+    // Light reaching x through the surface crosses at least the straight distance d to the
+    // surface towards the source, so its transmittance is about exp(−σt(x)·d) (any q > 0 keeps
+    // the estimate unbiased; this one spends the search where the light is): q = 1 within
+    // NEE_FULL_DEPTH mean free paths, then falling as the transmittance, never below NEE_MIN_Q.
+    float sigmaMin = INF;
+    for (int c = 0; c < 3; ++c)
+        sigmaMin = std::min(sigmaMin, scene.medium().sigmaT(x, c));
+    const auto keepProbability = [&](float straightDistance) {
+        const float tau = sigmaMin * straightDistance - NEE_FULL_DEPTH;
+        return tau <= 0.f ? 1.f : std::max(NEE_MIN_Q, std::exp(-tau));
+    };
+    // The straight segment towards the source gives the roulette its distance and
+    // RefractionSearch::sample its first face; the search is unbiased (weights w).
+    const auto fromPoint = [&](const Point3f& source, auto&& strength, const Light* light) {
+        const Vector3f toward = glm::normalize(source - x);
+        const std::optional<SurfaceHit> hit = boundary.intersect(x, toward, 0.f, INF);
+        if (!hit)
+            return;
+        const float q = keepProbability(hit->t);
+        if (q < 1.f && rng.uniform() >= q)
+            return;
+        search.sampleFromPoint(
+            source, x, eta, boundary, rng.uniform(),
+            [&](const Refraction& r, float w) { connect(r, (w / q) * strength(r), light); },
+            hit->triangle);
+    };
+    const auto fromDirection = [&](const Vector3f& travel, const Rgb& strength,
+                                   const Light* light) {
+        const std::optional<SurfaceHit> hit = boundary.intersect(x, -travel, 0.f, INF);
+        if (!hit)
+            return;
+        const float q = keepProbability(hit->t);
+        if (q < 1.f && rng.uniform() >= q)
+            return;
+        search.sampleFromDirection(
+            travel, x, eta, boundary, rng.uniform(),
+            [&](const Refraction& r, float w) { connect(r, (w / q) * strength, light); },
+            hit->triangle);
+    };
+    for (const Light& light : scene.lights()) {
+        switch (light.type) {
+            case Light::Type::Point:
+            case Light::Type::Spot:
+                fromPoint(
+                    light.position,
+                    [&](const Refraction& r) { return light.intensityToward(r.incident); }, &light);
+                break;
+            case Light::Type::Directional:
+                fromDirection(glm::normalize(light.direction), light.intensity, &light);
+                break;
+            case Light::Type::Sphere: {
+                // A point y drawn uniformly on the sphere (pdf 1/(4πr²)) emits like a point
+                // light of intensity L·cos θy·dA toward p.
+                const Vector3f u = uniformSphereDirection(rng);
+                const float area = 4.f * PI * light.radius * light.radius;
+                fromPoint(
+                    light.position + light.radius * u,
+                    [&](const Refraction& r) {
+                        return light.intensity * (std::max(0.f, glm::dot(u, r.incident)) * area);
+                    },
+                    &light);
+                break;
+            }
+        }
+    }
+    if (scene.environment() != Rgb(0.f)) {
+        // A direction drawn uniformly (pdf 1/4π): a directional light of irradiance 4π·L_env.
+        fromDirection(-uniformSphereDirection(rng), scene.environment() * (4.f * PI), nullptr);
+    }
+    return sum;
+}
+
+/// Next-event estimation from a real collision at x for the boundary model in `options`.
 template <typename Path>
 typename Path::Value directLighting(const VolumeScene& scene, const Point3f& x,
                                     const Vector3f& dirIn, const typename Path::Value& g,
                                     const Path& path, Pcg32& rng, const TransportOptions& options,
                                     TrackingStats* stats) {
-    using Value = typename Path::Value;
-    Value sum(0.f);
-    for (const Light& light : scene.lights()) {
-        const std::optional<LightSample> ls = sampleLightFrom(light, x, rng);
-        if (!ls)
-            continue;
-        const Value le = path.pick(ls->le);
-        if (!(path.largest(le) > 0.f))
-            continue;
-        // HG phase value for the angle between the path's travel direction and wi (the
-        // light's travel direction −wi against −dirIn gives the same cosine).
-        const Value phase = path.phase(g, glm::dot(dirIn, ls->wi));
-        if (!(path.largest(phase) > 0.f))
-            continue;  // hgPhase > 0 unless rounding of 1 + g² − 2g·cos bites (|g| ≳ 0.9995)
-        const Value tr =
-            traceShadowRay(scene, x, ls->wi, ls->dist, /*pInside=*/true,
-                           static_cast<const typename Path::Tracker&>(path), rng, options, stats);
-        sum += phase * tr * le;
-    }
-    return sum;
+    return refractedNextEvent(options)
+               ? refractedLighting(scene, x, dirIn, g, path, rng, options, stats)
+               : straightLighting(scene, x, dirIn, g, path, rng, options, stats);
 }
 
 /// The camera-path estimator of estimateRadiance / estimateRadianceRgb (Transport.h).
@@ -607,12 +790,19 @@ typename Path::Value tracePath(const VolumeScene& scene, const Point3f& o, const
     bool inside = false;
     bool specularChain = true;  // only surface events (no scattering) since the camera
     int scatterCount = 0;
+    // Emission found by the path after a scattering event counts only for chains that
+    // next-event estimation does not cover: none with straight shadow rays (they reach every
+    // light through the surface), all but a single refraction out with the refracted NEE.
+    const int neeChainEvents = refractedNextEvent(options) ? 1 : MAX_SURFACE_EVENTS;
+    int eventsSinceScatter = 0;  // surface events since the last scattering event
+    const auto emissionCounts = [&] {
+        return specularChain || eventsSinceScatter > neeChainEvents;
+    };
     for (int surfaceEvents = 0; surfaceEvents < MAX_SURFACE_EVENTS;) {
         if (!inside) {
             const std::optional<SurfaceHit> hit = boundary.intersect(pos, dir, 0.f, INF);
             const float tHit = hit ? hit->t : INF;
-            // Sphere lights are opaque emitters. Their emission counts only along specular
-            // chains; after a scattering event they are reached by next-event estimation.
+            // Sphere lights are opaque emitters; so is the environment beyond everything.
             float tLight = INF;
             const Light* emitter = nullptr;
             for (const Light& light : scene.lights()) {
@@ -625,13 +815,17 @@ typename Path::Value tracePath(const VolumeScene& scene, const Point3f& o, const
                 }
             }
             if (tLight < tHit) {
-                if (specularChain)
+                if (emissionCounts())
                     radiance += path.throughput() * path.pick(emitter->intensity);
                 break;
             }
-            if (!hit)
-                break;  // black background
+            if (!hit) {
+                if (emissionCounts())
+                    radiance += path.throughput() * path.pick(scene.environment());
+                break;
+            }
             ++surfaceEvents;
+            ++eventsSinceScatter;
             const Point3f x = pos + dir * tHit;
             const Normal3f n = hit->normal;
             const float off = boundary.offsetAt(x);
@@ -659,6 +853,7 @@ typename Path::Value tracePath(const VolumeScene& scene, const Point3f& o, const
             radiance +=
                 path.throughput() * directLighting(scene, x, dir, g, path, rng, options, stats);
             specularChain = false;
+            eventsSinceScatter = 0;
             if (options.russianRoulette && !path.roulette(rng))
                 break;
             dir = path.scatter(dir, g, rng);
@@ -666,6 +861,7 @@ typename Path::Value tracePath(const VolumeScene& scene, const Point3f& o, const
             continue;
         }
         ++surfaceEvents;
+        ++eventsSinceScatter;
         const Point3f x = pos + dir * exit->t;
         const Normal3f n = exit->normal;
         const float off = boundary.offsetAt(x);

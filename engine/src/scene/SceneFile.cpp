@@ -399,7 +399,8 @@ Scene parseScene(const std::string& jsonText, const std::string& baseDir) {
         LUCENT_THROW(IoError, "scene: not valid JSON (byte ", e.byte, "): ", e.what());
     }
     const Obj o(root, "");
-    o.allowOnly({"version", "mesh", "material", "resolution", "eta", "lights", "camera"});
+    o.allowOnly(
+        {"version", "mesh", "material", "resolution", "eta", "lights", "environment", "camera"});
     if (o.has("version")) {
         const int version = integer(o.at("version"), "version", 1, 1 << 20);
         if (version > SCENE_FORMAT_VERSION)
@@ -423,6 +424,11 @@ Scene parseScene(const std::string& jsonText, const std::string& baseDir) {
         fieldError("lights", "expected an array, got " + typeName(lights));
     for (size_t i = 0; i < lights.size(); ++i)
         scene.lights.push_back(parseLight(lights[i], "lights[" + std::to_string(i) + "]"));
+    if (o.has("environment")) {
+        const Obj env(o.at("environment"), "environment");
+        env.allowOnly({"radiance"});
+        scene.environment = nonNegativeRgb(env.at("radiance"), env.sub("radiance"));
+    }
     scene.camera = parseCamera(o.at("camera"));
     scene.objects.push_back(buildObject(meshSrc, matSrc, scene.eta, resolutionGiven));
     return scene;
@@ -525,6 +531,8 @@ std::string sceneToJson(const Scene& scene) {
         lights.push_back(jl);
     }
     root["lights"] = lights;
+    if (scene.environment != Rgb(0.f))
+        root["environment"] = {{"radiance", vecJson(scene.environment)}};
     const Camera& c = scene.camera;
     json cam = {{"position", vecJson(c.position)},
                 {"target", vecJson(c.target)},
@@ -554,6 +562,7 @@ void saveProject(const Scene& scene, const std::string& path) {
     // project folder when possible, so a project folder can be moved as a whole.
     Scene copy;
     copy.lights = scene.lights;
+    copy.environment = scene.environment;
     copy.camera = scene.camera;
     copy.eta = scene.eta;
     SceneObject o;
