@@ -19,6 +19,7 @@
 #include <lucent/core/Error.h>
 #include <lucent/core/Sampling.h>
 #include <lucent/core/SphericalHarmonics.h>
+#include <lucent/reference/SpecularChain.h>
 #include <lucent/reference/Transport.h>
 
 namespace lucent {
@@ -38,6 +39,12 @@ constexpr float RATIO_ROULETTE = 0.1f;
 constexpr float NEE_FULL_DEPTH = 2.f;
 /// ... but never with probability below this.
 constexpr float NEE_MIN_Q = 1.f / 256.f;
+/// The trials that estimate a chain's reciprocal probability run every time for a chain that
+/// carries at least this share of the light at x, and proportionally less often below it.
+constexpr float CHAIN_SHARE = 0.1f;
+/// A guard against an endless trial loop (a chain that a seed can no longer reach because of
+/// rounding); never reached in the tests and benchmarks.
+constexpr uint64_t MAX_CHAIN_TRIALS = uint64_t(1) << 24;
 
 Vector3f reflect(const Vector3f& d, const Normal3f& n) {
     return d - 2.f * glm::dot(d, n) * n;
@@ -610,10 +617,7 @@ bool refractedNextEvent(const TransportOptions& options) {
 
 /// A direction drawn uniformly on the unit sphere (pdf 1/4π).
 Vector3f uniformSphereDirection(Pcg32& rng) {
-    const float z = 1.f - 2.f * rng.uniform();
-    const float r = std::sqrt(std::max(0.f, 1.f - z * z));
-    const float phi = 2.f * PI * rng.uniform();
-    return {r * std::cos(phi), r * std::sin(phi), z};
+    return sampleUniformSphere({rng.uniform(), rng.uniform()});
 }
 
 /// Next-event estimation with straight shadow rays from a real collision at x (inside the
@@ -652,14 +656,63 @@ typename Path::Value straightLighting(const VolumeScene& scene, const Point3f& x
     return sum;
 }
 
-/// Next-event estimation through the exact dielectric boundary from a real collision at x:
-/// for every light (a point on a sphere light and a direction of the environment drawn
-/// uniformly), every refraction point p that RefractionSearch finds, with the visibility of
-/// x → p and p → light, the medium's transmittance along x → p, the Fresnel transmittance and
-/// the irradiance gain of the refracted pencil (docs/reference.md, "Refracted next-event
-/// estimation"). For sphere lights and the environment, light that reaches x through any other
-/// chain of surface events is found by the camera path itself (tracePath); for point, spot and
-/// directional lights such chains are not sampled yet (docs/reference.md, "Known bias").
+/// The light a point, spot, directional or sphere light sends to x along a specular chain, times
+/// the phase function toward the path: strength · Fresnel product · irradiance gain · medium
+/// transmittance of every inside segment · phase. Other sphere lights occlude the outside
+/// segments.
+template <typename Path>
+typename Path::Value chainContribution(const VolumeScene& scene, const Point3f& x,
+                                       const Vector3f& dirIn, const typename Path::Value& g,
+                                       const Path& path, const SpecularChain& chain,
+                                       const Light& light, Pcg32& rng, TrackingStats* stats) {
+    using Value = typename Path::Value;
+    // Directional: irradiance; point, spot: intensity toward the chain; sphere: radiance (the
+    // caller multiplies by cos θy·dA/pdf).
+    const Rgb strength = light.type == Light::Type::Point || light.type == Light::Type::Spot
+                             ? light.intensityToward(-chain.finalDirection)
+                             : light.intensity;
+    Value value = path.pick(strength) * float(chain.fresnel * chain.irradianceGain) *
+                  path.phase(g, glm::dot(dirIn, chain.directionAtX));
+    if (!(path.largest(value) > 0.f))
+        return Value(0.f);
+    const auto& tracker = static_cast<const typename Path::Tracker&>(path);
+    Point3f from = x;
+    for (int i = 0; i < chain.events; ++i) {
+        const Point3f to = chain.points[size_t(i)];
+        const Vector3f d = to - from;
+        const float len = glm::length(d);
+        if (len > 0.f) {
+            if (chain.insideBefore[size_t(i)])
+                value *=
+                    trackTransmittance(scene.medium(), from, d / len, len, tracker, rng, stats);
+            else if (blockedBySphereLight(scene, from, d / len, len, nullptr))
+                return Value(0.f);
+        }
+        from = to;
+    }
+    if (blockedBySphereLight(scene, from, chain.finalDirection, chain.distanceToSource, &light))
+        return Value(0.f);
+    return value;
+}
+
+/// Next-event estimation through the exact dielectric boundary from a real collision at x
+/// (docs/reference.md, "Refracted next-event estimation" and "Chains of surface events"), for
+/// every light (a point drawn on a sphere light, a direction of the environment):
+///  * the light that reaches x through one refraction: every refraction point p that
+///    RefractionSearch finds, with the visibility of x → p and p → light, the medium's
+///    transmittance along x → p, the Fresnel transmittance and the refracted pencil's gain;
+///  * the light of point, spot, directional and sphere lights that reaches x through more
+///    surface events (internal reflections, other parts of a non-convex object): specular
+///    chains. A random seed gives a chain type, Newton's method the exact chain; the
+///    probability that the seed process finds this chain is unknown, so its reciprocal is
+///    estimated without bias by the number K of independent trials until the process finds
+///    it again (Zeltner, Georgiev & Jakob 2020, Sec. 4.3).
+/// The environment's longer chains are found by the camera path itself (tracePath).
+/// Russian roulettes (unbiased: kept with probability q, weighted 1/q) spend the work where
+/// light arrives: light reaching x crosses at least the straight distance d to the surface
+/// towards the source, so its transmittance is about exp(−σt(x)·d); q = 1 within
+/// NEE_FULL_DEPTH mean free paths, then falling as that transmittance, never below NEE_MIN_Q.
+/// A chain's trials also run only with a probability that follows its share of the light.
 template <typename Path>
 typename Path::Value refractedLighting(const VolumeScene& scene, const Point3f& x,
                                        const Vector3f& dirIn, const typename Path::Value& g,
@@ -668,10 +721,20 @@ typename Path::Value refractedLighting(const VolumeScene& scene, const Point3f& 
     using Value = typename Path::Value;
     const MeshBoundary& boundary = scene.boundary();
     const RefractionSearch& search = scene.refractions();
+    const SpecularChainTracer chains(boundary, options.eta);
     const auto& tracker = static_cast<const typename Path::Tracker&>(path);
     const float eta = options.eta;
-    Value sum(0.f);
-    // strength: the source's intensity toward p (W/sr) or irradiance (W/mm²), per channel.
+    float sigmaMin = INF;
+    for (int c = 0; c < 3; ++c)
+        sigmaMin = std::min(sigmaMin, scene.medium().sigmaT(x, c));
+    const auto keepProbability = [&](float distance) {
+        const float tau = sigmaMin * distance - NEE_FULL_DEPTH;
+        return tau <= 0.f ? 1.f : std::max(NEE_MIN_Q, std::exp(-tau));
+    };
+
+    // One refraction light → p → x; `strength`: intensity toward p (W/sr) or irradiance
+    // (W/mm²) per channel, times the estimator's weight.
+    Value refracted(0.f);
     const auto connect = [&](const Refraction& r, const Rgb& strength, const Light* source) {
         const Value le = path.pick(strength);
         if (!(path.largest(le) > 0.f))
@@ -690,79 +753,108 @@ typename Path::Value refractedLighting(const VolumeScene& scene, const Point3f& 
             return;
         const Value tr =
             trackTransmittance(scene.medium(), x, wi, r.distInside, tracker, rng, stats);
-        sum += phase * tr * le * (r.fresnelTransmittance * r.irradianceGain);
+        refracted += phase * tr * le * (r.fresnelTransmittance * r.irradianceGain);
     };
-    // Russian roulette on the connection (unbiased: kept with probability q, weighted 1/q).
-    // Light reaching x through the surface crosses at least the straight distance d to the
-    // surface towards the source, so its transmittance is about exp(−σt(x)·d) (any q > 0 keeps
-    // the estimate unbiased; this one spends the search where the light is): q = 1 within
-    // NEE_FULL_DEPTH mean free paths, then falling as the transmittance, never below NEE_MIN_Q.
-    float sigmaMin = INF;
-    for (int c = 0; c < 3; ++c)
-        sigmaMin = std::min(sigmaMin, scene.medium().sigmaT(x, c));
-    const auto keepProbability = [&](float straightDistance) {
-        const float tau = sigmaMin * straightDistance - NEE_FULL_DEPTH;
-        return tau <= 0.f ? 1.f : std::max(NEE_MIN_Q, std::exp(-tau));
-    };
-    // The straight segment towards the source gives the roulette its distance and
-    // RefractionSearch::sample its first face; the search is unbiased (weights w).
-    const auto fromPoint = [&](const Point3f& source, auto&& strength, const Light* light) {
-        const Vector3f toward = glm::normalize(source - x);
-        const std::optional<SurfaceHit> hit = boundary.intersect(x, toward, 0.f, INF);
-        if (!hit)
+
+    // Chains from x to one source: seed, Newton, trials. `scale` converts the chain's
+    // per-unit-strength light into this source's, per channel.
+    Value chained(0.f);
+    const auto chainFrom = [&](const Light& light, const ChainSource& source, float q,
+                               auto&& scale) {
+        const std::optional<SpecularChain> seed = chains.sampleSeed(x, rng);
+        if (!seed || seed->isSingleRefraction())
+            return;  // a single refraction is the search's
+        // The seed's own length inside the object (the chain it leads to runs near it).
+        const float seedKeep = keepProbability(seed->insideLength(x));
+        if (seedKeep < 1.f && rng.uniform() >= seedKeep)
             return;
-        const float q = keepProbability(hit->t);
-        if (q < 1.f && rng.uniform() >= q)
+        const std::optional<SpecularChain> chain = chains.connect(x, *seed, source);
+        if (!chain)
             return;
-        search.sampleFromPoint(
-            source, x, eta, boundary, rng.uniform(),
-            [&](const Refraction& r, float w) { connect(r, (w / q) * strength(r), light); },
-            hit->triangle);
-    };
-    const auto fromDirection = [&](const Vector3f& travel, const Rgb& strength,
-                                   const Light* light) {
-        const std::optional<SurfaceHit> hit = boundary.intersect(x, -travel, 0.f, INF);
-        if (!hit)
+        const Value value =
+            chainContribution(scene, x, dirIn, g, path, *chain, light, rng, stats) * scale(*chain);
+        const float share = path.largest(value);
+        if (!(share > 0.f))
             return;
-        const float q = keepProbability(hit->t);
-        if (q < 1.f && rng.uniform() >= q)
+        const float keep = std::min(1.f, share / (CHAIN_SHARE * (path.largest(refracted) + share)));
+        if (keep < 1.f && rng.uniform() >= keep)
             return;
-        search.sampleFromDirection(
-            travel, x, eta, boundary, rng.uniform(),
-            [&](const Refraction& r, float w) { connect(r, (w / q) * strength, light); },
-            hit->triangle);
-    };
-    for (const Light& light : scene.lights()) {
-        switch (light.type) {
-            case Light::Type::Point:
-            case Light::Type::Spot:
-                fromPoint(
-                    light.position,
-                    [&](const Refraction& r) { return light.intensityToward(r.incident); }, &light);
+        uint64_t trials = 1;
+        for (; trials < MAX_CHAIN_TRIALS; ++trials) {
+            const std::optional<SpecularChain> again = chains.sampleSeed(x, rng);
+            if (!again || !again->sameKinds(*chain))
+                continue;
+            const std::optional<SpecularChain> found = chains.connect(x, *again, source);
+            if (found && found->sameAs(*chain))
                 break;
-            case Light::Type::Directional:
-                fromDirection(glm::normalize(light.direction), light.intensity, &light);
-                break;
-            case Light::Type::Sphere: {
-                // A point y drawn uniformly on the sphere (pdf 1/(4πr²)) emits like a point
-                // light of intensity L·cos θy·dA toward p.
-                const Vector3f u = uniformSphereDirection(rng);
-                const float area = 4.f * PI * light.radius * light.radius;
-                fromPoint(
-                    light.position + light.radius * u,
-                    [&](const Refraction& r) {
-                        return light.intensity * (std::max(0.f, glm::dot(u, r.incident)) * area);
-                    },
-                    &light);
-                break;
-            }
         }
+        if (trials == MAX_CHAIN_TRIALS)
+            return;  // never reached in the tests and benchmarks (docs/reference.md)
+        chained += value * (float(trials) / (q * seedKeep * keep));
+    };
+
+    for (const Light& light : scene.lights()) {
+        // The source: a point, a direction, or a point y drawn uniformly on a sphere light
+        // (pdf 1/(4πr²)), which emits like a point light of intensity L·cos θy·dA.
+        const bool directional = light.type == Light::Type::Directional;
+        Vector3f normalAtY(0.f);
+        Point3f position = light.position;
+        if (light.type == Light::Type::Sphere) {
+            normalAtY = uniformSphereDirection(rng);
+            position += light.radius * normalAtY;
+        }
+        const float area = 4.f * PI * light.radius * light.radius;
+        const auto sphereFactor = [&](const Vector3f& towardX) {
+            return std::max(0.f, glm::dot(normalAtY, towardX)) * area;
+        };
+        const Vector3f travel = directional ? glm::normalize(light.direction) : Vector3f(0.f);
+        const Vector3f toward = directional ? -travel : glm::normalize(position - x);
+        // The straight segment towards the source: the roulette's distance and the search's
+        // first face.
+        const std::optional<SurfaceHit> straight = boundary.intersect(x, toward, 0.f, INF);
+        if (!straight)
+            continue;  // x is not inside the closed mesh (rounding)
+        const float q = keepProbability(straight->t);
+        if (q < 1.f && rng.uniform() >= q)
+            continue;
+        if (directional) {
+            search.sampleFromDirection(
+                travel, x, eta, boundary, rng.uniform(),
+                [&](const Refraction& r, float w) {
+                    connect(r, (w / q) * light.intensity, &light);
+                },
+                straight->triangle);
+        } else {
+            search.sampleFromPoint(
+                position, x, eta, boundary, rng.uniform(),
+                [&](const Refraction& r, float w) {
+                    const Rgb strength = light.type == Light::Type::Sphere
+                                             ? light.intensity * sphereFactor(r.incident)
+                                             : light.intensityToward(r.incident);
+                    connect(r, (w / q) * strength, &light);
+                },
+                straight->triangle);
+        }
+        chainFrom(light, ChainSource{directional ? travel : position, directional}, q,
+                  [&](const SpecularChain& chain) {
+                      return light.type == Light::Type::Sphere ? sphereFactor(-chain.finalDirection)
+                                                               : 1.f;
+                  });
     }
     if (scene.environment() != Rgb(0.f)) {
         // A direction drawn uniformly (pdf 1/4π): a directional light of irradiance 4π·L_env.
-        fromDirection(-uniformSphereDirection(rng), scene.environment() * (4.f * PI), nullptr);
+        const Vector3f travel = -uniformSphereDirection(rng);
+        const std::optional<SurfaceHit> straight = boundary.intersect(x, -travel, 0.f, INF);
+        const float q = straight ? keepProbability(straight->t) : 1.f;
+        if (straight && (q >= 1.f || rng.uniform() < q))
+            search.sampleFromDirection(
+                travel, x, eta, boundary, rng.uniform(),
+                [&](const Refraction& r, float w) {
+                    connect(r, (w * 4.f * PI / q) * scene.environment(), nullptr);
+                },
+                straight->triangle);
     }
-    return sum;
+    return refracted + chained;
 }
 
 /// Next-event estimation from a real collision at x for the boundary model in `options`.
@@ -791,12 +883,15 @@ typename Path::Value tracePath(const VolumeScene& scene, const Point3f& o, const
     bool specularChain = true;  // only surface events (no scattering) since the camera
     int scatterCount = 0;
     // Emission found by the path after a scattering event counts only for chains that
-    // next-event estimation does not cover: none with straight shadow rays (they reach every
-    // light through the surface), all but a single refraction out with the refracted NEE.
-    const int neeChainEvents = refractedNextEvent(options) ? 1 : MAX_SURFACE_EVENTS;
+    // next-event estimation does not cover: with straight shadow rays, none (they reach every
+    // light through the surface); with the refracted estimation, sphere lights are reached
+    // through every chain (refraction search and specular chains) and the environment through
+    // a single refraction, so only the environment seen through longer chains counts.
+    const bool refracted = refractedNextEvent(options);
     int eventsSinceScatter = 0;  // surface events since the last scattering event
-    const auto emissionCounts = [&] {
-        return specularChain || eventsSinceScatter > neeChainEvents;
+    const auto sphereLightCounts = [&] { return specularChain; };
+    const auto environmentCounts = [&] {
+        return specularChain || (refracted && eventsSinceScatter > 1);
     };
     for (int surfaceEvents = 0; surfaceEvents < MAX_SURFACE_EVENTS;) {
         if (!inside) {
@@ -815,12 +910,12 @@ typename Path::Value tracePath(const VolumeScene& scene, const Point3f& o, const
                 }
             }
             if (tLight < tHit) {
-                if (emissionCounts())
+                if (sphereLightCounts())
                     radiance += path.throughput() * path.pick(emitter->intensity);
                 break;
             }
             if (!hit) {
-                if (emissionCounts())
+                if (environmentCounts())
                     radiance += path.throughput() * path.pick(scene.environment());
                 break;
             }

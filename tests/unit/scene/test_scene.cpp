@@ -234,6 +234,25 @@ TEST(SceneFile, JsonRoundTrip) {
     EXPECT_EQ(b.objects[0].material->insideMask(), a.objects[0].material->insideMask());
 }
 
+TEST(SceneFile, EnvironmentLightParsesAndRoundTrips) {
+    // Optional, black by default; radiance [r,g,b] ≥ 0; written back only when not black.
+    EXPECT_EQ(parseScene(minimalWith([](json&) {})).environment, Rgb(0.f));
+    const Scene s = parseScene(minimalWith([](json& j) {
+        j["environment"] = {{"radiance", {0.5, 1.0, 2.0}}};
+    }));
+    EXPECT_EQ(s.environment, Rgb(0.5f, 1.f, 2.f));
+    EXPECT_EQ(parseScene(sceneToJson(s)).environment, s.environment);
+    EXPECT_EQ(json::parse(sceneToJson(parseScene(MINIMAL))).count("environment"), 0u);
+    expectErrorNaming(minimalWith([](json& j) {
+                          j["environment"] = {{"radiance", {0.5, -1.0, 2.0}}};
+                      }),
+                      "environment.radiance");
+    expectErrorNaming(minimalWith([](json& j) {
+                          j["environment"] = {{"colour", {1, 1, 1}}};
+                      }),
+                      "environment.colour");
+}
+
 TEST(SceneFile, DefaultSceneIsBackLitAndHeterogeneous) {
     const Scene s = makeDefaultScene();
     ASSERT_EQ(s.objects.size(), 1u);
