@@ -41,7 +41,7 @@ constexpr float NEE_FULL_DEPTH = 2.f;
 constexpr float NEE_MIN_Q = 1.f / 256.f;
 /// The trials that estimate a chain's reciprocal probability run every time for a chain that
 /// carries at least this share of the light at x, and proportionally less often below it.
-constexpr float CHAIN_SHARE = 0.1f;
+constexpr float CHAIN_SHARE = 0.01f;
 /// A guard against an endless trial loop (a chain that a seed can no longer reach because of
 /// rounding); never reached in the tests and benchmarks.
 constexpr uint64_t MAX_CHAIN_TRIALS = uint64_t(1) << 24;
