@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 # cmake -DCLI=<lucent-cli> -DOUT=<dir> -DCASE=<case> [-DVDB_PRINT=<vdb_print>] [-DMESHES=<dir>]
-#       -P RunCli.cmake
+#       [-DSCENE=<scene.json>] -P RunCli.cmake
 # Runs lucent-cli end to end and fails (FATAL_ERROR) with the reason when a check does not hold.
 
 # run(<result var prefix> args...): runs lucent-cli, sets <p>_RC, <p>_OUT, <p>_ERR.
@@ -186,6 +186,50 @@ elseif(CASE STREQUAL "info_errors")
     run(help info --help)
     expect_ok(help)
     expect_contains(help "${help_OUT}" "usage: lucent-cli info")
+elseif(CASE STREQUAL "render_full_disk")
+    # Issue 18 §2: on a full disk `render -o r.png` printed "wrote" and replaced a good PNG with
+    # a truncated one (the fclose error was discarded). A tmpfs is sized so that every full
+    # 4 KiB block of the new PNG fits but its tail does not: only the last flush fails.
+    set(big ${OUT}/full_disk_probe.png)
+    run(probe render ${SCENE} -o ${big} --width 1024 --height 1024)
+    if(NOT probe_RC STREQUAL "0")
+        message(STATUS "no headless GL here: the full-disk check is skipped")
+        return()
+    endif()
+    file(SIZE ${big} size)
+    math(EXPR blocks "${size} / 4096")
+    math(EXPR tmpfs_bytes "4096 + ${blocks} * 4096")
+    set(mnt ${OUT}/full_disk)
+    file(MAKE_DIRECTORY ${mnt})
+    execute_process(COMMAND mount -t tmpfs -o size=${tmpfs_bytes} tmpfs ${mnt}
+        RESULT_VARIABLE mount_rc ERROR_VARIABLE mount_err)
+    if(NOT mount_rc STREQUAL "0")
+        message(STATUS "cannot mount a small tmpfs (needs root): the full-disk check is skipped "
+            "(${mount_err}); test_core covers the same failure with RLIMIT_FSIZE")
+        return()
+    endif()
+    run(good render ${SCENE} -o ${mnt}/r.png --width 16 --height 16)
+    file(SIZE ${mnt}/r.png good_size)
+    file(READ ${mnt}/r.png good HEX)
+    run(full render ${SCENE} -o ${mnt}/r.png --width 1024 --height 1024)
+    file(READ ${mnt}/r.png after HEX)
+    file(GLOB leftovers ${mnt}/*.tmp-*)
+    execute_process(COMMAND umount ${mnt})
+    expect_ok(good)
+    if(full_RC STREQUAL "0")
+        message(FATAL_ERROR "render on a full disk exited 0: ${full_OUT}")
+    endif()
+    string(FIND "${full_OUT}" "wrote" wrote)
+    if(NOT wrote EQUAL -1)
+        message(FATAL_ERROR "render on a full disk printed 'wrote': ${full_OUT}")
+    endif()
+    expect_contains(full "${full_ERR}" "r.png" "No space left on device")
+    if(NOT after STREQUAL good)
+        message(FATAL_ERROR "the good ${good_size}-byte PNG was replaced on a full disk")
+    endif()
+    if(leftovers)
+        message(FATAL_ERROR "temporaries left behind: ${leftovers}")
+    endif()
 else()
     message(FATAL_ERROR "unknown CASE '${CASE}'")
 endif()
