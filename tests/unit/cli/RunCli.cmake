@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
 # cmake -DCLI=<lucent-cli> -DOUT=<dir> -DCASE=<case> [-DVDB_PRINT=<vdb_print>] [-DMESHES=<dir>]
-#       [-DSCENE=<scene.json>] -P RunCli.cmake
+#       [-DSCENE=<scene.json>] [-DDATA=<tests/data/robust>] -P RunCli.cmake
 # Runs lucent-cli end to end and fails (FATAL_ERROR) with the reason when a check does not hold.
 
 # run(<result var prefix> args...): runs lucent-cli, sets <p>_RC, <p>_OUT, <p>_ERR.
@@ -186,6 +186,71 @@ elseif(CASE STREQUAL "info_errors")
     run(help info --help)
     expect_ok(help)
     expect_contains(help "${help_OUT}" "usage: lucent-cli info")
+elseif(CASE STREQUAL "robust_inputs")
+    # Issue 18: bad inputs give one-line errors, never silent wrong results (the inputs are
+    # tests/data/robust/, see its README.md).
+    set(vdb ${OUT}/robust.vdb)
+    file(REMOVE ${vdb})
+    run(off export --preset marble --mesh ${DATA}/off_half_truncated.off --res 16 -o ${vdb})
+    expect_one_line_error(off "claims 224 faces")
+    run(obj export --preset marble --mesh ${DATA}/obj_half_truncated.obj --res 16 -o ${vdb})
+    expect_one_line_error(obj "is open")
+    expect_contains(obj "${obj_ERR}" "--allow-open")
+    run(vtk export --preset marble --mesh ${DATA}/vtk_half_truncated.vtk --res 16 -o ${vdb})
+    expect_one_line_error(vtk "vtk_half_truncated.vtk")
+    run(valence export --preset marble --mesh ${DATA}/off_face_valence.off --res 16 -o ${vdb})
+    expect_one_line_error(valence "invalid vertex count")
+    run(vtp export --preset marble --mesh ${DATA}/vtp_compression_header.vtp --res 16 -o ${vdb})
+    expect_one_line_error(vtp "compression header")
+    if(EXISTS ${vdb})
+        message(FATAL_ERROR "a failed export wrote ${vdb}")
+    endif()
+    # Open meshes: exported only on request, with the warning on stderr.
+    run(open export --preset marble --mesh ${DATA}/tetra_open.obj --allow-open --res 16 -o ${vdb})
+    expect_ok(open)
+    expect_contains(open "${open_ERR}" "warning" "open: 3 boundary edge")
+    # Mesh scales whose voxels import would reject, or OpenVDB would refuse with its own text.
+    foreach(scale 1e6 1e-6)
+        file(REMOVE ${OUT}/scaled.vdb)
+        run(scale export --preset marble --mesh ${DATA}/sphere_closed.off --scale ${scale} --res 16
+            -o ${OUT}/scaled.vdb)
+        expect_one_line_error(scale "VDB import accepts")
+        expect_contains(scale "${scale_ERR}" "mesh scale")
+        if(EXISTS ${OUT}/scaled.vdb)
+            message(FATAL_ERROR "--scale ${scale} wrote a file import rejects")
+        endif()
+    endforeach()
+    # Output over the input mesh.
+    file(COPY ${DATA}/sphere_closed.off DESTINATION ${OUT})
+    file(READ ${OUT}/sphere_closed.off before)
+    run(self export --preset marble --mesh ${OUT}/sphere_closed.off --res 16 -o ${OUT}/./sphere_closed.off)
+    expect_one_line_error(self "is the input mesh")
+    run(selfmi export --preset marble --mesh ${OUT}/sphere_closed.off --res 16
+        --mitsuba ${OUT}/sphere_closed.off)
+    file(READ ${OUT}/sphere_closed.off after)
+    if(NOT before STREQUAL after)
+        message(FATAL_ERROR "export overwrote its input mesh")
+    endif()
+    # A VDB whose checksum no longer applies, with one size changed: an error, not an abort.
+    run(vdb info ${DATA}/vdb_stored_block_overflow.vdb)
+    expect_one_line_error(vdb "stored block of 20000 bytes")
+    run(meta info ${DATA}/vdb_grid_meta_length.vdb)
+    expect_one_line_error(meta "metadata name of 2147483632 bytes")
+    # Scenes: a device path, a material of another mesh, an open mesh's warning.
+    run(zero reference /dev/zero --spp 3 -o ${OUT}/zero.exr)
+    expect_one_line_error(zero "not a regular file")
+    run(foreign reference ${DATA}/scene_foreign_material.json --spp 3 --quiet -o ${OUT}/f.exr)
+    expect_one_line_error(foreign "does not fit the mesh")
+    run(warn reference ${DATA}/scene_open_mesh.json --spp 3 --quiet -o ${OUT}/warn.exr)
+    expect_ok(warn)
+    expect_contains(warn "${warn_ERR}" "warning" "the mesh is open")
+    # The reference writes OpenEXR: a .png name would hold EXR bytes.
+    file(REMOVE ${OUT}/ref.png)
+    run(png reference ${DATA}/scene_open_mesh.json --spp 3 --quiet -o ${OUT}/ref.png)
+    expect_one_line_error(png ".exr")
+    if(EXISTS ${OUT}/ref.png)
+        message(FATAL_ERROR "reference -o ref.png wrote ${OUT}/ref.png")
+    endif()
 elseif(CASE STREQUAL "render_full_disk")
     # Issue 18 §2: on a full disk `render -o r.png` printed "wrote" and replaced a good PNG with
     # a truncated one (the fclose error was discarded). A tmpfs is sized so that every full
