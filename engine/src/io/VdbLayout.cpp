@@ -87,6 +87,13 @@ public:
     [[nodiscard]] uint64_t pos() const { return m_pos; }
     [[nodiscard]] uint64_t remaining() const { return m_size - m_pos; }
     [[nodiscard]] const std::string& name() const { return m_name; }
+    /// A second cursor on the same file with its own read-ahead window (for walking two
+    /// regions in step without reloading one window for each).
+    [[nodiscard]] Cursor clone() const {
+        Cursor c(m_read, m_size, m_name);
+        c.m_pos = m_pos;
+        return c;
+    }
 
 private:
     void fetch(uint64_t pos, void* dst, size_t n) {
@@ -340,24 +347,19 @@ public:
                uint64_t(numTiles) * 64;
     }
 
-    /// Pass 2: the buffers start at the cursor.
+    /// Pass 2: the buffers start at the cursor; the topology is re-read in step with them by
+    /// a second cursor.
     void buffers() {
-        Cursor& buf = m_in;
-        const uint64_t bufStart = buf.pos();
-        // Re-read the topology with the same cursor type; root children follow the tiles.
-        buf.seek(m_topologyStart + 4 + m_vt.size);
-        const auto numTiles = buf.read<uint32_t>("root tile count");
-        buf.read<uint32_t>("root child count");
-        uint64_t topo = buf.pos() + uint64_t(numTiles) * (12 + m_vt.size + 1);
-        uint64_t data = bufStart;
+        Cursor topo = m_in.clone();
+        topo.seek(m_topologyStart + 4 + m_vt.size);  // after the buffer count and background
+        const auto numTiles = topo.read<uint32_t>("root tile count");
+        topo.read<uint32_t>("root child count");
+        topo.skip(uint64_t(numTiles) * (12 + m_vt.size + 1), "root tiles");
         for (uint32_t n = 0; n < m_numChildren; ++n) {
-            buf.seek(topo);
             Coord3 c{};
-            buf.bytes(c.data(), sizeof c, "root child");
-            topo = buf.pos();
-            internalBuffers(LEVEL5, c, topo, data);
+            topo.bytes(c.data(), sizeof c, "root child");
+            internalBuffers(LEVEL5, c, topo);
         }
-        buf.seek(data);
     }
 
 private:
@@ -412,29 +414,20 @@ private:
         }
     }
 
-    /// Walks the buffers of the node whose topology starts at `topo` (after its root coord).
-    void internalBuffers(const Level& level, const Coord3& origin, uint64_t& topo, uint64_t& data) {
-        Cursor& in = m_in;
+    /// Walks the buffers (at m_in) of the node whose topology is at `topo`.
+    void internalBuffers(const Level& level, const Coord3& origin, Cursor& topo) {
         const uint32_t values = 1u << (3 * level.log2Dim);
-        in.seek(topo);
-        const auto childMask = readMask(in, values, "child mask");
-        const auto valueMask = readMask(in, values, "value mask");
-        compressedValues(in, values, popcount(valueMask), "internal node values");
-        topo = in.pos();
+        const auto childMask = readMask(topo, values, "child mask");
+        const auto valueMask = readMask(topo, values, "value mask");
+        compressedValues(topo, values, popcount(valueMask), "internal node values");
         for (uint32_t i = 0; i < values; ++i) {
             if (!(childMask[i / 64] >> (i % 64) & 1))
                 continue;
             const Coord3 child = childOrigin(level, origin, i);
-            if (level.log2Dim == 5) {
-                internalBuffers(LEVEL4, child, topo, data);
-                continue;
-            }
-            in.seek(topo);
-            const auto leafMask = readMask(in, LEAF_VALUES, "leaf value mask");
-            topo = in.pos();
-            in.seek(data);
-            leafBuffer(child, popcount(leafMask));
-            data = in.pos();
+            if (level.log2Dim == 5)
+                internalBuffers(LEVEL4, child, topo);
+            else
+                leafBuffer(child, popcount(readMask(topo, LEAF_VALUES, "leaf value mask")));
         }
     }
 
