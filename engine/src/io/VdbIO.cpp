@@ -12,6 +12,7 @@
 #include <lucent/core/Parallel.h>
 
 #include <openvdb/io/File.h>
+#include <openvdb/io/GridDescriptor.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Prune.h>
 
@@ -609,7 +610,9 @@ VdbFileSummary summarizeVdb(const std::string& path) {
                 s.grids.push_back(std::move(g));
                 continue;
             }
-            if (vdb::GridBase::Ptr grid = file.readGrid(entry.uniqueName))
+            // "name[N]" selects the N-th of several grids of the same name.
+            const std::string name = vdb::io::GridDescriptor::nameAsString(entry.uniqueName);
+            if (vdb::GridBase::Ptr grid = file.readGrid(name))
                 s.grids.push_back(summarizeGrid(*grid));
         }
         return s;

@@ -477,13 +477,24 @@ TEST(VdbMalformed, ValidFilesOfEveryCheckedKindAreRead) {
     auto shared = grids[0]->copyGrid();  // shares the tree: written as an instance
     shared->setName("instance");
     grids.push_back(shared);
+    for (float v : {1.f, 2.f}) {  // two grids of the same name: both listed, each its own
+        auto dup = vdb::FloatGrid::create(0.f);
+        dup->setName("dup");
+        dup->tree().setValueOn(vdb::Coord(int(v), 0, 0), v);
+        grids.push_back(dup);
+    }
     auto checkAll = [&](const std::string& path, size_t expected) {
         const VdbFileSummary s = summarizeVdb(path);
         ASSERT_EQ(s.grids.size(), expected) << path;
+        std::vector<double> dupValues;
         for (const VdbGridSummary& g : s.grids) {
             EXPECT_TRUE(g.note.empty()) << path << " " << g.name << ": " << g.note;
             EXPECT_GE(g.activeVoxelCount, 1u) << path << " " << g.name;
+            if (g.name == "dup" && g.maxValue.size() == 1)
+                dupValues.push_back(g.maxValue[0]);
         }
+        std::sort(dupValues.begin(), dupValues.end());
+        EXPECT_EQ(dupValues, (std::vector<double>{1.0, 2.0})) << path;
     };
     const uint32_t modes[] = {vdb::io::COMPRESS_BLOSC | vdb::io::COMPRESS_ACTIVE_MASK,
                               vdb::io::COMPRESS_ZIP | vdb::io::COMPRESS_ACTIVE_MASK,
