@@ -141,7 +141,12 @@ ImageRgb readPng(const std::string& path) {
     img.version = PNG_IMAGE_VERSION;
     if (!png_image_begin_read_from_file(&img, path.c_str()))
         LUCENT_THROW(IoError, "cannot read PNG '", path, "': ", img.message);
-    checkDecodedImage(path, img.width, img.height);
+    try {
+        checkDecodedImage(path, img.width, img.height);
+    } catch (...) {
+        png_image_free(&img);  // begin_read holds libpng's structures until finish_read
+        throw;
+    }
     img.format = PNG_FORMAT_RGB;
     std::vector<uint8_t> buf(PNG_IMAGE_SIZE(img));
     if (!png_image_finish_read(&img, nullptr, buf.data(), 0, nullptr))

@@ -176,7 +176,8 @@ void getArray(const std::string& in, size_t& pos, std::vector<T>& v) {
     if (n > (in.size() - pos) / sizeof(T))
         LUCENT_THROW(IoError, "VTK reader result is truncated");
     v.resize(size_t(n));
-    std::memcpy(v.data(), in.data() + pos, size_t(n) * sizeof(T));
+    if (n > 0)  // an empty vector's data() may be null, which memcpy must not get
+        std::memcpy(v.data(), in.data() + pos, size_t(n) * sizeof(T));
     pos += size_t(n) * sizeof(T);
 }
 
