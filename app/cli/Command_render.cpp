@@ -260,6 +260,8 @@ int runRender(const std::vector<std::string>& argv) {
         LUCENT_THROW(ValueError, "--tonemap: '", curve, "' is not one of clamp, reinhard, aces");
 
     Scene scene = loadScene(args.positional().front());
+    for (const std::string& w : scene.warnings)
+        std::fprintf(stderr, "lucent-cli render: warning: %s\n", w.c_str());
     scene.camera.width = args.intOr("width", scene.camera.width, 1, 16384);
     scene.camera.height = args.intOr("height", scene.camera.height, 1, 16384);
     const RenderRequest req{scene, args.has("subsurface-only"), args};

@@ -699,15 +699,46 @@ TEST_F(RendererFixture, RejectsBadInput) {
     EXPECT_THROW(fresh.render(), ValueError);  // before create()
 }
 
-TEST_F(RendererFixture, ProfilerReportsPasses) {
+/// A sphere of radius 10 mm lit from above-front, seen by a `size`² default camera (set).
+Camera litSphere(SceneRenderer& r, int size) {
     r.addMesh(uvSphere(10.f, Point3f(0.f), 32, 16));
     Light light;
     light.position = {0.f, 30.f, 30.f};
     light.intensity = Rgb(100.f);
     r.setLights({light});
     Camera cam;
-    cam.width = cam.height = 64;
+    cam.width = cam.height = size;
     r.setCamera(cam);
+    return cam;
+}
+
+TEST_F(RendererFixture, FrameLargerThanTheDeviceAllowsGivesAnActionableError) {
+    // Regression (issue 18 §4): a 16384² render (the documented maximum) failed with
+    // "incomplete framebuffer" on llvmpipe, which caps a texture at 1 GiB (a 16384² RGBA32F
+    // target is 4 GiB). The error must say why and what to do, and the renderer must stay
+    // usable. (A GPU with about 26 GB free renders the frame; its readback is read in strips,
+    // since 4 GiB in one read overflows the GLsizei byte count.)
+    if (test::sharedContext()->renderer().find("llvmpipe") == std::string::npos)
+        GTEST_SKIP() << "not llvmpipe: a 16384² frame may fit, and would take ~26 GB";
+    Camera cam = litSphere(r, 16384);
+    try {
+        r.render();
+        ADD_FAILURE() << "llvmpipe rendered a frame with 4 GiB textures";
+    } catch (const GpuError& e) {
+        const std::string msg = e.what();
+        EXPECT_EQ(msg.find("incomplete framebuffer"), std::string::npos) << msg;
+        for (const char* part : {"16384x16384", "GiB", "8192x8192", "--width"})
+            EXPECT_NE(msg.find(part), std::string::npos) << part << ": " << msg;
+    }
+    test::drainDebugLog();  // the refused allocations were reported as GL errors
+    cam.width = cam.height = 32;
+    r.setCamera(cam);
+    r.render();
+    EXPECT_EQ(r.readRadiance().width(), 32);
+}
+
+TEST_F(RendererFixture, ProfilerReportsPasses) {
+    litSphere(r, 64);
     for (int i = 0; i < 4; ++i)
         r.render();
     glFinish();

@@ -310,5 +310,49 @@ TEST(SceneFile, ProjectReferencesMeshFilesRelatively) {
     EXPECT_EQ(r.objects[0].material->insideMask(), s.objects[0].material->insideMask());
 }
 
+std::string robustInput(const std::string& name) {
+    return std::string(LUCENT_TEST_DATA_DIR) + "/robust/" + name;
+}
+
+TEST(SceneFile, DevicesAndOversizedFilesAreNotRead) {
+    // Regression (issue 18 §3): a scene path of /dev/zero was read without end (7.7 GB).
+    try {
+        loadScene("/dev/zero");
+        ADD_FAILURE() << "no error";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+    }
+    const std::string big = outDir() + "/big_scene.json";
+    {
+        std::ofstream f(big);
+        f << std::string(17 << 20, ' ') << "{}";  // 17 MiB: over the 16 MiB scene limit
+    }
+    EXPECT_THROW(loadScene(big), IoError);
+}
+
+TEST(SceneFile, VdbMaterialOfAnotherMeshIsAnError) {
+    // Regression (issue 18 §4): a VDB material used with a mesh it was not painted in loaded
+    // silently, and light entering the mesh met no material (0 W injected). The sidecar was
+    // painted in the sphere at scale 1; the scene scales the sphere by 0.3.
+    try {
+        loadScene(robustInput("scene_foreign_material.json"));
+        ADD_FAILURE() << "no error";
+    } catch (const ValueError& e) {
+        EXPECT_NE(std::string(e.what()).find("does not fit the mesh"), std::string::npos)
+            << e.what();
+    }
+    const Scene own = loadScene(robustInput("scene_own_material.json"));
+    EXPECT_TRUE(own.warnings.empty());
+    EXPECT_EQ(insideCount(*own.objects[0].material), 1088u);  // as exported (README.md)
+}
+
+TEST(SceneFile, MeshWarningsReachTheScene) {
+    // Regression (issue 18 §4): open meshes gave no warning on the CLI; the scene now carries
+    // what loadMesh reported.
+    const Scene s = loadScene(robustInput("scene_open_mesh.json"));
+    ASSERT_FALSE(s.warnings.empty());
+    EXPECT_NE(s.warnings.front().find("open"), std::string::npos) << s.warnings.front();
+}
+
 }  // namespace
 }  // namespace lucent
