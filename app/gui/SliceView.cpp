@@ -5,42 +5,17 @@
 #include "SliceView.h"
 
 #include "Document.h"
+#include "ImageView.h"
 
 #include <QComboBox>
 #include <QHBoxLayout>
 #include <QLabel>
-#include <QPainter>
 #include <QSlider>
 #include <QVBoxLayout>
 
 #include <array>
 
 namespace lucent::app {
-
-namespace {
-/// Shows an image scaled to fit, aspect kept, nearest-neighbour (voxels stay square).
-class ImageWidget : public QWidget {
-public:
-    void setImage(const QImage& img) {
-        m_image = img;
-        update();
-    }
-
-protected:
-    void paintEvent(QPaintEvent*) override {
-        QPainter p(this);
-        p.fillRect(rect(), QColor(40, 40, 44));
-        if (m_image.isNull())
-            return;
-        const QSize s = m_image.size().scaled(size(), Qt::KeepAspectRatio);
-        p.drawImage(QRect(QPoint((width() - s.width()) / 2, (height() - s.height()) / 2), s),
-                    m_image);
-    }
-
-private:
-    QImage m_image;
-};
-}  // namespace
 
 QRgb viridis(float t) {
     // Nine samples of matplotlib's viridis, linearly interpolated.
@@ -120,8 +95,8 @@ SliceView::SliceView(Document* doc, QWidget* parent) : QWidget(parent), m_doc(do
     layout->addLayout(row);
     m_index = new QSlider(Qt::Horizontal);
     layout->addWidget(m_index);
-    m_picture = new ImageWidget;
-    m_picture->setMinimumSize(160, 160);
+    m_picture = new ImageView(Qt::FastTransformation);  // voxels stay square
+    m_picture->setMinimumSize(96, 96);
     layout->addWidget(m_picture, 1);
     m_legend = new QLabel;
     m_legend->setFixedHeight(14);
@@ -161,13 +136,13 @@ void SliceView::setSlice(int axis, int component, int index) {
 void SliceView::refresh() {
     const MaterialVolume* v = m_doc->material();
     if (!v) {
-        static_cast<ImageWidget*>(m_picture)->setImage(QImage());
+        m_picture->setImage(QImage());
         return;
     }
     const SliceImage s =
         renderSlice(*v, m_axis->currentIndex(), m_channel->currentIndex(), m_index->value());
     m_image = s.image;
-    static_cast<ImageWidget*>(m_picture)->setImage(m_image);
+    m_picture->setImage(m_image);
     const bool isG = m_channel->currentIndex() >= 6;
     m_range->setText(tr("slice %1 of %2   %3 … %4 %5")
                          .arg(m_index->value())

@@ -16,6 +16,7 @@ class QSlider;
 namespace lucent::app {
 
 class Document;
+class ImageView;
 
 /// The slice image (one pixel per voxel, first in-plane axis to the right, second up) and the
 /// value range its colour map spans.
@@ -44,7 +45,7 @@ private:
     QComboBox* m_axis;
     QComboBox* m_channel;
     QSlider* m_index;
-    QWidget* m_picture;
+    ImageView* m_picture;
     QLabel* m_legend;
     QLabel* m_range;
     QImage m_image;
