@@ -68,8 +68,22 @@ SliceImage renderSlice(const MaterialVolume& volume, int axis, int component, in
         lo = hi = 0.f;
     out.minValue = lo;
     out.maxValue = hi;
+    // The colour map spans at least 1 % of the values' magnitude (and 10⁻³ absolute): a slice
+    // that is uniform up to rounding (0.9999 … 1 mm⁻¹) shows as one colour, not as the whole
+    // map stretched over float noise.
+    const float minSpan = std::max(1e-2f * std::max(std::abs(lo), std::abs(hi)), 1e-3f);
+    float mapLo = lo, mapHi = hi;
+    if (hi - lo < minSpan) {
+        const float mid = 0.5f * (lo + hi);
+        mapLo = mid - 0.5f * minSpan;
+        mapHi = mid + 0.5f * minSpan;
+        out.nearlyUniform = true;
+    }
+    out.mapMin = mapLo;
+    out.mapMax = mapHi;
     out.image = QImage(res, res, QImage::Format_RGB32);
-    const float span = hi > lo ? hi - lo : 1.f;
+    lo = mapLo;
+    const float span = mapHi - mapLo;
     for (int v = 0; v < res; ++v) {
         auto* row = reinterpret_cast<QRgb*>(out.image.scanLine(res - 1 - v));  // +v up
         for (int u = 0; u < res; ++u) {
@@ -144,12 +158,13 @@ void SliceView::refresh() {
     m_image = s.image;
     m_picture->setImage(m_image);
     const bool isG = m_channel->currentIndex() >= 6;
-    m_range->setText(tr("slice %1 of %2   %3 … %4 %5")
+    m_range->setText(tr("slice %1 of %2   %3 … %4 %5%6")
                          .arg(m_index->value())
                          .arg(v->resolution())
                          .arg(double(s.minValue), 0, 'g', 4)
                          .arg(double(s.maxValue), 0, 'g', 4)
-                         .arg(isG ? QString() : QStringLiteral("mm⁻¹")));
+                         .arg(isG ? QString() : QStringLiteral("mm⁻¹"))
+                         .arg(s.nearlyUniform ? tr(" (uniform within 1 %)") : QString()));
 }
 
 }  // namespace lucent::app

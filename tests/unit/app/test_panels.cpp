@@ -8,6 +8,7 @@
 #include "Document.h"
 #include "MainWindow.h"
 #include "Panels.h"
+#include "SliceView.h"
 #include "Viewport.h"
 
 #include <lucent/core/Error.h>
@@ -693,6 +694,34 @@ TEST(BrushPanelTest, RadiusOnScreenFollowsTheCamera) {
         [&] { return std::abs(px->value() - radiusMm * 2.0 * perMm) <= 1.0; }, 10000))
         << px->value();
     EXPECT_DOUBLE_EQ(mm->value(), radiusMm) << "zooming keeps the radius in mm";
+}
+
+// Issue 17, item 9: the slice's colour map stretched a 0.9999 … 1 range over the whole map,
+// showing rounding noise as strong structure. Below 1 % of the magnitude it is one colour;
+// real paint still spans the map.
+TEST(SliceViewTest, NearlyUniformSliceIsOneColour) {
+    const GridSpec spec = GridSpec::around(Bounds3f{Point3f(0.f), Point3f(16.f)}, 16);
+    MaterialVolume v(spec, {Rgb(1.f), Rgb(0.5f), Rgb(0.f)});
+    v.setInsideMask(std::vector<uint8_t>(spec.voxelCount(), 1));
+    v.set({3, 4, 8}, {Rgb(0.9999f), Rgb(0.5f), Rgb(0.f)});
+    SliceImage s = renderSlice(v, 2, /*component=*/0, 8);
+    EXPECT_FLOAT_EQ(s.minValue, 0.9999f);
+    EXPECT_FLOAT_EQ(s.maxValue, 1.f);
+    EXPECT_TRUE(s.nearlyUniform);
+    EXPECT_GE(s.mapMax - s.mapMin, 0.01f * 0.999f);
+    // A z slice: voxel x to the right, y up (row 0 at the top).
+    const auto pixel = [&](int x, int y) { return QColor(s.image.pixel(x, 15 - y)); };
+    const QColor painted = pixel(3, 4), other = pixel(5, 5);
+    const int diff = std::abs(painted.red() - other.red()) +
+                     std::abs(painted.green() - other.green()) +
+                     std::abs(painted.blue() - other.blue());
+    EXPECT_LE(diff, 6) << "rounding noise shown as colour";  // ~1 % of the map: ≤ 2 levels each
+    // A real difference keeps the full map: the ends are viridis' ends.
+    v.set({3, 4, 8}, {Rgb(2.f), Rgb(0.5f), Rgb(0.f)});
+    s = renderSlice(v, 2, 0, 8);
+    EXPECT_FALSE(s.nearlyUniform);
+    EXPECT_EQ(pixel(3, 4), QColor(viridis(1.f)));
+    EXPECT_EQ(pixel(5, 5), QColor(viridis(0.f)));
 }
 
 // Issue 17, item 9: Help had only About. It now opens the user guide and a list of every
