@@ -51,6 +51,7 @@
 #include <QRadioButton>
 #include <QScreen>
 #include <QScrollArea>
+#include <QScrollBar>
 #include <QSettings>
 #include <QStandardPaths>
 #include <QStatusBar>
@@ -345,9 +346,22 @@ void MainWindow::createDocks() {
     render->raise();
     // Default proportions (a saved layout, restored later, overrides them); applied once the
     // window is laid out, since QMainWindow ignores resizeDocks before that.
-    QTimer::singleShot(0, this, [this, tools, channels, render] {
+    QTimer::singleShot(0, this, [this, tools, presets, channels, render, lights, stats] {
         if (!m_layoutRestored) {
-            resizeDocks({tools, channels}, {300, 340}, Qt::Horizontal);
+            // Wide enough for each panel's fields (no horizontal scrolling), within 30 % of
+            // the window per side so the viewport keeps the middle.
+            const auto fit = [this](std::initializer_list<QDockWidget*> docks, int least) {
+                int w = least;
+                for (QDockWidget* d : docks)
+                    if (auto* area = qobject_cast<QScrollArea*>(d->widget()))
+                        w = std::max(w, area->widget()->minimumSizeHint().width() +
+                                            area->verticalScrollBar()->sizeHint().width() +
+                                            2 * area->frameWidth() + 4);
+                return std::min(w, width() * 3 / 10);
+            };
+            resizeDocks({tools, channels},
+                        {fit({tools, presets}, 300), fit({channels, render, lights, stats}, 340)},
+                        Qt::Horizontal);
             // The slice gets 40 % of the height, the tab group the rest.
             resizeDocks({channels, render}, {height() * 2 / 5, height() * 3 / 5}, Qt::Vertical);
         }
