@@ -366,6 +366,19 @@ void checkMaterialFitsMesh(const TriangleMesh& mesh, const MaterialVolume& mater
                            " of their inside voxels (mesh edited after painting?)");
 }
 
+/// A scene without a camera looks at its object from +z: the bounding sphere fills the 40°
+/// vertical field of view with a 5 % margin.
+Camera framingCamera(const Bounds3f& bounds) {
+    Camera c;
+    const float radius = std::max(0.5f * glm::length(bounds.extent()), 1e-3f);
+    const float distance = 1.05f * radius / std::sin(glm::radians(0.5f * c.fovYDeg));
+    c.target = bounds.center();
+    c.position = c.target + Vector3f(0.f, 0.f, distance);
+    c.nearPlane = std::max(1e-3f, 0.01f * distance);
+    c.farPlane = std::max(c.farPlane, 100.f * distance);
+    return c;
+}
+
 /// Builds mesh, grid, mask and material of one object.
 SceneObject buildObject(const MeshSource& meshSrc, const MaterialSource& matSrc, float eta,
                         bool resolutionGiven, std::vector<std::string>& warnings) {
@@ -440,9 +453,12 @@ Scene parseScene(const std::string& jsonText, const std::string& baseDir) {
         env.allowOnly({"radiance"});
         scene.environment = nonNegativeRgb(env.at("radiance"), env.sub("radiance"));
     }
-    scene.camera = parseCamera(o.at("camera"));
+    if (o.has("camera"))
+        scene.camera = parseCamera(o.at("camera"));
     scene.objects.push_back(
         buildObject(meshSrc, matSrc, scene.eta, resolutionGiven, scene.warnings));
+    if (!o.has("camera"))
+        scene.camera = framingCamera(scene.objects.front().mesh.bounds());
     return scene;
 }
 
