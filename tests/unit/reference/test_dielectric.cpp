@@ -166,6 +166,17 @@ TEST(DielectricSlab, AgreesWithForwardTracerAcrossEtaAlbedoAndAnisotropy) {
         expectSlabAgrees(c, scaled(400000), scaled(16000), seed += 2);
 }
 
+// The grazing-view cases that came out 1.5–4 % low (2–3 standard errors) in the scale-16 run of
+// the two tests above, with eight times the samples and fresh seeds: a bias would stay, noise
+// would shrink. Benchmark-only (minutes at scale 1): run with --gtest_also_run_disabled_tests.
+TEST(DielectricSlab, DISABLED_GrazingViewsAtHighStatistics) {
+    uint64_t seed = 900;
+    for (const SlabCase& c :
+         {SlabCase{60.0, 70.0, 1.3, 0.9, 0.0}, SlabCase{60.0, 70.0, 1.3, 0.5, 0.0},
+          SlabCase{0.0, 70.0, 1.8, 0.95, 0.8}})
+        expectSlabAgrees(c, scaled(8 * 400000), scaled(8 * 16000), seed += 2);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Sphere (radius 10 mm) under a directional or a point light, seen by an orthographic "camera":
 // rings of equal area in the plane through the centre perpendicular to the view direction v.
