@@ -12,6 +12,7 @@
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
 #include <lucent/mesh/Voxelize.h>
+#include <lucent/scene/SceneFile.h>
 #if LUCENT_APP_HAS_IO
 #include <lucent/io/MitsubaIO.h>
 #include <lucent/io/VdbIO.h>
@@ -1151,10 +1152,7 @@ void MainWindow::autosaveNow() {
 }
 
 void MainWindow::removeAutosave() {
-    // The project JSON and its sidecar VDB (saveProject: `<stem>.vdb`).
-    QFile::remove(autosavePath());
-    QFile::remove(QFileInfo(autosavePath()).path() + QStringLiteral("/") +
-                  QFileInfo(autosavePath()).completeBaseName() + QStringLiteral(".vdb"));
+    removeProject(autosavePath().toStdString());  // the JSON and its sidecar VDB
 }
 
 void MainWindow::offerRecovery() {

@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 
@@ -573,14 +574,70 @@ std::string sceneToJson(const Scene& scene) {
     return root.dump(2) + "\n";
 }
 
+namespace {
+
+/// The two sidecar names of the project at `jsonPath`: "<stem>.vdb" and "<stem>.1.vdb".
+std::array<fs::path, 2> sidecarNames(const fs::path& jsonPath) {
+    fs::path a = jsonPath, b = jsonPath;
+    a.replace_extension(".vdb");
+    b.replace_extension(".1.vdb");
+    return {a, b};
+}
+
+/// The sidecar file name the project file at `jsonPath` refers to now; empty if there is no
+/// such file or it cannot be read as a project (then nothing of it is kept or removed).
+std::string referencedSidecar(const fs::path& jsonPath) {
+    std::error_code ec;
+    if (!fs::is_regular_file(jsonPath, ec))
+        return {};
+    try {
+        const json j = json::parse(
+            readInputFile(jsonPath.string(), "project file", MAX_SCENE_FILE_BYTES), nullptr,
+            /*allow_exceptions=*/false);
+        if (j.is_object() && j.contains("material") && j["material"].is_object() &&
+            j["material"].contains("vdb") && j["material"]["vdb"].is_string())
+            return j["material"]["vdb"].get<std::string>();
+    } catch (const std::exception&) {
+    }
+    return {};
+}
+
+}  // namespace
+
+std::vector<std::string> projectFiles(const std::string& path) {
+    std::vector<std::string> files;
+    std::error_code ec;
+    if (fs::is_regular_file(path, ec))
+        files.push_back(path);
+    for (const fs::path& sidecar : sidecarNames(fs::path(path)))
+        if (fs::is_regular_file(sidecar, ec))
+            files.push_back(sidecar.string());
+    return files;
+}
+
+void removeProject(const std::string& path) {
+    for (const std::string& file : projectFiles(path)) {
+        std::error_code ec;
+        fs::remove(file, ec);
+    }
+}
+
 void saveProject(const Scene& scene, const std::string& path) {
     LUCENT_CHECK(scene.objects.size() == 1 && scene.objects.front().material,
                  "saveProject: the scene needs exactly one object with a material");
     const fs::path jsonPath(path);
-    fs::path vdbPath = jsonPath;
-    vdbPath.replace_extension(".vdb");
-    LUCENT_CHECK(vdbPath != jsonPath, "saveProject: '", path, "' must not end in .vdb");
+    LUCENT_CHECK(jsonPath.extension() != ".vdb", "saveProject: '", path, "' must not end in .vdb");
     const fs::path dir = jsonPath.parent_path().empty() ? fs::path(".") : jsonPath.parent_path();
+
+    // One commit point: the rename of the JSON. The material goes to the sidecar name the
+    // project on disk does not use now ("<stem>.vdb" and "<stem>.1.vdb" alternate), so until
+    // the JSON is replaced the old JSON still refers to its own, untouched sidecar. A save
+    // killed at any moment leaves the old project or the new one, never the new material
+    // under the old JSON or the reverse. Renaming the two files one after the other would
+    // leave that window open.
+    const std::array<fs::path, 2> names = sidecarNames(jsonPath);
+    const std::string current = referencedSidecar(jsonPath);
+    const fs::path vdbPath = current == names[0].filename().string() ? names[1] : names[0];
 
     // The JSON refers to the sidecar by its file name, and to a mesh file relative to the
     // project folder when possible, so a project folder can be moved as a whole.
@@ -604,18 +661,23 @@ void saveProject(const Scene& scene, const std::string& path) {
     copy.objects.push_back(std::move(o));
     const std::string text = sceneToJson(copy);
 
-    // Both files are first written and synced as temporaries next to their destinations; only
-    // when both are complete are they renamed over the old ones, so a failed save leaves the
-    // previous project intact.
 #if LUCENT_SCENE_HAS_VDB
+    // Both files are written and synced as temporaries first, so a failed write (full disk,
+    // read-only folder) replaces nothing.
     AtomicFile vdbFile(vdbPath.string());
     AtomicFile jsonFile(path);
     vdbFile.sink().write(encodeVdb(*scene.objects.front().material));
     jsonFile.sink().write(text);
     vdbFile.finish();
     jsonFile.finish();
-    vdbFile.commit();
-    jsonFile.commit();
+    vdbFile.commit();   // a name the project on disk does not refer to
+    jsonFile.commit();  // the commit point
+    // The other sidecar is now unreferenced (the previous save's, or a killed save's), and so
+    // are the temporaries killed saves left for it.
+    const fs::path other = vdbPath == names[0] ? names[1] : names[0];
+    std::error_code ec;
+    fs::remove(other, ec);
+    removeStaleTemporaries(other.string());
 #else
     LUCENT_THROW(IoError, "saveProject: this build has no OpenVDB support");
 #endif

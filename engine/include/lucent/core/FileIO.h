@@ -15,9 +15,9 @@
 ///     writeStreamAtomically("grid.vol", [&](FileSink& out) {    // streamed
 ///         out.write(header.data(), header.size());
 ///     });
-///     AtomicFile a("a.vdb"), b("a.json");                        // two files, both or none
+///     AtomicFile a("a.vdb"), b("a.json");                        // two files, written first
 ///     a.sink().write(...); b.sink().write(...);
-///     a.commit(); b.commit();
+///     a.commit(); b.commit();   // two renames: see saveProject for one commit point
 
 #include <cstdint>
 #include <functional>
@@ -122,7 +122,8 @@ private:
 /// removeStaleTemporaries) and creates a fresh temporary beside it; commit() fsyncs, renames
 /// it over `path` and fsyncs the folder; the destructor removes the temporary unless it was
 /// committed. Several AtomicFile objects committed one after the other replace several files
-/// only once all of them were written.
+/// only once all of them were written, but by several renames: a kill between two leaves a
+/// mix (saveProject avoids this by writing to names the old files do not use).
 class AtomicFile {
 public:
     /// @throw IoError if the temporary cannot be created (missing or read-only folder).

@@ -8,6 +8,7 @@
 #include <lucent/scene/Scene.h>
 
 #include <string>
+#include <vector>
 
 namespace lucent {
 
@@ -24,10 +25,18 @@ Scene loadScene(const std::string& path);
 /// Serialises a scene to JSON text (the material is referenced, not embedded).
 std::string sceneToJson(const Scene& scene);
 
-/// Saves a project: `path` (scene JSON) and the painted material as a sidecar VDB next to it
-/// (`<stem>.vdb`), both written atomically. @throw IoError on failure; nothing is overwritten
-/// by a failed save.
+/// Saves a project: `path` (scene JSON) and the painted material as a sidecar VDB next to it,
+/// `<stem>.vdb` or `<stem>.1.vdb`: each save writes the one the project on disk does not refer
+/// to, then replaces the JSON (the single commit point), then removes the other. So a save
+/// that fails or is killed at any moment leaves the previous project or the new one intact,
+/// never a mix. @throw IoError on failure (nothing of the previous project is changed).
 void saveProject(const Scene& scene, const std::string& path);
+
+/// The files of the project at `path` that exist: the JSON and its sidecars.
+std::vector<std::string> projectFiles(const std::string& path);
+
+/// Removes the project at `path` (its JSON and sidecars), ignoring files that do not exist.
+void removeProject(const std::string& path);
 
 /// The built-in default scene: a back-lit shape with thin and thick parts, pre-painted with a
 /// heterogeneous material. Needs no files.
