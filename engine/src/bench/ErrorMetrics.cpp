@@ -5,6 +5,7 @@
 #include <lucent/bench/ErrorMetrics.h>
 #include <lucent/core/Error.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -40,10 +41,16 @@ ErrorReport compareImages(const ImageRgb& test, const ImageRgb& reference,
         double a[4], b[4], v[4];
     };
     std::vector<Px> px;
+    std::vector<size_t> blockOf;  // block index of each compared pixel
     px.reserve(n);
+    blockOf.reserve(n);
+    const size_t width = size_t(reference.width());
+    const size_t blocksPerRow = (width + ErrorReport::BLOCK_SIZE - 1) / ErrorReport::BLOCK_SIZE;
     for (size_t i = 0; i < n; ++i) {
         if (mask && !(*mask)[i])
             continue;
+        blockOf.push_back((i / width) / ErrorReport::BLOCK_SIZE * blocksPerRow +
+                          (i % width) / ErrorReport::BLOCK_SIZE);
         const Rgb& a = test.pixels()[i];
         const Rgb& b = reference.pixels()[i];
         LUCENT_CHECK(isFinite(a) && isFinite(b), "compare: non-finite value at pixel (",
@@ -96,6 +103,64 @@ ErrorReport compareImages(const ImageRgb& test, const ImageRgb& reference,
             e.relRmse = e.rmse / e.meanReference;
             e.relRmseFloor = e.rmseFloor / e.meanReference;
         }
+        double sumA = 0;
+        for (const Px& p : px)
+            sumA += p.a[c];
+        e.meanRatio = sumB > 0 ? sumA / sumB : 0.0;
+    }
+
+    // Blocks: sums of a, b, v and the pixel count per block, then the block metrics.
+    const size_t blockRows =
+        (size_t(reference.height()) + ErrorReport::BLOCK_SIZE - 1) / ErrorReport::BLOCK_SIZE;
+    struct Block {
+        double a[4] = {}, b[4] = {}, v[4] = {};
+        size_t n = 0;
+    };
+    std::vector<Block> blocks(blocksPerRow * blockRows);
+    for (size_t k = 0; k < px.size(); ++k) {
+        Block& blk = blocks[blockOf[k]];
+        for (int c = 0; c < 4; ++c) {
+            blk.a[c] += px[k].a[c];
+            blk.b[c] += px[k].b[c];
+            blk.v[c] += px[k].v[c];
+        }
+        ++blk.n;
+    }
+    std::erase_if(blocks, [](const Block& blk) { return blk.n == 0; });
+    r.blockCount = blocks.size();
+    std::vector<double> relErrors(blocks.size());
+    for (int c = 0; c < 4; ++c) {
+        const double meanB = r.channels[size_t(c)].meanReference;
+        double l1 = 0, l1Floor = 0, se = 0, sv = 0;
+        for (size_t k = 0; k < blocks.size(); ++k) {
+            const Block& blk = blocks[k];
+            const double nk = double(blk.n);
+            const double diff = (blk.a[c] - blk.b[c]) / nk;  // ā_k − b̄_k
+            const double varMean = blk.v[c] / (nk * nk);     // σ_k²
+            l1 += nk * std::abs(diff);
+            l1Floor += nk * SQRT_2_OVER_PI * std::sqrt(varMean);
+            se += nk * diff * diff;
+            sv += nk * varMean;
+            relErrors[k] = std::abs(diff) / std::max(blk.b[c] / nk, 0.1 * meanB);
+        }
+        BlockError& e = r.blocks[size_t(c)];
+        if (meanB > 0) {
+            const double sumB = meanB * count;  // Σ n_k b̄_k = Σ b
+            e.relL1 = l1 / sumB;
+            e.relL1Floor = l1Floor / sumB;
+            e.relRmse = std::sqrt(se / count) / meanB;
+            e.relRmseFloor = std::sqrt(sv / count) / meanB;
+            // Nearest-rank 95th percentile.
+            const size_t rank = size_t(std::ceil(0.95 * double(relErrors.size()))) - 1;
+            std::nth_element(relErrors.begin(), relErrors.begin() + std::ptrdiff_t(rank),
+                             relErrors.end());
+            e.p95 = relErrors[rank];
+        }
+        const auto net = [](double error, double floor) {
+            return std::sqrt(std::max(0.0, error * error - floor * floor));
+        };
+        e.relL1Net = net(e.relL1, e.relL1Floor);
+        e.relRmseNet = net(e.relRmse, e.relRmseFloor);
     }
     return r;
 }
@@ -130,6 +195,27 @@ std::string formatReport(const ErrorReport& report) {
             std::snprintf(line, sizeof line, "%-9s %12.5g %12.5g %12s %12.5g %12s %12.5g %12s\n",
                           names[c], e.meanReference, e.rmse, "n/a", e.relRmse, "n/a",
                           e.meanRelError, "n/a");
+        s += line;
+    }
+    std::snprintf(line, sizeof line, "%d×%d blocks: %zu\n", ErrorReport::BLOCK_SIZE,
+                  ErrorReport::BLOCK_SIZE, report.blockCount);
+    s += line;
+    std::snprintf(line, sizeof line, "%-9s %12s %12s %12s %12s %12s %12s %12s %12s\n", "channel",
+                  "rel L1", "(floor)", "net", "rel RMSE", "(floor)", "net", "p95 error",
+                  "mean ratio");
+    s += line;
+    for (int c = 0; c < 4; ++c) {
+        const BlockError& e = report.blocks[size_t(c)];
+        const double ratio = report.channels[size_t(c)].meanRatio;
+        if (report.hasNoiseFloor)
+            std::snprintf(line, sizeof line,
+                          "%-9s %12.5g %12.5g %12.5g %12.5g %12.5g %12.5g %12.5g %12.5g\n",
+                          names[c], e.relL1, e.relL1Floor, e.relL1Net, e.relRmse, e.relRmseFloor,
+                          e.relRmseNet, e.p95, ratio);
+        else
+            std::snprintf(line, sizeof line,
+                          "%-9s %12.5g %12s %12s %12.5g %12s %12s %12.5g %12.5g\n", names[c],
+                          e.relL1, "n/a", "n/a", e.relRmse, "n/a", "n/a", e.p95, ratio);
         s += line;
     }
     return s;
