@@ -1,0 +1,74 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief The Auto planner: from predicted cost and error of each candidate (a method at one
+/// setting) for a scene, pick the one with the least predicted error that fits the frame
+/// budget, or the cheapest one under an error target; explain the choice in one line; keep it
+/// while the scene's class does not change (no flicker while painting).
+///
+///     std::vector<Candidate> candidates = ...;          // models: lucent/planner/Models.h
+///     Plan p = plan(candidates, analyzeScene(scene), {.frameMs = 50, .directMs = 8});
+///     std::cout << p.reason;   // "dipole 16 spp: thick, front-lit, η 1.3, homogeneous; ..."
+///     ... the scene changes ...
+///     p = plan(candidates, analyzeScene(scene), budget, &p);  // hysteresis against p
+///
+/// Cost is predicted as a ratio to the Direct render of the same frame (so a model measured
+/// on one machine carries to another: Budget::directMs is this machine's Direct frame).
+
+#include <lucent/planner/SceneFeatures.h>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace lucent::planner {
+
+/// One method at one setting, with its predictions for a scene.
+struct Candidate {
+    std::string method;   ///< registry name, e.g. "dipole"
+    std::string setting;  ///< e.g. "16 spp", "grid 32"
+    /// Predicted frame time as a ratio to the Direct render of the same frame (≥ 1 normally).
+    std::function<double(const SceneFeatures&)> costRatio;
+    /// Predicted error (4×4-block relative L1 against the exact reference, ≥ 0).
+    std::function<double(const SceneFeatures&)> error;
+    /// Why the candidate cannot serve this scene at all ("" when it can), e.g. a method
+    /// without a light type the scene uses.
+    std::function<std::string(const SceneFeatures&)> unusable;
+};
+
+struct Budget {
+    double frameMs = 50.0;  ///< time per frame the preview may take
+    double directMs = 5.0;  ///< this machine's Direct render of the frame (> 0)
+    /// If > 0: the cheapest candidate whose predicted error is at most this, instead of the
+    /// most accurate within frameMs.
+    double maxError = 0.0;
+    /// A new best replaces the previous choice of the same scene class only if its predicted
+    /// error is lower by more than this fraction (or the previous no longer fits).
+    double hysteresis = 0.15;
+};
+
+/// One scored candidate.
+struct Option {
+    size_t index = 0;  ///< into the candidate list
+    double ms = 0.0;   ///< predicted frame time
+    double error = 0.0;
+    bool fits = false;  ///< within the budget (time, or error under maxError)
+};
+
+struct Plan {
+    bool valid = false;  ///< false only when no candidate is usable
+    size_t choice = 0;   ///< index into the candidate list
+    Option chosen;
+    SceneClass sceneClass;
+    /// One line: the choice, the scene class, prediction vs budget, and what was passed over.
+    std::string reason;
+    std::vector<Option> options;  ///< every usable candidate, best first
+    bool kept = false;            ///< the previous choice was kept (hysteresis)
+};
+
+/// Plans a frame. `previous` (may be null): the last plan, for hysteresis.
+/// @throw ValueError if budget.directMs ≤ 0 or frameMs ≤ 0, or a prediction is not finite.
+Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& features,
+          const Budget& budget, const Plan* previous = nullptr);
+
+}  // namespace lucent::planner

@@ -1,0 +1,121 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief The Auto planner (Planner.h has the contract).
+
+#include <lucent/core/Error.h>
+#include <lucent/planner/Planner.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace lucent::planner {
+
+namespace {
+
+std::string nameOf(const Candidate& c) {
+    return c.setting.empty() ? c.method : c.method + " " + c.setting;
+}
+
+std::string format(const char* fmt, double a, double b = 0.0) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, fmt, a, b);
+    return buf;
+}
+
+}  // namespace
+
+Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& features,
+          const Budget& budget, const Plan* previous) {
+    LUCENT_CHECK(budget.directMs > 0 && std::isfinite(budget.directMs),
+                 "plan: the Direct frame time must be > 0 ms, got ", budget.directMs);
+    LUCENT_CHECK(budget.frameMs > 0 && std::isfinite(budget.frameMs),
+                 "plan: the frame budget must be > 0 ms, got ", budget.frameMs);
+    LUCENT_CHECK(budget.hysteresis >= 0 && budget.hysteresis < 1,
+                 "plan: hysteresis must be in [0, 1), got ", budget.hysteresis);
+    const bool errorTarget = budget.maxError > 0;
+
+    Plan p;
+    p.sceneClass = classify(features);
+    std::string passedOver;
+    for (size_t i = 0; i < candidates.size(); ++i) {
+        const Candidate& c = candidates[i];
+        if (c.unusable) {
+            const std::string why = c.unusable(features);
+            if (!why.empty()) {
+                passedOver += "; " + nameOf(c) + " skipped: " + why;
+                continue;
+            }
+        }
+        Option o;
+        o.index = i;
+        o.ms = c.costRatio(features) * budget.directMs;
+        o.error = c.error(features);
+        LUCENT_CHECK(std::isfinite(o.ms) && o.ms >= 0 && std::isfinite(o.error) && o.error >= 0,
+                     "plan: the models of ", nameOf(c), " predict ", o.ms, " ms and error ",
+                     o.error);
+        o.fits = errorTarget ? o.error <= budget.maxError : o.ms <= budget.frameMs;
+        p.options.push_back(o);
+    }
+    if (p.options.empty()) {
+        p.reason = "no method can render this scene" + passedOver;
+        return p;
+    }
+    // Fitting options first; among them the least error (time budget) or the least time
+    // (error target), the other quantity breaking ties. If none fits: the cheapest (time
+    // budget) or the most accurate (error target), the closest to fitting.
+    std::stable_sort(p.options.begin(), p.options.end(), [&](const Option& a, const Option& b) {
+        if (a.fits != b.fits)
+            return a.fits;
+        const bool byError = errorTarget ? !a.fits : a.fits;
+        if (byError)
+            return a.error != b.error ? a.error < b.error : a.ms < b.ms;
+        return a.ms != b.ms ? a.ms < b.ms : a.error < b.error;
+    });
+    p.valid = true;
+    p.chosen = p.options.front();
+
+    // Hysteresis: within one scene class, keep the previous choice while it still fits and
+    // the new best is not clearly better.
+    if (previous && previous->valid && previous->sceneClass == p.sceneClass) {
+        const auto prev = std::find_if(p.options.begin(), p.options.end(), [&](const Option& o) {
+            return o.index == previous->choice;
+        });
+        if (prev != p.options.end() && prev->fits && prev->index != p.chosen.index) {
+            const double keepBelow = 1.0 - budget.hysteresis;
+            const bool clearlyBetter = errorTarget ? p.chosen.ms < prev->ms * keepBelow
+                                                   : p.chosen.error < prev->error * keepBelow;
+            if (!clearlyBetter) {
+                p.chosen = *prev;
+                p.kept = true;
+            }
+        }
+    }
+    p.choice = p.chosen.index;
+
+    const Candidate& chosen = candidates[p.choice];
+    p.reason = nameOf(chosen) + ": " + describe(p.sceneClass, features.eta) + "; predicted " +
+               format("%.0f ms", p.chosen.ms) + format(" (budget %.0f ms)", budget.frameMs) +
+               format(", block error %.2f", p.chosen.error);
+    if (errorTarget)
+        p.reason += format(" (target %.2f)", budget.maxError);
+    if (!p.chosen.fits)
+        p.reason += errorTarget ? ", no method reaches the target" : ", over budget";
+    if (p.kept)
+        p.reason +=
+            ", kept: the best differs by less than " + format("%.0f %%", 100.0 * budget.hysteresis);
+    // The runner-up, and why it lost.
+    for (const Option& o : p.options) {
+        if (o.index == p.choice)
+            continue;
+        const std::string why =
+            !o.fits ? (errorTarget ? format("error %.2f", o.error) : format("%.0f ms", o.ms))
+                    : (errorTarget ? format("%.0f ms", o.ms) : format("error %.2f", o.error));
+        p.reason += "; next: " + nameOf(candidates[o.index]) + " (" + why + ")";
+        break;
+    }
+    p.reason += passedOver;
+    return p;
+}
+
+}  // namespace lucent::planner
