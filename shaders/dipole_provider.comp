@@ -8,6 +8,10 @@
 // pixel projection use top-first rows like the CPU gather, so frame 0 equals gatherImageSpace()).
 // Each frame adds one estimate B_f (a new shift table) to a running sum; the output is the mean:
 //   L = F_t(η, ω_o) · (Σ_f B_f / N) / π   (Eq. 3), W/(mm²·sr).
+// Frames after the first add a per-pixel hashed offset to the cell's shifts (u_pixelShifts):
+// with the table alone, pixels k apart use the same samples in every frame, so their errors stay
+// equal however many frames are averaged and the converged image keeps a k×k-periodic error
+// pattern (the "waffle" of issue 17, docs/methods/dipole.md §3c).
 // Convergence statistics: atomic max of |B̄_N − B̄_{N−1}| and of B̄_N over pixels and channels.
 // Light views (seed 004 §7.1): the camera and the gathered light views split the pixel's sample
 // budget (viewSamples) and are combined by the balance heuristic with sample counts in
@@ -21,6 +25,7 @@
 #ifndef MULTI_VIEW
 #define MULTI_VIEW 1
 #endif
+#include "common/hash.glsl"
 #include "dipole_profiles.glsl"
 #include "dipole_fresnel.glsl"
 #include "dipole_lightview.glsl"
@@ -63,6 +68,11 @@ uniform int u_nUni;
 uniform int u_jacobian;
 uniform float u_maxJacobian;
 uniform int u_interleave;
+// 1: this frame's shifts are the cell's plus a hash of (pixel, u_frameSeed), mod 1 — an
+// independent uniform Cranley–Patterson rotation per pixel; 0 (frame 0, previews): the table
+// alone, exactly the CPU gather's samples.
+uniform int u_pixelShifts;
+uniform uint u_frameSeed;
 uniform float u_maxRadius;  // mm; > 0: only r ≤ u_maxRadius (ProviderSettings::maxRadius)
 uniform int u_lightViews;     // light views gathered (entries of b_views), 0: camera only
 uniform int u_lightViewSize;  // texels per side of each light view
@@ -194,6 +204,14 @@ vec3 gatherExitance(ivec2 xy, vec3 xo, vec3 no) {
     int k = u_interleave;
     int cell = ((u_size.y - 1 - xy.y) % k) * k + (xy.x % k);
     vec4 s0 = b_shift[2 * cell], s1 = b_shift[2 * cell + 1];
+    if (u_pixelShifts != 0) {
+        // A uniform offset added mod 1 (the fract() below) makes each pixel's shift uniform and
+        // independent of every other pixel's, so each frame stays an unbiased RQMC estimate.
+        uint h = pcgHash(uint(xy.x) + pcgHash(uint(xy.y) + pcgHash(u_frameSeed)));
+        s0 += vec4(toUnit(pcgHash(h)), toUnit(pcgHash(h + 1u)), toUnit(pcgHash(h + 2u)),
+                   toUnit(pcgHash(h + 3u)));
+        s1.x += toUnit(pcgHash(h + 4u));
+    }
     bool jac = u_jacobian != 0;
 
     vec3 B = vec3(0.0);

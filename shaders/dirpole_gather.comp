@@ -24,6 +24,7 @@
 // 1/m up to the rounding of k/m).
 // Convergence statistics: atomic max of |C̄_after − C̄_before| and of C̄_after over the sampled
 // texels, and their count.
+#include "common/hash.glsl"
 #include "common/lighting.glsl"
 #include "dipole_fresnel.glsl"
 #include "dipole_profiles.glsl"
@@ -69,14 +70,6 @@ float energyScale(float alphaP) {
 }
 
 const float PI = 3.14159265358979;
-
-// PCG hash (Jarzynski & Olano 2020, "Hash Functions for GPU Rendering", pcg).
-uint pcgHash(uint v) {
-    uint state = v * 747796405u + 2891336453u;
-    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
-    return (word >> 22u) ^ word;
-}
-float toUnit(uint v) { return float(v >> 8) * (1.0 / 16777216.0); }
 
 // R2 sequence (Roberts 2018; lucent::r2Sequence) in 32-bit fixed point, so sample indices in
 // the millions keep full precision: frac(offset + n·(1/φ₂, 1/φ₂²)).

@@ -127,7 +127,8 @@ struct GpuLightView {
 static_assert(sizeof(GpuLightView) == 96, "std430 LightView stride");
 
 /// Seed of frame f's Cranley–Patterson table: frame 0 uses the settings' seed (so it equals the
-/// CPU gather), later frames a Weyl step of it (independent tables through Pcg32's seeding).
+/// CPU gather), later frames a Weyl step of it (independent tables through Pcg32's seeding). It
+/// also seeds the per-pixel shifts of frames ≥ 1 (dipole_provider.comp, u_pixelShifts).
 uint32_t frameSeed(uint32_t seed, int frame) {
     return seed + 0x9E3779B9u * uint32_t(frame);
 }
@@ -613,6 +614,11 @@ struct DipoleSubsurfaceProvider::Impl {
         glUniform1i(p.uniformLocation("u_jacobian"), gs.jacobian ? 1 : 0);
         glUniform1f(p.uniformLocation("u_maxJacobian"), gs.maxJacobian);
         glUniform1i(p.uniformLocation("u_interleave"), gs.interleave);
+        // Frames after the first rotate each pixel's samples by its own hash: with the k×k table
+        // alone, pixels k apart share every frame's samples and the mean keeps a k-periodic
+        // error (the waffle of issue 17). Frame 0 (and a preview) keeps the CPU gather's table.
+        glUniform1i(p.uniformLocation("u_pixelShifts"), gather && !preview && stats.frames > 0);
+        glUniform1ui(p.uniformLocation("u_frameSeed"), frameSeed(settings.seed, stats.frames));
         glUniform1f(p.uniformLocation("u_maxRadius"), gs.maxRadius);
         glUniform1i(p.uniformLocation("u_gather"), gather ? 1 : 0);
         glUniform1i(p.uniformLocation("u_framesBefore"), stats.frames);
