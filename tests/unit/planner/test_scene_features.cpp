@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdio>
 
 using namespace lucent;
 using namespace lucent::planner;
@@ -107,4 +108,24 @@ TEST(SceneFeatures, ThickAbsorbingObjectHasNoThinParts) {
 
 TEST(SceneFeatures, RejectsAScenelessCall) {
     EXPECT_THROW(analyzeScene(Scene{}), ValueError);
+}
+
+TEST(SceneFeatures, StandardScenesAreClassified) {
+    // The three scenes of docs/evaluation.md, as the planner sees them.
+    struct Expect {
+        const char* file;
+        bool backLit;
+    };
+    for (const Expect& e : {Expect{"minimal.json", false}, Expect{"backlit_thin_thick.json", true},
+                            Expect{"skin_sphere.json", false}}) {
+        const SceneFeatures f =
+            analyzeScene(loadScene(std::string(LUCENT_SCENES_DIR) + "/" + e.file));
+        const SceneClass c = classify(f);
+        std::printf(
+            "  %-24s size %.0f mfp, albedo %.3f, l_d %.2f mm, thin %.2f, back-lit %.2f, "
+            "curvature %.2f, σt′ variation %.2f: %s\n",
+            e.file, f.opticalSize, f.albedo, f.diffusionLengthMm, f.thinFraction, f.backLitFraction,
+            f.curvature, f.sigmaTVariation, describe(c, f.eta).c_str());
+        EXPECT_EQ(c.backLit, e.backLit) << e.file;
+    }
 }
