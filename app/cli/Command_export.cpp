@@ -122,7 +122,6 @@ int runExport(const std::vector<std::string>& argv) {
 
 }  // namespace
 
-extern const Command exportCommand;
 const Command exportCommand{
     "export", "write a material preset filling a mesh as OpenVDB and/or Mitsuba 3 .vol",
     "usage: lucent-cli export --preset NAME [--mesh FILE [--scale S] | --procedural SHAPE]\n"
