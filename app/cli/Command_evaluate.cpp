@@ -216,12 +216,7 @@ Reference referenceFor(const Scene& scene, const std::string& scenePath, const s
     opt.subsurfaceOnly = subsurfaceOnly;
     const ReferenceImage img = renderReference(scene, opt);
     writeReferenceExr(img, exr.string());
-    writeFileAtomically(keyFile.string(), [&](const std::string& tmp) {
-        std::ofstream out(tmp);
-        out << key.str();
-        if (!out)
-            LUCENT_THROW(IoError, tmp, ": write failed");
-    });
+    writeFileAtomically(keyFile.string(), key.str());
     ref.mean = img.mean;
     ref.variance = img.variance;
     ref.coverage = img.coverage;
@@ -371,12 +366,7 @@ std::string toJson(const std::vector<Result>& results, const RunInfo& info) {
 }
 
 void writeText(const fs::path& path, const std::string& text) {
-    writeFileAtomically(path.string(), [&](const std::string& tmp) {
-        std::ofstream out(tmp, std::ios::binary);
-        out << text;
-        if (!out)
-            LUCENT_THROW(IoError, tmp, ": write failed");
-    });
+    writeFileAtomically(path.string(), text);
 }
 
 // ---------------------------------------------------------------------------------------------

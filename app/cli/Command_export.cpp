@@ -37,10 +37,16 @@ TriangleMesh proceduralMesh(const std::string& name) {
                  "' (valid: sphere, box, torus, thin-thick)");
 }
 
+/// True when `output` names the existing file `input` (same file, whatever the path spelling).
+bool isSameFile(const std::string& input, const std::string& output) {
+    std::error_code ec;
+    return std::filesystem::exists(output, ec) && std::filesystem::equivalent(input, output, ec);
+}
+
 int runExport(const std::vector<std::string>& argv) {
-    const Args args(argv,
-                    {"preset", "mesh", "procedural", "res", "scale", "o", "output", "mitsuba"},
-                    {"no-renderer-grids", "mitsuba-grey-sigma-t", "mitsuba-isotropic"});
+    const Args args(
+        argv, {"preset", "mesh", "procedural", "res", "scale", "o", "output", "mitsuba"},
+        {"no-renderer-grids", "mitsuba-grey-sigma-t", "mitsuba-isotropic", "allow-open"});
     if (!args.positional().empty())
         LUCENT_THROW(ValueError, "unexpected argument '", args.positional().front(),
                      "' (see --help)");
@@ -66,13 +72,37 @@ int runExport(const std::vector<std::string>& argv) {
     const float scale = args.floatOr("scale", 1.f, 1e-6f, 1e6f);
     if (args.has("scale") && !args.has("mesh"))
         LUCENT_THROW(ValueError, "--scale applies to --mesh only");
+    if (args.has("allow-open") && !args.has("mesh"))
+        LUCENT_THROW(ValueError, "--allow-open applies to --mesh only");
+    if (const auto file = args.value("mesh")) {
+        // An output path naming the input mesh would replace it with the export.
+        std::vector<std::string> outputs;
+        if (out)
+            outputs.push_back(*out);
+        if (mitsuba)
+            for (const char* suffix : {"_sigma_t.vol", "_albedo.vol", "_medium.xml"})
+                outputs.push_back(*mitsuba + suffix);
+        for (const std::string& o : outputs)
+            if (isSameFile(*file, o))
+                LUCENT_THROW(ValueError, "output '", o, "' is the input mesh '", *file,
+                             "': it would be overwritten (choose another output name)");
+    }
 
     Timer timer;
     TriangleMesh mesh;
     std::string source;
     if (const auto file = args.value("mesh")) {
-        mesh = loadMesh(*file, scale);
+        MeshReport report;
+        mesh = loadMesh(*file, scale, &report);
         source = *file;
+        // An open mesh has no inside to fill: most often a truncated or incomplete file, whose
+        // few enclosed voxels would otherwise be exported without complaint.
+        if (report.boundaryEdges > 0 && !args.has("allow-open"))
+            LUCENT_THROW(IoError, "mesh '", *file, "' is open (", report.boundaryEdges,
+                         " boundary edges): truncated or incomplete? Export fills the inside of "
+                         "a closed mesh; --allow-open voxelises it anyway");
+        for (const std::string& w : report.warnings)
+            std::fprintf(stderr, "lucent-cli export: warning: %s\n", w.c_str());
     } else {
         source = args.valueOr("procedural", "sphere");
         mesh = proceduralMesh(source);
@@ -124,7 +154,8 @@ int runExport(const std::vector<std::string>& argv) {
 
 const Command exportCommand{
     "export", "write a material preset filling a mesh as OpenVDB and/or Mitsuba 3 .vol",
-    "usage: lucent-cli export --preset NAME [--mesh FILE [--scale S] | --procedural SHAPE]\n"
+    "usage: lucent-cli export --preset NAME [--mesh FILE [--scale S] [--allow-open] |\n"
+    "                                       --procedural SHAPE]\n"
     "                         [--res N] [--no-renderer-grids] [-o OUT.vdb]\n"
     "                         [--mitsuba PREFIX [--mitsuba-grey-sigma-t] [--mitsuba-isotropic]]\n"
     "\n"
@@ -135,6 +166,8 @@ const Command exportCommand{
     "\n"
     "  --preset NAME         material preset (e.g. marble, skin1, jade; case-insensitive)\n"
     "  --mesh FILE           mesh file (.obj .ply .off .stl .vtp .vtk), must be closed\n"
+    "                        (repairs and problems are printed as warnings on stderr)\n"
+    "  --allow-open          voxelise an open mesh (boundary edges) anyway, by ray voting\n"
     "  --scale S             mesh file units to mm (default 1; 1000 for metres)\n"
     "  --procedural SHAPE    sphere (radius 10 mm, the default), box (20 mm), torus (10/4 mm),\n"
     "                        thin-thick (20 mm)\n"

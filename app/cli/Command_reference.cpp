@@ -10,8 +10,10 @@
 #include <lucent/scene/SceneFile.h>
 
 #include <atomic>
+#include <cctype>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 
 namespace lucent::cli {
 
@@ -66,6 +68,15 @@ int runReference(const std::vector<std::string>& argv) {
     const std::string out = args.value("o").value_or(args.valueOr("output", ""));
     if (out.empty())
         LUCENT_THROW(ValueError, "missing -o OUT.exr");
+    // The output is always OpenEXR (linear radiance with variance layers): another extension
+    // would name EXR bytes as something else.
+    std::string ext = std::filesystem::path(out).extension().string();
+    for (char& c : ext)
+        c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".exr")
+        LUCENT_THROW(ValueError, "-o/--output '", out,
+                     "': the reference writes OpenEXR (linear radiance with variance layers), "
+                     "use a .exr name (render --method reference writes PNG)");
     if (!args.has("spp") && !args.has("rse"))
         LUCENT_THROW(ValueError, "give --spp N or --rse R (or both: R with N as the cap)");
 
@@ -103,6 +114,8 @@ int runReference(const std::vector<std::string>& argv) {
     opt.cancel = &g_interrupted;
 
     Scene scene = loadScene(args.positional().front());
+    for (const std::string& w : scene.warnings)
+        std::fprintf(stderr, "lucent-cli reference: warning: %s\n", w.c_str());
     scene.camera.width = args.intOr("width", scene.camera.width, 1, 16384);
     scene.camera.height = args.intOr("height", scene.camera.height, 1, 16384);
     auto previous = std::signal(SIGINT, onInterrupt);

@@ -83,6 +83,8 @@ int runRender(const std::vector<std::string>& argv) {
             params.set(d.name, *v);
 
     Scene scene = loadScene(args.positional().front());
+    for (const std::string& w : scene.warnings)
+        std::fprintf(stderr, "lucent-cli render: warning: %s\n", w.c_str());
     scene.camera.width = args.intOr("width", scene.camera.width, 1, 16384);
     scene.camera.height = args.intOr("height", scene.camera.height, 1, 16384);
     const methods::RenderResult r = methods::renderImage(scene, method.name, params, options);

@@ -6,14 +6,14 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <png.h>
 
-#include <cstdio>
+#include <csetjmp>
 #include <filesystem>
 #include <memory>
-#include <random>
 
 namespace lucent {
 
@@ -60,32 +60,37 @@ Rgb toneMapToDisplay(const Rgb& linear, const ToneMap& tm) {
     return out;
 }
 
-void writeFileAtomically(const std::string& path,
-                         const std::function<void(const std::string&)>& writer) {
-    namespace fs = std::filesystem;
-    const fs::path target(path);
-    std::random_device rd;
-    const fs::path tmp =
-        target.parent_path() / (target.filename().string() + ".tmp-" + std::to_string(rd()));
-    try {
-        writer(tmp.string());
-        std::error_code ec;
-        fs::rename(tmp, target, ec);
-        if (ec)
-            LUCENT_THROW(IoError, "cannot write '", path, "': ", ec.message());
-    } catch (...) {
-        std::error_code ignored;
-        fs::remove(tmp, ignored);
-        throw;
-    }
+namespace {
+
+/// libpng output callbacks on a checked sink: a failed write is kept by the sink and reported
+/// through png_error (libpng's own error path; no C++ exception crosses the C library).
+void pngWrite(png_structp png, png_bytep data, png_size_t n) {
+    auto* sink = static_cast<FileSink*>(png_get_io_ptr(png));
+    if (!sink->tryWrite(data, n))
+        png_error(png, "write failed");
 }
+void pngFlush(png_structp) {}
+
+/// OpenEXR output on a checked sink. OpenEXR writes its line-offset table from the
+/// OutputFile destructor and swallows exceptions there, so failures are also kept by the
+/// sink and checked after the OutputFile is gone.
+class ExrSinkStream : public Imf::OStream {
+public:
+    ExrSinkStream(FileSink& sink, const std::string& path)
+        : Imf::OStream(path.c_str()), m_sink(sink) {}
+    void write(const char c[], int n) override { m_sink.write(c, size_t(n)); }
+    uint64_t tellp() override { return m_sink.position(); }
+    void seekp(uint64_t pos) override { m_sink.seek(pos); }
+
+private:
+    FileSink& m_sink;
+};
+
+}  // namespace
 
 void writePng(const ImageRgb& image, const std::string& path, const ToneMap& tm) {
     LUCENT_CHECK(!image.isEmpty(), "cannot write an empty image to '", path, "'");
-    writeFileAtomically(path, [&](const std::string& tmp) {
-        std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(tmp.c_str(), "wb"), &std::fclose);
-        if (!file)
-            LUCENT_THROW(IoError, "cannot open '", path, "' for writing");
+    writeStreamAtomically(path, [&](FileSink& sink) {
         png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
         png_infop info = png ? png_create_info_struct(png) : nullptr;
         if (!png || !info) {
@@ -95,9 +100,11 @@ void writePng(const ImageRgb& image, const std::string& path, const ToneMap& tm)
         std::vector<uint8_t> row(size_t(image.width()) * 3);
         if (setjmp(png_jmpbuf(png))) {
             png_destroy_write_struct(&png, &info);
+            if (sink.failed())
+                throw IoError(sink.error());
             LUCENT_THROW(IoError, "libpng failed while writing '", path, "'");
         }
-        png_init_io(png, file.get());
+        png_set_write_fn(png, &sink, pngWrite, pngFlush);
         png_set_IHDR(png, info, image.width(), image.height(), 8, PNG_COLOR_TYPE_RGB,
                      PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
         png_write_info(png, info);
@@ -114,11 +121,32 @@ void writePng(const ImageRgb& image, const std::string& path, const ToneMap& tm)
     });
 }
 
+namespace {
+/// Rejects images whose decoded float RGB copy (12 bytes a pixel) would exceed the import
+/// limits, before it is allocated.
+void checkDecodedImage(const std::string& path, int64_t width, int64_t height) {
+    if (width < 1 || height < 1 || width > 32768 || height > 32768)
+        LUCENT_THROW(IoError, "image '", path, "' has an invalid size ", width, "x", height,
+                     " (1..32768 per side)");
+    const uint64_t bytes = uint64_t(width) * uint64_t(height) * sizeof(Rgb);
+    if (bytes > importLimits().maxDecodedBytes)
+        LUCENT_THROW(IoError, "image '", path, "' (", width, "x", height, ") decodes to ", bytes,
+                     " bytes, more than the import limit of ", importLimits().maxDecodedBytes);
+}
+}  // namespace
+
 ImageRgb readPng(const std::string& path) {
+    checkInputFile(path, "PNG file");
     png_image img{};
     img.version = PNG_IMAGE_VERSION;
     if (!png_image_begin_read_from_file(&img, path.c_str()))
         LUCENT_THROW(IoError, "cannot read PNG '", path, "': ", img.message);
+    try {
+        checkDecodedImage(path, img.width, img.height);
+    } catch (...) {
+        png_image_free(&img);  // begin_read holds libpng's structures until finish_read
+        throw;
+    }
     img.format = PNG_FORMAT_RGB;
     std::vector<uint8_t> buf(PNG_IMAGE_SIZE(img));
     if (!png_image_finish_read(&img, nullptr, buf.data(), 0, nullptr))
@@ -137,7 +165,7 @@ void writeExrLayers(const ImageRgb& image,
     for (const auto& [name, layer] : layers)
         LUCENT_CHECK(layer && layer->width() == image.width() && layer->height() == image.height(),
                      "EXR layer '", name, "' does not match the image size");
-    writeFileAtomically(path, [&](const std::string& tmp) {
+    writeStreamAtomically(path, [&](FileSink& sink) {
         try {
             Imf::Header header(image.width(), image.height());
             Imf::FrameBuffer fb;
@@ -156,12 +184,19 @@ void writeExrLayers(const ImageRgb& image,
             addLayer("", image);
             for (const auto& [name, layer] : layers)
                 addLayer(name, *layer);
-            Imf::OutputFile file(tmp.c_str(), header);
-            file.setFrameBuffer(fb);
-            file.writePixels(image.height());
+            ExrSinkStream stream(sink, path);
+            {
+                Imf::OutputFile file(stream, header);
+                file.setFrameBuffer(fb);
+                file.writePixels(image.height());
+            }  // the destructor writes the line-offset table (errors kept by the sink)
+        } catch (const Error&) {
+            throw;
         } catch (const std::exception& e) {
             LUCENT_THROW(IoError, "cannot write EXR '", path, "': ", e.what());
         }
+        if (sink.failed())
+            throw IoError(sink.error());
     });
 }
 
@@ -170,11 +205,11 @@ void writeExr(const ImageRgb& image, const std::string& path) {
 }
 
 ImageRgb readExr(const std::string& path, const std::string& layer) {
-    if (!std::filesystem::exists(path))
-        LUCENT_THROW(IoError, "EXR file '", path, "' does not exist");
+    checkInputFile(path, "EXR file");
     try {
         Imf::InputFile file(path.c_str());
         const Imath::Box2i dw = file.header().dataWindow();
+        checkDecodedImage(path, int64_t(dw.max.x) - dw.min.x + 1, int64_t(dw.max.y) - dw.min.y + 1);
         const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
         ImageRgb out(w, h);
         Imf::FrameBuffer fb;

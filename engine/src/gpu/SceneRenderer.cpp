@@ -12,6 +12,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 
 namespace lucent::gpu {
 
@@ -216,6 +218,9 @@ struct SceneRenderer::Impl {
         if (width == camera.width && height == camera.height && gFbo.isValid())
             return;
         destroyTargets();
+        checkTargetLimits(camera.width, camera.height);
+        while (glGetError() != GL_NO_ERROR)  // judge only the allocations below
+            ;
         width = camera.width;
         height = camera.height;
         gPosition = createTexture2D(GL_RGBA32F, width, height);
@@ -246,13 +251,48 @@ struct SceneRenderer::Impl {
         display = createTexture2D(GL_RGBA32F, width, height);
         displayFbo = GlObject::create(GlObjectKind::Framebuffer);
         glNamedFramebufferTexture(displayFbo.id(), GL_COLOR_ATTACHMENT0, display.id(), 0);
+        bool complete = glGetError() != GL_OUT_OF_MEMORY;
         for (GLuint fbo :
              {gFbo.id(), subsurfaceFbo.id(), radianceFbo.id(), directFbo.id(), displayFbo.id()})
-            if (glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-                LUCENT_THROW(GpuError, "SceneRenderer: incomplete framebuffer at ", width, "x",
-                             height);
+            complete = complete && glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER) ==
+                                       GL_FRAMEBUFFER_COMPLETE;
+        if (!complete) {
+            const int w = width, h = height;
+            destroyTargets();
+            throw GpuError(targetsMessage(w, h, "the device could not allocate them"));
+        }
         haveFrame = false;
         gbufferDirty = directDirty = true;
+    }
+
+    /// Bytes of the per-pixel render targets: six RGBA32F images and a 32-bit depth buffer.
+    static double targetBytes(int w, int h) { return double(w) * double(h) * (6.0 * 16.0 + 4.0); }
+
+    /// Why a w×h frame cannot be rendered on this device, in words a user can act on.
+    static std::string targetsMessage(int w, int h, const std::string& reason) {
+        const auto* name = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+        const std::string renderer = name ? name : "unknown";
+        std::ostringstream os;
+        os << "cannot render " << w << "x" << h << " on '" << renderer << "': " << reason
+           << " (six RGBA32F images and a depth buffer, " << std::fixed << std::setprecision(1)
+           << targetBytes(w, h) / double(1u << 30) << " GiB)";
+        if (renderer.find("llvmpipe") != std::string::npos)
+            os << "; llvmpipe allows 1 GiB per texture, so at most 8192x8192";
+        os << ". Render smaller (--width/--height) or on a GPU with more memory";
+        return os.str();
+    }
+
+    /// The device's size limits, checked before allocating (a texture over them would only
+    /// show up later as an incomplete framebuffer).
+    static void checkTargetLimits(int w, int h) {
+        GLint maxTexture = 0, maxFbWidth = 0, maxFbHeight = 0;
+        glGetIntegerv(GL_MAX_TEXTURE_SIZE, &maxTexture);
+        glGetIntegerv(GL_MAX_FRAMEBUFFER_WIDTH, &maxFbWidth);
+        glGetIntegerv(GL_MAX_FRAMEBUFFER_HEIGHT, &maxFbHeight);
+        const int maxW = std::min(maxTexture, maxFbWidth), maxH = std::min(maxTexture, maxFbHeight);
+        if (maxW > 0 && maxH > 0 && (w > maxW || h > maxH))
+            throw GpuError(targetsMessage(
+                w, h, detail::concat("the device allows at most ", maxW, "x", maxH, " pixels")));
     }
 
     void destroyTargets() {
@@ -606,7 +646,8 @@ void SceneRenderer::renderToFramebuffer(unsigned framebuffer, int width, int hei
 void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int tonemapHeight) {
     Impl& r = *this;
     r.ensureShadowMaps();
-    r.profiler.beginFrame();
+    // A provider or pass that throws cancels the frame: the next frame starts cleanly.
+    GpuProfiler::FrameScope frame(r.profiler);
 
     // Per-frame uniforms and light buffers.
     r.viewFromWorld = cameraViewFromWorld(r.camera);
@@ -705,25 +746,34 @@ void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int
         auto s = r.profiler.scope("tonemap");
         r.tonemapInto(tonemapFbo, tonemapWidth, tonemapHeight);
     }
-    r.profiler.endFrame();
+    frame.end();
     r.haveFrame = true;
 }
 
 namespace {
 ImageRgb readTexture(GLuint tex, int w, int h) {
-    std::vector<float> rgba(size_t(w) * size_t(h) * 4);
+    ImageRgb img(w, h);
+    // Read in strips of at most 64 MiB: one read of a large frame (16384² RGBA32F = 4 GiB) would
+    // overflow the GLsizei byte count and double the host memory.
+    const size_t rowBytes = size_t(w) * 4 * sizeof(float);
+    const int stripRows = int(std::clamp<size_t>((size_t(64) << 20) / rowBytes, 1, size_t(h)));
+    std::vector<float> rgba(size_t(w) * size_t(stripRows) * 4);
     // Default pack state, whatever another pass (or Qt) left: client memory, tight rows.
     glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
     glPixelStorei(GL_PACK_ROW_LENGTH, 0);
     glPixelStorei(GL_PACK_SKIP_ROWS, 0);
     glPixelStorei(GL_PACK_SKIP_PIXELS, 0);
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
-    glGetTextureImage(tex, 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)), rgba.data());
-    ImageRgb img(w, h);
-    for (int y = 0; y < h; ++y) {
-        const float* row = rgba.data() + size_t(h - 1 - y) * size_t(w) * 4;  // GL rows bottom-up
-        for (int x = 0; x < w; ++x)
-            img.at(x, y) = Rgb(row[4 * x], row[4 * x + 1], row[4 * x + 2]);
+    for (int y0 = 0; y0 < h; y0 += stripRows) {
+        const int rows = std::min(stripRows, h - y0);
+        glGetTextureSubImage(tex, 0, 0, y0, 0, w, rows, 1, GL_RGBA, GL_FLOAT,
+                             GLsizei(size_t(rows) * rowBytes), rgba.data());
+        for (int r = 0; r < rows; ++r) {
+            const float* row = rgba.data() + size_t(r) * size_t(w) * 4;
+            const int y = h - 1 - (y0 + r);  // GL rows bottom-up
+            for (int x = 0; x < w; ++x)
+                img.at(x, y) = Rgb(row[4 * x], row[4 * x + 1], row[4 * x + 2]);
+        }
     }
     return img;
 }

@@ -9,7 +9,7 @@
 #include <lucent/io/MitsubaIO.h>
 
 #include <lucent/core/Error.h>
-#include <lucent/core/Image.h>
+#include <lucent/core/FileIO.h>
 #include <lucent/material/Medium.h>
 
 #include <bit>
@@ -17,7 +17,6 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <sstream>
 #include <vector>
@@ -86,26 +85,19 @@ void writeVol(const std::string& path, const GridSpec& spec, int channels,
         putF32(header, box.hi[a]);
     LUCENT_ASSERT(header.size() == MITSUBA_VOL_HEADER_BYTES);
 
-    writeFileAtomically(path, [&](const std::string& tmp) {
-        std::ofstream os(tmp, std::ios::binary | std::ios::trunc);
-        if (!os)
-            LUCENT_THROW(IoError, "cannot open '", path, "' for writing");
-        os.write(header.data(), std::streamsize(header.size()));
+    writeStreamAtomically(path, [&](FileSink& out) {
+        out.write(header.data(), header.size());
         const size_t sliceFloats = size_t(res) * res * channels;
         std::vector<float> slice(sliceFloats);
         std::vector<char> bytes;
         bytes.reserve(sliceFloats * 4);
-        for (int z = 0; z < res && os; ++z) {
+        for (int z = 0; z < res; ++z) {
             fill(z, slice.data());
             bytes.clear();
             for (float f : slice)
                 putF32(bytes, f);
-            os.write(bytes.data(), std::streamsize(bytes.size()));
+            out.write(bytes.data(), bytes.size());
         }
-        os.close();
-        if (!os)
-            LUCENT_THROW(IoError, "cannot write Mitsuba volume '", path,
-                         "' (disk full or not writable?)");
     });
 }
 
@@ -291,15 +283,7 @@ MitsubaExportResult exportMitsubaVol(const MaterialVolume& volume, const std::st
       << "</scene>\n";
     const std::string xml = x.str();
 
-    writeFileAtomically(result.xmlPath, [&](const std::string& tmp) {
-        std::ofstream os(tmp, std::ios::binary | std::ios::trunc);
-        if (!os)
-            LUCENT_THROW(IoError, "cannot open '", result.xmlPath, "' for writing");
-        os.write(xml.data(), std::streamsize(xml.size()));
-        os.close();
-        if (!os)
-            LUCENT_THROW(IoError, "cannot write Mitsuba scene XML '", result.xmlPath, "'");
-    });
+    writeFileAtomically(result.xmlPath, xml);
     return result;
 }
 

@@ -8,10 +8,11 @@
 #include "VdbLayout.h"
 
 #include <lucent/core/Error.h>
-#include <lucent/core/Image.h>
+#include <lucent/core/FileIO.h>
 #include <lucent/core/Parallel.h>
 
 #include <openvdb/io/File.h>
+#include <openvdb/io/GridDescriptor.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Prune.h>
 
@@ -129,8 +130,9 @@ typename GridT::Ptr buildGrid(const MaterialVolume& volume, const char* name, Va
     return grid;
 }
 
-/// Exposes Archive::write on a caller-owned stream (io::File::write opens its own file and
-/// ignores the stream state, so disk-full errors would go unnoticed).
+/// Exposes Archive::write on a caller-owned (in-memory) stream: the bytes are then written
+/// through the checked atomic writer (io::File::write ignores the stream state, so disk-full
+/// errors would go unnoticed).
 class CheckedArchive : public vdb::io::Archive {
 public:
     void writeTo(std::ostream& os, const vdb::GridCPtrVec& grids, const vdb::MetaMap& meta) const {
@@ -174,10 +176,14 @@ Rgb requireFiniteRgb(const vdb::MetaMap& meta, const std::string& path, const ch
     return v;
 }
 
-vdb::Vec3SGrid::Ptr requireVec3Grid(vdb::io::File& file, const std::string& path,
-                                    const char* name) {
-    if (!file.hasGrid(name))
+vdb::Vec3SGrid::Ptr requireVec3Grid(vdb::io::File& file, const io_detail::VdbLayout& layout,
+                                    const std::string& path, const char* name) {
+    const io_detail::VdbGridEntry* entry = layout.findGrid(name);
+    if (!file.hasGrid(name) || !entry)
         LUCENT_THROW(IoError, "VDB file '", path, "': missing grid '", name, "'");
+    if (!entry->checked)  // a type the preflight walk does not know: never read
+        LUCENT_THROW(IoError, "VDB file '", path, "': grid '", name, "' has type '",
+                     entry->typeName, "', expected 'vec3s'");
     vdb::GridBase::Ptr base = file.readGrid(name);
     auto grid = vdb::gridPtrCast<vdb::Vec3SGrid>(base);
     if (!grid)
@@ -186,7 +192,8 @@ vdb::Vec3SGrid::Ptr requireVec3Grid(vdb::io::File& file, const std::string& path
     return grid;
 }
 
-ImportedMaterial importOpen(vdb::io::File& file, const std::string& path) {
+ImportedMaterial importOpen(vdb::io::File& file, const io_detail::VdbLayout& layout,
+                            const std::string& path) {
     const vdb::MetaMap::Ptr metaPtr = file.getMetadata();
     const vdb::MetaMap& meta = *metaPtr;
     if (!meta[META_FORMAT_VERSION])
@@ -204,10 +211,9 @@ ImportedMaterial importOpen(vdb::io::File& file, const std::string& path) {
     md.spec.resolution = res;
     md.spec.origin = requireFiniteRgb(meta, path, META_ORIGIN);
     md.spec.voxelSize = requireMeta<vdb::FloatMetadata>(meta, path, META_VOXEL_SIZE);
-    // Voxel sizes beyond [1e-4, 1e4] mm (0.1 µm .. 10 m) are not a material anyone paints.
-    if (!(md.spec.voxelSize >= 1e-4f && md.spec.voxelSize <= 1e4f))
+    if (!(md.spec.voxelSize >= VDB_MIN_VOXEL_SIZE_MM && md.spec.voxelSize <= VDB_MAX_VOXEL_SIZE_MM))
         LUCENT_THROW(IoError, "VDB file '", path, "': voxel size ", md.spec.voxelSize,
-                     " mm is outside [1e-4, 1e4]");
+                     " mm is outside [", VDB_MIN_VOXEL_SIZE_MM, ", ", VDB_MAX_VOXEL_SIZE_MM, "]");
     md.eta = requireMeta<vdb::FloatMetadata>(meta, path, META_ETA);
     if (!(md.eta >= 1.f && md.eta <= 3.f))
         LUCENT_THROW(IoError, "VDB file '", path, "': eta ", md.eta, " is outside [1, 3]");
@@ -223,9 +229,9 @@ ImportedMaterial importOpen(vdb::io::File& file, const std::string& path) {
     if (meta[META_GENERATOR_VERSION])
         md.generatorVersion = requireMeta<vdb::StringMetadata>(meta, path, META_GENERATOR_VERSION);
 
-    vdb::Vec3SGrid::Ptr grids[3] = {requireVec3Grid(file, path, GRID_SIGMA_T),
-                                    requireVec3Grid(file, path, GRID_SIGMA_S),
-                                    requireVec3Grid(file, path, GRID_G)};
+    vdb::Vec3SGrid::Ptr grids[3] = {requireVec3Grid(file, layout, path, GRID_SIGMA_T),
+                                    requireVec3Grid(file, layout, path, GRID_SIGMA_S),
+                                    requireVec3Grid(file, layout, path, GRID_G)};
     const GridSpec& spec = md.spec;
     const vdb::CoordBBox domain(vdb::Coord(0), vdb::Coord(res - 1));
     for (const auto& grid : grids) {
@@ -320,18 +326,12 @@ void stampChecksum(std::string& bytes, const std::string& path) {
     LUCENT_THROW(IoError, "cannot write VDB file '", path, "': checksum placeholder not found");
 }
 
-/// Checks the file exists, parses its outer structure (VdbLayout.h) and, for a file written
-/// by exportVdb and not rewritten since (same header UUID), verifies the checksum: truncated,
-/// corrupt and garbage files are rejected here, before OpenVDB reads them.
-void preflight(const std::string& path) {
-    std::error_code ec;
-    if (!std::filesystem::exists(path, ec))
-        LUCENT_THROW(IoError, "VDB file '", path, "' does not exist");
-    if (!std::filesystem::is_regular_file(path, ec))
-        LUCENT_THROW(IoError, "VDB file '", path, "' is not a regular file");
-    const uint64_t size = std::filesystem::file_size(path, ec);
-    if (ec)
-        LUCENT_THROW(IoError, "cannot read VDB file '", path, "': ", ec.message());
+/// Checks the file (a regular file within the import limits), walks its whole structure
+/// (VdbLayout.h: every size OpenVDB will trust is checked against the file) and, for a file
+/// written by exportVdb and not rewritten since (same header UUID), verifies the checksum:
+/// truncated, corrupt and garbage files are rejected here, before OpenVDB reads them.
+io_detail::VdbLayout preflight(const std::string& path) {
+    const uint64_t size = checkInputFile(path, "VDB file");
     std::ifstream in(path, std::ios::binary);
     if (!in)
         LUCENT_THROW(IoError, "cannot open VDB file '", path, "' for reading");
@@ -342,7 +342,7 @@ void preflight(const std::string& path) {
             LUCENT_THROW(IoError, "cannot read VDB file '", path, "' at byte ", pos,
                          " (changed while reading?)");
     };
-    const io_detail::VdbLayout layout = io_detail::parseVdbLayout(reader, size, path);
+    io_detail::VdbLayout layout = io_detail::parseVdbLayout(reader, size, path);
     for (const auto& e : layout.meta) {
         if (e.name != io_detail::CHECKSUM_META || e.valueSize != io_detail::CHECKSUM_TEXT_SIZE)
             continue;
@@ -363,18 +363,19 @@ void preflight(const std::string& path) {
                          "' is corrupt or truncated (checksum mismatch)");
         break;
     }
+    return layout;
 }
 
-/// Opens `path` fully loaded (no delayed loading: the file may change or vanish afterwards).
-/// Any OpenVDB/std failure becomes an IoError naming the file.
+/// Opens `path` fully loaded (no delayed loading: the file may change or vanish afterwards)
+/// after preflight. Any OpenVDB/std failure becomes an IoError naming the file.
 template <typename Fn>
 auto withOpenFile(const std::string& path, const char* what, Fn fn) {
-    preflight(path);
+    const io_detail::VdbLayout layout = preflight(path);
     initializeOnce();
     try {
         vdb::io::File file(path);
         file.open(/*delayLoad=*/false);
-        auto result = fn(file);
+        auto result = fn(file, layout);
         file.close();
         return result;
     } catch (const Error&) {
@@ -473,12 +474,18 @@ VdbGridSummary summarizeGrid(const vdb::GridBase& grid) {
 
 // ------------------------------------------------------------------------------- public API
 
-void exportVdb(const MaterialVolume& volume, const std::string& path,
-               const VdbExportOptions& options) {
+std::string encodeVdb(const MaterialVolume& volume, const VdbExportOptions& options) {
     const GridSpec& spec = volume.spec();
     LUCENT_CHECK(spec.resolution > 0 && volume.insideMask().size() == spec.voxelCount(),
-                 "cannot export an empty material volume to '", path, "'");
-    LUCENT_CHECK(!path.empty(), "VDB export needs a file name");
+                 "cannot encode an empty material volume as VDB");
+    // Checked before OpenVDB sees the transform (it rejects tiny voxels with its own text) and
+    // so that every file written can be imported again.
+    LUCENT_CHECK(spec.voxelSize >= VDB_MIN_VOXEL_SIZE_MM &&
+                     spec.voxelSize <= VDB_MAX_VOXEL_SIZE_MM && isFinite(spec.origin),
+                 "cannot export a VDB material with voxels of ", spec.voxelSize,
+                 " mm: VDB import accepts ", VDB_MIN_VOXEL_SIZE_MM, " to ", VDB_MAX_VOXEL_SIZE_MM,
+                 " mm (", spec.resolution, " voxels across ",
+                 spec.voxelSize * float(spec.resolution), " mm; is the mesh scale right?)");
     initializeOnce();
 
     auto sigmaT = buildGrid<vdb::Vec3SGrid>(
@@ -561,43 +568,53 @@ void exportVdb(const MaterialVolume& volume, const std::string& path,
         CheckedArchive().writeTo(buffer, grids, meta);
         bytes = std::move(buffer).str();
     } catch (const std::exception& e) {
-        LUCENT_THROW(IoError, "cannot write VDB file '", path, "': ", vdbErrorText(e));
+        LUCENT_THROW(IoError, "cannot encode the VDB file: ", vdbErrorText(e));
     }
-    stampChecksum(bytes, path);
+    stampChecksum(bytes, "<encoded VDB>");
+    return bytes;
+}
 
-    writeFileAtomically(path, [&](const std::string& tmp) {
-        try {
-            std::ofstream os(tmp, std::ios::binary | std::ios::trunc);
-            if (!os)
-                LUCENT_THROW(IoError, "cannot open '", path, "' for writing");
-            os.exceptions(std::ios::failbit | std::ios::badbit);
-            os.write(bytes.data(), std::streamsize(bytes.size()));
-            os.close();
-        } catch (const Error&) {
-            throw;
-        } catch (const std::exception& e) {
-            LUCENT_THROW(IoError, "cannot write VDB file '", path, "': ", vdbErrorText(e));
-        }
-    });
+void exportVdb(const MaterialVolume& volume, const std::string& path,
+               const VdbExportOptions& options) {
+    LUCENT_CHECK(!path.empty(), "VDB export needs a file name");
+    const GridSpec& spec = volume.spec();
+    LUCENT_CHECK(spec.resolution > 0 && volume.insideMask().size() == spec.voxelCount(),
+                 "cannot export an empty material volume to '", path, "'");
+    writeFileAtomically(path, encodeVdb(volume, options));
 }
 
 ImportedMaterial importVdb(const std::string& path) {
     return withOpenFile(path, "import",
-                        [&](vdb::io::File& file) { return importOpen(file, path); });
+                        [&](vdb::io::File& file, const io_detail::VdbLayout& layout) {
+                            return importOpen(file, layout, path);
+                        });
 }
 
 VdbFileSummary summarizeVdb(const std::string& path) {
-    return withOpenFile(path, "read", [&](vdb::io::File& file) {
+    return withOpenFile(path, "read", [&](vdb::io::File& file, const io_detail::VdbLayout& layout) {
         VdbFileSummary s;
         s.path = path;
         std::error_code ec;
         s.fileBytes = std::filesystem::file_size(path, ec);
         s.formatVersion = file.version();
         s.metadata = metaText(*file.getMetadata());
-        vdb::GridPtrVecPtr grids = file.getGrids();
-        for (const auto& grid : *grids)
-            if (grid)
+        // Grid by grid in file order; a grid the preflight walk could not check (point data,
+        // point index) is listed by name and type and never handed to OpenVDB.
+        for (const io_detail::VdbGridEntry& entry : layout.grids) {
+            if (!entry.checked) {
+                VdbGridSummary g;
+                g.name = entry.uniqueName.substr(0, entry.uniqueName.find('\x1e'));
+                g.valueType = entry.typeName;
+                g.gridClass = "unknown";
+                g.note = "not read: Lucent does not check grids of type " + entry.typeName;
+                s.grids.push_back(std::move(g));
+                continue;
+            }
+            // "name[N]" selects the N-th of several grids of the same name.
+            const std::string name = vdb::io::GridDescriptor::nameAsString(entry.uniqueName);
+            if (vdb::GridBase::Ptr grid = file.readGrid(name))
                 s.grids.push_back(summarizeGrid(*grid));
+        }
         return s;
     });
 }

@@ -32,14 +32,21 @@ std::string formatVdbSummary(const VdbFileSummary& s) {
     for (const VdbGridSummary& g : s.grids) {
         os << "grid '" << g.name << "'\n";
         os << "  type:          " << g.valueType << " (" << g.gridClass << ")\n";
+        if (!g.note.empty()) {
+            os << "  " << g.note << '\n';
+            continue;
+        }
         os << "  active voxels: " << g.activeVoxelCount << " in " << g.leafCount << " leaves\n";
         if (g.activeBox.isEmpty()) {
             os << "  index bbox:    empty\n";
         } else {
-            const Coord dim = g.activeBox.hi - g.activeBox.lo + Coord(1);
+            // In 64 bits: an int32 box can span more than 2^31 voxels per axis.
+            const auto extent = [](int32_t lo, int32_t hi) { return int64_t(hi) - lo + 1; };
             os << "  index bbox:    [" << g.activeBox.lo.x << ' ' << g.activeBox.lo.y << ' '
                << g.activeBox.lo.z << "] .. [" << g.activeBox.hi.x << ' ' << g.activeBox.hi.y << ' '
-               << g.activeBox.hi.z << "] (" << dim.x << 'x' << dim.y << 'x' << dim.z << ")\n";
+               << g.activeBox.hi.z << "] (" << extent(g.activeBox.lo.x, g.activeBox.hi.x) << 'x'
+               << extent(g.activeBox.lo.y, g.activeBox.hi.y) << 'x'
+               << extent(g.activeBox.lo.z, g.activeBox.hi.z) << ")\n";
             os << "  world bbox:    (" << g.worldMin.x << ", " << g.worldMin.y << ", "
                << g.worldMin.z << ") .. (" << g.worldMax.x << ", " << g.worldMax.y << ", "
                << g.worldMax.z << ")\n";

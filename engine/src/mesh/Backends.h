@@ -4,6 +4,8 @@
 /// @brief Private: the library boundaries of the mesh module (OpenMesh in OpenMeshBackend.cpp,
 /// VTK in VtkBackend.cpp) behind plain functions on TriangleMesh.
 
+#include "MeshValidate.h"
+
 #include <lucent/mesh/TriangleMesh.h>
 
 #include <string>
@@ -20,7 +22,9 @@ struct RawMesh {
 
 RawMesh readOpenMesh(const std::string& path);
 void writeOpenMesh(const TriangleMesh& mesh, const std::string& path, bool binary);
-RawMesh readVtk(const std::string& path);
+/// Reads .vtp/.vtk in a child process with resource limits; `claimed` (from the header) must
+/// match what VTK read.
+RawMesh readVtk(const std::string& path, const ClaimedCounts& claimed);
 void writeVtk(const TriangleMesh& mesh, const std::string& path, bool binary);
 
 }  // namespace lucent::detail

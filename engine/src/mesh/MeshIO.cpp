@@ -5,17 +5,14 @@
 #include "Backends.h"
 
 #include <lucent/core/Error.h>
+#include <lucent/core/FileIO.h>
 #include <lucent/mesh/MeshIO.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <set>
-#include <fstream>
-#include <sstream>
 #include <unordered_map>
 
 namespace lucent {
@@ -85,174 +82,7 @@ size_t weldIdentical(TriangleMesh& m) {
     return merged;
 }
 
-/// Checks a PLY header strictly, and rejects files whose header claims more elements than the
-/// file could hold (each element takes at least one byte in every encoding), before a reader
-/// tries to allocate for them.
-void checkHeader(const std::string& path, const std::string& ext, uintmax_t fileSize) {
-    if (ext != ".ply" && ext != ".off" && ext != ".vtk")
-        return;
-    std::ifstream f(path, std::ios::binary);
-    std::string head(8192, '\0');
-    f.read(head.data(), std::streamsize(head.size()));
-    head.resize(size_t(f.gcount()));
-    std::istringstream in(head);
-    std::string line;
-    uintmax_t claimed = 0;
-    bool offCounts = false;
-    size_t lineNo = 0;
-    bool inElement = false, sawEnd = false;
-    auto add = [&](const std::string& token) {
-        try {
-            const double v = std::stod(token);
-            if (v > 0)
-                claimed += v > 1e18 ? uintmax_t(1e18) : uintmax_t(v);
-        } catch (const std::exception&) {
-        }
-    };
-    while (std::getline(in, line)) {
-        std::istringstream words(line);
-        std::string w0, w1, w2;
-        words >> w0 >> w1 >> w2;
-        if (ext == ".ply") {
-            // A strict header check: OpenMesh's PLY reader crashes on some malformed headers
-            // (e.g. a property before any element), found by fuzzing.
-            static const std::set<std::string> TYPES = {
-                "char",  "uchar",  "short", "ushort", "int",   "uint",   "int8",    "uint8",
-                "int16", "uint16", "int32", "uint32", "float", "double", "float32", "float64"};
-            auto bad = [&](const char* why) {
-                LUCENT_THROW(IoError, "mesh file '", path, "': malformed PLY header (", why, "): '",
-                             line, "'");
-            };
-            if (!line.empty() && line.back() == '\r')
-                line.pop_back();
-            if (lineNo++ == 0) {
-                if (line != "ply")
-                    bad("first line must be 'ply'");
-                continue;
-            }
-            if (w0 == "format") {
-                if (w1 != "ascii" && w1 != "binary_little_endian" && w1 != "binary_big_endian")
-                    bad("unknown format");
-            } else if (w0 == "element") {
-                if (w1.empty() || w2.empty() ||
-                    w2.find_first_not_of("0123456789") != std::string::npos)
-                    bad("expected 'element <name> <count>'");
-                add(w2);
-                inElement = true;
-            } else if (w0 == "property") {
-                if (!inElement)
-                    bad("property outside an element");
-                std::string w3, w4;
-                words >> w3 >> w4;
-                const bool list = w1 == "list";
-                if (list ? (!TYPES.count(w2) || !TYPES.count(w3) || w4.empty())
-                         : (!TYPES.count(w1) || w2.empty()))
-                    bad("expected 'property <type> <name>' or 'property list <type> <type> "
-                        "<name>'");
-            } else if (w0 == "end_header") {
-                sawEnd = true;
-                break;
-            } else if (w0 != "comment" && w0 != "obj_info" && !w0.empty()) {
-                bad("unknown keyword");
-            }
-        } else if (ext == ".off") {
-            if (w0.empty() || w0[0] == '#')
-                continue;
-            if (!offCounts && w0.find("OFF") != std::string::npos) {
-                offCounts = true;  // the counts follow on this line or the next one
-                if (!w1.empty()) {
-                    add(w1);
-                    add(w2);
-                    break;
-                }
-                continue;
-            }
-            if (offCounts) {
-                add(w0);
-                add(w1);
-                break;
-            }
-        } else if (w0 == "POINTS" || w0 == "POLYGONS" || w0 == "TRIANGLE_STRIPS") {
-            add(w1);
-        }
-    }
-    if (ext == ".ply" && !sawEnd)
-        LUCENT_THROW(IoError, "mesh file '", path, "': PLY header has no end_header in its first ",
-                     head.size(), " bytes");
-    if (claimed > fileSize)
-        LUCENT_THROW(IoError, "mesh file '", path, "': its header claims ", claimed,
-                     " elements but the file has only ", fileSize, " bytes (truncated or corrupt)");
-}
-
 }  // namespace
-
-/// Walks the body of an ASCII PLY file token by token against its header (called after
-/// checkHeader accepted the header). OpenMesh's ASCII PLY reader loops forever on some
-/// truncated or corrupted bodies (a failed stream read is never detected; found by the fuzz
-/// test), so every token it will read must be present and be a plain decimal number.
-void checkAsciiPlyBody(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    struct Element {
-        std::string name;
-        uintmax_t count = 0;
-        std::vector<bool> isList;  // per property
-    };
-    std::vector<Element> elements;
-    std::string line;
-    bool ascii = false;
-    while (std::getline(f, line)) {
-        if (!line.empty() && line.back() == '\r')
-            line.pop_back();
-        std::istringstream words(line);
-        std::string w0, w1, w2;
-        words >> w0 >> w1 >> w2;
-        if (w0 == "format") {
-            ascii = w1 == "ascii";
-        } else if (w0 == "element") {
-            elements.push_back({w1, uintmax_t(std::stoull(w2)), {}});
-        } else if (w0 == "property" && !elements.empty()) {
-            elements.back().isList.push_back(w1 == "list");
-        } else if (w0 == "end_header") {
-            break;
-        }
-    }
-    if (!ascii)
-        return;
-    auto isPlainNumber = [](const std::string& t) {
-        if (t.empty() || t.find_first_not_of("0123456789+-.eE") != std::string::npos)
-            return false;
-        char* end = nullptr;
-        std::strtod(t.c_str(), &end);
-        return end == t.c_str() + t.size();
-    };
-    std::string token;
-    for (const Element& e : elements) {
-        for (uintmax_t i = 0; i < e.count; ++i) {
-            for (const bool list : e.isList) {
-                uintmax_t n = 1;
-                if (list) {
-                    if (!(f >> token) || !isPlainNumber(token))
-                        LUCENT_THROW(IoError, "mesh file '", path,
-                                     "': ASCII PLY body is truncated or "
-                                     "malformed in element '",
-                                     e.name, "' ", i);
-                    const double k = std::strtod(token.c_str(), nullptr);
-                    if (!(k >= 0 && k <= 1e6) || k != std::floor(k))
-                        LUCENT_THROW(IoError, "mesh file '", path, "': ASCII PLY list length '",
-                                     token, "' in element '", e.name, "' ", i, " is invalid");
-                    n = uintmax_t(k);
-                }
-                for (uintmax_t k = 0; k < n; ++k)
-                    if (!(f >> token) || !isPlainNumber(token))
-                        LUCENT_THROW(IoError, "mesh file '", path,
-                                     "': ASCII PLY body is truncated or "
-                                     "malformed in element '",
-                                     e.name, "' ", i,
-                                     (f ? std::string(" (token '") + token + "')" : std::string()));
-            }
-        }
-    }
-}
 
 MeshReport validateMesh(TriangleMesh& mesh, const std::string& name) {
     MeshReport r;
@@ -374,21 +204,19 @@ MeshReport validateMesh(TriangleMesh& mesh, const std::string& name) {
 
 TriangleMesh loadMesh(const std::string& path, float scale, MeshReport* report) {
     LUCENT_CHECK(std::isfinite(scale) && scale > 0.f, "loadMesh: scale must be > 0, got ", scale);
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec))
-        LUCENT_THROW(IoError, "mesh file '", path, "' does not exist or is not a file");
-    if (fs::file_size(path, ec) == 0)
+    // A regular file within the import limits (a device such as /dev/zero would never end).
+    const uint64_t size = checkInputFile(path, "mesh file");
+    if (size == 0)
         LUCENT_THROW(IoError, "mesh file '", path, "' is empty");
     const std::string ext = lowerExtension(path);
     if (!isOpenMeshFormat(ext) && !isVtkFormat(ext))
         LUCENT_THROW(IoError, "mesh file '", path, "': unsupported extension '", ext,
                      "' (expected .obj, .ply, .off, .stl, .vtp or .vtk)");
-    checkHeader(path, ext, fs::file_size(path, ec));
-    if (ext == ".ply")
-        checkAsciiPlyBody(path);
+    // The upstream readers trust the file: its structure is checked first (MeshValidate.h).
+    const detail::ClaimedCounts claimed = detail::validateMeshFile(path, ext, size);
     detail::RawMesh raw;
     try {
-        raw = isOpenMeshFormat(ext) ? detail::readOpenMesh(path) : detail::readVtk(path);
+        raw = isOpenMeshFormat(ext) ? detail::readOpenMesh(path) : detail::readVtk(path, claimed);
     } catch (const Error&) {
         throw;
     } catch (const std::bad_alloc&) {

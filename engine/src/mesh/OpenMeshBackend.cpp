@@ -6,6 +6,7 @@
 #include "Backends.h"
 
 #include <lucent/core/Error.h>
+#include <lucent/core/FileIO.h>
 #include <lucent/mesh/MeshEdit.h>
 
 // OpenMesh requires its IO header before the mesh kernel.
@@ -75,6 +76,38 @@ TriangleMesh fromOpenMesh(const OmMesh& om, bool useNormals) {
     return m;
 }
 
+/// A stream connected once, for the life of the process, to OpenMesh's error stream; what it
+/// receives goes to the current target string (or nowhere). OpenMesh's mostream::disconnect
+/// does not free the 16-byte target that connect allocates, so connecting per load leaked
+/// (LeakSanitizer: OpenMesh::mostream::connect).
+class ErrorCapture : private std::streambuf {
+public:
+    ErrorCapture() : m_stream(this) { ::omerr().connect(m_stream); }
+    void setTarget(std::string* target) { m_target = target; }
+
+private:
+    int_type overflow(int_type c) override {
+        if (m_target && !traits_type::eq_int_type(c, traits_type::eof()))
+            m_target->push_back(traits_type::to_char_type(c));
+        return traits_type::not_eof(c);
+    }
+    std::streamsize xsputn(const char* s, std::streamsize n) override {
+        if (m_target)
+            m_target->append(s, size_t(n));
+        return n;
+    }
+
+    std::ostream m_stream;
+    std::string* m_target = nullptr;
+};
+
+ErrorCapture& errorCapture() {
+    // Never destroyed: OpenMesh's error stream, a static in its library, keeps a reference to
+    // it until the very end of the process.
+    static ErrorCapture* capture = new ErrorCapture;
+    return *capture;
+}
+
 }  // namespace
 
 namespace detail {
@@ -96,24 +129,22 @@ RawMesh readOpenMesh(const std::string& path) {
     // OpenMesh's importer reports the faces it rejects only on its error stream: listen to it
     // (a process-wide stream, hence the lock) to count them.
     static std::mutex s_logMutex;
-    std::ostringstream log;
+    std::string messages;
     bool ok = false;
     {
         const std::lock_guard<std::mutex> lock(s_logMutex);
-        // Disconnects even when the reader throws (a dangling stream would be written later).
+        // Stops listening even when the reader throws (the log is a local).
         struct Listen {
-            std::ostringstream& log;
-            explicit Listen(std::ostringstream& l) : log(l) { ::omerr().connect(log); }
+            explicit Listen(std::string& log) { errorCapture().setTarget(&log); }
             ~Listen() {
                 ::omerr().flush();
-                ::omerr().disconnect(log);
+                errorCapture().setTarget(nullptr);
             }
-        } listen(log);
+        } listen(messages);
         ok = OpenMesh::IO::read_mesh(om, path, opt);
     }
     if (!ok)
         LUCENT_THROW(IoError, "mesh file '", path, "': cannot be parsed (unreadable or malformed)");
-    const std::string messages = log.str();
     auto count = [&](const char* what) {
         size_t n = 0;
         for (size_t at = messages.find(what); at != std::string::npos;
@@ -138,14 +169,21 @@ RawMesh readOpenMesh(const std::string& path) {
 void writeOpenMesh(const TriangleMesh& mesh, const std::string& path, bool binary) {
     OmMesh om = toOpenMesh(mesh);
     OpenMesh::IO::Options opt;
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (auto& ch : ext)
+        ch = char(std::tolower(static_cast<unsigned char>(ch)));
     // STL stores face normals only (OpenMesh's STL writer refuses vertex normals).
-    if (path.size() < 4 || (path.compare(path.size() - 4, 4, ".stl") != 0 &&
-                            path.compare(path.size() - 4, 4, ".STL") != 0))
+    if (ext != ".stl")
         opt += OpenMesh::IO::Options::VertexNormal;
-    if (binary)
+    // Binary only where documented (PLY, STL): binary OFF is not read back (MeshValidate.h).
+    if (binary && (ext == ".ply" || ext == ".stl"))
         opt += OpenMesh::IO::Options::Binary;
-    if (!OpenMesh::IO::write_mesh(om, path, opt))
-        LUCENT_THROW(IoError, "mesh file '", path, "': cannot be written");
+    // Encoded in memory, then written through the checked atomic writer (OpenMesh's file
+    // output does not report a full disk).
+    std::ostringstream bytes(std::ios::binary);
+    if (!OpenMesh::IO::write_mesh(om, bytes, ext.substr(1), opt) || bytes.str().empty())
+        LUCENT_THROW(IoError, "mesh file '", path, "': cannot be encoded");
+    writeFileAtomically(path, bytes.str());
 }
 
 }  // namespace detail

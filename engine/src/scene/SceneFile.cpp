@@ -5,6 +5,7 @@
 /// projects (scene JSON + sidecar VDB) and the built-in default scene.
 
 #include <lucent/core/Error.h>
+#include <lucent/core/FileIO.h>
 #include <lucent/material/Brush.h>
 #include <lucent/material/Presets.h>
 #include <lucent/material/Procedural.h>
@@ -22,9 +23,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <random>
-#include <sstream>
 
 namespace lucent {
 namespace {
@@ -33,6 +31,9 @@ using nlohmann::json;
 namespace fs = std::filesystem;
 
 constexpr int MAX_IMAGE_SIZE = 16384;  // pixels per side
+/// A scene holds a few lights and a camera and refers to its mesh and material files: 16 MiB
+/// is far more than any scene needs.
+constexpr uint64_t MAX_SCENE_FILE_BYTES = uint64_t(16) << 20;
 
 std::string typeName(const json& v) {
     if (v.is_null())
@@ -198,9 +199,13 @@ MeshSource parseMeshSource(const json& j, const std::string& baseDir) {
     return src;
 }
 
-TriangleMesh buildMesh(const MeshSource& src) {
-    if (!src.file.empty())
-        return loadMesh(src.file, src.scale);
+TriangleMesh buildMesh(const MeshSource& src, std::vector<std::string>& warnings) {
+    if (!src.file.empty()) {
+        MeshReport report;
+        TriangleMesh mesh = loadMesh(src.file, src.scale, &report);
+        warnings.insert(warnings.end(), report.warnings.begin(), report.warnings.end());
+        return mesh;
+    }
     const auto& p = src.params;
     if (src.procedural == "sphere")
         return makeSphere(p.at(0), p.size() > 1 ? int(p[1]) : 4);
@@ -334,13 +339,53 @@ Camera parseCamera(const json& j) {
     return c;
 }
 
+/// A VDB material belongs to the mesh it was painted in: its inside voxels must be (nearly)
+/// those of this mesh in the material's grid. Otherwise light entering the mesh meets no
+/// material (0 W injected) without any error. Below half the voxels in common it is an error;
+/// below 95 % a warning (a mesh edited after painting).
+void checkMaterialFitsMesh(const TriangleMesh& mesh, const MaterialVolume& material,
+                           const std::string& vdbFile, std::vector<std::string>& warnings) {
+    const std::vector<uint8_t> meshInside = voxelizeSolid(mesh, material.spec());
+    const std::vector<uint8_t>& materialInside = material.insideMask();
+    size_t inMesh = 0, inMaterial = 0, inBoth = 0;
+    for (size_t i = 0; i < meshInside.size() && i < materialInside.size(); ++i) {
+        inMesh += meshInside[i] != 0;
+        inMaterial += materialInside[i] != 0;
+        inBoth += meshInside[i] != 0 && materialInside[i] != 0;
+    }
+    const double overlap = double(inBoth) / double(std::max<size_t>({inMesh, inMaterial, 1}));
+    const std::string percent = std::to_string(int(std::floor(100.0 * overlap))) + " %";
+    if (overlap < 0.5)
+        valueError("material.vdb",
+                   "the VDB material '" + vdbFile + "' does not fit the mesh: only " + percent +
+                       " of their inside voxels are common (" + std::to_string(inMesh) +
+                       " voxels of the mesh, " + std::to_string(inMaterial) +
+                       " of the material); was it painted in another mesh, or at another scale?");
+    if (overlap < 0.95)
+        warnings.push_back("the VDB material '" + vdbFile + "' and the mesh share only " + percent +
+                           " of their inside voxels (mesh edited after painting?)");
+}
+
+/// A scene without a camera looks at its object from +z: the bounding sphere fills the 40°
+/// vertical field of view with a 5 % margin.
+Camera framingCamera(const Bounds3f& bounds) {
+    Camera c;
+    const float radius = std::max(0.5f * glm::length(bounds.extent()), 1e-3f);
+    const float distance = 1.05f * radius / std::sin(glm::radians(0.5f * c.fovYDeg));
+    c.target = bounds.center();
+    c.position = c.target + Vector3f(0.f, 0.f, distance);
+    c.nearPlane = std::max(1e-3f, 0.01f * distance);
+    c.farPlane = std::max(c.farPlane, 100.f * distance);
+    return c;
+}
+
 /// Builds mesh, grid, mask and material of one object.
 SceneObject buildObject(const MeshSource& meshSrc, const MaterialSource& matSrc, float eta,
-                        bool resolutionGiven) {
+                        bool resolutionGiven, std::vector<std::string>& warnings) {
     SceneObject obj;
     obj.meshSource = meshSrc;
     obj.materialSource = matSrc;
-    obj.mesh = buildMesh(meshSrc);
+    obj.mesh = buildMesh(meshSrc, warnings);
     if (!matSrc.vdbFile.empty()) {
 #if LUCENT_SCENE_HAS_VDB
         ImportedMaterial imported = importVdb(matSrc.vdbFile);
@@ -348,6 +393,7 @@ SceneObject buildObject(const MeshSource& meshSrc, const MaterialSource& matSrc,
             valueError("resolution", "is " + std::to_string(matSrc.resolution) +
                                          " but the VDB material '" + matSrc.vdbFile + "' has " +
                                          std::to_string(imported.volume.resolution()));
+        checkMaterialFitsMesh(obj.mesh, imported.volume, matSrc.vdbFile, warnings);
         obj.materialSource.resolution = imported.volume.resolution();
         obj.materialSource.value = imported.volume.base();
         obj.material = std::make_shared<MaterialVolume>(std::move(imported.volume));
@@ -365,28 +411,6 @@ SceneObject buildObject(const MeshSource& meshSrc, const MaterialSource& matSrc,
 
 json vecJson(const Vector3f& v) {
     return json::array({v.x, v.y, v.z});
-}
-
-void writeFileAtomically(const std::string& path, const std::string& text) {
-    const std::string tmp = path + ".tmp";
-    {
-        std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-        if (!f)
-            LUCENT_THROW(IoError, "cannot write '", tmp, "'");
-        f << text;
-        f.flush();
-        if (!f) {
-            std::error_code ec;
-            fs::remove(tmp, ec);
-            LUCENT_THROW(IoError, "failed writing '", tmp, "'");
-        }
-    }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        LUCENT_THROW(IoError, "cannot replace '", path, "': ", ec.message());
-    }
 }
 
 }  // namespace
@@ -429,22 +453,22 @@ Scene parseScene(const std::string& jsonText, const std::string& baseDir) {
         env.allowOnly({"radiance"});
         scene.environment = nonNegativeRgb(env.at("radiance"), env.sub("radiance"));
     }
-    scene.camera = parseCamera(o.at("camera"));
-    scene.objects.push_back(buildObject(meshSrc, matSrc, scene.eta, resolutionGiven));
+    if (o.has("camera"))
+        scene.camera = parseCamera(o.at("camera"));
+    scene.objects.push_back(
+        buildObject(meshSrc, matSrc, scene.eta, resolutionGiven, scene.warnings));
+    if (!o.has("camera"))
+        scene.camera = framingCamera(scene.objects.front().mesh.bounds());
     return scene;
 }
 
 Scene loadScene(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    if (!f)
-        LUCENT_THROW(IoError, "cannot open scene file '", path, "'");
-    std::stringstream ss;
-    ss << f.rdbuf();
-    if (f.bad())
-        LUCENT_THROW(IoError, "cannot read scene file '", path, "'");
+    // A regular file of bounded size only: a path such as /dev/zero or a FIFO would be read
+    // without end.
+    const std::string text = readInputFile(path, "scene file", MAX_SCENE_FILE_BYTES);
     const std::string baseDir = fs::path(path).parent_path().string();
     try {
-        return parseScene(ss.str(), baseDir.empty() ? "." : baseDir);
+        return parseScene(text, baseDir.empty() ? "." : baseDir);
     } catch (const IoError& e) {
         LUCENT_THROW(IoError, path, ": ", e.what());
     } catch (const ValueError& e) {
@@ -580,34 +604,21 @@ void saveProject(const Scene& scene, const std::string& path) {
     copy.objects.push_back(std::move(o));
     const std::string text = sceneToJson(copy);
 
-    // Both files are first written next to their destinations; only when both exist are they
-    // renamed over the old ones, so a failed save leaves the previous project intact.
-    const std::string vdbTmp = vdbPath.string() + ".saving.vdb";
-    const std::string jsonTmp = path + ".saving";
-    std::error_code ec;
-    try {
+    // Both files are first written and synced as temporaries next to their destinations; only
+    // when both are complete are they renamed over the old ones, so a failed save leaves the
+    // previous project intact.
 #if LUCENT_SCENE_HAS_VDB
-        exportVdb(*scene.objects.front().material, vdbTmp);
+    AtomicFile vdbFile(vdbPath.string());
+    AtomicFile jsonFile(path);
+    vdbFile.sink().write(encodeVdb(*scene.objects.front().material));
+    jsonFile.sink().write(text);
+    vdbFile.finish();
+    jsonFile.finish();
+    vdbFile.commit();
+    jsonFile.commit();
 #else
-        LUCENT_THROW(IoError, "saveProject: this build has no OpenVDB support");
+    LUCENT_THROW(IoError, "saveProject: this build has no OpenVDB support");
 #endif
-        writeFileAtomically(jsonTmp, text);
-    } catch (...) {
-        fs::remove(vdbTmp, ec);
-        fs::remove(jsonTmp, ec);
-        throw;
-    }
-    fs::rename(vdbTmp, vdbPath, ec);
-    if (ec) {
-        fs::remove(vdbTmp, ec);
-        fs::remove(jsonTmp, ec);
-        LUCENT_THROW(IoError, "saveProject: cannot replace '", vdbPath.string(), "'");
-    }
-    fs::rename(jsonTmp, jsonPath, ec);
-    if (ec) {
-        fs::remove(jsonTmp, ec);
-        LUCENT_THROW(IoError, "saveProject: cannot replace '", path, "': ", ec.message());
-    }
 }
 
 Scene makeDefaultScene() {
@@ -621,7 +632,7 @@ Scene makeDefaultScene() {
     mt.preset = "skin1";
     mt.value = findPreset(mt.preset).sample();
     mt.resolution = GridSpec::DEFAULT_RESOLUTION;
-    SceneObject obj = buildObject(ms, mt, scene.eta, /*resolutionGiven=*/false);
+    SceneObject obj = buildObject(ms, mt, scene.eta, /*resolutionGiven=*/false, scene.warnings);
     obj.materialSource.preset.clear();  // painted below: no longer the plain preset
     obj.materialSource.uniform = true;
 

@@ -12,6 +12,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <cmath>
+#include <stdexcept>
 
 using namespace lucent;
 using namespace lucent::gpu;
@@ -335,15 +336,23 @@ private:
 };
 }  // namespace
 
-TEST_F(RendererFixture, SubsurfaceProviderIsAddedAndIsolated) {
+namespace {
+/// A 10 mm grey sphere at the origin, a point light in front of it, the default camera at
+/// `pixels`² (the scene of the subsurface-provider tests).
+void setUpLitSphere(SceneRenderer& r, int pixels) {
     r.addMesh(uvSphere(10.f, Point3f(0.f), 32, 16), {Rgb(0.5f), Rgb(0.f), 1.f});
     Light light;
     light.position = {0.f, 0.f, 60.f};
     light.intensity = Rgb(1000.f);
     r.setLights({light});
     Camera cam;
-    cam.width = cam.height = 64;
+    cam.width = cam.height = pixels;
     r.setCamera(cam);
+}
+}  // namespace
+
+TEST_F(RendererFixture, SubsurfaceProviderIsAddedAndIsolated) {
+    setUpLitSphere(r, 64);
     DirectSettings s;
     s.specular = false;
     s.background = Rgb(0.25f);
@@ -375,6 +384,64 @@ TEST_F(RendererFixture, SubsurfaceProviderIsAddedAndIsolated) {
         EXPECT_EQ(onlyNone.at(c, c)[k], 0.f);  // --subsurface-only with no provider: black
     }
     EXPECT_GT(direct.at(c, c).r, 0.f);
+}
+
+namespace {
+/// Test provider whose pass fails, as a provider with a missing input does (e.g. SSLPV before
+/// setMaterial).
+class ThrowingSubsurface : public SubsurfaceProvider {
+public:
+    void renderSubsurface(const GBufferView&, unsigned) override {
+        ++calls;
+        LUCENT_THROW(ValueError, "test provider: no material");
+    }
+    int calls = 0;
+};
+}  // namespace
+
+// Regression: a provider that threw inside the frame left the profiler mid-frame, so every
+// later frame failed with "GpuProfiler::beginFrame called twice without endFrame", whatever
+// the provider (the app's viewport stayed blank until restart).
+TEST_F(RendererFixture, FrameAfterAFailedProviderRenders) {
+    setUpLitSphere(r, 32);
+    r.render();
+    const ImageRgb before = r.readRadiance();
+
+    ThrowingSubsurface failing;
+    r.setSubsurfaceProvider(&failing);
+    EXPECT_THROW(r.render(), ValueError);
+    EXPECT_THROW(r.render(), ValueError);  // the provider's own error, not the profiler's
+    EXPECT_EQ(failing.calls, 2);
+    EXPECT_FALSE(r.profiler().isInFrame());
+    r.setSubsurfaceProvider(nullptr);
+    ASSERT_NO_THROW(r.render());
+    // The frame after the failures is the frame before them: nothing stale was kept.
+    const ImageRgb after = r.readRadiance();
+    for (int y = 0; y < after.height(); ++y)
+        for (int x = 0; x < after.width(); ++x)
+            ASSERT_EQ(after.at(x, y), before.at(x, y)) << x << ", " << y;
+    r.profiler().collect(/*wait=*/true);  // the frame's timings resolve again
+    EXPECT_FALSE(r.profiler().latest().empty());
+}
+
+TEST(GpuProfilerFrames, CancelledFrameLeavesTheProfilerReady) {
+    LUCENT_REQUIRE_GL();
+    GpuProfiler prof;
+    try {
+        GpuProfiler::FrameScope frame(prof);
+        auto pass = prof.scope("pass");
+        throw std::runtime_error("pass failed");
+    } catch (const std::runtime_error&) {
+    }
+    EXPECT_FALSE(prof.isInFrame());
+    {
+        GpuProfiler::FrameScope frame(prof);
+        { auto pass = prof.scope("next"); }
+        frame.end(/*wait=*/true);
+    }
+    ASSERT_EQ(prof.latest().size(), 1u);  // only the completed frame's pass
+    EXPECT_EQ(prof.latest()[0].name, "next");
+    prof.destroy();
 }
 
 namespace {
@@ -699,15 +766,46 @@ TEST_F(RendererFixture, RejectsBadInput) {
     EXPECT_THROW(fresh.render(), ValueError);  // before create()
 }
 
-TEST_F(RendererFixture, ProfilerReportsPasses) {
+/// A sphere of radius 10 mm lit from above-front, seen by a `size`² default camera (set).
+Camera litSphere(SceneRenderer& r, int size) {
     r.addMesh(uvSphere(10.f, Point3f(0.f), 32, 16));
     Light light;
     light.position = {0.f, 30.f, 30.f};
     light.intensity = Rgb(100.f);
     r.setLights({light});
     Camera cam;
-    cam.width = cam.height = 64;
+    cam.width = cam.height = size;
     r.setCamera(cam);
+    return cam;
+}
+
+TEST_F(RendererFixture, FrameLargerThanTheDeviceAllowsGivesAnActionableError) {
+    // Regression (issue 18 §4): a 16384² render (the documented maximum) failed with
+    // "incomplete framebuffer" on llvmpipe, which caps a texture at 1 GiB (a 16384² RGBA32F
+    // target is 4 GiB). The error must say why and what to do, and the renderer must stay
+    // usable. (A GPU with about 26 GB free renders the frame; its readback is read in strips,
+    // since 4 GiB in one read overflows the GLsizei byte count.)
+    if (test::sharedContext()->renderer().find("llvmpipe") == std::string::npos)
+        GTEST_SKIP() << "not llvmpipe: a 16384² frame may fit, and would take ~26 GB";
+    Camera cam = litSphere(r, 16384);
+    try {
+        r.render();
+        ADD_FAILURE() << "llvmpipe rendered a frame with 4 GiB textures";
+    } catch (const GpuError& e) {
+        const std::string msg = e.what();
+        EXPECT_EQ(msg.find("incomplete framebuffer"), std::string::npos) << msg;
+        for (const char* part : {"16384x16384", "GiB", "8192x8192", "--width"})
+            EXPECT_NE(msg.find(part), std::string::npos) << part << ": " << msg;
+    }
+    test::drainDebugLog();  // the refused allocations were reported as GL errors
+    cam.width = cam.height = 32;
+    r.setCamera(cam);
+    r.render();
+    EXPECT_EQ(r.readRadiance().width(), 32);
+}
+
+TEST_F(RendererFixture, ProfilerReportsPasses) {
+    litSphere(r, 64);
     for (int i = 0; i < 4; ++i)
         r.render();
     glFinish();

@@ -3,13 +3,18 @@
 // crash. This TU includes OpenVDB to craft the bad files (wrong types, NaN, missing grids...).
 #include "IoTestUtil.h"
 
+#include <lucent/core/FileIO.h>
 #include <lucent/io/VdbIO.h>
 
 #include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <bit>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -263,4 +268,263 @@ TEST(VdbMalformed, MismatchedTransformIsRejected) {
     raw.grid("sigma_s")->setTransform(vdb::math::Transform::createLinearTransform(2.0));
     const std::string path = raw.write("transform.vdb");
     expectIoError([&] { importVdb(path); }, path, "transform of grid 'sigma_s'");
+}
+
+// ------------------------------------------------------------------------------------------
+// Issue 18 §1: files whose checksum no longer applies (rewritten by another tool) are walked
+// completely before OpenVDB reads them; every size OpenVDB 10 would trust is checked.
+
+namespace {
+
+/// A vec3s grid of `leaves` 8³ leaves of random (incompressible) values: Blosc cannot shrink
+/// them and copies them behind its 16-byte header, so each leaf's block is int64 6160 followed
+/// by the header and the 6144 bytes of values.
+std::string writeRandomLeaves(const std::string& name, int leaves) {
+    vdb::initialize();
+    auto grid = vdb::Vec3SGrid::create(vdb::Vec3s(0.f));
+    grid->setName("velocity");
+    Pcg32 rng(5);
+    // Random bit patterns (finite: exponent below 255) compress by nothing.
+    auto randomFloat = [&] { return std::bit_cast<float>(rng.nextUint() & 0xbf7fffffu); };
+    for (int l = 0; l < leaves; ++l)
+        for (int i = 0; i < 512; ++i)
+            grid->tree().setValueOn(vdb::Coord(8 * l + i % 8, (i / 8) % 8, i / 64),
+                                    vdb::Vec3s(randomFloat(), randomFloat(), randomFloat()));
+    const std::string path = outputPath(name);
+    vdb::io::File(path).write({grid});
+    return path;
+}
+
+/// Offset of the first occurrence of the 8 bytes of `v`.
+size_t findInt64(const std::vector<char>& bytes, int64_t v) {
+    char pattern[8];
+    std::memcpy(pattern, &v, 8);
+    const auto it = std::search(bytes.begin(), bytes.end(), pattern, pattern + 8);
+    return it == bytes.end() ? std::string::npos : size_t(it - bytes.begin());
+}
+
+/// Every load of `path` either succeeds or throws lucent::Error.
+void expectLoadOrError(const std::string& path) {
+    try {
+        summarizeVdb(path);
+    } catch (const Error&) {
+    }
+    try {
+        importVdb(path);
+    } catch (const Error&) {
+    }
+}
+
+}  // namespace
+
+TEST(VdbMalformed, OversizedStoredBlockIsRejectedBeforeOpenVdbReadsIt) {
+    // Regression: OpenVDB 10.0 reads a stored (negative-size) block into the leaf's buffer
+    // before comparing its size: one changed size byte overflowed the heap (ASan:
+    // heap-buffer-overflow WRITE in bloscFromStream <- readCompressedValues<Vec3s>).
+    const std::string src = writeRandomLeaves("stored-blocks.vdb", 64);
+    std::vector<char> bytes = readBytes(src);
+    const size_t at = findInt64(bytes, 6144 + 16);  // 512 voxels × 12 bytes + Blosc header
+    ASSERT_NE(at, std::string::npos);
+    // One changed size field: now a stored (negative) block far larger than the 6144-byte
+    // buffer, within the file.
+    const int64_t huge = -200000;
+    std::memcpy(bytes.data() + at, &huge, 8);
+    const std::string path = outputPath("stored-block-overflow.vdb");
+    writeBytes(path, bytes.data(), bytes.size());
+    expectIoError([&] { summarizeVdb(path); }, path, "stored block of 200000 bytes");
+    expectIoError([&] { importVdb(path); }, path, "stored block of 200000 bytes");
+}
+
+TEST(VdbMalformed, CheckedInRegressionInputsAreRejected) {
+    // tests/data/robust/README.md: a rewritten file with one stored-block size changed
+    // (OpenVDB 10 aborted: "free(): invalid pointer"), and a grid metadata name length of
+    // 2^31 - 16 (OpenVDB allocated and filled 2 GiB, then misread the rest).
+    const std::string dir = std::string(LUCENT_TEST_DATA_DIR) + "/robust/";
+    const std::string stored = dir + "vdb_stored_block_overflow.vdb";
+    expectIoError([&] { summarizeVdb(stored); }, stored, "stored block of 20000 bytes");
+    const std::string meta = dir + "vdb_grid_meta_length.vdb";
+    expectIoError([&] { summarizeVdb(meta); }, meta, "metadata name of 2147483632 bytes");
+}
+
+TEST(VdbMalformed, CompressedBlockSizesAreCheckedAgainstTheFileAndTheBloscHeader) {
+    RawFile raw;  // rewritten: a fresh UUID, so the Lucent checksum does not apply
+    const std::string src = raw.write("rewritten-blosc.vdb");
+    const std::vector<char> bytes = readBytes(src);
+    // Lucent's σt leaves compress: find a positive block size followed by a Blosc header
+    // (version byte 2) and corrupt the size in both directions.
+    size_t at = std::string::npos;
+    int64_t size = 0;
+    for (size_t i = 0; i + 24 < bytes.size(); ++i) {
+        std::memcpy(&size, bytes.data() + i, 8);
+        uint32_t headerBytes = 0;
+        std::memcpy(&headerBytes, bytes.data() + i + 8 + 12, 4);
+        if (size > 16 && size < 100000 && bytes[i + 8] == 2 && int64_t(headerBytes) == size) {
+            at = i;
+            break;
+        }
+    }
+    ASSERT_NE(at, std::string::npos) << "no Blosc block found";
+    for (const int64_t bad : {size + 1, size - 1, int64_t(bytes.size()), int64_t(1) << 40}) {
+        std::vector<char> mutated = bytes;
+        std::memcpy(mutated.data() + at, &bad, 8);
+        const std::string path = outputPath("blosc-size.vdb");
+        writeBytes(path, mutated.data(), mutated.size());
+        expectIoError([&] { summarizeVdb(path); }, path, "VDB file");
+    }
+}
+
+TEST(VdbMalformed, GridMetadataSizesAreChecked) {
+    // Regression: grid-level metadata was not checked; a corrupt string length made OpenVDB
+    // allocate (and fill) gigabytes in MetaMap::readMeta.
+    RawFile raw;
+    raw.grid("g")->insertMeta("zz_probe", vdb::StringMetadata("abcdefgh"));
+    const std::string src = raw.write("grid-meta-source.vdb");
+    std::vector<char> bytes = readBytes(src);
+    const std::string name = "zz_probe";
+    const auto it = std::search(bytes.begin(), bytes.end(), name.begin(), name.end());
+    ASSERT_NE(it, bytes.end());
+    const size_t nameLength = size_t(it - bytes.begin()) - 4;
+    const uint32_t huge = 0x7ffffff0u;
+    std::memcpy(bytes.data() + nameLength, &huge, 4);
+    const std::string path = outputPath("grid-meta-length.vdb");
+    writeBytes(path, bytes.data(), bytes.size());
+    expectIoError([&] { importVdb(path); }, path, "metadata name of 2147483632 bytes");
+    // A fixed-size value whose size field disagrees with its type desynchronises OpenVDB (it
+    // reads sizeof(T) whatever the size field says).
+    raw.grid("g")->insertMeta("zz_vec", vdb::Vec3SMetadata(vdb::Vec3s(1.f)));
+    std::vector<char> typed = readBytes(raw.write("grid-meta-typed.vdb"));
+    const std::string key = "zz_vec", type = "vec3s";
+    const auto kt = std::search(typed.begin(), typed.end(), key.begin(), key.end());
+    ASSERT_NE(kt, typed.end());
+    // name characters, then the type name's length and characters, then the value size
+    const size_t sizeField = size_t(kt - typed.begin()) + key.size() + 4 + type.size();
+    uint32_t twelve = 0;
+    std::memcpy(&twelve, typed.data() + sizeField, 4);
+    ASSERT_EQ(twelve, 12u);
+    const uint32_t wrong = 11;
+    std::memcpy(typed.data() + sizeField, &wrong, 4);
+    const std::string path2 = outputPath("grid-meta-size.vdb");
+    writeBytes(path2, typed.data(), typed.size());
+    expectIoError([&] { importVdb(path2); }, path2, "has 11 bytes, not 12");
+}
+
+TEST(VdbMalformed, DecodedSizeOverTheImportLimitIsRejected) {
+    const std::string path = outputPath("decoded-limit.vdb");
+    exportVdb(randomPaintedVolume(32, /*seed=*/3), path);
+    ImportLimits small = importLimits();
+    small.maxDecodedBytes = 1 << 20;  // a 32³ file decodes to several MiB of tree nodes
+    {
+        ScopedImportLimits scoped(small);
+        expectIoError([&] { importVdb(path); }, path, "import limit");
+    }
+    EXPECT_NO_THROW(importVdb(path));
+}
+
+TEST(VdbMalformed, ByteMutationsOfARewrittenFileNeverCrash) {
+    // The fault campaign's class of inputs: a file whose checksum no longer applies, with one
+    // or a few bytes changed. Every load must succeed or throw lucent::Error.
+    RawFile raw;
+    const std::string src = raw.write("mutate-source.vdb");
+    const std::vector<char> bytes = readBytes(src);
+    Pcg32 rng(2024);
+    const std::string path = outputPath("mutated.vdb");
+    for (int it = 0; it < 300; ++it) {
+        std::vector<char> data = bytes;
+        const int changes = 1 + int(rng.uniformBelow(3));
+        for (int k = 0; k < changes; ++k)
+            data[rng.uniformBelow(uint32_t(data.size()))] = char(rng.uniformBelow(256));
+        writeBytes(path, data.data(), data.size());
+        expectLoadOrError(path);
+    }
+}
+
+TEST(VdbMalformed, ValidFilesOfEveryCheckedKindAreRead) {
+    // The preflight walk must accept whatever OpenVDB writes: every value type, half floats,
+    // zip / no compression, active-mask compression off, tiles at every level, instances and
+    // stream-written files.
+    vdb::initialize();
+    auto fill = [](auto grid, auto value) {
+        grid->tree().setValueOn(vdb::Coord(1, 2, 3), value);
+        grid->tree().setValueOn(vdb::Coord(-100, 50, 7), value);
+        grid->tree().addTile(1, vdb::Coord(4096, 0, 0), value, true);     // 8³ tile
+        grid->tree().addTile(2, vdb::Coord(8192, 4096, 0), value, true);  // 128³ tile
+        grid->tree().addTile(3, vdb::Coord(0, 0, 40960), value, true);    // 4096³ root tile
+        return grid;
+    };
+    vdb::GridPtrVec grids{
+        fill(vdb::FloatGrid::create(0.5f), 2.f),
+        fill(vdb::DoubleGrid::create(0.0), 3.0),
+        fill(vdb::Int32Grid::create(0), 4),
+        fill(vdb::Int64Grid::create(0), int64_t(5)),
+        fill(vdb::BoolGrid::create(false), true),
+        fill(vdb::MaskGrid::create(false), true),
+        fill(vdb::Vec3SGrid::create(vdb::Vec3s(0.f)), vdb::Vec3s(1.f, 2.f, 3.f)),
+        fill(vdb::Vec3DGrid::create(vdb::Vec3d(0.0)), vdb::Vec3d(1.0, 2.0, 3.0)),
+        fill(vdb::Vec3IGrid::create(vdb::Vec3i(0)), vdb::Vec3i(1, 2, 3)),
+    };
+    for (size_t i = 0; i < grids.size(); ++i)
+        grids[i]->setName("grid" + std::to_string(i));
+    auto half = vdb::FloatGrid::create(0.f);
+    half->setName("half");
+    half->setSaveFloatAsHalf(true);
+    half->tree().setValueOn(vdb::Coord(5, 5, 5), 0.25f);
+    grids.push_back(half);
+    auto halfVec = vdb::Vec3SGrid::create(vdb::Vec3s(0.f));
+    halfVec->setName("halfvec");
+    halfVec->setSaveFloatAsHalf(true);
+    halfVec->tree().setValueOn(vdb::Coord(5, 5, 5), vdb::Vec3s(0.5f));
+    grids.push_back(halfVec);
+    auto shared = grids[0]->copyGrid();  // shares the tree: written as an instance
+    shared->setName("instance");
+    grids.push_back(shared);
+    for (float v : {1.f, 2.f}) {  // two grids of the same name: both listed, each its own
+        auto dup = vdb::FloatGrid::create(0.f);
+        dup->setName("dup");
+        dup->tree().setValueOn(vdb::Coord(int(v), 0, 0), v);
+        grids.push_back(dup);
+    }
+    auto checkAll = [&](const std::string& path, size_t expected) {
+        const VdbFileSummary s = summarizeVdb(path);
+        ASSERT_EQ(s.grids.size(), expected) << path;
+        std::vector<double> dupValues;
+        for (const VdbGridSummary& g : s.grids) {
+            EXPECT_TRUE(g.note.empty()) << path << " " << g.name << ": " << g.note;
+            EXPECT_GE(g.activeVoxelCount, 1u) << path << " " << g.name;
+            if (g.name == "dup" && g.maxValue.size() == 1)
+                dupValues.push_back(g.maxValue[0]);
+        }
+        std::sort(dupValues.begin(), dupValues.end());
+        EXPECT_EQ(dupValues, (std::vector<double>{1.0, 2.0})) << path;
+    };
+    const uint32_t modes[] = {vdb::io::COMPRESS_BLOSC | vdb::io::COMPRESS_ACTIVE_MASK,
+                              vdb::io::COMPRESS_ZIP | vdb::io::COMPRESS_ACTIVE_MASK,
+                              vdb::io::COMPRESS_NONE, vdb::io::COMPRESS_ACTIVE_MASK,
+                              vdb::io::COMPRESS_BLOSC};
+    for (const uint32_t mode : modes) {
+        const std::string path = outputPath("every-kind-" + std::to_string(mode) + ".vdb");
+        vdb::io::File file(path);
+        file.setCompression(mode);
+        file.write(grids);
+        checkAll(path, grids.size());
+    }
+    // Stream-written (no grid offsets): OpenVDB reads every grid when it opens the file.
+    const std::string streamed = outputPath("every-kind-stream.vdb");
+    {
+        std::ofstream os(streamed, std::ios::binary);
+        vdb::io::Stream(os).write(grids);
+    }
+    checkAll(streamed, grids.size());
+}
+
+TEST(VdbMalformed, SummaryOfHugeBoxesDoesNotOverflow) {
+    // Regression: the index box extent hi - lo + 1 overflowed int at ±2^30 (UBSan:
+    // signed-integer-overflow in formatVdbSummary) and printed a negative size.
+    VdbFileSummary s;
+    VdbGridSummary g;
+    g.name = "huge";
+    g.activeBox = {Coord(-(1 << 30), 0, -2147483647 - 1), Coord(1 << 30, 0, 2147483647)};
+    g.components = 1;
+    s.grids.push_back(g);
+    const std::string text = formatVdbSummary(s);
+    EXPECT_NE(text.find("(2147483649x1x4294967296)"), std::string::npos) << text;
 }

@@ -6,6 +6,7 @@
 #include "MeshTestUtil.h"
 
 #include <lucent/core/Error.h>
+#include <lucent/core/FileIO.h>
 #include <lucent/mesh/MeshIO.h>
 #include <lucent/mesh/Procedural.h>
 
@@ -197,6 +198,67 @@ TEST(MeshIO, SharedMeshesLoadIfPresent) {
     EXPECT_EQ(bunny.triangleCount(), 75408u);
     EXPECT_TRUE(rb.isClosedManifold());
     EXPECT_GT(test::signedVolume(bunny), 0.0);
+}
+
+/// A checked-in regression input (tests/data/robust/README.md).
+std::string robustInput(const std::string& name) {
+    return std::string(LUCENT_TEST_DATA_DIR) + "/robust/" + name;
+}
+
+/// Expects loadMesh(path) to throw IoError naming the file and containing `fragment`.
+void expectLoadError(const std::string& path, const std::string& fragment) {
+    try {
+        loadMesh(path);
+        ADD_FAILURE() << "no error for " << path;
+    } catch (const IoError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find(path), std::string::npos) << msg;
+        EXPECT_NE(msg.find(fragment), std::string::npos) << "lacks '" << fragment << "': " << msg;
+    }
+}
+
+TEST(MeshIO, HalfTruncatedFilesAreErrorsNotSmallerMeshes) {
+    // Regression (issue 18 §4): files cut in half (at a line end) loaded as a few faces and
+    // exported a few voxels with exit 0; the legacy VTK reader crashed the process.
+    expectLoadError(robustInput("off_half_truncated.off"), "claims 224 faces");
+    expectLoadError(robustInput("vtk_half_truncated.vtk"), "VTK");
+    expectLoadError(robustInput("stl_truncated.stl"), "binary STL");
+    // OBJ has no counts: a file cut at a line end is a valid, open mesh. It is reported as
+    // open (and `lucent-cli export` refuses open meshes unless --allow-open).
+    MeshReport r;
+    loadMesh(robustInput("obj_half_truncated.obj"), 1.f, &r);
+    EXPECT_GT(r.boundaryEdges, 0u);
+    EXPECT_FALSE(r.warnings.empty());
+}
+
+TEST(MeshIO, CorruptCountsAreRejectedBeforeTheReaders) {
+    // Regression (issue 18 §3): a face valence of -3 (4294967293 once read as unsigned) made
+    // OpenMesh's OFF reader run for minutes at up to 13 GB; a mutated block count in a VTP
+    // compression header did the same in vtkXMLDataParser::ReadCompressionHeader.
+    expectLoadError(robustInput("off_face_valence.off"), "invalid vertex count '-3'");
+    expectLoadError(robustInput("vtp_compression_header.vtp"), "claims 1073741824 blocks");
+}
+
+TEST(MeshIO, ImportLimitsApplyBeforeAllocation) {
+    const std::string sphere = robustInput("sphere_closed.off");
+    EXPECT_EQ(loadMesh(sphere).triangleCount(), 224u);
+    ImportLimits small = importLimits();
+    small.maxElements = 100;  // the file claims 114 vertices
+    {
+        ScopedImportLimits scoped(small);
+        expectLoadError(sphere, "import limit");
+    }
+    small = importLimits();
+    small.maxFileBytes = 1000;
+    {
+        ScopedImportLimits scoped(small);
+        expectLoadError(sphere, "import limit");
+    }
+    // Not a regular file: a device would be read without end.
+    const std::string zero = outPath("zero.off");
+    std::filesystem::remove(zero);
+    std::filesystem::create_symlink("/dev/zero", zero);
+    expectLoadError(zero, "not a regular file");
 }
 
 TEST(MeshIO, CorruptedFilesFailCleanly) {

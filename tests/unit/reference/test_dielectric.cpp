@@ -376,7 +376,7 @@ TEST(DielectricClosedForm, ObliqueSingleScatteringThroughTheSurface) {
     spec.resolution = 16;
     uint64_t seed = 700;
     for (double incidence : {0.0, 60.0, 80.0}) {
-        for (double view : {0.0, 50.0}) {
+        for (double view : {0.0, 50.0, 70.0}) {
             Light sun;
             sun.type = Light::Type::Directional;
             const Vector3f towardLight = fromPolar(incidence, 0.0);

@@ -130,7 +130,6 @@ TEST(SceneFile, UnknownFieldsAreNamed) {
 }
 
 TEST(SceneFile, MissingFieldsAreNamed) {
-    expectErrorNaming(minimalWith([](json& j) { j.erase("camera"); }), "camera");
     expectErrorNaming(minimalWith([](json& j) { j.erase("mesh"); }), "mesh");
     expectErrorNaming(minimalWith([](json& j) { j["mesh"].erase("radius"); }), "mesh.radius");
     expectErrorNaming(minimalWith([](json& j) { j["lights"][0].erase("intensity"); }),
@@ -142,6 +141,35 @@ TEST(SceneFile, MissingFieldsAreNamed) {
                           j["material"] = {{"sigma_t", {1, 1, 1}}};
                       }),
                       "material.sigma_s");
+}
+
+// A scene without a camera (hand-written, or from a tool that has none) opens looking at its
+// object instead of being refused: every corner of the object's box projects into the image.
+TEST(SceneFile, MissingCameraFramesTheObject) {
+    const Scene s = parseScene(minimalWith([](json& j) {
+        j.erase("camera");
+        j["mesh"] = {{"procedural", "box"}, {"size", {40, 6, 8}}};
+        j["lights"][0]["position"] = {0, 0, 300};
+    }));
+    const Bounds3f b = s.objects[0].mesh.bounds();
+    EXPECT_EQ(s.camera.target, b.center());
+    const Mat4f clipFromWorld = s.camera.clipFromView() * s.camera.viewFromWorld();
+    for (int corner = 0; corner < 8; ++corner) {
+        const Point3f p((corner & 1) ? b.hi.x : b.lo.x, (corner & 2) ? b.hi.y : b.lo.y,
+                        (corner & 4) ? b.hi.z : b.lo.z);
+        const glm::vec4 clip = clipFromWorld * glm::vec4(p, 1.f);
+        ASSERT_GT(clip.w, 0.f) << corner;
+        // Square image (256²): the bounding sphere fits the vertical field, so x and y do.
+        EXPECT_LE(std::abs(clip.x / clip.w), 1.f) << corner;
+        EXPECT_LE(std::abs(clip.y / clip.w), 1.f) << corner;
+        EXPECT_LE(std::abs(clip.z / clip.w), 1.f) << corner << " clipped by near/far";
+    }
+    // Not a speck either: the 40 mm box spans more than half of the image width.
+    const auto ndcX = [&](float x) {
+        const glm::vec4 c = clipFromWorld * glm::vec4(x, b.center().y, b.center().z, 1.f);
+        return c.x / c.w;
+    };
+    EXPECT_GT(ndcX(b.hi.x) - ndcX(b.lo.x), 1.f);
 }
 
 TEST(SceneFile, WrongTypesAndValuesAreNamed) {
@@ -308,6 +336,50 @@ TEST(SceneFile, ProjectReferencesMeshFilesRelatively) {
     const Scene r = loadScene(projDir + "/p.json");
     EXPECT_NEAR(r.objects[0].mesh.bounds().extent().x, 10.f, 1e-3f);
     EXPECT_EQ(r.objects[0].material->insideMask(), s.objects[0].material->insideMask());
+}
+
+std::string robustInput(const std::string& name) {
+    return std::string(LUCENT_TEST_DATA_DIR) + "/robust/" + name;
+}
+
+TEST(SceneFile, DevicesAndOversizedFilesAreNotRead) {
+    // Regression (issue 18 §3): a scene path of /dev/zero was read without end (7.7 GB).
+    try {
+        loadScene("/dev/zero");
+        ADD_FAILURE() << "no error";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+    }
+    const std::string big = outDir() + "/big_scene.json";
+    {
+        std::ofstream f(big);
+        f << std::string(17 << 20, ' ') << "{}";  // 17 MiB: over the 16 MiB scene limit
+    }
+    EXPECT_THROW(loadScene(big), IoError);
+}
+
+TEST(SceneFile, VdbMaterialOfAnotherMeshIsAnError) {
+    // Regression (issue 18 §4): a VDB material used with a mesh it was not painted in loaded
+    // silently, and light entering the mesh met no material (0 W injected). The sidecar was
+    // painted in the sphere at scale 1; the scene scales the sphere by 0.3.
+    try {
+        loadScene(robustInput("scene_foreign_material.json"));
+        ADD_FAILURE() << "no error";
+    } catch (const ValueError& e) {
+        EXPECT_NE(std::string(e.what()).find("does not fit the mesh"), std::string::npos)
+            << e.what();
+    }
+    const Scene own = loadScene(robustInput("scene_own_material.json"));
+    EXPECT_TRUE(own.warnings.empty());
+    EXPECT_EQ(insideCount(*own.objects[0].material), 1088u);  // as exported (README.md)
+}
+
+TEST(SceneFile, MeshWarningsReachTheScene) {
+    // Regression (issue 18 §4): open meshes gave no warning on the CLI; the scene now carries
+    // what loadMesh reported.
+    const Scene s = loadScene(robustInput("scene_open_mesh.json"));
+    ASSERT_FALSE(s.warnings.empty());
+    EXPECT_NE(s.warnings.front().find("open"), std::string::npos) << s.warnings.front();
 }
 
 }  // namespace

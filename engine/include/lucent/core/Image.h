@@ -4,9 +4,9 @@
 /// @brief Linear float RGB images and their files: PNG (8-bit sRGB, tone-mapped) and OpenEXR
 /// (linear half or float). Row 0 is the top row of the picture.
 
+#include <lucent/core/FileIO.h>  // writeFileAtomically, for callers that write images themselves
 #include <lucent/core/Types.h>
 
-#include <functional>
 #include <string>
 #include <vector>
 
@@ -41,7 +41,8 @@ struct ToneMap {
 /// Maps a linear value to display [0,1] (exposure, curve) and applies the sRGB OETF.
 Rgb toneMapToDisplay(const Rgb& linear, const ToneMap& tm);
 
-/// Writes an 8-bit sRGB PNG after tone mapping. Atomic: written to a temporary then renamed.
+/// Writes an 8-bit sRGB PNG after tone mapping. Atomic and checked (lucent/core/FileIO.h): on
+/// any failure (disk full, read-only folder) an existing file is kept.
 /// @throw IoError naming the path on failure.
 void writePng(const ImageRgb& image, const std::string& path, const ToneMap& tm = {});
 
@@ -56,15 +57,11 @@ void writeExrLayers(const ImageRgb& image,
                     const std::string& path);
 
 /// Reads the R, G, B channels (or a named layer's) of an OpenEXR file.
-/// @throw IoError if the file is missing, malformed or lacks the channels.
+/// @throw IoError if the file is missing, malformed, lacks the channels or is larger than the
+/// import limits (lucent/core/FileIO.h).
 ImageRgb readExr(const std::string& path, const std::string& layer = "");
 
 /// Reads an 8-bit PNG, converting sRGB to linear. @throw IoError on failure.
 ImageRgb readPng(const std::string& path);
-
-/// Writes `path` atomically: `writer(tmpPath)` writes a sibling temporary file which is then
-/// renamed over `path`; on any exception the temporary is removed and `path` is untouched.
-void writeFileAtomically(const std::string& path,
-                         const std::function<void(const std::string&)>& writer);
 
 }  // namespace lucent

@@ -33,6 +33,11 @@ namespace lucent {
 /// Version of the Lucent layout inside the VDB file (metadata `lucent_format_version`).
 inline constexpr int VDB_FORMAT_VERSION = 1;
 
+/// Voxel sizes importVdb accepts, mm (0.1 µm .. 10 m: beyond them no one paints a material);
+/// exportVdb refuses to write a file outside them.
+inline constexpr float VDB_MIN_VOXEL_SIZE_MM = 1e-4f;
+inline constexpr float VDB_MAX_VOXEL_SIZE_MM = 1e4f;
+
 /// Options of exportVdb.
 struct VdbExportOptions {
     bool rendererGrids = true;  ///< also write `density`, `albedo` and `color`
@@ -56,13 +61,20 @@ struct ImportedMaterial {
     VdbMaterialMetadata metadata;
 };
 
-/// Writes `volume` as an OpenVDB file. Atomic: an existing file at `path` is replaced only
-/// when the whole new file has been written.
+/// Writes `volume` as an OpenVDB file. Atomic and checked (lucent/core/FileIO.h): an existing
+/// file at `path` is replaced only when the whole new file has been written and synced.
 /// @param volume a non-empty material volume.
 /// @param path destination file (usually *.vdb).
-/// @throw ValueError if the volume is empty; IoError naming `path` if writing fails.
+/// @throw ValueError if the volume is empty or its voxel size is outside
+/// [VDB_MIN_VOXEL_SIZE_MM, VDB_MAX_VOXEL_SIZE_MM] (a file importVdb would reject; typically a
+/// mesh imported at the wrong scale); IoError naming `path` if writing fails.
 void exportVdb(const MaterialVolume& volume, const std::string& path,
                const VdbExportOptions& options = {});
+
+/// The bytes exportVdb writes, for callers that write them together with other files
+/// (saveProject).
+/// @throw ValueError if the volume is empty; IoError if OpenVDB fails.
+std::string encodeVdb(const MaterialVolume& volume, const VdbExportOptions& options = {});
 
 /// Reads a file written by exportVdb back, float32 bit-exact.
 /// @throw IoError naming `path` and the problem if the file is missing, truncated, not a VDB,
@@ -86,6 +98,7 @@ struct VdbGridSummary {
     std::vector<double> maxValue;
     uint64_t nonFiniteCount = 0;  ///< active NaN/Inf values (voxels or tiles)
     std::vector<std::pair<std::string, std::string>> metadata;  ///< name → value as text
+    std::string note;  ///< why the grid was not read (a type Lucent does not check), or empty
 };
 
 /// Summary of a VDB file.
@@ -97,8 +110,11 @@ struct VdbFileSummary {
     std::vector<VdbGridSummary> grids;
 };
 
-/// Summarises any readable VDB file (foreign files included).
-/// @throw IoError naming `path` if the file is missing or not a readable VDB.
+/// Summarises any readable VDB file (foreign files included). The whole file is checked first
+/// (every size OpenVDB would trust, docs/file-formats.md "Integrity check"); grids of types
+/// the check does not know (point data, point index) are listed without being read.
+/// @throw IoError naming `path` if the file is missing, not a readable VDB, corrupt or over
+/// the import limits (lucent/core/FileIO.h).
 VdbFileSummary summarizeVdb(const std::string& path);
 
 /// Human-readable multi-line text of a summary (what `lucent-cli info` prints).

@@ -85,6 +85,9 @@ struct Scene {
     Rgb environment{0.f};
     Camera camera;
     float eta = 1.3f;  ///< relative index of refraction of the object(s)
+    /// What loading found and repaired but accepted (e.g. an open mesh, dropped faces): one
+    /// line each, for the user to see.
+    std::vector<std::string> warnings;
 };
 
 }  // namespace lucent

@@ -1,0 +1,149 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief Child-process isolation of untrusted readers (see lucent/core/Isolate.h).
+
+#include <lucent/core/Isolate.h>
+
+#include <lucent/core/Error.h>
+#include <lucent/core/FileIO.h>
+
+#include <cerrno>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <new>
+
+#include <fcntl.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace lucent {
+
+namespace {
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool ADDRESS_SANITIZER = true;
+#else
+constexpr bool ADDRESS_SANITIZER = false;
+#endif
+
+/// Virtual size of this process in bytes (/proc/self/statm, first field, in pages).
+uint64_t addressSpaceBytes() {
+    std::ifstream statm("/proc/self/statm");
+    uint64_t pages = 0;
+    statm >> pages;
+    return pages * uint64_t(::sysconf(_SC_PAGESIZE));
+}
+
+bool writeAll(int fd, const void* data, size_t n) {
+    const char* p = static_cast<const char*>(data);
+    while (n > 0) {
+        const ssize_t w = ::write(fd, p, n);
+        if (w < 0 && errno == EINTR)
+            continue;
+        if (w <= 0)
+            return false;
+        p += w;
+        n -= size_t(w);
+    }
+    return true;
+}
+
+[[noreturn]] void runChild(int fd, const ImportLimits& limits, uint64_t baseBytes,
+                           const std::function<std::string()>& work) {
+    std::signal(SIGXCPU, SIG_DFL);
+    std::signal(SIGPIPE, SIG_DFL);
+    const rlimit cpu{rlim_t(limits.maxReaderCpuSeconds), rlim_t(limits.maxReaderCpuSeconds) + 1};
+    ::setrlimit(RLIMIT_CPU, &cpu);
+    if (!ADDRESS_SANITIZER) {
+        const rlimit as{rlim_t(baseBytes + limits.maxDecodedBytes),
+                        rlim_t(baseBytes + limits.maxDecodedBytes)};
+        ::setrlimit(RLIMIT_AS, &as);
+    }
+    char status = 'E';
+    std::string payload;
+    try {
+        payload = work();
+        status = 'K';
+    } catch (const std::bad_alloc&) {
+        payload = "out of memory: the file needs more than the import limit of " +
+                  std::to_string(limits.maxDecodedBytes) + " bytes";
+    } catch (const std::exception& e) {
+        payload = e.what();
+    } catch (...) {
+        payload = "unknown error";
+    }
+    const uint64_t n = payload.size();
+    const bool ok = writeAll(fd, &status, 1) && writeAll(fd, &n, sizeof n) &&
+                    writeAll(fd, payload.data(), payload.size());
+    // _exit: no atexit handlers, static destructors or leak checks of the parent's state.
+    ::_exit(ok ? 0 : 1);
+}
+
+}  // namespace
+
+std::string runIsolated(const std::string& what, const std::function<std::string()>& work) {
+    const ImportLimits limits = importLimits();
+    int fds[2];
+    if (::pipe2(fds, O_CLOEXEC) != 0)
+        LUCENT_THROW(IoError, what, ": cannot create a pipe: ", std::strerror(errno));
+    const uint64_t baseBytes = addressSpaceBytes();
+    std::fflush(nullptr);  // buffered output would otherwise be written twice
+    const pid_t pid = ::fork();
+    if (pid < 0) {
+        const int err = errno;
+        ::close(fds[0]);
+        ::close(fds[1]);
+        LUCENT_THROW(IoError, what, ": cannot start a child process: ", std::strerror(err));
+    }
+    if (pid == 0) {
+        ::close(fds[0]);
+        runChild(fds[1], limits, baseBytes, work);
+    }
+    ::close(fds[1]);
+    std::string data;
+    bool tooLarge = false;
+    char buf[1 << 16];
+    for (;;) {
+        const ssize_t r = ::read(fds[0], buf, sizeof buf);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0)
+            break;
+        if (data.size() + size_t(r) > limits.maxDecodedBytes + 9) {
+            tooLarge = true;
+            ::kill(pid, SIGKILL);
+            break;
+        }
+        data.append(buf, size_t(r));
+    }
+    ::close(fds[0]);
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR)
+        ;
+    if (tooLarge)
+        LUCENT_THROW(IoError, what, ": returned more than the import limit of ",
+                     limits.maxDecodedBytes, " bytes");
+    if (WIFSIGNALED(status)) {
+        const int sig = WTERMSIG(status);
+        if (sig == SIGXCPU)
+            LUCENT_THROW(IoError, what, ": stopped after its CPU time limit of ",
+                         limits.maxReaderCpuSeconds, " s (a corrupt file parsed without end?)");
+        LUCENT_THROW(IoError, what, ": crashed (", strsignal(sig),
+                     ") on a file it cannot read (corrupt?)");
+    }
+    uint64_t n = 0;
+    if (data.size() < 1 + sizeof n)
+        LUCENT_THROW(IoError, what, ": ended without a result");
+    std::memcpy(&n, data.data() + 1, sizeof n);
+    if (n != data.size() - 1 - sizeof n)
+        LUCENT_THROW(IoError, what, ": returned an incomplete result");
+    std::string payload = data.substr(1 + sizeof n);
+    if (data[0] != 'K')
+        throw IoError(what + ": " + payload);
+    return payload;
+}
+
+}  // namespace lucent

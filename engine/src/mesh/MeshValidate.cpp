@@ -1,0 +1,625 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief Checks of mesh files before the upstream readers (see MeshValidate.h). Each check
+/// mirrors what the reader will consume: OpenMesh 9's OFFReader::read_ascii, PLYReader,
+/// OBJReader and STLReader (ASCII/binary by file size).
+
+#include "MeshValidate.h"
+
+#include <lucent/core/Error.h>
+#include <lucent/core/FileIO.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <vector>
+
+namespace lucent::detail {
+
+namespace {
+
+/// Longest polygon accepted (vertices per face or PLY list entries): far above any real mesh,
+/// far below what would let a corrupt count run for long.
+constexpr uint64_t MAX_POLYGON = 1u << 16;
+
+/// Buffered reading of a file by tokens, lines or bytes, with the line number for messages.
+class Reader {
+public:
+    Reader(const std::string& path) : m_path(path), m_in(path, std::ios::binary) {
+        if (!m_in)
+            LUCENT_THROW(IoError, "cannot open mesh file '", path, "' for reading");
+    }
+
+    /// Next whitespace-separated token (across lines); false at the end of the file.
+    bool token(std::string& out) {
+        out.clear();
+        int c;
+        while ((c = get()) != EOF && std::isspace(c))
+            ;
+        if (c == EOF)
+            return false;
+        out.push_back(char(c));
+        while ((c = peek()) != EOF && !std::isspace(c)) {
+            out.push_back(char(c));
+            get();
+        }
+        return true;
+    }
+    /// Like std::getline: the rest of the current line; false at the end of the file.
+    bool line(std::string& out) {
+        out.clear();
+        int c = get();
+        if (c == EOF)
+            return false;
+        while (c != EOF && c != '\n') {
+            out.push_back(char(c));
+            c = get();
+        }
+        if (!out.empty() && out.back() == '\r')
+            out.pop_back();
+        return true;
+    }
+    /// Reads `n` raw bytes; false if the file ends first.
+    bool bytes(void* dst, size_t n) {
+        auto* p = static_cast<char*>(dst);
+        for (size_t i = 0; i < n; ++i) {
+            const int c = get();
+            if (c == EOF)
+                return false;
+            p[i] = char(c);
+        }
+        return true;
+    }
+    [[nodiscard]] uint64_t lineNumber() const { return m_line; }
+    [[nodiscard]] uint64_t offset() const { return m_offset; }
+
+    [[noreturn]] void fail(const std::string& what) const {
+        LUCENT_THROW(IoError, "mesh file '", m_path, "': ", what, " (line ", m_line, ")");
+    }
+
+private:
+    int peek() {
+        if (m_pos == m_len && !fill())
+            return EOF;
+        return static_cast<unsigned char>(m_buf[m_pos]);
+    }
+    int get() {
+        const int c = peek();
+        if (c != EOF) {
+            ++m_pos;
+            ++m_offset;
+            if (c == '\n')
+                ++m_line;
+        }
+        return c;
+    }
+    bool fill() {
+        m_in.read(m_buf.data(), std::streamsize(m_buf.size()));
+        m_len = size_t(m_in.gcount());
+        m_pos = 0;
+        return m_len > 0;
+    }
+
+    std::string m_path;
+    std::ifstream m_in;
+    std::array<char, 1 << 16> m_buf{};
+    size_t m_len = 0, m_pos = 0;
+    uint64_t m_line = 1, m_offset = 0;
+};
+
+/// A plain decimal number as the readers' stream extraction accepts it (no nan/inf/hex).
+bool isNumber(const std::string& t) {
+    if (t.empty() || t.find_first_not_of("0123456789+-.eE") != std::string::npos)
+        return false;
+    char* end = nullptr;
+    const double v = std::strtod(t.c_str(), &end);
+    return end == t.c_str() + t.size() && std::isfinite(v);
+}
+
+/// A non-negative integer (no sign: extracting "-3" into an unsigned gives 4294967293).
+bool parseCount(const std::string& t, uint64_t& out) {
+    if (t.empty() || t.size() > 19 || t.find_first_not_of("0123456789") != std::string::npos)
+        return false;
+    out = std::strtoull(t.c_str(), nullptr, 10);
+    return true;
+}
+
+std::string quoted(const std::string& t) {
+    return "'" + (t.size() > 40 ? t.substr(0, 40) + "..." : t) + "'";
+}
+
+/// The counts a header gives, checked against the import limits and, at `minBytes` each,
+/// against the file size.
+void checkClaim(const std::string& path, uint64_t count, uint64_t minBytes, uint64_t fileSize,
+                const char* noun) {
+    checkElementCount(count, "mesh file", path, noun);
+    if (count > fileSize / std::max<uint64_t>(minBytes, 1))
+        LUCENT_THROW(IoError, "mesh file '", path, "': its header claims ", count, " ", noun,
+                     " but the file has only ", fileSize, " bytes (truncated or corrupt)");
+}
+
+// ------------------------------------------------------------------------------------ OFF
+
+void validateOff(const std::string& path, uint64_t size) {
+    Reader in(path);
+    std::string header;
+    in.line(header);
+    // OFFReader::can_u_read: [ST][C][N][4][n]OFF [BINARY] on the first line.
+    size_t p = 0;
+    if (header.compare(p, 2, "ST") == 0)
+        p += 2;  // texture coordinates: on the rest of each vertex line
+    const bool color = p < header.size() && header[p] == 'C' && (++p, true);
+    const bool normal = p < header.size() && header[p] == 'N' && (++p, true);
+    if (p < header.size() && (header[p] == '4' || header[p] == 'n'))
+        in.fail("4D and nD OFF files are not supported");
+    if (header.compare(p, 3, "OFF") != 0)
+        in.fail("the first line must be OFF (or COFF, NOFF, STOFF...), not " + quoted(header));
+    if (header.find("BINARY") != std::string::npos)
+        in.fail("binary OFF is not supported (save it as ASCII OFF or PLY)");
+    // The counts follow on the next lines (the reader does not skip comments).
+    std::string t;
+    uint64_t nV = 0, nF = 0, nE = 0;
+    if (!in.token(t) || !parseCount(t, nV) || !in.token(t) || !parseCount(t, nF) || !in.token(t) ||
+        !parseCount(t, nE))
+        in.fail("expected the counts '#vertices #faces #edges' after the OFF line");
+    checkClaim(path, nV, 6, size, "vertices");  // "0 0 0\n"
+    checkClaim(path, nF, 8, size, "faces");     // "3 0 1 2\n"
+    const int coords = 3 + (normal ? 3 : 0);
+    for (uint64_t v = 0; v < nV; ++v) {
+        for (int k = 0; k < coords; ++k)
+            if (!in.token(t) || !isNumber(t))
+                in.fail(t.empty() ? "truncated: the header claims " + std::to_string(nV) +
+                                        " vertices, the file ends at vertex " + std::to_string(v)
+                                  : "vertex " + std::to_string(v) + ": " + quoted(t) +
+                                        " is not a number");
+        in.line(t);  // colours / texture coordinates: the rest of the line
+    }
+    for (uint64_t f = 0; f < nF; ++f) {
+        uint64_t k = 0;
+        if (!in.token(t))
+            in.fail("truncated: the header claims " + std::to_string(nF) +
+                    " faces, the file ends at face " + std::to_string(f));
+        if (!parseCount(t, k) || k < 3 || k > std::min<uint64_t>(nV, MAX_POLYGON))
+            in.fail("face " + std::to_string(f) + ": invalid vertex count " + quoted(t));
+        for (uint64_t i = 0; i < k; ++i) {
+            uint64_t idx = 0;
+            if (!in.token(t))
+                in.fail("truncated in face " + std::to_string(f));
+            if (!parseCount(t, idx) || idx >= nV)
+                in.fail("face " + std::to_string(f) + ": vertex index " + quoted(t) +
+                        " is not in [0, " + std::to_string(nV) + ")");
+        }
+        if (color)
+            in.line(t);  // face colour: the rest of the line
+    }
+}
+
+// ------------------------------------------------------------------------------------ OBJ
+
+/// One `f` reference "v", "v/t", "v//n" or "v/t/n": every index present must refer to an
+/// element already defined (1-based, or negative from the last one).
+bool objIndexValid(const std::string& s, uint64_t defined) {
+    if (s.empty())
+        return false;
+    char* end = nullptr;
+    const long long i = std::strtoll(s.c_str(), &end, 10);
+    return end == s.c_str() + s.size() && i != 0 &&
+           (i > 0 ? uint64_t(i) <= defined : uint64_t(-(i + 1)) < defined);
+}
+
+void validateObj(const std::string& path) {
+    Reader in(path);
+    std::string line;
+    uint64_t nv = 0, nvt = 0, nvn = 0, nf = 0;
+    while (in.line(line)) {
+        std::istringstream words(line);
+        std::string key, t;
+        words >> key;
+        if (key == "v" || key == "vn" || key == "vt") {
+            int numbers = 0;
+            while (words >> t) {
+                if (!isNumber(t))
+                    in.fail(key + " line: " + quoted(t) + " is not a number");
+                ++numbers;
+            }
+            if (numbers < (key == "vt" ? 1 : 3))
+                in.fail(key + " line with " + std::to_string(numbers) +
+                        " numbers (truncated or corrupt)");
+            uint64_t& n = key == "v" ? nv : key == "vn" ? nvn : nvt;
+            checkElementCount(++n, "mesh file", path, "vertices");
+        } else if (key == "f") {
+            int refs = 0;
+            while (words >> t) {
+                const size_t s1 = t.find('/');
+                const size_t s2 = s1 == std::string::npos ? s1 : t.find('/', s1 + 1);
+                const std::string vi = t.substr(0, s1);
+                const std::string ti = s1 == std::string::npos ? "" : t.substr(s1 + 1, s2 - s1 - 1);
+                const std::string ni = s2 == std::string::npos ? "" : t.substr(s2 + 1);
+                if (!objIndexValid(vi, nv) || (!ti.empty() && !objIndexValid(ti, nvt)) ||
+                    (!ni.empty() && !objIndexValid(ni, nvn)))
+                    in.fail("face reference " + quoted(t) + " refers to an element not defined " +
+                            "before it (" + std::to_string(nv) + " vertices so far)");
+                ++refs;
+            }
+            if (refs < 3)
+                in.fail("face with " + std::to_string(refs) + " vertices (truncated or corrupt)");
+            if (uint64_t(refs) > MAX_POLYGON)
+                in.fail("face with " + std::to_string(refs) + " vertices");
+            checkElementCount(++nf, "mesh file", path, "faces");
+        }
+    }
+}
+
+// ------------------------------------------------------------------------------------ STL
+
+void validateStl(const std::string& path, uint64_t size) {
+    // STLReader: binary when the size is exactly 84 + 50·(triangle count at byte 80).
+    if (size >= 84) {
+        std::ifstream f(path, std::ios::binary);
+        f.seekg(80);
+        uint32_t n = 0;
+        f.read(reinterpret_cast<char*>(&n), 4);
+        if (f && size == 84 + 50 * uint64_t(n)) {
+            checkElementCount(n, "mesh file", path, "triangles");
+            return;
+        }
+    }
+    Reader in(path);
+    std::string t;
+    if (!in.token(t) || t != "solid")
+        in.fail(
+            "neither a binary STL (its size does not match its triangle count: truncated?) "
+            "nor an ASCII STL starting with 'solid'");
+    in.line(t);  // the solid's name
+    uint64_t facets = 0;
+    auto expect = [&](const char* word) {
+        if (!in.token(t))
+            in.fail(std::string("truncated: expected '") + word + "' in facet " +
+                    std::to_string(facets));
+        if (t != word)
+            in.fail(std::string("expected '") + word + "', found " + quoted(t));
+    };
+    auto numbers = [&](int n) {
+        for (int k = 0; k < n; ++k)
+            if (!in.token(t) || !isNumber(t))
+                in.fail("facet " + std::to_string(facets) + ": " + quoted(t) + " is not a number");
+    };
+    while (true) {
+        if (!in.token(t))
+            in.fail("truncated: no 'endsolid' after " + std::to_string(facets) + " facets");
+        if (t == "endsolid")
+            return;
+        if (t != "facet")
+            in.fail("expected 'facet' or 'endsolid', found " + quoted(t));
+        expect("normal");
+        numbers(3);
+        expect("outer");
+        expect("loop");
+        for (int v = 0; v < 3; ++v) {
+            expect("vertex");
+            numbers(3);
+        }
+        expect("endloop");
+        expect("endfacet");
+        checkElementCount(++facets, "mesh file", path, "triangles");
+    }
+}
+
+// ------------------------------------------------------------------------------------ PLY
+
+struct PlyProperty {
+    bool isList = false;
+    std::string countType, type, name;
+};
+struct PlyElement {
+    std::string name;
+    uint64_t count = 0;
+    std::vector<PlyProperty> properties;
+};
+
+uint32_t plyTypeSize(const std::string& t) {
+    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8")
+        return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16")
+        return 2;
+    if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" ||
+        t == "float32")
+        return 4;
+    if (t == "double" || t == "float64")
+        return 8;
+    return 0;
+}
+
+/// Parses a PLY header strictly (OpenMesh's PLY reader crashes on some malformed headers, e.g.
+/// a property before any element, found by fuzzing). Leaves the reader after end_header.
+std::vector<PlyElement> readPlyHeader(Reader& in, const std::string& path, uint64_t size,
+                                      std::string& format) {
+    std::vector<PlyElement> elements;
+    std::string line;
+    uint64_t lineNo = 0;
+    while (in.line(line)) {
+        std::istringstream words(line);
+        std::string w0, w1, w2, w3, w4;
+        words >> w0 >> w1 >> w2 >> w3 >> w4;
+        auto bad = [&](const char* why) {
+            LUCENT_THROW(IoError, "mesh file '", path, "': malformed PLY header (", why, "): '",
+                         line, "'");
+        };
+        if (lineNo++ == 0) {
+            if (line != "ply")
+                bad("first line must be 'ply'");
+            continue;
+        }
+        if (in.offset() > 65536)
+            LUCENT_THROW(IoError, "mesh file '", path,
+                         "': PLY header has no end_header in its first 65536 bytes");
+        if (w0 == "format") {
+            if (w1 != "ascii" && w1 != "binary_little_endian" && w1 != "binary_big_endian")
+                bad("unknown format");
+            format = w1;
+        } else if (w0 == "element") {
+            uint64_t count = 0;
+            if (w1.empty() || !parseCount(w2, count))
+                bad("expected 'element <name> <count>'");
+            elements.push_back({w1, count, {}});
+        } else if (w0 == "property") {
+            if (elements.empty())
+                bad("property outside an element");
+            PlyProperty p;
+            p.isList = w1 == "list";
+            if (p.isList) {
+                if (!plyTypeSize(w2) || !plyTypeSize(w3) || w4.empty() || w2 == "float" ||
+                    w2 == "float32" || w2 == "double" || w2 == "float64")
+                    bad("expected 'property list <integer type> <type> <name>'");
+                p.countType = w2;
+                p.type = w3;
+                p.name = w4;
+            } else {
+                if (!plyTypeSize(w1) || w2.empty())
+                    bad("expected 'property <type> <name>'");
+                p.type = w1;
+                p.name = w2;
+            }
+            elements.back().properties.push_back(p);
+        } else if (w0 == "end_header") {
+            if (format.empty())
+                bad("no format line");
+            uint64_t claimed = 0;
+            for (const PlyElement& e : elements) {
+                // Each element takes at least one byte in every encoding.
+                checkClaim(path, e.count, 1, size, (e.name + " elements").c_str());
+                claimed += e.count;
+            }
+            checkClaim(path, claimed, 1, size, "elements");
+            return elements;
+        } else if (w0 != "comment" && w0 != "obj_info" && !w0.empty()) {
+            bad("unknown keyword");
+        }
+    }
+    LUCENT_THROW(IoError, "mesh file '", path, "': PLY header has no end_header");
+}
+
+/// OpenMesh's ASCII PLY reader loops forever on some truncated or corrupted bodies (a failed
+/// stream read is never detected; found by the fuzz test), so every token it will read must
+/// be present and a plain decimal number.
+void validatePlyAscii(Reader& in, const std::vector<PlyElement>& elements) {
+    std::string t;
+    for (const PlyElement& e : elements)
+        for (uint64_t i = 0; i < e.count; ++i)
+            for (const PlyProperty& p : e.properties) {
+                uint64_t n = 1;
+                if (p.isList) {
+                    if (!in.token(t))
+                        in.fail("ASCII PLY body is truncated in element '" + e.name + "' " +
+                                std::to_string(i));
+                    if (!parseCount(t, n) || n > MAX_POLYGON)
+                        in.fail("ASCII PLY list length " + quoted(t) + " in element '" + e.name +
+                                "' " + std::to_string(i) + " is invalid");
+                }
+                for (uint64_t k = 0; k < n; ++k)
+                    if (!in.token(t) || !isNumber(t))
+                        in.fail("ASCII PLY body is truncated or malformed in element '" + e.name +
+                                "' " + std::to_string(i) +
+                                (t.empty() ? "" : " (" + quoted(t) + ")"));
+            }
+}
+
+/// The binary body: every element present, every list length within bounds.
+void validatePlyBinary(Reader& in, const std::vector<PlyElement>& elements, bool bigEndian) {
+    for (const PlyElement& e : elements)
+        for (uint64_t i = 0; i < e.count; ++i)
+            for (const PlyProperty& p : e.properties) {
+                uint64_t n = 1;
+                if (p.isList) {
+                    const uint32_t cs = plyTypeSize(p.countType);
+                    unsigned char b[8] = {};
+                    if (!in.bytes(b, cs))
+                        in.fail("binary PLY body is truncated in element '" + e.name + "' " +
+                                std::to_string(i));
+                    n = 0;
+                    for (uint32_t k = 0; k < cs; ++k)
+                        n |= uint64_t(b[bigEndian ? cs - 1 - k : k]) << (8 * k);
+                    const bool isSigned = p.countType[0] != 'u';
+                    if ((isSigned && (n >> (8 * cs - 1)) != 0) || n > MAX_POLYGON)
+                        in.fail("binary PLY list length in element '" + e.name + "' " +
+                                std::to_string(i) + " is invalid");
+                }
+                const uint64_t bytes = n * plyTypeSize(p.type);
+                char skip[8 * 64];
+                for (uint64_t left = bytes; left > 0;) {
+                    const size_t chunk = size_t(std::min<uint64_t>(left, sizeof skip));
+                    if (!in.bytes(skip, chunk))
+                        in.fail("binary PLY body is truncated in element '" + e.name + "' " +
+                                std::to_string(i));
+                    left -= chunk;
+                }
+            }
+}
+
+void validatePly(const std::string& path, uint64_t size) {
+    Reader in(path);
+    std::string format;
+    const std::vector<PlyElement> elements = readPlyHeader(in, path, size, format);
+    if (format == "ascii")
+        validatePlyAscii(in, elements);
+    else
+        validatePlyBinary(in, elements, format == "binary_big_endian");
+}
+
+// ------------------------------------------------------------------------------------ VTK
+
+/// Legacy .vtk: the POINTS and POLYGONS counts (version 5 writes the number of offsets, one
+/// more than the number of polygons).
+ClaimedCounts legacyVtkClaims(const std::string& path, uint64_t size) {
+    Reader in(path);
+    std::string line;
+    ClaimedCounts c;
+    bool version5 = false;
+    for (uint64_t n = 0; in.line(line); ++n) {
+        if (n == 0)
+            version5 = line.find("Version 5") != std::string::npos;
+        std::istringstream words(line);
+        std::string key, t;
+        words >> key >> t;
+        uint64_t v = 0;
+        if (key == "POINTS" && parseCount(t, v))
+            c.points += v;
+        else if (key == "POLYGONS" && parseCount(t, v))
+            c.polygons += version5 && v > 0 ? v - 1 : v;
+    }
+    checkClaim(path, c.points, 1, size, "points");
+    checkClaim(path, c.polygons, 1, size, "polygons");
+    return c;
+}
+
+/// The value of attribute `name` in the XML text `tag` ("" when absent).
+std::string xmlAttribute(const std::string& tag, const std::string& name) {
+    for (size_t at = tag.find(name + "=\""); at != std::string::npos;
+         at = tag.find(name + "=\"", at + 1)) {
+        if (at > 0 && !std::isspace(static_cast<unsigned char>(tag[at - 1])))
+            continue;  // e.g. "XNumberOfPoints"
+        const size_t begin = at + name.size() + 2, end = tag.find('"', begin);
+        return end == std::string::npos ? std::string() : tag.substr(begin, end - begin);
+    }
+    return {};
+}
+
+/// VTK XML PolyData. VTK allocates for the Piece attributes NumberOfPoints/NumberOfPolys and
+/// for the sizes in each appended array's compression header ([#blocks, block size, last
+/// block size, compressed size of each block]) before it reads them: a mutated block count
+/// made vtkXMLDataParser::ReadCompressionHeader run for minutes at 4-13 GB. For raw appended
+/// data, every header is checked against the file size and the import limits here.
+ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
+    std::ifstream f(path, std::ios::binary);
+    // The XML part: everything before the appended data (bounded: 64 MiB of text).
+    std::string text;
+    constexpr size_t MAX_XML = size_t(64) << 20;
+    size_t appendedTag = std::string::npos;
+    char buf[1 << 16];
+    while (f && text.size() < MAX_XML && appendedTag == std::string::npos) {
+        f.read(buf, sizeof buf);
+        text.append(buf, size_t(f.gcount()));
+        appendedTag = text.find("<AppendedData");
+    }
+    auto fail = [&](const std::string& what) {
+        LUCENT_THROW(IoError, "mesh file '", path, "': ", what);
+    };
+    ClaimedCounts c;
+    const std::string xml = text.substr(0, appendedTag);
+    for (size_t at = xml.find("<Piece"); at != std::string::npos; at = xml.find("<Piece", at + 1)) {
+        const std::string tag = xml.substr(at, xml.find('>', at) - at);
+        uint64_t points = 0, polys = 0;
+        const std::string p = xmlAttribute(tag, "NumberOfPoints"),
+                          q = xmlAttribute(tag, "NumberOfPolys");
+        if ((!p.empty() && !parseCount(p, points)) || (!q.empty() && !parseCount(q, polys)))
+            fail("invalid NumberOfPoints or NumberOfPolys in '" + tag.substr(0, 80) + "'");
+        c.points += points;
+        c.polygons += polys;
+    }
+    checkElementCount(c.points, "mesh file", path, "points");
+    checkElementCount(c.polygons, "mesh file", path, "polygons");
+    if (appendedTag == std::string::npos)
+        return c;
+    const size_t tagEnd = text.find('>', appendedTag);
+    const size_t underscore = tagEnd == std::string::npos ? tagEnd : text.find('_', tagEnd);
+    if (underscore == std::string::npos)
+        fail("AppendedData without its '_' marker");
+    if (xmlAttribute(text.substr(appendedTag, tagEnd - appendedTag), "encoding") != "raw")
+        return c;  // base64: decoded by VTK in the child process, bounded by its memory limit
+    const size_t fileTag = xml.find("<VTKFile");
+    const std::string head =
+        fileTag == std::string::npos ? "" : xml.substr(fileTag, xml.find('>', fileTag) - fileTag);
+    const uint32_t word = xmlAttribute(head, "header_type") == "UInt64" ? 8 : 4;
+    const bool compressed = !xmlAttribute(head, "compressor").empty();
+    const uint64_t dataStart = uint64_t(underscore) + 1;
+    const uint64_t limit = importLimits().maxDecodedBytes;
+    auto readWord = [&](uint64_t pos) {
+        if (pos + word > size)
+            fail("appended data header at byte " + std::to_string(pos) + " is past the end");
+        unsigned char b[8] = {};
+        f.clear();
+        f.seekg(std::streamoff(pos));
+        f.read(reinterpret_cast<char*>(b), word);
+        uint64_t v = 0;
+        for (uint32_t k = 0; k < word; ++k)
+            v |= uint64_t(b[k]) << (8 * k);  // byte_order LittleEndian (VTK writes the host's)
+        return v;
+    };
+    for (size_t at = xml.find("<DataArray"); at != std::string::npos;
+         at = xml.find("<DataArray", at + 1)) {
+        const std::string tag = xml.substr(at, xml.find('>', at) - at);
+        if (xmlAttribute(tag, "format") != "appended")
+            continue;
+        uint64_t offset = 0;
+        if (!parseCount(xmlAttribute(tag, "offset"), offset) || dataStart + offset > size)
+            fail("appended array offset out of the file in '" + tag.substr(0, 80) + "'");
+        const uint64_t pos = dataStart + offset;
+        const std::string where = " of the appended array at byte " + std::to_string(pos);
+        if (!compressed) {
+            if (readWord(pos) > size - pos)
+                fail("the size" + where + " is larger than the file");
+            continue;
+        }
+        const uint64_t blocks = readWord(pos), blockSize = readWord(pos + word),
+                       lastSize = readWord(pos + 2 * word);
+        if (blocks > (size - pos) / word)
+            fail("the compression header" + where + " claims " + std::to_string(blocks) +
+                 " blocks, more than the file holds (corrupt)");
+        const uint64_t decoded =
+            blocks == 0 ? 0 : (blocks - 1) * blockSize + (lastSize ? lastSize : blockSize);
+        if (blockSize > limit || decoded > limit)
+            fail("the compression header" + where + " claims " + std::to_string(decoded) +
+                 " bytes, more than the import limit of " + std::to_string(limit));
+        uint64_t stored = 0;
+        for (uint64_t b = 0; b < blocks; ++b)
+            stored += readWord(pos + (3 + b) * word);
+        if (stored > size - pos)
+            fail("the compressed blocks" + where + " are larger than the file (corrupt)");
+    }
+    return c;
+}
+
+}  // namespace
+
+ClaimedCounts validateMeshFile(const std::string& path, const std::string& ext, uint64_t size) {
+    if (ext == ".off")
+        validateOff(path, size);
+    else if (ext == ".obj")
+        validateObj(path);
+    else if (ext == ".stl")
+        validateStl(path, size);
+    else if (ext == ".ply")
+        validatePly(path, size);
+    else if (ext == ".vtk")
+        return legacyVtkClaims(path, size);
+    else if (ext == ".vtp")
+        return xmlVtkClaims(path, size);
+    return {};
+}
+
+}  // namespace lucent::detail
