@@ -95,8 +95,9 @@ Variant parseVariant(const std::string& entry) {
                      "' (known: ", knownVariants(), ")");
     const methods::MethodInfo& info = methods::find(v.method);
     if (!suffix.empty()) {
-        const auto it = std::find_if(info.variants.begin(), info.variants.end(),
-                                     [&](const methods::ParamPreset& p) { return p.name == suffix; });
+        const auto it =
+            std::find_if(info.variants.begin(), info.variants.end(),
+                         [&](const methods::ParamPreset& p) { return p.name == suffix; });
         if (it == info.variants.end()) {
             std::string allowed;
             for (const methods::ParamPreset& p : info.variants)
@@ -229,12 +230,14 @@ Reference referenceFor(const Scene& scene, const std::string& scenePath, const s
 // Scene overrides (--presets, --etas): every scene × preset × η is evaluated as its own case
 
 /// Replaces every object's material by the uniform preset, on the grid the scene file gave
-/// (GridSpec::around the mesh at the object's resolution, as SceneFile builds a preset material).
+/// (makeObject: GridSpec::around the mesh at the object's resolution, voxels outside the mesh
+/// vacuum, as SceneFile builds a preset material).
 void applyPreset(Scene& scene, const MaterialPreset& preset) {
     for (SceneObject& obj : scene.objects) {
         const int res = obj.material ? obj.material->resolution() : obj.materialSource.resolution;
-        obj.material = std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), res),
-                                                        preset.sample());
+        const float eta = obj.material ? obj.material->eta() : scene.eta;
+        obj.material = makeObject(obj.mesh, res, preset.sample()).material;
+        obj.material->setEta(eta);
         obj.materialSource.vdbFile.clear();
         obj.materialSource.uniform = false;
         obj.materialSource.preset = preset.name;
@@ -748,8 +751,7 @@ int runEvaluate(const std::vector<std::string>& argv) {
     if (!outDir || outDir->empty())
         LUCENT_THROW(ValueError, "missing --out DIR");
     std::vector<Variant> variants;
-    for (const std::string& name :
-         splitComma(args.valueOr("methods", defaultVariants())))
+    for (const std::string& name : splitComma(args.valueOr("methods", defaultVariants())))
         variants.push_back(parseVariant(name));
     if (variants.empty())
         LUCENT_THROW(ValueError, "--methods: no method given");
@@ -817,7 +819,9 @@ int runEvaluate(const std::vector<std::string>& argv) {
                 if (!presets.empty()) {
                     c.preset = presets[pi];
                     c.name.append("-").append(c.preset->name);
-                    c.overrides.append("preset=").append(c.preset->name);
+                    // "inside-mask": since issue 13 a preset fills the mesh only (makeObject);
+                    // references cached before that filled the whole grid and must not match.
+                    c.overrides.append("preset=").append(c.preset->name).append(" inside-mask");
                 }
                 if (!etas.empty()) {
                     c.eta = etas[ei];

@@ -72,6 +72,12 @@ void printText(const methods::MethodInfo& m) {
             v += (v.empty() ? "" : ", ") + m.name + ":" + p.name;
         std::printf("  evaluate variants: %s\n", v.c_str());
     }
+    if (!m.quality.empty()) {
+        std::string q;
+        for (const methods::ParamPreset& p : m.quality)
+            q += (q.empty() ? "" : "; ") + p.name;
+        std::printf("  evaluate quality levels: %s\n", q.c_str());
+    }
 }
 
 void printJson(const std::vector<const methods::MethodInfo*>& list) {
@@ -86,11 +92,12 @@ void printJson(const std::vector<const methods::MethodInfo*>& list) {
                     m.caps.progressive ? "true" : "false");
         for (size_t k = 0; k < m.params.size(); ++k) {
             const methods::ParamDescriptor& d = m.params[k];
-            std::printf("%s\n    {\"name\": %s, \"type\": \"%s\", \"range\": %s, \"default\": %s, "
-                        "\"help\": %s}",
-                        k ? "," : "", jsonString(d.name).c_str(), methods::paramTypeName(d.type),
-                        jsonString(d.rangeText()).c_str(), jsonString(defaults(d)).c_str(),
-                        jsonString(d.help).c_str());
+            std::printf(
+                "%s\n    {\"name\": %s, \"type\": \"%s\", \"range\": %s, \"default\": %s, "
+                "\"help\": %s}",
+                k ? "," : "", jsonString(d.name).c_str(), methods::paramTypeName(d.type),
+                jsonString(d.rangeText()).c_str(), jsonString(defaults(d)).c_str(),
+                jsonString(d.help).c_str());
         }
         std::printf("]}%s\n", i + 1 < list.size() ? "," : "");
     }

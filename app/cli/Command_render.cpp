@@ -41,7 +41,7 @@ int runRender(const std::vector<std::string>& argv) {
     // The method decides which --NAME VALUE options are its parameters.
     const std::string methodName = Args::peek(argv, "method").value_or("direct");
     const methods::MethodInfo& method = methods::find(methodName);
-    std::vector<std::string> valueOptions = {"method", "o",        "output",   "width",  "height",
+    std::vector<std::string> valueOptions = {"method",   "o",       "output",  "width", "height",
                                              "exposure", "tonemap", "backend", "param"};
     for (const methods::ParamDescriptor& d : method.params)
         valueOptions.push_back(d.name);

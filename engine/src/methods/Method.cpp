@@ -9,8 +9,8 @@ namespace lucent::methods {
 
 Method::Method(const MethodInfo& info, const MethodContext& context)
     : m_info(info), m_context(context) {
-    LUCENT_CHECK(context.backend == Backend::Gl || context.backend == Backend::Cpu,
-                 info.name, ": a method instance needs a resolved backend (gl or cpu)");
+    LUCENT_CHECK(context.backend == Backend::Gl || context.backend == Backend::Cpu, info.name,
+                 ": a method instance needs a resolved backend (gl or cpu)");
 }
 
 Method::~Method() = default;

@@ -50,7 +50,10 @@ namespace {
 /// "%g" of a range bound: integers print without a fraction.
 std::string number(double v) {
     char buf[40];
-    std::snprintf(buf, sizeof buf, "%.9g", v);
+    if (v == std::floor(v) && std::fabs(v) < 1e15)
+        std::snprintf(buf, sizeof buf, "%.0f", v);  // 1073741824, not 1.07374182e+09
+    else
+        std::snprintf(buf, sizeof buf, "%.9g", v);
     return buf;
 }
 
@@ -69,8 +72,16 @@ std::string ParamDescriptor::rangeText() const {
         case ParamType::Bool:
             return "on|off";
         case ParamType::Int:
-        case ParamType::Float:
-            return "[" + number(min) + ", " + number(max) + "]";
+        case ParamType::Float: {
+            // Appended piecewise: GCC 12 warns (-Wrestrict, a false positive) on
+            // "literal" + std::string&&.
+            std::string s = "[";
+            s += number(min);
+            s += ", ";
+            s += number(max);
+            s += "]";
+            return s;
+        }
         case ParamType::Choice:
             break;
     }

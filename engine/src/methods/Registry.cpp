@@ -10,14 +10,14 @@
 namespace lucent::methods {
 
 // The list: one line per method, in the order the CLI and the app's selector show them.
-#define LUCENT_METHODS(X) \
-    X(directMethod)       \
+#define LUCENT_METHODS(X)     \
+    X(directMethod)           \
     X(singleScatteringMethod) \
-    X(sslpvMethod)        \
-    X(dipoleMethod)       \
-    X(betterDipoleMethod) \
-    X(dirpoleMethod)      \
-    X(combinedMethod)     \
+    X(sslpvMethod)            \
+    X(dipoleMethod)           \
+    X(betterDipoleMethod)     \
+    X(dirpoleMethod)          \
+    X(combinedMethod)         \
     X(referenceMethod)
 
 #define LUCENT_DECLARE_METHOD(entry) MethodEntry entry();
@@ -72,8 +72,7 @@ std::unique_ptr<Method> create(const std::string& name, const ParamSet& given,
     LUCENT_CHECK(context.backend != Backend::Auto, name,
                  ": resolve the backend (resolveBackend) before creating an instance");
     LUCENT_CHECK(context.backend != Backend::Gl || e.info.caps.gl, name, " has no GL pass");
-    LUCENT_CHECK(context.backend != Backend::Cpu || e.info.caps.cpu, name,
-                 " has no CPU renderer");
+    LUCENT_CHECK(context.backend != Backend::Cpu || e.info.caps.cpu, name, " has no CPU renderer");
     std::unique_ptr<Method> m = e.create(e.info, context);
     m->setParams(given);
     return m;

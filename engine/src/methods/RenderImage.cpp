@@ -18,8 +18,7 @@ void say(const Log& log, const std::string& message) {
 
 /// The GL render: every object as a translucent surface (or the method's own surface), the
 /// method's pass, frames until it converges.
-void renderGl(const Scene& scene, Method& method, const RenderOptions& options,
-              RenderResult& out) {
+void renderGl(const Scene& scene, Method& method, const RenderOptions& options, RenderResult& out) {
     LUCENT_CHECK(!scene.objects.empty(), method.info().name, ": the scene has no object");
     std::unique_ptr<gpu::GlContext> own;
     gpu::GlContext* ctx = options.context;

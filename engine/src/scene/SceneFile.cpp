@@ -401,9 +401,9 @@ SceneObject buildObject(const MeshSource& meshSrc, const MaterialSource& matSrc,
         LUCENT_THROW(IoError, "scene: field 'material.vdb': this build has no OpenVDB support");
 #endif
     } else {
-        const GridSpec spec = GridSpec::around(obj.mesh.bounds(), matSrc.resolution);
-        obj.material = std::make_shared<MaterialVolume>(spec, matSrc.value);
-        obj.material->setInsideMask(voxelizeSolid(obj.mesh, spec));
+        SceneObject filled = makeObject(std::move(obj.mesh), matSrc.resolution, matSrc.value);
+        obj.mesh = std::move(filled.mesh);
+        obj.material = std::move(filled.material);
     }
     obj.material->setEta(eta);
     return obj;

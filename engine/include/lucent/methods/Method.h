@@ -44,8 +44,7 @@ constexpr LightMask lightBit(Light::Type type) {
     return 1u << unsigned(type);
 }
 constexpr LightMask ALL_LIGHTS = lightBit(Light::Type::Point) | lightBit(Light::Type::Spot) |
-                                 lightBit(Light::Type::Directional) |
-                                 lightBit(Light::Type::Sphere);
+                                 lightBit(Light::Type::Directional) | lightBit(Light::Type::Sphere);
 
 /// What a method can do.
 struct Capabilities {
@@ -54,8 +53,8 @@ struct Capabilities {
     /// What Backend::Auto picks when both exist and GL is available (falling back to the other
     /// backend when it is not).
     Backend preferred = Backend::Gl;
-    bool progressive = false;         ///< GL frames refine while idle until converged()
-    LightMask glLights = ALL_LIGHTS;  ///< light types the GL pass handles
+    bool progressive = false;          ///< GL frames refine while idle until converged()
+    LightMask glLights = ALL_LIGHTS;   ///< light types the GL pass handles
     LightMask cpuLights = ALL_LIGHTS;  ///< light types the CPU renderer handles (others ignored)
 };
 
@@ -92,11 +91,11 @@ struct MethodContext {
 
 /// Object 0 of a scene as a live method sees it (positions in mm).
 struct SceneInputs {
-    const TriangleMesh* mesh = nullptr;          ///< rest pose (non-owning)
-    const MaterialVolume* material = nullptr;    ///< painted volume (non-owning; must outlive)
-    float eta = 1.3f;                            ///< relative index of refraction
-    std::vector<Light> lights;                   ///< at most gpu::SceneRenderer::MAX_LIGHTS
-    int meshId = 0;                              ///< the object's SceneRenderer mesh id
+    const TriangleMesh* mesh = nullptr;        ///< rest pose (non-owning)
+    const MaterialVolume* material = nullptr;  ///< painted volume (non-owning; must outlive)
+    float eta = 1.3f;                          ///< relative index of refraction
+    std::vector<Light> lights;                 ///< at most gpu::SceneRenderer::MAX_LIGHTS
+    int meshId = 0;                            ///< the object's SceneRenderer mesh id
 };
 
 /// One key/value line of a method's statistics ("frames" → "12").

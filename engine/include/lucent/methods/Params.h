@@ -53,6 +53,24 @@ enum class ParamScope {
 
 /// One parameter of a method: everything a front end needs to offer it and to check a value.
 struct ParamDescriptor {
+    ParamDescriptor() = default;
+    /// In field order; the per-backend and live defaults and the scope are optional, so that the
+    /// methods' tables stay one brace list per parameter.
+    ParamDescriptor(std::string name_, ParamType type_, std::string help_, double min_, double max_,
+                    std::vector<std::string> choices_, std::string defaultValue_,
+                    std::string cpuDefault_ = {}, std::string liveDefault_ = {},
+                    ParamScope scope_ = ParamScope::Both)
+        : name(std::move(name_)),
+          type(type_),
+          help(std::move(help_)),
+          min(min_),
+          max(max_),
+          choices(std::move(choices_)),
+          defaultValue(std::move(defaultValue_)),
+          cpuDefault(std::move(cpuDefault_)),
+          liveDefault(std::move(liveDefault_)),
+          scope(scope_) {}
+
     std::string name;  ///< kebab-case, as on the command line: "spp-frame"
     ParamType type = ParamType::Int;
     std::string help;                  ///< one line, with the unit

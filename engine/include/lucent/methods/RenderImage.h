@@ -23,17 +23,17 @@
 #include <string>
 #include <vector>
 
-namespace lucent::methods {
-
-namespace gpu {
+namespace lucent::gpu {
 class GlContext;
 }
+
+namespace lucent::methods {
 
 /// How to render.
 struct RenderOptions {
     Backend backend = Backend::Auto;
     bool subsurfaceOnly = false;  ///< only the subsurface term (no surface reflection)
-    Log log;                      ///< notes for the user (fallbacks, ignored parameters); may be empty
+    Log log;  ///< notes for the user (fallbacks, ignored parameters); may be empty
     /// Progress of long CPU renders (fraction in [0, 1], a short status); may be empty.
     std::function<void(double fraction, const std::string& status)> progress;
     /// Render GL methods in this context (made current; e.g. a test's shared context) instead
@@ -43,13 +43,13 @@ struct RenderOptions {
 
 /// What a render produced.
 struct RenderResult {
-    ImageRgb radiance;               ///< linear W/(mm²·sr), camera width × height, top row first
-    Backend backend = Backend::Gl;   ///< the backend used (Gl or Cpu)
-    std::string device;              ///< Gl: "GL_RENDERER (GL_VERSION, EGL platform)"; Cpu: "CPU"
-    int frames = 0;                  ///< renderer frames (Gl) or CPU renders (1)
-    double milliseconds = 0.0;       ///< wall time of the whole call (context creation included)
+    ImageRgb radiance;              ///< linear W/(mm²·sr), camera width × height, top row first
+    Backend backend = Backend::Gl;  ///< the backend used (Gl or Cpu)
+    std::string device;             ///< Gl: "GL_RENDERER (GL_VERSION, EGL platform)"; Cpu: "CPU"
+    int frames = 0;                 ///< renderer frames (Gl) or CPU renders (1)
+    double milliseconds = 0.0;      ///< wall time of the whole call (context creation included)
     std::vector<gpu::PassTiming> passes;  ///< Gl: the last frame's renderer passes
-    Stats stats;                     ///< the method's statistics after the last frame
+    Stats stats;                          ///< the method's statistics after the last frame
     std::vector<std::string> glErrors;    ///< Gl: errors the context's debug log collected
 };
 

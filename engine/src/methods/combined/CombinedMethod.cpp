@@ -139,19 +139,18 @@ private:
         s.meshId = m_meshId;
         if (!isLive()) {  // frames of spp-frame dipole samples up to spp (or convergence)
             s.dipole.samplesPerFrame = std::min(s.dipole.samplesPerFrame, m_spp);
-            s.dipole.maxFrames =
-                (m_spp + s.dipole.samplesPerFrame - 1) / s.dipole.samplesPerFrame;
+            s.dipole.maxFrames = (m_spp + s.dipole.samplesPerFrame - 1) / s.dipole.samplesPerFrame;
         }
         const combined::CombinedProviderSettings& o = m_provider->settings();
-        const bool changed =
-            !m_settingsSet || s.splitRadius != o.splitRadius || s.mode != o.mode ||
-            s.eta != o.eta || s.meshId != o.meshId || s.dipole.model != o.dipole.model ||
-            s.dipole.seed != o.dipole.seed || s.dipole.lightViews != o.dipole.lightViews ||
-            s.dipole.samplesPerFrame != o.dipole.samplesPerFrame ||
-            s.dipole.maxFrames != o.dipole.maxFrames ||
-            s.sslpv.render.gridResolution != o.sslpv.render.gridResolution ||
-            s.sslpv.render.solver.maxSteps != o.sslpv.render.solver.maxSteps ||
-            s.sslpv.render.solver.order != o.sslpv.render.solver.order;
+        const bool changed = !m_settingsSet || s.splitRadius != o.splitRadius || s.mode != o.mode ||
+                             s.eta != o.eta || s.meshId != o.meshId ||
+                             s.dipole.model != o.dipole.model || s.dipole.seed != o.dipole.seed ||
+                             s.dipole.lightViews != o.dipole.lightViews ||
+                             s.dipole.samplesPerFrame != o.dipole.samplesPerFrame ||
+                             s.dipole.maxFrames != o.dipole.maxFrames ||
+                             s.sslpv.render.gridResolution != o.sslpv.render.gridResolution ||
+                             s.sslpv.render.solver.maxSteps != o.sslpv.render.solver.maxSteps ||
+                             s.sslpv.render.solver.order != o.sslpv.render.solver.order;
         if (changed)
             m_provider->setSettings(s);
         m_settingsSet = true;
@@ -180,20 +179,42 @@ MethodEntry combinedMethod() {
     i.caps.progressive = true;
     i.params = {
         {"split-radius", ParamType::Float, "r_s, mm (< 0: 4 SSLPV cells)", -1, 1e30, {}, "-1"},
-        {"split", ParamType::Choice,
+        {"split",
+         ParamType::Choice,
          "kernel: SSLPV minus its own local kernel; steps: SSLPV skips its first r_s/cell steps",
-         0, 0, {"kernel", "steps"}, "kernel"},
-        {"model", ParamType::Choice, "the dipole part's profile", 0, 0,
-         {"dipole", "better-dipole"}, "dipole"},
+         0,
+         0,
+         {"kernel", "steps"},
+         "kernel"},
+        {"model",
+         ParamType::Choice,
+         "the dipole part's profile",
+         0,
+         0,
+         {"dipole", "better-dipole"},
+         "dipole"},
         {"grid", ParamType::Int, "SSLPV cells per axis (calibrated mode)", 4, 256, {}, "32"},
         {"steps", ParamType::Int, "SSLPV propagation steps", 0, 4096, {}, "32"},
         {"sh", ParamType::Int, "SSLPV spherical-harmonics order", 1, 2, {}, "1"},
         {"seed", ParamType::Int, "the dipole part's sample sequence", 0, 1 << 30, {}, "1"},
-        {"spp", ParamType::Int, "dipole samples per pixel in all", 1, 1 << 24, {}, "256", "32", "",
+        {"spp",
+         ParamType::Int,
+         "dipole samples per pixel in all",
+         1,
+         1 << 24,
+         {},
+         "256",
+         "32",
+         "",
          ParamScope::Offline},
         {"spp-frame", ParamType::Int, "GL: dipole samples per pixel and frame", 1, 4096, {}, "16"},
-        {"light-views", ParamType::Bool,
-         "the dipole part's light views (on counts back-lit light twice)", 0, 0, {}, "off"},
+        {"light-views",
+         ParamType::Bool,
+         "the dipole part's light views (on counts back-lit light twice)",
+         0,
+         0,
+         {},
+         "off"},
     };
     i.variants = {{"cpu", {}, Backend::Cpu}};
     for (int spp : {8, 32, 128})

@@ -22,54 +22,18 @@ namespace {
 
 using detail::num;
 
-class DipoleMethod final : public Method {
+class DipoleMethod final : public detail::ImageSpaceDipoleMethod<dipole::DipoleSubsurfaceProvider> {
 public:
     DipoleMethod(const MethodInfo& info, const MethodContext& context, dipole::Model model)
-        : Method(info, context), m_model(model) {}
-
-    void createGl(const gpu::ShaderLibrary& library) override {
-        m_provider = std::make_unique<dipole::DipoleSubsurfaceProvider>();
-        m_provider->create(library);
-        m_material = nullptr;
-        m_settingsSet = false;
-    }
-    void destroyGl() override {
-        if (m_provider)
-            m_provider->destroy();
-        m_provider.reset();
-        m_material = nullptr;
-    }
-
-    void setScene(const SceneInputs& scene) override {
-        LUCENT_CHECK(scene.material, info().name, ": the object needs a material volume");
-        LUCENT_CHECK(m_provider, info().name, ": setScene before createGl");
-        m_eta = std::clamp(scene.eta, 1.f, 3.f);
-        m_meshId = scene.meshId;
-        applySettings();
-        if (scene.material != m_material) {
-            m_provider->setMaterial(scene.material);  // full upload at the next frame
-            m_material = scene.material;
-        }
-    }
-    void materialChanged(const std::vector<int>& dirtyBricks) override {
-        if (m_provider && m_material && !dirtyBricks.empty())
-            m_provider->uploadBricks(dirtyBricks);
-    }
-    void geometryChanged() override {
-        if (m_provider)
-            m_provider->reset();
-    }
-
-    gpu::SubsurfaceProvider* subsurfacePass() override { return m_provider.get(); }
-    [[nodiscard]] bool converged() const override {
-        return !m_provider || m_provider->stats().converged;
-    }
+        : ImageSpaceDipoleMethod(info, context), m_model(model) {}
 
     ImageRgb renderCpu(const Scene& scene, const CpuRequest& request) override {
         if (!request.subsurfaceOnly)
-            note(info().name + " on the CPU draws the subsurface term only (no surface reflection)");
+            note(info().name +
+                 " on the CPU draws the subsurface term only (no surface reflection)");
         const int spp = params().getInt("spp");
-        LUCENT_CHECK(spp <= 65536, info().name, ": spp: ", spp, " is outside [1, 65536] on the CPU");
+        LUCENT_CHECK(spp <= 65536, info().name, ": spp: ", spp,
+                     " is outside [1, 65536] on the CPU");
         dipole::GatherSettings gs;
         gs.model = m_model;
         gs.uniformSamples = spp / 4;
@@ -82,11 +46,12 @@ public:
         std::vector<dipole::LightViewReport> reports;
         const dipole::GatherResult g = dipole::renderImageSpaceDipole(scene, gs, lv, &reports);
         const dipole::GatherStats& st = g.stats;
-        m_cpuStats = {{"pixels", std::to_string(st.pixels)},
-                      {"eps", num(st.epsilon, "%.3g")},
-                      {"disc quantile", num(1.0 - st.epsilon)},
-                      {"disc radius mm", num(st.minRadius, "%.3g") + ".." + num(st.maxRadius, "%.3g")},
-                      {"light views gathered", std::to_string(st.lightViews)}};
+        m_cpuStats = {
+            {"pixels", std::to_string(st.pixels)},
+            {"eps", num(st.epsilon, "%.3g")},
+            {"disc quantile", num(1.0 - st.epsilon)},
+            {"disc radius mm", num(st.minRadius, "%.3g") + ".." + num(st.maxRadius, "%.3g")},
+            {"light views gathered", std::to_string(st.lightViews)}};
         for (const dipole::LightViewReport& r : reports)
             m_cpuStats.push_back(
                 {"light " + std::to_string(r.light) + " view",
@@ -117,7 +82,7 @@ public:
             s.push_back({"light " + std::to_string(l) + " view",
                          std::string(f < 0.f ? "not rendered"
                                      : f > m_provider->settings().lightViewThreshold ? "gathered"
-                                                                                      : "skipped") +
+                                                                                     : "skipped") +
                              " (back-lit flux fraction " + num(f, "%.3g") + ")"});
         }
         return s;
@@ -140,7 +105,7 @@ private:
 
     /// The provider's settings from the parameters and the scene; set only when they changed
     /// (every change restarts the accumulation).
-    void applySettings() {
+    void applySettings() override {
         dipole::ProviderSettings ps = m_provider->settings();
         ps.model = m_model;
         ps.eta = m_eta;
@@ -155,23 +120,17 @@ private:
         ps.lightViews = m_lightViews;
         ps.lightViewResolution = m_lightViewRes;
         const dipole::ProviderSettings& old = m_provider->settings();
-        const bool changed = !m_settingsSet || ps.model != old.model || ps.eta != old.eta ||
-                             ps.samplesPerFrame != old.samplesPerFrame ||
-                             ps.maxFrames != old.maxFrames || ps.seed != old.seed ||
-                             ps.meshId != old.meshId || ps.maxRadius != old.maxRadius ||
-                             ps.lightViews != old.lightViews ||
-                             ps.lightViewResolution != old.lightViewResolution;
+        const bool changed =
+            !m_settingsSet || ps.model != old.model || ps.eta != old.eta ||
+            ps.samplesPerFrame != old.samplesPerFrame || ps.maxFrames != old.maxFrames ||
+            ps.seed != old.seed || ps.meshId != old.meshId || ps.maxRadius != old.maxRadius ||
+            ps.lightViews != old.lightViews || ps.lightViewResolution != old.lightViewResolution;
         if (changed)
             m_provider->setSettings(ps);
         m_settingsSet = true;
     }
 
     dipole::Model m_model;
-    std::unique_ptr<dipole::DipoleSubsurfaceProvider> m_provider;
-    const MaterialVolume* m_material = nullptr;
-    bool m_settingsSet = false;
-    float m_eta = 1.3f;
-    int m_meshId = -1;
     int m_spp = 256, m_sppFrame = 16, m_lightViewRes = 512;
     uint32_t m_seed = 1;
     float m_maxRadius = 0.f;
@@ -182,18 +141,34 @@ private:
 /// The parameters both dipoles share.
 std::vector<ParamDescriptor> dipoleParams() {
     return {
-        {"spp", ParamType::Int,
-         "samples per pixel in all (GL: frames of spp-frame up to this or convergence)", 1,
-         1 << 24, {}, "256", "32", "", ParamScope::Offline},
+        {"spp",
+         ParamType::Int,
+         "samples per pixel in all (GL: frames of spp-frame up to this or convergence)",
+         1,
+         1 << 24,
+         {},
+         "256",
+         "32",
+         "",
+         ParamScope::Offline},
         {"spp-frame", ParamType::Int, "GL: samples per pixel and frame", 1, 4096, {}, "16"},
         {"seed", ParamType::Int, "sample sequence", 0, 1 << 30, {}, "1"},
-        {"light-views", ParamType::Bool,
+        {"light-views",
+         ParamType::Bool,
          "gather light-view irradiance images too (back-lit thin parts; docs/methods/dipole.md "
          "section 3d)",
-         0, 0, {}, "on"},
+         0,
+         0,
+         {},
+         "on"},
         {"light-view-res", ParamType::Int, "texels per side of a light view", 16, 4096, {}, "512"},
-        {"max-radius", ParamType::Float, "mm; > 0: only r <= this is gathered (0: unlimited)", 0,
-         1e6, {}, "0"},
+        {"max-radius",
+         ParamType::Float,
+         "mm; > 0: only r <= this is gathered (0: unlimited)",
+         0,
+         1e6,
+         {},
+         "0"},
     };
 }
 

@@ -28,47 +28,10 @@ constexpr const char* EXPERIMENTAL_WARNING =
     "reflectance (1.34 at sigma_a = 0) and is +48..131% against the reference path tracer "
     "(docs/methods/dipole.md, sections 1 and 4)";
 
-class DirpoleMethod final : public Method {
+class DirpoleMethod final
+    : public detail::ImageSpaceDipoleMethod<dipole::DirpoleSubsurfaceProvider> {
 public:
-    using Method::Method;
-
-    void createGl(const gpu::ShaderLibrary& library) override {
-        m_provider = std::make_unique<dipole::DirpoleSubsurfaceProvider>();
-        m_provider->create(library);
-        m_material = nullptr;
-        m_settingsSet = false;
-    }
-    void destroyGl() override {
-        if (m_provider)
-            m_provider->destroy();
-        m_provider.reset();
-        m_material = nullptr;
-    }
-
-    void setScene(const SceneInputs& scene) override {
-        LUCENT_CHECK(scene.material, "dirpole: the object needs a material volume");
-        LUCENT_CHECK(m_provider, "dirpole: setScene before createGl");
-        m_eta = std::clamp(scene.eta, 1.f, 3.f);
-        m_meshId = scene.meshId;
-        applySettings();
-        if (scene.material != m_material) {
-            m_provider->setMaterial(scene.material);  // full upload at the next frame
-            m_material = scene.material;
-        }
-    }
-    void materialChanged(const std::vector<int>& dirtyBricks) override {
-        if (m_provider && m_material && !dirtyBricks.empty())
-            m_provider->uploadBricks(dirtyBricks);
-    }
-    void geometryChanged() override {
-        if (m_provider)
-            m_provider->reset();
-    }
-
-    gpu::SubsurfaceProvider* subsurfacePass() override { return m_provider.get(); }
-    [[nodiscard]] bool converged() const override {
-        return !m_provider || m_provider->stats().converged;
-    }
+    using ImageSpaceDipoleMethod::ImageSpaceDipoleMethod;
 
     ImageRgb renderCpu(const Scene& scene, const CpuRequest& request) override {
         if (!request.subsurfaceOnly)
@@ -131,7 +94,7 @@ private:
     }
 
     /// The provider's settings; set only when they changed (a change restarts the gather).
-    void applySettings() {
+    void applySettings() override {
         dipole::DirpoleSettings ds = m_provider->settings();
         ds.eta = m_eta;
         ds.samplesPerFrame = m_sppFrame;
@@ -158,11 +121,6 @@ private:
         m_settingsSet = true;
     }
 
-    std::unique_ptr<dipole::DirpoleSubsurfaceProvider> m_provider;
-    const MaterialVolume* m_material = nullptr;
-    bool m_settingsSet = false;
-    float m_eta = 1.3f;
-    int m_meshId = -1;
     int m_spp = 256, m_sppFrame = 16;
     uint32_t m_seed = 1;
     bool m_normalised = true;
@@ -183,16 +141,32 @@ MethodEntry dirpoleMethod() {
     i.caps.progressive = true;
     i.caps.cpuLights = lightBit(Light::Type::Directional);
     i.params = {
-        {"spp", ParamType::Int,
-         "disc samples per cube texel and light in all (GL; CPU: per pixel and light)", 1,
-         1 << 24, {}, "256", "32", "", ParamScope::Offline},
-        {"spp-frame", ParamType::Int, "GL: disc samples per cube texel, light and frame", 1, 4096,
-         {}, "16"},
+        {"spp",
+         ParamType::Int,
+         "disc samples per cube texel and light in all (GL; CPU: per pixel and light)",
+         1,
+         1 << 24,
+         {},
+         "256",
+         "32",
+         "",
+         ParamScope::Offline},
+        {"spp-frame",
+         ParamType::Int,
+         "GL: disc samples per cube texel, light and frame",
+         1,
+         4096,
+         {},
+         "16"},
         {"seed", ParamType::Int, "sample sequence", 0, 1 << 30, {}, "1"},
-        {"dirpole-normalise", ParamType::Bool,
+        {"dirpole-normalise",
+         ParamType::Bool,
          "S_d scaled to the better dipole's normal-incidence total (docs/methods/dipole.md "
          "section 1); off: the published model",
-         0, 0, {}, "on"},
+         0,
+         0,
+         {},
+         "on"},
     };
     // Default: the GPU pipeline, energy-normalised; raw: the published S_d; cpu: the CPU
     // pipeline (directional lights only).

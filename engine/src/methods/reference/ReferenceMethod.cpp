@@ -73,13 +73,22 @@ MethodEntry referenceMethod() {
     i.caps.preferred = Backend::Cpu;
     i.params = {
         {"spp", ParamType::Int, "samples per pixel", 3, 1 << 24, {}, "64"},
-        {"seed", ParamType::Int, "random seed: same seed and spp give the same image", 0, 1 << 30,
-         {}, "1"},
+        {"seed",
+         ParamType::Int,
+         "random seed: same seed and spp give the same image",
+         0,
+         1 << 30,
+         {},
+         "1"},
         {"threads", ParamType::Int, "worker threads (0: all)", 0, 1024, {}, "0"},
-        {"boundary", ParamType::Choice,
+        {"boundary",
+         ParamType::Choice,
          "dielectric: exact Fresnel and refraction; matched: eta = 1; straight: fast "
          "approximation (not ground truth)",
-         0, 0, {"dielectric", "matched", "straight"}, "dielectric"},
+         0,
+         0,
+         {"dielectric", "matched", "straight"},
+         "dielectric"},
     };
     for (int spp : {4, 16, 64})
         i.quality.push_back({std::to_string(spp) + " spp",

@@ -25,10 +25,11 @@ namespace {
 
 /// Settings of the pass (the method's parameters).
 struct SingleScatteringSettings {
-    int steps = 24;             ///< view-ray march steps, [1, 512]
-    int lightSteps = 6;         ///< shadow-ray march steps per view step, [1, 128]
-    float ambient = 0.f;        ///< uniform ambient irradiance, W/mm²
-    bool smoothVoxels = false;  ///< trilinear σ filtering (display only; the lookup rule is nearest)
+    int steps = 24;       ///< view-ray march steps, [1, 512]
+    int lightSteps = 6;   ///< shadow-ray march steps per view step, [1, 128]
+    float ambient = 0.f;  ///< uniform ambient irradiance, W/mm²
+    bool smoothVoxels =
+        false;  ///< trilinear σ filtering (display only; the lookup rule is nearest)
 };
 
 /// The compute pass and its two volume textures.
@@ -235,11 +236,19 @@ MethodEntry singleScatteringMethod() {
         {"steps", ParamType::Int, "view-ray march steps", 1, 512, {}, "24"},
         {"light-steps", ParamType::Int, "shadow-ray march steps per view step", 1, 128, {}, "6"},
         {"ambient", ParamType::Float, "uniform ambient irradiance, W/mm^2", 0, 1e6, {}, "0"},
-        {"smooth-voxels", ParamType::Bool,
-         "trilinear filtering of sigma (display only; the engine's lookup rule is nearest)", 0, 0,
-         {}, "off"},
+        {"smooth-voxels",
+         ParamType::Bool,
+         "trilinear filtering of sigma (display only; the engine's lookup rule is nearest)",
+         0,
+         0,
+         {},
+         "off"},
     };
-    i.quality = {{"24 steps", {}, Backend::Auto}};
+    // `evaluate` levels: the view-ray step count sets the cost and the quadrature error.
+    for (int steps : {12, 24, 48})
+        i.quality.push_back({std::to_string(steps) + " steps",
+                             ParamSet::fromAssignments({"steps=" + std::to_string(steps)}),
+                             Backend::Auto});
     e.create = [](const MethodInfo& info, const MethodContext& context) {
         return std::unique_ptr<Method>(new SingleScatteringMethod(info, context));
     };

@@ -69,16 +69,12 @@ public:
         SslpvRenderTimings t;
         SslpvStats st;
         ImageRgb image = renderSslpv(scene, opt, &t, &st);
-        m_cpuStats = {{"mode", params().getChoice("mode")},
-                      {"steps", std::to_string(st.stepsUsed)},
-                      {"injected W (green)", num(st.injected.y)},
-                      {"exitant W (green)", num(st.exitant.y)},
-                      {"remaining W (green)", num(st.remaining.y)},
-                      {"rsm ms", num(t.rsmMs, "%.2f")},
-                      {"resample ms", num(t.resampleMs, "%.2f")},
-                      {"inject ms", num(t.injectMs, "%.2f")},
-                      {"propagate ms", num(t.propagateMs, "%.2f")},
-                      {"shade ms", num(t.shadeMs, "%.2f")}};
+        m_cpuStats = {
+            {"mode", params().getChoice("mode")},         {"steps", std::to_string(st.stepsUsed)},
+            {"injected W (green)", num(st.injected.y)},   {"exitant W (green)", num(st.exitant.y)},
+            {"remaining W (green)", num(st.remaining.y)}, {"rsm ms", num(t.rsmMs, "%.2f")},
+            {"resample ms", num(t.resampleMs, "%.2f")},   {"inject ms", num(t.injectMs, "%.2f")},
+            {"propagate ms", num(t.propagateMs, "%.2f")}, {"shade ms", num(t.shadeMs, "%.2f")}};
         return image;
     }
 
@@ -171,19 +167,46 @@ MethodEntry sslpvMethod() {
     i.caps.preferred = Backend::Cpu;  // offline: the CPU ray-cast image with its own direct term
     i.params = {
         {"grid", ParamType::Int, "LPV cells per axis", 4, 256, {}, "32"},
-        {"steps", ParamType::Int, "propagation steps (live preview: at most 512)", 0, 4096, {},
+        {"steps",
+         ParamType::Int,
+         "propagation steps (live preview: at most 512)",
+         0,
+         4096,
+         {},
          "32"},
-        {"sh", ParamType::Int, "spherical-harmonics order: 1 (4 coefficients) or 2 (9)", 1, 2, {},
+        {"sh",
+         ParamType::Int,
+         "spherical-harmonics order: 1 (4 coefficients) or 2 (9)",
+         1,
+         2,
+         {},
          "1"},
-        {"mode", ParamType::Choice,
+        {"mode",
+         ParamType::Choice,
          "calibrated: fitted per-step absorption and gain; paper: the paper's transfer (section "
          "3.2.1)",
-         0, 0, {"calibrated", "paper"}, "calibrated", "", "paper"},
-        {"attenuation", ParamType::Choice, "mode paper only: per-step attenuation", 0, 0,
-         {"absorption", "extinction"}, "absorption", "", "extinction"},
-        {"propagation", ParamType::Choice,
-         "GL backend: where the propagation steps run (cpu: SslpvSolver; gl: compute shaders)", 0,
-         0, {"cpu", "gl"}, "cpu"},
+         0,
+         0,
+         {"calibrated", "paper"},
+         "calibrated",
+         "",
+         "paper"},
+        {"attenuation",
+         ParamType::Choice,
+         "mode paper only: per-step attenuation",
+         0,
+         0,
+         {"absorption", "extinction"},
+         "absorption",
+         "",
+         "extinction"},
+        {"propagation",
+         ParamType::Choice,
+         "GL backend: where the propagation steps run (cpu: SslpvSolver; gl: compute shaders)",
+         0,
+         0,
+         {"cpu", "gl"},
+         "cpu"},
     };
     i.variants = {{"paper", ParamSet::fromAssignments({"mode=paper"}), Backend::Auto},
                   {"calibrated", ParamSet::fromAssignments({"mode=calibrated"}), Backend::Auto},
@@ -191,10 +214,10 @@ MethodEntry sslpvMethod() {
     // One propagation step moves light by one cell, so the step count follows the grid to cover
     // the same distance in mm (docs/methods/sslpv.md).
     for (int n : {16, 32, 64})
-        i.quality.push_back({"grid " + std::to_string(n) + ", " + std::to_string(n) + " steps",
-                             ParamSet::fromAssignments({"grid=" + std::to_string(n),
-                                                        "steps=" + std::to_string(n)}),
-                             Backend::Auto});
+        i.quality.push_back(
+            {"grid " + std::to_string(n) + ", " + std::to_string(n) + " steps",
+             ParamSet::fromAssignments({"grid=" + std::to_string(n), "steps=" + std::to_string(n)}),
+             Backend::Auto});
     i.evaluate = {"paper", "calibrated"};
     e.create = detail::make<SslpvMethod>;
     return e;
