@@ -14,9 +14,7 @@
 #include <lucent/mesh/Voxelize.h>
 #include <lucent/scene/SceneFile.h>
 
-#if LUCENT_SCENE_HAS_VDB
 #include <lucent/io/VdbIO.h>
-#endif
 
 #include <nlohmann/json.hpp>
 
@@ -387,7 +385,6 @@ SceneObject buildObject(const MeshSource& meshSrc, const MaterialSource& matSrc,
     obj.materialSource = matSrc;
     obj.mesh = buildMesh(meshSrc, warnings);
     if (!matSrc.vdbFile.empty()) {
-#if LUCENT_SCENE_HAS_VDB
         ImportedMaterial imported = importVdb(matSrc.vdbFile);
         if (resolutionGiven && imported.volume.resolution() != matSrc.resolution)
             valueError("resolution", "is " + std::to_string(matSrc.resolution) +
@@ -397,9 +394,6 @@ SceneObject buildObject(const MeshSource& meshSrc, const MaterialSource& matSrc,
         obj.materialSource.resolution = imported.volume.resolution();
         obj.materialSource.value = imported.volume.base();
         obj.material = std::make_shared<MaterialVolume>(std::move(imported.volume));
-#else
-        LUCENT_THROW(IoError, "scene: field 'material.vdb': this build has no OpenVDB support");
-#endif
     } else {
         SceneObject filled = makeObject(std::move(obj.mesh), matSrc.resolution, matSrc.value);
         obj.mesh = std::move(filled.mesh);
@@ -607,7 +601,6 @@ void saveProject(const Scene& scene, const std::string& path) {
     // Both files are first written and synced as temporaries next to their destinations; only
     // when both are complete are they renamed over the old ones, so a failed save leaves the
     // previous project intact.
-#if LUCENT_SCENE_HAS_VDB
     AtomicFile vdbFile(vdbPath.string());
     AtomicFile jsonFile(path);
     vdbFile.sink().write(encodeVdb(*scene.objects.front().material));
@@ -616,9 +609,6 @@ void saveProject(const Scene& scene, const std::string& path) {
     jsonFile.finish();
     vdbFile.commit();
     jsonFile.commit();
-#else
-    LUCENT_THROW(IoError, "saveProject: this build has no OpenVDB support");
-#endif
 }
 
 Scene makeDefaultScene() {
