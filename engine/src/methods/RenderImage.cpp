@@ -83,8 +83,13 @@ RenderResult renderImage(const Scene& scene, const std::string& name, const Para
     const MethodInfo& info = find(name);
     const Timer timer;
     std::string reason;
-    const bool glAvailable = info.caps.gl && options.backend != Backend::Cpu &&
-                             (options.context || gpu::GlContext::isHeadlessAvailable(&reason));
+    // Probe EGL only when GL could be chosen: the probe initialises a display (~0.3 s on
+    // llvmpipe), which a method that prefers its CPU renderer (sslpv) would pay for nothing.
+    const bool autoPicksCpu =
+        options.backend == Backend::Auto && info.caps.cpu && info.caps.preferred == Backend::Cpu;
+    const bool mayUseGl = info.caps.gl && options.backend != Backend::Cpu && !autoPicksCpu;
+    const bool glAvailable =
+        mayUseGl && (options.context || gpu::GlContext::isHeadlessAvailable(&reason));
     RenderResult out;
     out.backend = resolveBackend(info, options.backend, glAvailable, reason);
     if (options.backend == Backend::Auto && out.backend == Backend::Cpu && info.caps.gl &&
