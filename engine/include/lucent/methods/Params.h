@@ -2,9 +2,9 @@
 #pragma once
 /// @file
 /// @brief The typed parameters of a translucency method: descriptors (name, type, range,
-/// default, help) that the CLI, the app's settings widgets and `lucent-cli methods` are built
-/// from, the values a caller gives (ParamSet: text, as on a command line), and their resolved,
-/// validated form (Params) that a method reads.
+/// default, help) that `lucent-cli render` and `lucent-cli methods` are built from (and the
+/// app's settings widgets are to be), the values a caller gives (ParamSet: text, as on a command
+/// line), and their resolved, validated form (Params) that a method reads.
 ///
 /// Usage (what lucent::methods::renderImage does for a method):
 /// @code

@@ -3,7 +3,8 @@
 /// @file
 /// @brief The registry of translucency methods: name → descriptor + factory, the one list of
 /// methods (engine/src/methods/Registry.cpp). The CLI (`render --method`, `methods`,
-/// `evaluate`), the app's method selector and its settings widgets are built from it.
+/// `evaluate`) is built from it; the app's method selector and settings widgets are to be
+/// (docs/architecture.md, "Not yet on the registry").
 ///
 ///     for (const MethodInfo* info : methods::all()) std::puts(info->name.c_str());
 ///     auto m = methods::create("sslpv", params, {Backend::Gl, /*live=*/true});
