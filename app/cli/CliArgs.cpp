@@ -29,11 +29,11 @@ Args::Args(const std::vector<std::string>& argv, const std::vector<std::string>&
                 m_flags.push_back(name);
             } else if (isIn(valueOptions, name)) {
                 if (inlineValue) {
-                    m_values[name] = *inlineValue;
+                    m_values[name].push_back(*inlineValue);
                 } else {
                     if (i + 1 >= argv.size())
                         LUCENT_THROW(ValueError, "option --", name, " needs a value");
-                    m_values[name] = argv[++i];
+                    m_values[name].push_back(argv[++i]);
                 }
             } else {
                 LUCENT_THROW(ValueError, "unknown option '", a, "' (see --help)");
@@ -52,7 +52,24 @@ std::optional<std::string> Args::value(const std::string& name) const {
     auto it = m_values.find(name);
     if (it == m_values.end())
         return std::nullopt;
-    return it->second;
+    return it->second.back();
+}
+
+std::vector<std::string> Args::values(const std::string& name) const {
+    auto it = m_values.find(name);
+    return it == m_values.end() ? std::vector<std::string>{} : it->second;
+}
+
+std::optional<std::string> Args::peek(const std::vector<std::string>& argv,
+                                      const std::string& name) {
+    std::optional<std::string> found;
+    for (size_t i = 0; i < argv.size(); ++i) {
+        if (argv[i] == "--" + name && i + 1 < argv.size())
+            found = argv[++i];
+        else if (argv[i].rfind("--" + name + "=", 0) == 0)
+            found = argv[i].substr(name.size() + 3);
+    }
+    return found;
 }
 
 std::string Args::valueOr(const std::string& name, const std::string& fallback) const {

@@ -22,7 +22,10 @@ public:
          const std::vector<std::string>& flagOptions);
 
     [[nodiscard]] bool has(const std::string& name) const;
+    /// The last value of an option given several times.
     [[nodiscard]] std::optional<std::string> value(const std::string& name) const;
+    /// Every value of a repeatable option, in the order given.
+    [[nodiscard]] std::vector<std::string> values(const std::string& name) const;
     [[nodiscard]] std::string valueOr(const std::string& name, const std::string& fallback) const;
     /// Integer option within [lo, hi]; ValueError naming the option otherwise.
     [[nodiscard]] int intOr(const std::string& name, int fallback, int lo, int hi) const;
@@ -32,8 +35,13 @@ public:
     [[nodiscard]] std::optional<Rgb> rgb(const std::string& name, float lo, float hi) const;
     [[nodiscard]] const std::vector<std::string>& positional() const { return m_positional; }
 
+    /// The value of `--name VALUE` or `--name=VALUE` in raw arguments, before parsing (for
+    /// options that decide which other options exist, such as render's --method).
+    static std::optional<std::string> peek(const std::vector<std::string>& argv,
+                                           const std::string& name);
+
 private:
-    std::map<std::string, std::string> m_values;
+    std::map<std::string, std::vector<std::string>> m_values;
     std::vector<std::string> m_flags;
     std::vector<std::string> m_positional;
 };
@@ -45,5 +53,9 @@ struct Command {
     const char* help;  ///< full --help text
     int (*run)(const std::vector<std::string>& args);
 };
+
+/// The subcommands, one per Command_<name>.cpp (CliMain.cpp lists them in this order).
+extern const Command exportCommand, infoCommand, renderCommand, methodsCommand, referenceCommand,
+    compareCommand, benchCommand, profileCommand, evaluateCommand;
 
 }  // namespace lucent::cli

@@ -13,61 +13,10 @@
 #include <vector>
 
 namespace lucent::cli {
-// Each Command_<name>.cpp defines its table entry; CMake defines LUCENT_CLI_HAS_<NAME>.
-#define LUCENT_DECLARE(name) extern const Command name##Command;
-#ifdef LUCENT_CLI_HAS_EXPORT
-LUCENT_DECLARE(export)
-#endif
-#ifdef LUCENT_CLI_HAS_INFO
-LUCENT_DECLARE(info)
-#endif
-#ifdef LUCENT_CLI_HAS_RENDER
-LUCENT_DECLARE(render)
-#endif
-#ifdef LUCENT_CLI_HAS_REFERENCE
-LUCENT_DECLARE(reference)
-#endif
-#ifdef LUCENT_CLI_HAS_COMPARE
-LUCENT_DECLARE(compare)
-#endif
-#ifdef LUCENT_CLI_HAS_BENCH
-LUCENT_DECLARE(bench)
-#endif
-#ifdef LUCENT_CLI_HAS_PROFILE
-LUCENT_DECLARE(profile)
-#endif
-#ifdef LUCENT_CLI_HAS_EVALUATE
-LUCENT_DECLARE(evaluate)
-#endif
-#undef LUCENT_DECLARE
 
 static std::vector<const Command*> commands() {
-    return {
-#ifdef LUCENT_CLI_HAS_EXPORT
-        &exportCommand,
-#endif
-#ifdef LUCENT_CLI_HAS_INFO
-        &infoCommand,
-#endif
-#ifdef LUCENT_CLI_HAS_RENDER
-        &renderCommand,
-#endif
-#ifdef LUCENT_CLI_HAS_REFERENCE
-        &referenceCommand,
-#endif
-#ifdef LUCENT_CLI_HAS_COMPARE
-        &compareCommand,
-#endif
-#ifdef LUCENT_CLI_HAS_BENCH
-        &benchCommand,
-#endif
-#ifdef LUCENT_CLI_HAS_PROFILE
-        &profileCommand,
-#endif
-#ifdef LUCENT_CLI_HAS_EVALUATE
-        &evaluateCommand,
-#endif
-    };
+    return {&exportCommand,  &infoCommand,  &renderCommand,  &methodsCommand, &referenceCommand,
+            &compareCommand, &benchCommand, &profileCommand, &evaluateCommand};
 }
 
 static void printUsage(std::FILE* out) {

@@ -12,8 +12,6 @@
 #include <lucent/gpu/GlContext.h>
 #include <lucent/sslpv/SslpvBench.h>
 #include <lucent/sslpv/SslpvGl.h>
-#include <lucent/sslpv/SslpvProvider.h>
-#include <lucent/sslpv/SslpvRenderer.h>
 #include <lucent/sslpv/SslpvSolver.h>
 
 #include <algorithm>
@@ -413,105 +411,6 @@ int runFit(const Args& args) {
 
 }  // namespace
 
-/// `render --method sslpv --gl`: gpu::SceneRenderer with SslpvSubsurfaceProvider (the live
-/// preview path; same grid and Eq. 5–7 as the CPU image). The direct term is the renderer's
-/// shadow-mapped Blinn–Phong (specular albedo F_r(0, η), no diffuse), not the CPU ray tracer's.
-ImageRgb renderSslpvGl(const Scene& scene, const SslpvRenderOptions& opt, bool subsurfaceOnly) {
-    LUCENT_CHECK(!scene.objects.empty() && scene.objects[0].material != nullptr,
-                 "--method sslpv --gl: the scene needs an object with a material volume");
-    std::string reason;
-    if (!gpu::GlContext::isHeadlessAvailable(&reason))
-        LUCENT_THROW(GpuError, "--gl: no headless OpenGL 4.5 context: ", reason);
-    auto ctx = gpu::GlContext::createHeadless();
-    gpu::SceneRenderer renderer;
-    SslpvSubsurfaceProvider provider(SslpvProviderOptions{.render = opt});
-    ImageRgb image;
-    try {
-        renderer.create();
-        provider.create();
-        gpu::SurfaceMaterial surface;
-        surface.diffuseAlbedo = opt.diffuseReflectance;
-        surface.specularAlbedo = Rgb(opt.specularWeight * dielectricReflectance(1.f, scene.eta));
-        surface.shininess = opt.shininess;
-        renderer.addMesh(scene.objects[0].mesh, surface);
-        renderer.setLights(scene.lights);
-        renderer.setCamera(scene.camera);
-        gpu::DirectSettings settings;
-        settings.subsurfaceOnly = subsurfaceOnly;
-        renderer.setSettings(settings);
-        provider.setMesh(scene.objects[0].mesh);
-        provider.setLights(scene.lights);
-        provider.setMaterial(*scene.objects[0].material, scene.eta);
-        renderer.setSubsurfaceProvider(&provider);
-        renderer.render();
-        image = renderer.readRadiance();
-    } catch (...) {
-        renderer.setSubsurfaceProvider(nullptr);
-        provider.destroy();
-        renderer.destroy();
-        throw;
-    }
-    const SslpvProviderTimings& t = provider.timings();
-    const SslpvStats& st = provider.solver().stats();
-    std::fprintf(stderr,
-                 "sslpv --gl (%s): %d steps, injected %.4g W (green)\n"
-                 "  resample %.2f ms, rsm %.2f ms, inject %.2f ms, propagate %.2f ms, upload "
-                 "%.2f ms, sample %.2f ms (CPU issue)\n",
-                 ctx->renderer().c_str(), st.stepsUsed, double(st.injected.y), t.resampleMs,
-                 t.rsmMs, t.injectMs, t.propagateMs, t.uploadMs, t.sampleCpuMs);
-    renderer.setSubsurfaceProvider(nullptr);
-    provider.destroy();
-    renderer.destroy();
-    return image;
-}
-
-/// `lucent-cli render --method sslpv` (Command_render.cpp): the CPU SSLPV renderer (--gl: the
-/// GL provider path above).
-ImageRgb renderSslpvMethod(const Scene& scene, bool subsurfaceOnly, const Args& args) {
-    SslpvRenderOptions opt;
-    opt.gridResolution = args.intOr("grid", 32, 4, 256);
-    opt.solver.maxSteps = args.intOr("steps", 32, 0, 4096);
-    opt.solver.order = args.intOr("sh", 1, 1, 2);
-    opt.direct = !subsurfaceOnly;
-    // --mode calibrated (default): the fitted per-step absorption and radiance gain
-    // (SslpvCalibration, `lucent-cli bench sslpv-fit`). --mode paper: §3.2.1 with
-    // --attenuation; absorption-only by default (within −15 %…+22 % of diffusion on thick slabs
-    // for α′ ≥ 0.5, where the paper's literal extinction is 5–50× too dark;
-    // docs/methods/sslpv.md).
-    const std::string mode = args.valueOr("mode", "calibrated");
-    if (mode == "calibrated") {
-        opt.solver.mode = SslpvMode::Calibrated;
-        if (args.has("attenuation"))
-            LUCENT_THROW(ValueError, "--attenuation applies to --mode paper only");
-    } else if (mode == "paper") {
-        opt.solver.mode = SslpvMode::Paper;
-        const std::string att = args.valueOr("attenuation", "absorption");
-        if (att == "extinction")
-            opt.solver.attenuation = SslpvAttenuation::Extinction;
-        else if (att == "absorption")
-            opt.solver.attenuation = SslpvAttenuation::Absorption;
-        else
-            LUCENT_THROW(ValueError, "--attenuation: '", att, "' is not absorption or extinction");
-    } else {
-        LUCENT_THROW(ValueError, "--mode: '", mode, "' is not paper or calibrated");
-    }
-    if (args.has("gl"))
-        return renderSslpvGl(scene, opt, subsurfaceOnly);
-    SslpvRenderTimings t;
-    SslpvStats st;
-    ImageRgb image = renderSslpv(scene, opt, &t, &st);
-    std::fprintf(stderr,
-                 "sslpv (%s): %d steps, injected %.4g W (green), exitant %.4g W, "
-                 "remaining %.4g W\n"
-                 "  rsm %.2f ms, resample %.2f ms, inject %.2f ms, propagate %.2f ms, "
-                 "shade %.2f ms (CPU)\n",
-                 mode.c_str(), st.stepsUsed, double(st.injected.y), double(st.exitant.y),
-                 double(st.remaining.y), t.rsmMs, t.resampleMs, t.injectMs, t.propagateMs,
-                 t.shadeMs);
-    return image;
-}
-
-extern const Command benchCommand;
 const Command benchCommand{
     "bench", "time the SSLPV propagation against a bandwidth floor; fit its calibrated mode",
     "usage: lucent-cli bench sslpv [--scene cube|sphere|shell|spot] [--grid N] [--steps K]\n"

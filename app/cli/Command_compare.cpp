@@ -76,7 +76,6 @@ int runCompare(const std::vector<std::string>& argv) {
 
 }  // namespace
 
-extern const Command compareCommand;
 const Command compareCommand{
     "compare", "error metrics of an image against a reference, with its noise floor",
     "usage: lucent-cli compare TEST.exr REFERENCE.exr [--mask MASK]\n"

@@ -13,10 +13,10 @@
 #include <lucent/bench/ErrorMetrics.h>
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
-#include <lucent/gpu/GlContext.h>
-#include <lucent/gpu/SceneRenderer.h>
 #include <lucent/material/MaterialVolume.h>
 #include <lucent/material/Presets.h>
+#include <lucent/methods/Registry.h>
+#include <lucent/methods/RenderImage.h>
 #include <lucent/reference/PathTracer.h>
 #include <lucent/scene/SceneFile.h>
 
@@ -40,18 +40,6 @@
 
 namespace lucent::cli {
 
-#ifdef LUCENT_CLI_HAS_PROFILE
-/// Defined in Command_profile.cpp: the dipole family (as `lucent-cli render --method dipole`).
-ImageRgb renderDipoleMethod(const Scene& scene, const std::string& model, bool subsurfaceOnly,
-                            const Args& args);
-#endif
-/// Defined in Command_render.cpp: dipole + SSLPV (as `lucent-cli render --method combined`).
-ImageRgb renderCombinedMethod(const Scene& scene, bool subsurfaceOnly, const Args& args);
-#ifdef LUCENT_CLI_HAS_BENCH
-/// Defined in Command_bench.cpp: SSLPV (as `lucent-cli render --method sslpv`).
-ImageRgb renderSslpvMethod(const Scene& scene, bool subsurfaceOnly, const Args& args);
-#endif
-
 namespace {
 
 namespace fs = std::filesystem;
@@ -62,42 +50,37 @@ constexpr int REFERENCE_SEED = 1;
 constexpr int TEST_PT_SEED = 7;
 
 // ---------------------------------------------------------------------------------------------
-// Methods, variants and quality settings
-
-/// The options the method functions read (a superset of theirs; see Command_render.cpp).
-const std::vector<std::string> METHOD_VALUE_OPTIONS = {"spp",
-                                                       "seed",
-                                                       "grid",
-                                                       "steps",
-                                                       "sh",
-                                                       "mode",
-                                                       "attenuation",
-                                                       "spp-frame",
-                                                       "threads",
-                                                       "boundary",
-                                                       "dirpole-normalise"};
-const std::vector<std::string> METHOD_FLAG_OPTIONS = {"cpu", "gl"};
-
-/// One quality setting of a variant: a label and the method's command-line options.
-struct Setting {
-    std::string label;
-    std::vector<std::string> argv;
-};
+// Methods, variants and quality settings (from the method registry)
 
 /// A method with its variant suffix, e.g. "sslpv:paper".
 struct Variant {
     std::string name;  ///< as given: "sslpv:paper"
     std::string method;
-    std::string suffix;
-    std::vector<std::string> extraArgv;  ///< from the suffix, e.g. --mode paper
-    std::vector<Setting> settings;       ///< cheapest first
+    methods::ParamPreset variant;                ///< the suffix's values and backend
+    std::vector<methods::ParamPreset> settings;  ///< quality levels, cheapest first
 };
 
-std::vector<Setting> sppSettings(const std::vector<int>& spps) {
-    std::vector<Setting> out;
-    for (int spp : spps)
-        out.push_back({std::to_string(spp) + " spp", {"--spp", std::to_string(spp)}});
-    return out;
+/// "direct, sslpv[:paper|:calibrated|:gl], ..." for messages and help.
+std::string knownVariants() {
+    std::string s;
+    for (const methods::MethodInfo* m : methods::all()) {
+        s += (s.empty() ? "" : ", ") + m->name;
+        std::string v;
+        for (const methods::ParamPreset& p : m->variants)
+            v += (v.empty() ? "[:" : "|:") + p.name;
+        if (!v.empty())
+            s += v + "]";
+    }
+    return s;
+}
+
+/// The registry's default evaluation: every method's MethodInfo::evaluate variants.
+std::string defaultVariants() {
+    std::string s;
+    for (const methods::MethodInfo* m : methods::all())
+        for (const std::string& v : m->evaluate)
+            s += (s.empty() ? "" : ",") + m->name + (v.empty() ? "" : ":" + v);
+    return s;
 }
 
 /// Parses "method[:suffix]"; unknown names or suffixes throw ValueError naming the entry.
@@ -106,113 +89,41 @@ Variant parseVariant(const std::string& entry) {
     v.name = entry;
     const size_t colon = entry.find(':');
     v.method = entry.substr(0, colon);
-    v.suffix = colon == std::string::npos ? "" : entry.substr(colon + 1);
-    auto badSuffix = [&](const char* allowed) {
-        LUCENT_THROW(ValueError, "--methods: '", entry, "': unknown variant '", v.suffix, "' of ",
-                     v.method, " (allowed: ", allowed, ")");
-    };
-    if (v.method == "direct") {
-        if (!v.suffix.empty())
-            badSuffix("none");
-        v.settings = {{"-", {}}};
-    } else if (v.method == "sslpv") {
-        if (v.suffix == "paper" || v.suffix == "calibrated")
-            v.extraArgv = {"--mode", v.suffix};
-        else if (v.suffix == "gl")
-            v.extraArgv = {"--gl"};
-        else if (!v.suffix.empty())
-            badSuffix("paper, calibrated, gl");
-        // One propagation step moves light by one cell, so the step count follows the grid to
-        // cover the same distance in mm (docs/methods/sslpv.md).
-        for (int n : {16, 32, 64})
-            v.settings.push_back({"grid " + std::to_string(n) + ", " + std::to_string(n) + " steps",
-                                  {"--grid", std::to_string(n), "--steps", std::to_string(n)}});
-    } else if (v.method == "dipole" || v.method == "better-dipole") {
-        if (v.suffix == "cpu" || v.suffix == "gl")
-            v.extraArgv = {"--" + v.suffix};
-        else if (!v.suffix.empty())
-            badSuffix("cpu, gl");
-        v.settings = sppSettings({8, 32, 128});
-    } else if (v.method == "dirpole") {
-        // Default: the GPU pipeline with S_d energy-normalised to the better dipole's total
-        // (docs/methods/dipole.md §1); raw: the published model as is; cpu: the CPU pipeline.
-        if (v.suffix == "raw")
-            v.extraArgv = {"--dirpole-normalise", "off"};
-        else if (v.suffix == "cpu")
-            v.extraArgv = {"--cpu"};
-        else if (!v.suffix.empty())
-            badSuffix("raw, cpu");
-        v.settings = sppSettings({8, 32, 128});
-    } else if (v.method == "combined") {
-        if (v.suffix == "cpu")
-            v.extraArgv = {"--cpu"};
-        else if (!v.suffix.empty())
-            badSuffix("cpu");
-        v.settings = sppSettings({8, 32, 128});
-    } else if (v.method == "reference") {
-        if (!v.suffix.empty())
-            badSuffix("none");
-        v.settings = sppSettings({4, 16, 64});
-    } else {
+    const std::string suffix = colon == std::string::npos ? "" : entry.substr(colon + 1);
+    if (!methods::exists(v.method))
         LUCENT_THROW(ValueError, "--methods: unknown method '", v.method, "' in '", entry,
-                     "' (known: direct, sslpv[:paper|:calibrated|:gl], dipole[:cpu|:gl], "
-                     "better-dipole[:cpu|:gl], dirpole[:raw|:cpu], combined[:cpu], reference)");
+                     "' (known: ", knownVariants(), ")");
+    const methods::MethodInfo& info = methods::find(v.method);
+    if (!suffix.empty()) {
+        const auto it =
+            std::find_if(info.variants.begin(), info.variants.end(),
+                         [&](const methods::ParamPreset& p) { return p.name == suffix; });
+        if (it == info.variants.end()) {
+            std::string allowed;
+            for (const methods::ParamPreset& p : info.variants)
+                allowed += (allowed.empty() ? "" : ", ") + p.name;
+            LUCENT_THROW(ValueError, "--methods: '", entry, "': unknown variant '", suffix, "' of ",
+                         v.method, " (allowed: ", allowed.empty() ? "none" : allowed, ")");
+        }
+        v.variant = *it;
     }
+    v.settings = info.quality;
     return v;
 }
 
-/// Direct lighting through gpu::SceneRenderer on a headless context, as `lucent-cli render
-/// --method direct` (Command_render.cpp renderWithGl without a subsurface provider).
-ImageRgb renderDirectGl(const Scene& scene, bool subsurfaceOnly) {
-    auto ctx = gpu::GlContext::createHeadless();
-    gpu::SceneRenderer renderer;
-    ImageRgb image;
-    try {
-        renderer.create();
-        for (const SceneObject& object : scene.objects)
-            renderer.addMesh(object.mesh);
-        renderer.setLights(scene.lights);
-        renderer.setCamera(scene.camera);
-        gpu::DirectSettings settings;
-        settings.subsurfaceOnly = subsurfaceOnly;
-        renderer.setSettings(settings);
-        renderer.render();
-        image = renderer.readRadiance();
-    } catch (...) {
-        renderer.destroy();
-        throw;
-    }
-    renderer.destroy();
-    return image;
-}
-
-/// Renders one setting of a variant. @throw whatever the method throws (ValueError for an
-/// option the binary does not support, GpuError without GL, ...).
-ImageRgb renderVariant(const Scene& scene, const Variant& v, const Setting& s,
-                       bool subsurfaceOnly) {
-    std::vector<std::string> argv = v.extraArgv;
-    argv.insert(argv.end(), s.argv.begin(), s.argv.end());
-    const Args args(argv, METHOD_VALUE_OPTIONS, METHOD_FLAG_OPTIONS);
-    if (v.method == "direct")
-        return renderDirectGl(scene, subsurfaceOnly);
-    if (v.method == "reference") {
-        ReferenceOptions opt;
-        opt.spp = args.intOr("spp", 16, 3, 1 << 24);
-        opt.seed = TEST_PT_SEED;
-        opt.subsurfaceOnly = subsurfaceOnly;
-        return renderReference(scene, opt).mean;
-    }
-#ifdef LUCENT_CLI_HAS_BENCH
-    if (v.method == "sslpv")
-        return renderSslpvMethod(scene, subsurfaceOnly, args);
-#endif
-#ifdef LUCENT_CLI_HAS_PROFILE
-    if (v.method == "dipole" || v.method == "better-dipole" || v.method == "dirpole")
-        return renderDipoleMethod(scene, v.method, subsurfaceOnly, args);
-#endif
-    if (v.method == "combined")
-        return renderCombinedMethod(scene, subsurfaceOnly, args);
-    LUCENT_THROW(ValueError, "method ", v.method, " is not built into this lucent-cli");
+/// Renders one setting of a variant (lucent/methods/RenderImage.h). @throw whatever the method
+/// throws (ValueError for a scene it cannot render, GpuError without GL, ...).
+ImageRgb renderVariant(const Scene& scene, const Variant& v, const methods::ParamPreset& s,
+                       bool subsurfaceOnly, const methods::Log& log) {
+    methods::ParamSet params = v.variant.values;
+    params.merge(s.values);
+    if (v.method == "reference")
+        params.set("seed", TEST_PT_SEED);
+    methods::RenderOptions options;
+    options.backend = v.variant.backend;
+    options.subsurfaceOnly = subsurfaceOnly;
+    options.log = log;
+    return methods::renderImage(scene, v.method, params, options).radiance;
 }
 
 /// Sends stderr to /dev/null while alive (the methods print per-pass logs), unless disabled.
@@ -319,12 +230,14 @@ Reference referenceFor(const Scene& scene, const std::string& scenePath, const s
 // Scene overrides (--presets, --etas): every scene × preset × η is evaluated as its own case
 
 /// Replaces every object's material by the uniform preset, on the grid the scene file gave
-/// (GridSpec::around the mesh at the object's resolution, as SceneFile builds a preset material).
+/// (makeObject: GridSpec::around the mesh at the object's resolution, voxels outside the mesh
+/// vacuum, as SceneFile builds a preset material).
 void applyPreset(Scene& scene, const MaterialPreset& preset) {
     for (SceneObject& obj : scene.objects) {
         const int res = obj.material ? obj.material->resolution() : obj.materialSource.resolution;
-        obj.material = std::make_shared<MaterialVolume>(GridSpec::around(obj.mesh.bounds(), res),
-                                                        preset.sample());
+        const float eta = obj.material ? obj.material->eta() : scene.eta;
+        obj.material = makeObject(obj.mesh, res, preset.sample()).material;
+        obj.material->setEta(eta);
         obj.materialSource.vdbFile.clear();
         obj.materialSource.uniform = false;
         obj.materialSource.preset = preset.name;
@@ -838,10 +751,7 @@ int runEvaluate(const std::vector<std::string>& argv) {
     if (!outDir || outDir->empty())
         LUCENT_THROW(ValueError, "missing --out DIR");
     std::vector<Variant> variants;
-    for (const std::string& name :
-         splitComma(args.valueOr("methods",
-                                 "direct,sslpv:paper,sslpv:calibrated,dipole,"
-                                 "better-dipole,dirpole,combined")))
+    for (const std::string& name : splitComma(args.valueOr("methods", defaultVariants())))
         variants.push_back(parseVariant(name));
     if (variants.empty())
         LUCENT_THROW(ValueError, "--methods: no method given");
@@ -853,6 +763,11 @@ int runEvaluate(const std::vector<std::string>& argv) {
     const bool json = args.has("json");
     const bool verbose = args.has("verbose");
     FILE* log = json ? stderr : stdout;  // progress; with --json stdout holds the JSON only
+    // The methods' own notes (fallbacks, ignored lights): only with --verbose.
+    const methods::Log methodLog = [verbose](const std::string& m) {
+        if (verbose)
+            std::fprintf(stderr, "  %s\n", m.c_str());
+    };
 
     const fs::path dir(*outDir);
     std::error_code ec;
@@ -904,7 +819,9 @@ int runEvaluate(const std::vector<std::string>& argv) {
                 if (!presets.empty()) {
                     c.preset = presets[pi];
                     c.name.append("-").append(c.preset->name);
-                    c.overrides.append("preset=").append(c.preset->name);
+                    // "inside-mask": since issue 13 a preset fills the mesh only (makeObject);
+                    // references cached before that filled the whole grid and must not match.
+                    c.overrides.append("preset=").append(c.preset->name).append(" inside-mask");
                 }
                 if (!etas.empty()) {
                     c.eta = etas[ei];
@@ -934,34 +851,34 @@ int runEvaluate(const std::vector<std::string>& argv) {
         for (const Variant& v : variants) {
             const int n = std::min(levels, int(v.settings.size()));
             for (int q = 0; q < n; ++q) {
-                const Setting& s = v.settings[size_t(q)];
+                const methods::ParamPreset& s = v.settings[size_t(q)];
                 Result r;
                 r.scene = c.name;
                 r.variant = v.name;
-                r.setting = s.label;
+                r.setting = s.name;
                 r.quality = q;
                 ImageRgb image;
                 std::vector<double> ms;
                 try {
                     StderrSilencer quiet(!verbose);
                     // Warm-up (first-use costs: shader compilation, caches, thread pool).
-                    image = renderVariant(scene, v, s, info.subsurfaceOnly);
+                    image = renderVariant(scene, v, s, info.subsurfaceOnly, methodLog);
                     for (int i = 0; i < info.repeats; ++i) {
                         const auto t0 = std::chrono::steady_clock::now();
-                        image = renderVariant(scene, v, s, info.subsurfaceOnly);
+                        image = renderVariant(scene, v, s, info.subsurfaceOnly, methodLog);
                         ms.push_back(std::chrono::duration<double, std::milli>(
                                          std::chrono::steady_clock::now() - t0)
                                          .count());
                     }
                 } catch (const std::exception& e) {
                     const std::string why =
-                        c.name + ": " + v.name + " (" + s.label + "): " + e.what();
+                        c.name + ": " + v.name + " (" + s.name + "): " + e.what();
                     std::fprintf(stderr, "evaluate: skipping %s\n", why.c_str());
                     info.skipped.push_back(why);
                     break;  // the other settings of this variant would fail the same way
                 }
                 if (image.width() != ref.mean.width() || image.height() != ref.mean.height()) {
-                    const std::string why = c.name + ": " + v.name + " (" + s.label +
+                    const std::string why = c.name + ": " + v.name + " (" + s.name +
                                             "): image size differs from the reference";
                     std::fprintf(stderr, "evaluate: skipping %s\n", why.c_str());
                     info.skipped.push_back(why);
@@ -972,7 +889,7 @@ int runEvaluate(const std::vector<std::string>& argv) {
                     rep = compareImages(image, ref.mean, &ref.variance, nullptr, &mask);
                 } catch (const ValueError& e) {  // e.g. a non-finite pixel in the method's image
                     const std::string why =
-                        c.name + ": " + v.name + " (" + s.label + "): " + e.what();
+                        c.name + ": " + v.name + " (" + s.name + "): " + e.what();
                     std::fprintf(stderr, "evaluate: skipping %s\n", why.c_str());
                     info.skipped.push_back(why);
                     continue;
@@ -996,7 +913,7 @@ int runEvaluate(const std::vector<std::string>& argv) {
                          previewToneMap());
                 std::fprintf(
                     log, "  %-18s %-22s %10.1f ms   rel. RMSE %.4f (floor %.4f), mean ratio %.3f\n",
-                    v.name.c_str(), s.label.c_str(), r.msMedian, r.lum.relRmse, r.lum.relRmseFloor,
+                    v.name.c_str(), s.name.c_str(), r.msMedian, r.lum.relRmse, r.lum.relRmseFloor,
                     r.meanRatio);
                 std::fflush(log);
                 results.push_back(r);
@@ -1031,7 +948,6 @@ int runEvaluate(const std::vector<std::string>& argv) {
 
 }  // namespace
 
-extern const Command evaluateCommand;
 const Command evaluateCommand{
     "evaluate", "run time vs error of the methods against the path-traced reference (chart)",
     "usage: lucent-cli evaluate SCENE.json [SCENE2.json ...] --out DIR\n"
@@ -1050,16 +966,10 @@ const Command evaluateCommand{
     "several scenes also DIR/runtime_vs_error_<scene>.png) and, per render, an EXR\n"
     "and a PNG preview (ACES tone map).\n"
     "\n"
-    "  --methods LIST    comma-separated (default direct,sslpv:paper,sslpv:calibrated,dipole,\n"
-    "                    better-dipole,dirpole,combined). Methods and their quality settings:\n"
-    "                      direct                  one setting\n"
-    "                      sslpv[:paper|:calibrated|:gl]   grid 16/32/64, steps = grid\n"
-    "                      dipole, better-dipole [:cpu|:gl]   8/32/128 spp\n"
-    "                      dirpole[:raw|:cpu]      8/32/128 spp (GPU pipeline, energy-normalised\n"
-    "                                              S_d; raw: the published S_d unscaled;\n"
-    "                                              cpu: CPU pipeline, directional lights)\n"
-    "                      combined[:cpu]          dipole + SSLPV 32^3, 8/32/128 spp\n"
-    "                      reference               path tracer, seed 7, 4/16/64 spp\n"
+    "  --methods LIST    comma-separated METHOD[:VARIANT] (default: each method's default\n"
+    "                    evaluation variants; `lucent-cli methods` lists the methods, their\n"
+    "                    variants and quality levels, e.g. sslpv:paper, dipole:cpu,\n"
+    "                    dirpole:raw). The reference method runs with seed 7.\n"
     "                    A variant this binary or scene cannot render is skipped with a message.\n"
     "  --ref-spp N       reference samples per pixel (default 256)\n"
     "  --width, --height override the scenes' image size (pixels)\n"

@@ -14,7 +14,7 @@
 #include <lucent/material/Presets.h>
 #include <lucent/mesh/MeshIO.h>
 #include <lucent/mesh/Procedural.h>
-#include <lucent/mesh/Voxelize.h>
+#include <lucent/scene/Scene.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -107,17 +107,16 @@ int runExport(const std::vector<std::string>& argv) {
         source = args.valueOr("procedural", "sphere");
         mesh = proceduralMesh(source);
     }
-    const GridSpec spec = GridSpec::around(mesh.bounds(), res);
-    MaterialVolume volume(spec, preset.sample());
+    const SceneObject object = makeObject(std::move(mesh), res, preset.sample());
+    MaterialVolume& volume = *object.material;
     volume.setEta(preset.eta);
-    const std::vector<uint8_t> inside = voxelizeSolid(mesh, spec);
+    const GridSpec& spec = volume.spec();
     size_t insideCount = 0;
-    for (uint8_t v : inside)
+    for (uint8_t v : volume.insideMask())
         insideCount += v != 0;
     if (insideCount == 0)
         LUCENT_THROW(ValueError, "mesh '", source, "' covers no voxel centre at resolution ", res,
                      " (is it closed, and not too thin?)");
-    volume.setInsideMask(inside);
 
     if (out) {
         VdbExportOptions options;
@@ -152,7 +151,6 @@ int runExport(const std::vector<std::string>& argv) {
 
 }  // namespace
 
-extern const Command exportCommand;
 const Command exportCommand{
     "export", "write a material preset filling a mesh as OpenVDB and/or Mitsuba 3 .vol",
     "usage: lucent-cli export --preset NAME [--mesh FILE [--scale S] [--allow-open] |\n"

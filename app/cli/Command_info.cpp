@@ -38,7 +38,6 @@ int runInfo(const std::vector<std::string>& argv) {
 
 }  // namespace
 
-extern const Command infoCommand;
 const Command infoCommand{
     "info", "describe an OpenVDB file (grids, bounds, value ranges, metadata)",
     "usage: lucent-cli info [--validate] FILE.vdb\n"

@@ -141,23 +141,6 @@ int runReference(const std::vector<std::string>& argv) {
 
 }  // namespace
 
-/// `lucent-cli render --method reference`: the path tracer as a render method (declared in
-/// Command_render.cpp). Options: --spp (default 64), --seed, --threads, --boundary.
-ImageRgb renderReferenceMethod(const Scene& scene, bool subsurfaceOnly, const Args& args) {
-    ReferenceOptions opt;
-    opt.spp = args.intOr("spp", 64, 3, 1 << 24);
-    opt.seed = uint64_t(args.intOr("seed", 1, 0, 1 << 30));
-    opt.threads = args.intOr("threads", 0, 0, 1024);
-    opt.boundary = parseBoundary(args.valueOr("boundary", "dielectric"));
-    opt.subsurfaceOnly = subsurfaceOnly;
-    opt.progress = printProgress;
-    const ReferenceImage img = renderReference(scene, opt);
-    std::fprintf(stderr, "\nreference: %d spp, RSE %.4f, %.2f s\n", img.spp, double(img.rse),
-                 img.seconds);
-    return img.mean;
-}
-
-extern const Command referenceCommand;
 const Command referenceCommand{
     "reference", "Monte Carlo ground truth of a scene (linear EXR with variance)",
     "usage: lucent-cli reference SCENE.json (--spp N | --rse R) -o OUT.exr [options]\n"

@@ -907,9 +907,9 @@ bool MainWindow::importMesh(const QString& path, double mmPerUnit) {
         obj.meshSource.scale = float(mmPerUnit);
         const MaterialSample base =
             m_doc->material() ? m_doc->material()->base() : MaterialSample{};
-        const GridSpec spec = GridSpec::around(obj.mesh.bounds(), GridSpec::DEFAULT_RESOLUTION);
-        obj.material = std::make_shared<MaterialVolume>(spec, base);
-        obj.material->setInsideMask(voxelizeSolid(obj.mesh, spec));
+        SceneObject filled = makeObject(std::move(obj.mesh), GridSpec::DEFAULT_RESOLUTION, base);
+        obj.mesh = std::move(filled.mesh);
+        obj.material = std::move(filled.material);
         obj.material->setEta(m_doc->scene().eta);
         obj.materialSource.uniform = true;
         obj.materialSource.value = base;

@@ -22,6 +22,7 @@
 #include <lucent/gpu/SceneRenderer.h>
 #include <lucent/material/Brush.h>
 #include <lucent/material/MaterialVolume.h>
+#include <lucent/methods/Method.h>
 #include <lucent/scene/SceneFile.h>
 
 #include <benchmark/benchmark.h>
@@ -56,7 +57,11 @@ int loadDefaultScene(Scene& scene, gpu::SceneRenderer& renderer) {
     scene.camera.width = WIDTH;
     scene.camera.height = HEIGHT;
     renderer.create();
-    return dipole::addTranslucentScene(renderer, scene, /*subsurfaceOnly=*/false);
+    const int id =
+        renderer.addMesh(scene.objects[0].mesh, methods::translucentSurface(scene.eta));
+    renderer.setLights(scene.lights);
+    renderer.setCamera(scene.camera);
+    return id;
 }
 
 /// A paint stroke like the app harness's (radius 5 mm, 16 mm across the front of the object at

@@ -7,14 +7,12 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/dipole/Profiles.h>
-#include <lucent/gpu/GlContext.h>
 #include <lucent/gpu/GlResources.h>
 #include <lucent/material/MaterialVolume.h>
 
 #include <epoxy/gl.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -347,59 +345,6 @@ const dipole::DipoleSubsurfaceProvider& CombinedSubsurfaceProvider::dipoleProvid
 
 const SslpvSurfaceKernel& CombinedSubsurfaceProvider::kernel() const {
     return m->kernel;
-}
-
-ImageRgb renderCombinedGl(const Scene& scene, const CombinedProviderSettings& settings,
-                          int samplesPerPixel, bool subsurfaceOnly) {
-    LUCENT_CHECK(!scene.objects.empty() && scene.objects[0].material != nullptr,
-                 "combined: the scene needs an object with a material volume");
-    LUCENT_CHECK(samplesPerPixel >= 1, "combined: samples per pixel must be >= 1");
-    std::string reason;
-    if (!gpu::GlContext::isHeadlessAvailable(&reason))
-        LUCENT_THROW(GpuError, "combined: no headless OpenGL 4.5 context: ", reason);
-    auto ctx = gpu::GlContext::createHeadless();
-    gpu::SceneRenderer renderer;
-    CombinedSubsurfaceProvider provider;
-    ImageRgb image;
-    const auto t0 = std::chrono::steady_clock::now();
-    try {
-        renderer.create();
-        provider.create();
-        const int meshId = dipole::addTranslucentScene(renderer, scene, subsurfaceOnly);
-        CombinedProviderSettings s = settings;
-        s.eta = scene.eta;
-        s.meshId = meshId;
-        s.dipole.samplesPerFrame = std::min(s.dipole.samplesPerFrame, samplesPerPixel);
-        s.dipole.maxFrames =
-            (samplesPerPixel + s.dipole.samplesPerFrame - 1) / s.dipole.samplesPerFrame;
-        provider.setSettings(s);
-        provider.setMesh(scene.objects[0].mesh);
-        provider.setLights(scene.lights);
-        provider.setMaterial(*scene.objects[0].material, scene.eta);
-        renderer.setSubsurfaceProvider(&provider);
-        do {
-            renderer.render();
-        } while (!provider.stats().converged);
-        image = renderer.readRadiance();
-    } catch (...) {
-        renderer.setSubsurfaceProvider(nullptr);
-        provider.destroy();
-        renderer.destroy();
-        throw;
-    }
-    const CombinedProviderStats& st = provider.stats();
-    std::fprintf(
-        stderr,
-        "combined (%s): r_s %.3g mm = %.2f cells of %.3g mm, SSLPV skips %d of %d steps; "
-        "dipole %d frames, %d spp; %.1f ms\n",
-        ctx->renderer().c_str(), double(st.plan.splitRadius),
-        double(st.plan.splitRadius / st.plan.cellSize), double(st.plan.cellSize), st.plan.skipSteps,
-        settings.sslpv.render.solver.maxSteps, st.dipole.frames, st.dipole.samplesPerPixel,
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-    renderer.setSubsurfaceProvider(nullptr);
-    provider.destroy();
-    renderer.destroy();
-    return image;
 }
 
 }  // namespace lucent::combined

@@ -860,22 +860,4 @@ void DipoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsig
     gpu::checkGlError("DipoleSubsurfaceProvider::renderSubsurface");
 }
 
-int addTranslucentScene(gpu::SceneRenderer& renderer, const Scene& scene, bool subsurfaceOnly) {
-    gpu::SurfaceMaterial surface;
-    surface.diffuseAlbedo = Rgb(0.f);
-    surface.specularAlbedo = Rgb(float(fresnelReflectance(1.0, scene.eta)));
-    int firstMesh = -1;
-    for (const SceneObject& object : scene.objects) {
-        const int id = renderer.addMesh(object.mesh, surface);
-        if (firstMesh < 0)
-            firstMesh = id;  // the volume belongs to objects[0]
-    }
-    renderer.setLights(scene.lights);
-    renderer.setCamera(scene.camera);
-    gpu::DirectSettings settings;
-    settings.subsurfaceOnly = subsurfaceOnly;
-    renderer.setSettings(settings);
-    return firstMesh;
-}
-
 }  // namespace lucent::dipole

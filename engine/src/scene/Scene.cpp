@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: MIT
 /// @file
-/// @brief Light falloff and camera matrices / primary rays.
+/// @brief Light falloff, camera matrices / primary rays, and objects made from a mesh.
 
 #include <lucent/scene/Scene.h>
+
+#include <lucent/mesh/Voxelize.h>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -66,6 +68,18 @@ void Camera::generateRay(float px, float py, Point3f& origin, Vector3f& directio
     origin = position;
     direction =
         glm::normalize(forward + right * (ndcX * tanHalf * aspect) + trueUp * (ndcY * tanHalf));
+}
+
+SceneObject makeObject(TriangleMesh mesh, int resolution, const MaterialSample& base) {
+    const GridSpec spec = GridSpec::around(mesh.bounds(), resolution);
+    SceneObject obj;
+    obj.material = std::make_shared<MaterialVolume>(spec, base);
+    obj.material->setInsideMask(voxelizeSolid(mesh, spec));
+    obj.mesh = std::move(mesh);
+    obj.materialSource.uniform = true;
+    obj.materialSource.value = base;
+    obj.materialSource.resolution = resolution;
+    return obj;
 }
 
 }  // namespace lucent

@@ -14,9 +14,7 @@
 #include <lucent/mesh/Voxelize.h>
 #include <lucent/scene/SceneFile.h>
 
-#if LUCENT_SCENE_HAS_VDB
 #include <lucent/io/VdbIO.h>
-#endif
 
 #include <nlohmann/json.hpp>
 
@@ -388,7 +386,6 @@ SceneObject buildObject(const MeshSource& meshSrc, const MaterialSource& matSrc,
     obj.materialSource = matSrc;
     obj.mesh = buildMesh(meshSrc, warnings);
     if (!matSrc.vdbFile.empty()) {
-#if LUCENT_SCENE_HAS_VDB
         ImportedMaterial imported = importVdb(matSrc.vdbFile);
         if (resolutionGiven && imported.volume.resolution() != matSrc.resolution)
             valueError("resolution", "is " + std::to_string(matSrc.resolution) +
@@ -398,13 +395,10 @@ SceneObject buildObject(const MeshSource& meshSrc, const MaterialSource& matSrc,
         obj.materialSource.resolution = imported.volume.resolution();
         obj.materialSource.value = imported.volume.base();
         obj.material = std::make_shared<MaterialVolume>(std::move(imported.volume));
-#else
-        LUCENT_THROW(IoError, "scene: field 'material.vdb': this build has no OpenVDB support");
-#endif
     } else {
-        const GridSpec spec = GridSpec::around(obj.mesh.bounds(), matSrc.resolution);
-        obj.material = std::make_shared<MaterialVolume>(spec, matSrc.value);
-        obj.material->setInsideMask(voxelizeSolid(obj.mesh, spec));
+        SceneObject filled = makeObject(std::move(obj.mesh), matSrc.resolution, matSrc.value);
+        obj.mesh = std::move(filled.mesh);
+        obj.material = std::move(filled.material);
     }
     obj.material->setEta(eta);
     return obj;
@@ -661,7 +655,6 @@ void saveProject(const Scene& scene, const std::string& path) {
     copy.objects.push_back(std::move(o));
     const std::string text = sceneToJson(copy);
 
-#if LUCENT_SCENE_HAS_VDB
     // Both files are written and synced as temporaries first, so a failed write (full disk,
     // read-only folder) replaces nothing.
     AtomicFile vdbFile(vdbPath.string());
@@ -678,9 +671,6 @@ void saveProject(const Scene& scene, const std::string& path) {
     std::error_code ec;
     fs::remove(other, ec);
     removeStaleTemporaries(other.string());
-#else
-    LUCENT_THROW(IoError, "saveProject: this build has no OpenVDB support");
-#endif
 }
 
 Scene makeDefaultScene() {

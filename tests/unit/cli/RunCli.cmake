@@ -295,6 +295,38 @@ elseif(CASE STREQUAL "render_full_disk")
     if(leftovers)
         message(FATAL_ERROR "temporaries left behind: ${leftovers}")
     endif()
+elseif(CASE STREQUAL "methods")
+    # Issue 13: the registry is the one list; `methods` shows every method and its parameters,
+    # `render` takes any of them by name with --NAME VALUE or --param NAME=VALUE, and a
+    # parameter the method lacks or a bad value is a one-line error naming it.
+    run(list methods)
+    expect_ok(list)
+    expect_contains(list "${list_OUT}" "direct:" "single-scattering:" "sslpv:" "dipole:"
+        "better-dipole:" "dirpole:" "combined:" "reference:" "--spp-frame" "--light-views")
+    run(json methods dipole --json)
+    expect_ok(json)
+    expect_contains(json "${json_OUT}" "\"name\": \"dipole\"" "\"default\": \"256 (cpu: 32)\"")
+    run(unknown methods dipol)
+    expect_one_line_error(unknown "better-dipole")
+    run(bad_param render ${SCENE} --method dipole --grid 8 -o ${OUT}/m.exr)
+    expect_one_line_error(bad_param "--grid")
+    run(bad_value render ${SCENE} --method reference --param spp=2 -o ${OUT}/m.exr)
+    expect_one_line_error(bad_value "spp")
+    run(cpu_only render ${SCENE} --method direct --cpu -o ${OUT}/m.exr)
+    expect_one_line_error(cpu_only "no CPU renderer")
+    # A CPU method through --param (no GL needed): the reference at 4 spp.
+    run(ref render ${SCENE} --method reference --param spp=4 --width 8 --height 8 -o ${OUT}/m.exr)
+    expect_ok(ref)
+    expect_contains(ref "${ref_OUT}" "wrote" "method reference")
+    # Single scattering was app-only before the registry; now the CLI renders it (GL).
+    run(single render ${SCENE} --method single-scattering --steps 12 --width 16 --height 16
+        -o ${OUT}/single.exr)
+    if(single_RC STREQUAL "0")
+        expect_contains(single "${single_OUT}" "method single-scattering")
+    else()
+        expect_contains(single "${single_ERR}" "OpenGL")
+        message(STATUS "no headless GL here: single scattering not rendered")
+    endif()
 else()
     message(FATAL_ERROR "unknown CASE '${CASE}'")
 endif()

@@ -130,11 +130,4 @@ private:
     std::unique_ptr<Impl> m;
 };
 
-/// Headless render of scene.objects[0] through gpu::SceneRenderer with the combined provider
-/// (dipole part accumulated over frames until `samplesPerPixel` samples or convergence).
-/// The surface reflection is the renderer's specular lobe with albedo F_r(0, η) unless
-/// subsurfaceOnly. @throw ValueError for a scene without object/material, GpuError without GL.
-ImageRgb renderCombinedGl(const Scene& scene, const CombinedProviderSettings& settings,
-                          int samplesPerPixel, bool subsurfaceOnly);
-
 }  // namespace lucent::combined

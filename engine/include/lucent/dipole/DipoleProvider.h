@@ -224,11 +224,4 @@ private:
     std::unique_ptr<Impl> m;
 };
 
-/// Adds every object of `scene` to `renderer` as a translucent surface (no diffuse albedo; the
-/// specular albedo is the Fresnel reflectance at normal incidence for scene.eta, the subsurface
-/// term coming from a provider), and sets the lights, the camera and
-/// DirectSettings::subsurfaceOnly. Context current. @return the mesh id of scene.objects[0],
-/// the object the material volume belongs to (−1 if there is none).
-int addTranslucentScene(gpu::SceneRenderer& renderer, const Scene& scene, bool subsurfaceOnly);
-
 }  // namespace lucent::dipole

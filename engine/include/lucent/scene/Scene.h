@@ -76,6 +76,18 @@ struct SceneObject {
     std::shared_ptr<MaterialVolume> material;
 };
 
+/// The object `mesh` filled with the uniform material `base`: the material grid placed around
+/// the mesh's bounds with `resolution` voxels per axis (GridSpec::around) and the inside mask
+/// of the closed mesh (voxelizeSolid), so that voxels outside the mesh are vacuum. Every front
+/// end that builds an object from a mesh uses this (scene files, mesh import, `export`,
+/// evaluation presets). The material's η is left at its default (callers set the scene's).
+/// @param mesh rest pose, mm (moved into the object)
+/// @param resolution voxels per axis, in [GridSpec::MIN_RESOLUTION, GridSpec::MAX_RESOLUTION]
+/// @param base σ_t, σ_s (mm⁻¹) and g of every inside voxel
+/// @return the object; materialSource records `base` (uniform) and `resolution`.
+/// @throw ValueError for empty or non-finite mesh bounds or a resolution out of range.
+SceneObject makeObject(TriangleMesh mesh, int resolution, const MaterialSample& base);
+
 struct Scene {
     std::vector<SceneObject> objects;  ///< one in the current format
     std::vector<Light> lights;

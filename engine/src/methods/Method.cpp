@@ -1,0 +1,71 @@
+// SPDX-License-Identifier: MIT
+#include <lucent/methods/Method.h>
+
+#include <lucent/core/Error.h>
+
+#include <algorithm>
+
+namespace lucent::methods {
+
+Method::Method(const MethodInfo& info, const MethodContext& context)
+    : m_info(info), m_context(context) {
+    LUCENT_CHECK(context.backend == Backend::Gl || context.backend == Backend::Cpu, info.name,
+                 ": a method instance needs a resolved backend (gl or cpu)");
+}
+
+Method::~Method() = default;
+
+void Method::setParams(const ParamSet& given) {
+    Params p(m_info.name, m_info.params, given, m_context.backend, m_context.live);
+    applyParams(p);
+    m_params = std::move(p);
+}
+
+void Method::note(const std::string& message) const {
+    if (m_context.log)
+        m_context.log(message);
+}
+
+void Method::createGl(const gpu::ShaderLibrary&) {}
+
+void Method::destroyGl() {}
+
+void Method::setScene(const SceneInputs&) {}
+
+void Method::materialChanged(const std::vector<int>&) {}
+
+void Method::cameraChanged(const Camera&) {}
+
+void Method::geometryChanged() {}
+
+gpu::SubsurfaceProvider* Method::subsurfacePass() {
+    return nullptr;
+}
+
+gpu::SurfaceMaterial Method::surface(float eta) const {
+    return translucentSurface(eta);
+}
+
+ImageRgb Method::renderCpu(const Scene&, const CpuRequest&) {
+    LUCENT_THROW(ValueError, m_info.name, " has no CPU renderer");
+}
+
+bool Method::converged() const {
+    return true;
+}
+
+Stats Method::stats() const {
+    return {};
+}
+
+gpu::SurfaceMaterial translucentSurface(float eta) {
+    const double e = std::clamp(double(eta), 1.0, 3.0);
+    const double r = (e - 1.0) / (e + 1.0);
+    gpu::SurfaceMaterial surface;
+    surface.diffuseAlbedo = Rgb(0.f);
+    surface.specularAlbedo = Rgb(float(r * r));
+    surface.shininess = 64.f;
+    return surface;
+}
+
+}  // namespace lucent::methods

@@ -1,0 +1,210 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief `dipole` and `better-dipole`: the image-space dipole integration (Mertens et al. 2005)
+/// of the classical dipole (Jensen et al. 2001) or the better dipole (d'Eon 2012);
+/// docs/methods/dipole.md. GL: dipole::DipoleSubsurfaceProvider, progressive (frames of
+/// `spp-frame` samples until `spp` or convergence). CPU: the image-space gather
+/// (dipole::renderImageSpaceDipole), subsurface term only.
+
+#include <lucent/core/Error.h>
+#include <lucent/dipole/DipoleProvider.h>
+#include <lucent/dipole/IrradiancePass.h>
+#include <lucent/material/MaterialVolume.h>
+#include <lucent/methods/Registry.h>
+
+#include "../MethodUtil.h"
+
+#include <algorithm>
+
+namespace lucent::methods {
+
+namespace {
+
+using detail::num;
+
+class DipoleMethod final : public detail::ImageSpaceDipoleMethod<dipole::DipoleSubsurfaceProvider> {
+public:
+    DipoleMethod(const MethodInfo& info, const MethodContext& context, dipole::Model model)
+        : ImageSpaceDipoleMethod(info, context), m_model(model) {}
+
+    ImageRgb renderCpu(const Scene& scene, const CpuRequest& request) override {
+        if (!request.subsurfaceOnly)
+            note(info().name +
+                 " on the CPU draws the subsurface term only (no surface reflection)");
+        const int spp = params().getInt("spp");
+        LUCENT_CHECK(spp <= 65536, info().name, ": spp: ", spp,
+                     " is outside [1, 65536] on the CPU");
+        dipole::GatherSettings gs;
+        gs.model = m_model;
+        gs.uniformSamples = spp / 4;
+        gs.importanceSamples = spp - gs.uniformSamples;
+        gs.seed = uint32_t(params().getInt("seed"));
+        gs.maxRadius = params().getFloat("max-radius");
+        dipole::LightViewSettings lv;
+        lv.enabled = params().getBool("light-views");
+        lv.resolution = params().getInt("light-view-res");
+        std::vector<dipole::LightViewReport> reports;
+        const dipole::GatherResult g = dipole::renderImageSpaceDipole(scene, gs, lv, &reports);
+        const dipole::GatherStats& st = g.stats;
+        m_cpuStats = {
+            {"pixels", std::to_string(st.pixels)},
+            {"eps", num(st.epsilon, "%.3g")},
+            {"disc quantile", num(1.0 - st.epsilon)},
+            {"disc radius mm", num(st.minRadius, "%.3g") + ".." + num(st.maxRadius, "%.3g")},
+            {"light views gathered", std::to_string(st.lightViews)}};
+        for (const dipole::LightViewReport& r : reports)
+            m_cpuStats.push_back(
+                {"light " + std::to_string(r.light) + " view",
+                 std::string(r.used ? "gathered" : (r.built ? "skipped" : "not built")) +
+                     " (back-lit flux fraction " + num(r.backlitFraction, "%.3g") + ")" +
+                     (r.note.empty() ? "" : ": " + r.note)});
+        return g.radiance;
+    }
+
+    [[nodiscard]] Stats stats() const override {
+        if (backend() == Backend::Cpu)
+            return m_cpuStats;
+        if (!m_provider)
+            return {};
+        const dipole::ProviderStats& st = m_provider->stats();
+        Stats s = {{"frames", std::to_string(st.frames)},
+                   {"samples per frame", std::to_string(m_provider->settings().samplesPerFrame)},
+                   {"spp", std::to_string(st.samplesPerPixel)},
+                   {"last change", num(st.lastChange, "%.2e")},
+                   {"converged", st.converged ? "yes" : "no"},
+                   {"last upload bricks", std::to_string(st.lastUploadBricks)},
+                   {"eps", num(st.epsilon, "%.3g")},
+                   {"disc radius mm", num(st.minRadius, "%.3g") + ".." + num(st.maxRadius, "%.3g")},
+                   {"light views", std::to_string(st.lightViewsGathered) + " of " +
+                                       std::to_string(st.lightViewsRendered) + " gathered"}};
+        for (size_t l = 0; l < st.backlitFractions.size(); ++l) {
+            const float f = st.backlitFractions[l];
+            s.push_back({"light " + std::to_string(l) + " view",
+                         std::string(f < 0.f ? "not rendered"
+                                     : f > m_provider->settings().lightViewThreshold ? "gathered"
+                                                                                     : "skipped") +
+                             " (back-lit flux fraction " + num(f, "%.3g") + ")"});
+        }
+        return s;
+    }
+
+private:
+    void applyParams(const Params& p) override {
+        if (backend() == Backend::Cpu)
+            return;  // renderCpu reads its parameters
+        m_sppFrame = p.getInt("spp-frame");
+        m_seed = uint32_t(p.getInt("seed"));
+        m_maxRadius = p.getFloat("max-radius");
+        m_lightViews = p.getBool("light-views");
+        m_lightViewRes = p.getInt("light-view-res");
+        if (!isLive())
+            m_spp = p.getInt("spp");
+        if (m_provider && m_settingsSet)
+            applySettings();
+    }
+
+    /// The provider's settings from the parameters and the scene; set only when they changed
+    /// (every change restarts the accumulation).
+    void applySettings() override {
+        dipole::ProviderSettings ps = m_provider->settings();
+        ps.model = m_model;
+        ps.eta = m_eta;
+        ps.samplesPerFrame = m_sppFrame;
+        if (!isLive()) {  // offline: frames of spp-frame samples up to spp (or convergence)
+            ps.samplesPerFrame = std::min(m_sppFrame, m_spp);
+            ps.maxFrames = (m_spp + ps.samplesPerFrame - 1) / ps.samplesPerFrame;
+        }
+        ps.seed = m_seed;
+        ps.meshId = m_meshId;
+        ps.maxRadius = m_maxRadius;
+        ps.lightViews = m_lightViews;
+        ps.lightViewResolution = m_lightViewRes;
+        const dipole::ProviderSettings& old = m_provider->settings();
+        const bool changed =
+            !m_settingsSet || ps.model != old.model || ps.eta != old.eta ||
+            ps.samplesPerFrame != old.samplesPerFrame || ps.maxFrames != old.maxFrames ||
+            ps.seed != old.seed || ps.meshId != old.meshId || ps.maxRadius != old.maxRadius ||
+            ps.lightViews != old.lightViews || ps.lightViewResolution != old.lightViewResolution;
+        if (changed)
+            m_provider->setSettings(ps);
+        m_settingsSet = true;
+    }
+
+    dipole::Model m_model;
+    int m_spp = 256, m_sppFrame = 16, m_lightViewRes = 512;
+    uint32_t m_seed = 1;
+    float m_maxRadius = 0.f;
+    bool m_lightViews = true;
+    Stats m_cpuStats;
+};
+
+/// The parameters both dipoles share.
+std::vector<ParamDescriptor> dipoleParams() {
+    return {
+        {"spp",
+         ParamType::Int,
+         "samples per pixel in all (GL: frames of spp-frame up to this or convergence)",
+         1,
+         1 << 24,
+         {},
+         "256",
+         "32",
+         "",
+         ParamScope::Offline},
+        {"spp-frame", ParamType::Int, "GL: samples per pixel and frame", 1, 4096, {}, "16"},
+        {"seed", ParamType::Int, "sample sequence", 0, 1 << 30, {}, "1"},
+        {"light-views",
+         ParamType::Bool,
+         "gather light-view irradiance images too (back-lit thin parts; docs/methods/dipole.md "
+         "section 3d)",
+         0,
+         0,
+         {},
+         "on"},
+        {"light-view-res", ParamType::Int, "texels per side of a light view", 16, 4096, {}, "512"},
+        {"max-radius",
+         ParamType::Float,
+         "mm; > 0: only r <= this is gathered (0: unlimited)",
+         0,
+         1e6,
+         {},
+         "0"},
+    };
+}
+
+MethodEntry dipoleEntry(dipole::Model model) {
+    MethodEntry e;
+    MethodInfo& i = e.info;
+    const bool better = model == dipole::Model::BetterDipole;
+    i.name = better ? "better-dipole" : "dipole";
+    i.title = better ? "Better dipole" : "Dipole";
+    i.summary = better ? "image-space better dipole (d'Eon 2012; Mertens et al. 2005)"
+                       : "image-space dipole (Jensen et al. 2001; Mertens et al. 2005)";
+    i.docs = "docs/methods/dipole.md";
+    i.caps.gl = true;
+    i.caps.cpu = true;
+    i.caps.progressive = true;
+    i.params = dipoleParams();
+    i.variants = {{"cpu", {}, Backend::Cpu}, {"gl", {}, Backend::Gl}};
+    for (int spp : {8, 32, 128})
+        i.quality.push_back({std::to_string(spp) + " spp",
+                             ParamSet::fromAssignments({"spp=" + std::to_string(spp)}),
+                             Backend::Auto});
+    i.evaluate = {""};
+    e.create = [model](const MethodInfo& info, const MethodContext& context) {
+        return std::unique_ptr<Method>(new DipoleMethod(info, context, model));
+    };
+    return e;
+}
+
+}  // namespace
+
+MethodEntry dipoleMethod() {
+    return dipoleEntry(dipole::Model::Dipole);
+}
+
+MethodEntry betterDipoleMethod() {
+    return dipoleEntry(dipole::Model::BetterDipole);
+}
+
+}  // namespace lucent::methods
