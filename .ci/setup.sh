@@ -3,14 +3,17 @@
 # Lucent set-up on Debian 12: install what is missing, build, then launch the app or run the tests.
 #   .ci/setup.sh run    install, build (Release), launch `lucent` on the default scene
 #   .ci/setup.sh test   install, build (ci preset), run the whole test suite with ctest
+#   .ci/setup.sh asan   install, build the asan-ubsan-ci preset (engine, CLI, tests; no Qt app),
+#                       run every non-GUI test with AddressSanitizer, LeakSanitizer and UBSan,
+#                       halting on the first error (docs/benchmarks.md, "Sanitizer stage")
 # Idempotent: apt-get runs only when a package is missing; works as root or through sudo.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 mode=${1:-}
 case "$mode" in
-    run | test) ;;
-    *) echo "usage: .ci/setup.sh run|test" >&2; exit 2 ;;
+    run | test | asan) ;;
+    *) echo "usage: .ci/setup.sh run|test|asan" >&2; exit 2 ;;
 esac
 
 packages=(build-essential cmake ninja-build pkg-config ccache
@@ -35,11 +38,12 @@ fi
 
 preset=release
 [ "$mode" = test ] && preset=ci
+[ "$mode" = asan ] && preset=asan-ubsan-ci
 cmake --preset "$preset"
 cmake --build --preset "$preset"
 
-if [ "$mode" = test ]; then
-    exec ctest --preset ci
+if [ "$mode" = test ] || [ "$mode" = asan ]; then
+    exec ctest --preset "$preset"
 fi
 
 app=build/$preset/app/gui/lucent
