@@ -4,8 +4,8 @@
 // per covered G-buffer pixel, the Fresnel-transmitted irradiance of Eq. 5,
 //   E = Σ_lights F_t(η, cos θ_i) · E⊥ · cos θ_i · V,   F_t = 1 − F_r,
 // with E⊥ and V exactly as the renderer's shading pass (common/lighting.glsl, common/shadow.glsl),
-// and the painted material just inside the surface (same lookup as dipole::buildSurfaceBuffers:
-// nearest voxel half a voxel inside, stepping further in, up to 3 voxels, past masked voxels).
+// and the painted material just inside the surface (dipole_material.glsl, the lookup of
+// dipole::buildSurfaceBuffers).
 // Also the radius R′ of the uniform disc samples (the discQuantile quantile of the widest
 // channel's virtual source, as the CPU gather's PixelMaterial), so the per-frame gather does not
 // repeat the three Newton solves. Outputs (GL rows, bottom first): E (W/mm²), σt and σs′ (mm⁻¹),
@@ -20,6 +20,7 @@
 #include "common/lighting.glsl"
 #include "common/shadow.glsl"
 #include "dipole_fresnel.glsl"
+#include "dipole_material.glsl"
 #include "dipole_profiles.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -72,21 +73,9 @@ void main() {
             E += incident * ((1.0 - dipoleFresnelReflectance(cosI, u_eta)) * cosI * V);
         }
 #if !LIGHT_VIEW
-        if (u_hasMaterial != 0) {
-            float inset = 0.5 * u_voxelSize;
-            for (int step = 1; step <= 6; ++step) {
-                vec3 q = p - float(step) * inset * n;
-                ivec3 c = ivec3(floor((q - u_gridOrigin) / u_voxelSize));
-                if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(u_resolution))))
-                    continue;
-                vec3 t = texelFetch(u_volumeSigmaT, c, 0).rgb;
-                if (t != vec3(0.0)) {
-                    sigT = t;
-                    sigS = texelFetch(u_volumeSigmaS, c, 0).rgb;
-                    break;
-                }
-            }
-        }
+        if (u_hasMaterial != 0)
+            dipoleMaterialInside(u_volumeSigmaT, u_volumeSigmaS, u_gridOrigin, u_voxelSize,
+                                 u_resolution, p, n, sigT, sigS);
 #endif
     }
 #if LIGHT_VIEW

@@ -3,8 +3,9 @@
 // Combination pass of dipole::DirpoleSubsurfaceProvider (seed 001 §4.1 step 3): every camera
 // pixel x_o of the object averages the cube faces that see it,
 //   L(x_o) = T₂₁(ω_o) · Σ_f V_f C̄^f(x_proj^f) / Σ_f V_f,
-// C̄^f the texel's running mean (rgb / sample count a of the gather pass's accumulator; a face
-// texel without samples does not count), T₂₁ = 1 − F_r(η, n_o·ω_o) (Fresnel).
+// C̄^f the running mean (rgb / sample count a of the gather pass's accumulator; a face texel
+// without samples does not count) interpolated bilinearly between the texels of x_o's surface,
+// T₂₁ = 1 − F_r(η, n_o·ω_o) (Fresnel).
 // Seed 001 §4.3.2 (cube-map intrusion): faces are looked up at x′_o = x_o − ε_c n_o.
 // Seed 001 §4.3.3 (shadow bias): the face's stored window depth z_tex becomes a world distance
 // along the face axis, z = z_near + (z_far − z_near) z_tex (the §4.3.3 formula for an
@@ -57,21 +58,42 @@ void main() {
     for (int f = 0; f < 6; ++f) {
         vec2 uv = (u_faceClipFromWorld[f] * vec4(xc, 1.0)).xy * 0.5 + 0.5;  // orthographic: w = 1
         if (any(lessThan(uv, vec2(0.0))) || any(greaterThanEqual(uv, vec2(1.0)))) continue;
-        ivec3 texel = ivec3(ivec2(uv * float(u_faceSize)), f);
-        float zTex = texelFetch(u_faceDepth, texel, 0).r;
-        if (zTex >= 1.0) continue;  // nothing rasterised there
-        float zStored = u_faceNearFar.x + (u_faceNearFar.y - u_faceNearFar.x) * zTex;
-        float zPoint = dot(xc - u_faceEye[f], u_faceAxis[f]);
         // Slope-scaled extension of ε_b: across one texel a surface at angle θ to the face
         // axis spans h·tan θ of depth, which a constant ε_b cannot absorb at grazing angles.
         float cosF = -dot(no, u_faceAxis[f]);
         if (cosF < 0.1) continue;  // seen from behind or edge-on (> 84°): not by this face
         float tanF = sqrt(max(0.0, 1.0 - cosF * cosF)) / cosF;
         float bias = u_bias + u_slopeBias * u_faceTexel * tanF;
-        if (!(zPoint < zStored + bias)) continue;  // V_f = 0: hidden from face f
-        vec4 acc = texelFetch(u_accum, texel, 0);
-        if (acc.a == 0.0) continue;  // no samples yet
-        sum += acc.rgb / acc.a;
+        float zPoint = dot(xc - u_faceEye[f], u_faceAxis[f]);
+        // C̄^f at x_proj^f: bilinear over the four nearest texels that hold this surface (the
+        // nearest texel alone made every face texel a flat block on screen, visible as blocky
+        // stroke edges once a texel covers several pixels). A texel counts when it has samples
+        // and its surface is x_o's: the §4.3.3 visibility test (not hidden, zPoint < z + ε_b)
+        // and, for the neighbours, not a surface further along the axis either (z < zPoint +
+        // ε_b). The weights of the texels that count are renormalised.
+        vec2 st = uv * float(u_faceSize) - 0.5;
+        ivec2 i0 = ivec2(floor(st));
+        vec2 fr = st - vec2(i0);
+        vec3 faceSum = vec3(0.0);
+        float faceWeight = 0.0;
+        for (int k = 0; k < 4; ++k) {
+            ivec2 o = ivec2(k & 1, k >> 1);
+            float w = (o.x == 1 ? fr.x : 1.0 - fr.x) * (o.y == 1 ? fr.y : 1.0 - fr.y);
+            ivec2 t = i0 + o;
+            if (w <= 0.0 || any(lessThan(t, ivec2(0))) || any(greaterThanEqual(t, ivec2(u_faceSize))))
+                continue;
+            ivec3 texel = ivec3(t, f);
+            float zTex = texelFetch(u_faceDepth, texel, 0).r;
+            if (zTex >= 1.0) continue;  // nothing rasterised there
+            float zStored = u_faceNearFar.x + (u_faceNearFar.y - u_faceNearFar.x) * zTex;
+            if (!(zPoint < zStored + bias) || !(zStored < zPoint + bias)) continue;
+            vec4 acc = texelFetch(u_accum, texel, 0);
+            if (acc.a == 0.0) continue;  // no samples yet
+            faceSum += w * (acc.rgb / acc.a);
+            faceWeight += w;
+        }
+        if (!(faceWeight > 0.0)) continue;  // V_f = 0: hidden from face f (or no samples)
+        sum += faceSum / faceWeight;
         ++visible;
     }
     vec3 C = visible > 0 ? sum / float(visible) : vec3(0.0);

@@ -282,8 +282,9 @@ Reference referenceFor(const Scene& scene, const std::string& scenePath, const s
     std::ostringstream key;
     key << "scene-fnv1a=" << std::hex << hashFile(scenePath) << std::dec << " width=" << w
         << " height=" << h << " spp=" << spp << " seed=" << REFERENCE_SEED
-        << " boundary=dielectric subsurface-only=" << subsurfaceOnly
-        << (overrides.empty() ? "" : " " + overrides) << "\n";
+        << " boundary=dielectric estimator=" << REFERENCE_ESTIMATOR_VERSION
+        << " subsurface-only=" << subsurfaceOnly << (overrides.empty() ? "" : " " + overrides)
+        << "\n";
     Reference ref;
     ref.path = exr.string();
     if (fs::exists(exr) && fs::exists(keyFile)) {

@@ -50,7 +50,12 @@ BoundaryModel parseBoundary(const std::string& s) {
         return BoundaryModel::Matched;
     if (s == "dielectric")
         return BoundaryModel::Dielectric;
-    LUCENT_THROW(ValueError, "--boundary: expected 'matched' or 'dielectric', got '", s, "'");
+    if (s == "straight")
+        return BoundaryModel::Straight;
+    LUCENT_THROW(ValueError,
+                 "--boundary: expected 'dielectric' (exact, the default), 'matched' "
+                 "(η = 1) or 'straight' (fast approximation, not ground truth), got '",
+                 s, "'");
 }
 
 int runReference(const std::vector<std::string>& argv) {
@@ -169,7 +174,9 @@ const Command referenceCommand{
     "  --width, --height  override the scene camera's image size (pixels)\n"
     "  --seed S           random seed (default 1); same seed and spp → same image\n"
     "  --threads T        worker threads (default: all)\n"
-    "  --boundary B       'dielectric' (default: Fresnel, η from the scene) or 'matched' (η = 1)\n"
+    "  --boundary B       'dielectric' (default, exact: Fresnel and refraction at every crossing,\n"
+    "                     η from the scene), 'matched' (η = 1) or 'straight' (fast approximation\n"
+    "                     with straight shadow rays; not ground truth)\n"
     "  --subsurface-only  drop the direct Fresnel surface reflection\n"
     "  --majorant M       auto (default), bricks (per-brick majorants + DDA) or global\n"
     "  --per-channel      trace one channel per sample instead of hero-channel spectral MIS\n"

@@ -288,7 +288,7 @@ const Command renderCommand{
     "\n"
     "  --method NAME      direct (default): opaque surface, Lambert + Blinn-Phong, shadow maps\n"
     "                     reference: CPU path tracer (no GL), with --spp N (64), --seed S,\n"
-    "                     --threads T, --boundary matched|dielectric (docs/reference.md)\n"
+    "                     --threads T, --boundary dielectric|matched|straight (docs/reference.md)\n"
     "                     dipole, better-dipole: GPU image-space dipole accumulated over\n"
     "                     frames of --spp-frame M (16) up to --spp N (256) samples per pixel,\n"
     "                     --seed S, plus the specular surface reflection; --cpu (or no EGL):\n"

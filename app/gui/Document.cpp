@@ -17,6 +17,10 @@ Document::Document(QObject* parent) : QObject(parent) {
             [this](bool) { Q_EMIT modifiedChanged(isModified()); });
 }
 
+Document::~Document() {
+    disconnect(&m_undo, nullptr, this, nullptr);
+}
+
 void Document::setScene(Scene scene, const QString& path) {
     if (m_history.isStrokeOpen() && material())
         m_history.cancelStroke(*material());
@@ -164,6 +168,33 @@ Light convertLight(const Light& light, Light::Type type, const Point3f& target,
         }
     }
     return out;
+}
+
+QString brushProblem(const BrushSettings& brush) {
+    if ((brush.channels & ALL_CHANNELS) == 0)
+        return Document::tr("Choose at least one channel (σt, σs′ or g) for the brush to paint.");
+    const bool setsBoth = brush.mode == BrushMode::Set &&
+                          (brush.channels & uint8_t(Channel::SigmaT)) &&
+                          (brush.channels & uint8_t(Channel::SigmaS));
+    if (setsBoth) {
+        const char* const colour[] = {QT_TR_NOOP("red"), QT_TR_NOOP("green"), QT_TR_NOOP("blue")};
+        for (int c = 0; c < 3; ++c)
+            if (brush.value.sigma_s[c] > brush.value.sigma_t[c])
+                return Document::tr(
+                           "The scattering σs′ (%1) of %2 mm⁻¹ is larger than the extinction σt "
+                           "of %3 mm⁻¹: a material cannot scatter more light than it takes out. "
+                           "Lower σs′ or raise σt.")
+                    .arg(Document::tr(colour[c]))
+                    .arg(double(brush.value.sigma_s[c]), 0, 'g', 4)
+                    .arg(double(brush.value.sigma_t[c]), 0, 'g', 4);
+    }
+    try {
+        validateBrush(brush);
+    } catch (const std::exception& ex) {
+        return Document::tr("The brush settings cannot paint: %1")
+            .arg(QString::fromUtf8(ex.what()));
+    }
+    return {};
 }
 
 void Document::lightTarget(Point3f& center, float& radius) const {

@@ -28,10 +28,18 @@ namespace lucent::app {
 /// min(0.1·objectRadius, 0.5·d). Same type: `light` unchanged.
 Light convertLight(const Light& light, Light::Type type, const Point3f& target, float objectRadius);
 
+/// Why `brush` cannot paint, in words for an artist (what to change), or an empty string when
+/// it can. The engine's checks (validateBrush) name its fields; this names what the Tools dock
+/// shows.
+QString brushProblem(const BrushSettings& brush);
+
 class Document : public QObject {
     Q_OBJECT
 public:
     explicit Document(QObject* parent = nullptr);
+    /// Disconnects the undo stack first: ~QUndoStack clears the stack and emits cleanChanged,
+    /// which must not reach this half-destroyed document (or its listeners).
+    ~Document() override;
 
     /// Replaces the scene by the built-in default scene (makeDefaultScene; no files needed).
     void newDefault();

@@ -39,6 +39,9 @@
 #include <QFileInfo>
 #include <QFormLayout>
 #include <QInputDialog>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QListWidget>
 #include <QLabel>
 #include <QLineEdit>
 #include <QMenuBar>
@@ -46,26 +49,52 @@
 #include <QMimeData>
 #include <QProgressDialog>
 #include <QRadioButton>
+#include <QScreen>
+#include <QScrollArea>
+#include <QScrollBar>
 #include <QSettings>
 #include <QStandardPaths>
 #include <QStatusBar>
+#include <QTextBrowser>
 #include <QSurfaceFormat>
 #include <QThread>
 #include <QUndoStack>
 #include <QUrl>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <memory>
+
+/// The docs resource lives in the static library lucent_gui: registered explicitly, since the
+/// linker may drop its otherwise unreferenced initialiser. Q_INIT_RESOURCE must be called
+/// outside a namespace.
+static void initDocsResource() {
+    Q_INIT_RESOURCE(lucent_docs);
+}
 
 namespace lucent::app {
 
 namespace {
 constexpr int MAX_RECENT = 8;
+/// Version of the Render settings defaults saved with the preferences (2: Dipole by default).
+constexpr int RENDER_DEFAULTS_VERSION = 2;
 constexpr int AUTOSAVE_INTERVAL_MS = 120 * 1000;
 /// Factor of one [ / ] step on the brush radius (eight steps ≈ ×6).
 constexpr double BRUSH_STEP = 1.25;
 const QStringList MESH_SUFFIXES = {"obj", "ply", "off", "stl", "vtp", "vtk"};
+}  // namespace
+
+namespace {
+/// Adds OK and Cancel under `form` and runs `dialog`. @return true when accepted.
+bool execWithOkCancel(QDialog& dialog, QFormLayout* form) {
+    auto* buttons = new QDialogButtonBox(QDialogButtonBox::Ok | QDialogButtonBox::Cancel);
+    form->addRow(buttons);
+    QObject::connect(buttons, &QDialogButtonBox::accepted, &dialog, &QDialog::accept);
+    QObject::connect(buttons, &QDialogButtonBox::rejected, &dialog, &QDialog::reject);
+    return dialog.exec() == QDialog::Accepted;
+}
 }  // namespace
 
 void MainWindow::useGlSurfaceFormat() {
@@ -152,6 +181,7 @@ QString MainWindow::autosavePath() {
 
 MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
     : QMainWindow(parent), m_doc(new Document(this)), m_useSettings(restoreSettings) {
+    initDocsResource();
     setObjectName(QStringLiteral("LucentMainWindow"));
     setAcceptDrops(true);
     m_doc->newDefault();
@@ -162,8 +192,23 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
     m_hoverLabel = new QLabel;
     statusBar()->addPermanentWidget(m_hoverLabel);
     connect(m_viewport, &Viewport::hoverVoxel, m_hoverLabel, &QLabel::setText);
-    connect(m_viewport, &Viewport::paintError, this,
-            [this](const QString& m) { statusBar()->showMessage(tr("Paint: %1").arg(m), 5000); });
+    connect(m_viewport, &Viewport::paintError, this, [this](const QString& m) {
+        statusBar()->showMessage(tr("Cannot paint: %1").arg(m), 10000);
+    });
+    // A preview method that fails falls back to Direct in the viewport; the dock follows and
+    // the user is told why (queued: the viewport emits it from inside its frame).
+    connect(
+        m_viewport, &Viewport::renderFailed, this,
+        [this](const QString& message, int method) {
+            m_render->setMethod(int(RenderSettings::Method::Direct));
+            const QString text = tr("The %1 preview failed and the viewport switched to Direct: %2")
+                                     .arg(RenderPanel::methodName(method), message);
+            m_lastError = text;
+            statusBar()->showMessage(text, 15000);
+            if (!m_useSettings)
+                std::fprintf(stderr, "lucent: %s\n", qPrintable(text));
+        },
+        Qt::QueuedConnection);
     connect(m_doc, &Document::modifiedChanged, this, [this] { updateTitle(); });
     connect(m_doc, &Document::sceneReplaced, this, [this] {
         updateTitle();
@@ -171,7 +216,11 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
     });
     connect(m_render, &RenderPanel::bookmarksChanged, this, &MainWindow::storeBookmarks);
     updateTitle();
-    resize(1400, 900);
+    // 1400×900, or what the screen has room for (a 1366×768 laptop).
+    QSize size(1400, 900);
+    if (const QScreen* sc = screen())
+        size = size.boundedTo(sc->availableGeometry().size());
+    resize(size);
     if (m_useSettings) {
         QSettings s;
         restoreGeometry(s.value("window/geometry").toByteArray());
@@ -181,6 +230,10 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
         m_vdbChoice.mitsubaVol = s.value("export/mitsubaVol", false).toBool();
         // Preferences: the brush, the render settings and the light handles as last left.
         restorePanelSettings(m_brush, s, QStringLiteral("brush"));
+        // Before version 2 of the defaults every closed session saved the then-default method
+        // (SSLPV, which hid paint), chosen or not: that saved choice is not kept.
+        if (s.value(QStringLiteral("render/defaultsVersion"), 1).toInt() < RENDER_DEFAULTS_VERSION)
+            s.remove(QStringLiteral("render/renderMethod"));
         restorePanelSettings(m_render, s, QStringLiteral("render"));
         if (auto* gizmos = findChild<QAction*>(QStringLiteral("actionLightGizmos")))
             gizmos->setChecked(s.value("view/lightGizmos", true).toBool());
@@ -199,23 +252,63 @@ void MainWindow::setRenderMethod(int method) {
     m_render->setMethod(method);
 }
 
-MainWindow::~MainWindow() = default;
+MainWindow::~MainWindow() {
+    // The document outlives this destructor's body (QObject deletes it with the other
+    // children): nothing it emits from now on may reach the half-destroyed window.
+    disconnect(m_doc, nullptr, this, nullptr);
+}
+
+QString MainWindow::readableMessage(const std::string& text) {
+    // Error messages may quote a file's bytes (a binary file read as text): invalid UTF-8 and
+    // control characters become "<binary data>" once per run, and very long messages are cut.
+    constexpr int MAX_CHARS = 600;
+    const QString raw = QString::fromUtf8(text.data(), qsizetype(text.size()));
+    QString out;
+    bool inBinary = false;
+    for (const QChar ch : raw) {
+        const bool binary = ch == QChar::ReplacementCharacter ||
+                            (ch.category() == QChar::Other_Control && ch != QLatin1Char('\n') &&
+                             ch != QLatin1Char('\t')) ||
+                            ch.category() == QChar::Other_PrivateUse || ch.isNull();
+        if (binary && !inBinary)
+            out += tr("<binary data>");
+        inBinary = binary;
+        if (!binary)
+            out += ch;
+        if (out.size() > MAX_CHARS) {
+            out.truncate(MAX_CHARS);
+            out += QStringLiteral("…");
+            break;
+        }
+    }
+    return out;
+}
 
 void MainWindow::reportError(const QString& what, const std::exception& ex) {
-    m_lastError = QStringLiteral("%1: %2").arg(what, QString::fromUtf8(ex.what()));
+    const QString message = readableMessage(ex.what());
+    m_lastError = QStringLiteral("%1: %2").arg(what, message);
     statusBar()->showMessage(tr("%1 failed").arg(what), 5000);
     if (m_useSettings)
-        QMessageBox::warning(this, what, QString::fromUtf8(ex.what()));
+        QMessageBox::warning(this, what, message);
     else  // scripted / test runs never block on a dialog
         std::fprintf(stderr, "lucent: %s\n", qPrintable(m_lastError));
 }
 
 void MainWindow::createDocks() {
+    // Every dock scrolls its panel instead of imposing the panel's full height on the window:
+    // the window then fits a 1366×768 screen (the docks' minimum sizes add up; the Tools and
+    // Render settings forms alone are taller than such a screen).
     auto addDock = [this](const QString& title, const char* name, QWidget* w,
                           Qt::DockWidgetArea area) {
+        auto* scroll = new QScrollArea;
+        scroll->setObjectName(QString::fromLatin1(name) + QStringLiteral("Scroll"));
+        scroll->setWidget(w);
+        scroll->setWidgetResizable(true);
+        scroll->setFrameShape(QFrame::NoFrame);
+        scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAsNeeded);
         auto* dock = new QDockWidget(title, this);
         dock->setObjectName(QString::fromLatin1(name));
-        dock->setWidget(w);
+        dock->setWidget(scroll);
         addDockWidget(area, dock);
         return dock;
     };
@@ -239,23 +332,38 @@ void MainWindow::createDocks() {
     m_viewport->setSelectedLight(m_lights->currentLight());
     m_stats = new StatsPanel(m_doc, m_viewport);
     auto* stats = addDock(tr("Statistics"), "dockStats", m_stats, Qt::RightDockWidgetArea);
+    tabifyDockWidget(tools, presets);
+    tools->raise();
+    // One tab group under the slice: Render settings, Lights, Statistics, Reference.
+    tabifyDockWidget(render, lights);
+    tabifyDockWidget(lights, stats);
 #if LUCENT_APP_HAS_REFERENCE
     m_reference = new ReferencePanel(m_doc, m_viewport);
     auto* reference =
         addDock(tr("Reference"), "dockReference", m_reference, Qt::RightDockWidgetArea);
     tabifyDockWidget(stats, reference);
 #endif
-    tabifyDockWidget(tools, presets);
-    tools->raise();
-    tabifyDockWidget(render, lights);
-    tabifyDockWidget(lights, stats);
     render->raise();
     // Default proportions (a saved layout, restored later, overrides them); applied once the
     // window is laid out, since QMainWindow ignores resizeDocks before that.
-    QTimer::singleShot(0, this, [this, tools, channels, render] {
+    QTimer::singleShot(0, this, [this, tools, presets, channels, render, lights, stats] {
         if (!m_layoutRestored) {
-            resizeDocks({tools, channels}, {300, 340}, Qt::Horizontal);
-            resizeDocks({channels, render}, {420, 300}, Qt::Vertical);
+            // Wide enough for each panel's fields (no horizontal scrolling), within 30 % of
+            // the window per side so the viewport keeps the middle.
+            const auto fit = [this](std::initializer_list<QDockWidget*> docks, int least) {
+                int w = least;
+                for (QDockWidget* d : docks)
+                    if (auto* area = qobject_cast<QScrollArea*>(d->widget()))
+                        w = std::max(w, area->widget()->minimumSizeHint().width() +
+                                            area->verticalScrollBar()->sizeHint().width() +
+                                            2 * area->frameWidth() + 4);
+                return std::min(w, width() * 3 / 10);
+            };
+            resizeDocks({tools, channels},
+                        {fit({tools, presets}, 300), fit({channels, render, lights, stats}, 340)},
+                        Qt::Horizontal);
+            // The slice gets 40 % of the height, the tab group the rest.
+            resizeDocks({channels, render}, {height() * 2 / 5, height() * 3 / 5}, Qt::Vertical);
         }
     });
 }
@@ -313,7 +421,7 @@ void MainWindow::createActions() {
                 QFileDialog::getOpenFileName(this, tr("Import mesh"), QString(),
                                              tr("Meshes (*.obj *.ply *.off *.stl *.vtp *.vtk)"));
             if (!p.isEmpty() && maybeSave())
-                importMesh(p);
+                importMesh(p, /*mmPerUnit=*/0.0);
         });
         a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_I));
         a->setObjectName(QStringLiteral("actionImportMesh"));
@@ -436,12 +544,92 @@ void MainWindow::createActions() {
         m_viewMenu->addAction(d->toggleViewAction());
 
     QMenu* help = menuBar()->addMenu(tr("&Help"));
+    a = help->addAction(tr("&User Guide"), this, &MainWindow::showUserGuide);
+    a->setObjectName(QStringLiteral("actionUserGuide"));
+    a->setShortcut(QKeySequence::HelpContents);
+    a = help->addAction(tr("&Keyboard and Mouse"), this, &MainWindow::showShortcuts);
+    a->setObjectName(QStringLiteral("actionShortcuts"));
+    help->addSeparator();
     help->addAction(tr("&About Lucent"), this, [this] {
         QMessageBox::about(this, tr("About Lucent"),
                            tr("<b>Lucent</b> — paint heterogeneous subsurface-scattering material "
                               "into a mesh's volume and preview its translucency.<br>See "
                               "docs/user-guide.md."));
     });
+}
+
+namespace {
+/// A non-modal help window (kept open while working), reused when asked for again.
+QTextBrowser* helpWindow(QWidget* parent, const QString& name, const QString& title) {
+    if (auto* existing = parent->findChild<QTextBrowser*>(name)) {
+        existing->show();
+        existing->raise();
+        existing->activateWindow();
+        return existing;
+    }
+    auto* browser = new QTextBrowser(parent);
+    browser->setObjectName(name);
+    browser->setWindowFlag(Qt::Window);
+    browser->setWindowTitle(title);
+    browser->setOpenExternalLinks(true);
+    browser->resize(760, 620);
+    return browser;
+}
+}  // namespace
+
+void MainWindow::showUserGuide() {
+    QTextBrowser* browser =
+        helpWindow(this, QStringLiteral("userGuide"), tr("Lucent — User guide"));
+    if (browser->document()->isEmpty()) {
+        QFile guide(QStringLiteral(":/docs/user-guide.md"));
+        QString text = tr("The user guide is not in this build.");
+        if (guide.open(QIODevice::ReadOnly | QIODevice::Text))
+            text = QString::fromUtf8(guide.readAll());
+        // Pictures (images/…) from the source tree when it is there; otherwise their captions.
+        browser->setSearchPaths({QStringLiteral(LUCENT_DOCS_DIR)});
+        browser->setMarkdown(text);
+    }
+    browser->show();
+}
+
+QString MainWindow::shortcutsText() const {
+    // Every menu action with a shortcut, as the menus define them (so the list cannot drift),
+    // then the viewport's mouse bindings.
+    QString rows;
+    for (QAction* menuAction : menuBar()->actions()) {
+        const QMenu* menu = menuAction->menu();
+        if (!menu)
+            continue;
+        for (QAction* a : menu->actions()) {
+            if (a->shortcuts().isEmpty())
+                continue;
+            QStringList keys;
+            for (const QKeySequence& k : a->shortcuts())
+                keys.push_back(k.toString(QKeySequence::NativeText).toHtmlEscaped());
+            rows += QStringLiteral("<tr><td>%1 ▸ %2</td><td><b>%3</b></td></tr>")
+                        .arg(menuAction->text().remove(QLatin1Char('&')),
+                             a->text().remove(QLatin1Char('&')).remove(QStringLiteral("…")),
+                             keys.join(QStringLiteral(", ")));
+        }
+    }
+    const QString mouse =
+        tr("<tr><td>Paint</td><td><b>left drag</b> over the object (a drag may start beside "
+           "it)</td></tr>"
+           "<tr><td>Orbit</td><td><b>Alt + left drag</b> or <b>middle drag</b></td></tr>"
+           "<tr><td>Pan</td><td><b>Shift + middle drag</b> or <b>right drag</b></td></tr>"
+           "<tr><td>Zoom</td><td><b>wheel</b></td></tr>"
+           "<tr><td>Move a light</td><td><b>drag its handle</b> (L0, L1, …)</td></tr>");
+    return tr("<h3>Keys</h3><table cellpadding=\"3\">%1</table>"
+              "<h3>Mouse in the viewport</h3><table cellpadding=\"3\">%2</table>")
+        .arg(rows, mouse);
+}
+
+void MainWindow::showShortcuts() {
+    QTextBrowser* browser =
+        helpWindow(this, QStringLiteral("shortcuts"), tr("Lucent — Keyboard and mouse"));
+    browser->setHtml(shortcutsText());
+    browser->resize(520, 560);
+    browser->show();
 }
 
 void MainWindow::updateTitle() {
@@ -472,7 +660,7 @@ bool MainWindow::openFile(const QString& path) {
     if (suffix == QLatin1String("vdb"))
         return importVdb(path);
     if (MESH_SUFFIXES.contains(suffix))
-        return importMesh(path);
+        return importMesh(path, /*mmPerUnit=*/0.0);
     try {
         m_doc->open(path);
         addRecent(path);
@@ -508,8 +696,76 @@ void MainWindow::loadBookmarks() {
         m_render->setBookmarks(QSettings().value(bookmarksKey(m_doc->filePath())).toStringList());
 }
 
+void MainWindow::storeViewInScene() {
+    // The viewport's orbit camera is what the user sees: the project keeps it (a reopened
+    // project shows the same view, and the CLI renders it).
+    Camera& c = m_doc->scene().camera;
+    const OrbitCamera& view = m_viewport->camera();
+    c.position = view.eye();
+    c.target = view.target;
+    c.up = Vector3f(0.f, 1.f, 0.f);
+    c.orthographic = false;
+    c.fovYDeg = view.fovYDeg;
+    // Planes as the viewport's (OrbitCamera::clipFromView), so a far camera is not clipped.
+    c.nearPlane = std::max(1e-3f, view.distance * 0.01f);
+    c.farPlane = view.distance * 100.f + 1.f;
+}
+
+namespace {
+bool sameContents(const QString& a, const QString& b) {
+    QFile fa(a), fb(b);
+    if (fa.size() != fb.size() || !fa.open(QIODevice::ReadOnly) || !fb.open(QIODevice::ReadOnly))
+        return false;
+    while (!fa.atEnd())
+        if (fa.read(1 << 20) != fb.read(1 << 20))
+            return false;
+    return true;
+}
+}  // namespace
+
+bool MainWindow::keepMeshWithProject(const QString& projectPath) {
+    if (!m_doc->hasObject())
+        return true;
+    MeshSource& source = m_doc->scene().objects[0].meshSource;
+    if (source.file.empty())
+        return true;  // procedural: nothing to keep
+    const QFileInfo mesh(QString::fromStdString(source.file));
+    const QDir folder = QFileInfo(projectPath).absoluteDir();
+    const QString relative = folder.relativeFilePath(mesh.absoluteFilePath());
+    if (!relative.startsWith(QLatin1String("../")) && !QDir::isAbsolutePath(relative))
+        return true;  // already inside the project folder
+    if (!mesh.exists())
+        return true;  // nothing to copy: the project keeps the (relative) reference
+    if (m_useSettings) {
+        const auto answer = QMessageBox::question(
+            this, tr("Save project"),
+            tr("The mesh %1 is outside the project's folder. Copy it into the folder, so that the "
+               "project can be moved or shared as one folder?")
+                .arg(mesh.fileName()),
+            QMessageBox::Yes | QMessageBox::No | QMessageBox::Cancel, QMessageBox::Yes);
+        if (answer == QMessageBox::Cancel)
+            return false;
+        if (answer == QMessageBox::No)
+            return true;
+    }
+    // Beside the project under its own name; another file of that name gets a suffix.
+    QString target = folder.filePath(mesh.fileName());
+    for (int i = 2; QFileInfo::exists(target) && !sameContents(target, mesh.absoluteFilePath());
+         ++i)
+        target = folder.filePath(
+            QStringLiteral("%1_%2.%3").arg(mesh.completeBaseName()).arg(i).arg(mesh.suffix()));
+    if (!QFileInfo::exists(target) && !QFile::copy(mesh.absoluteFilePath(), target))
+        LUCENT_THROW(IoError, "cannot copy the mesh '", mesh.absoluteFilePath().toStdString(),
+                     "' to '", target.toStdString(), "'");
+    source.file = target.toStdString();
+    return true;
+}
+
 bool MainWindow::saveTo(const QString& path) {
     try {
+        storeViewInScene();
+        if (!keepMeshWithProject(path))
+            return false;
         m_doc->save(path);
         storeBookmarks();  // under the new path
         addRecent(path);
@@ -523,13 +779,131 @@ bool MainWindow::saveTo(const QString& path) {
     }
 }
 
-bool MainWindow::importMesh(const QString& path) {
+double MainWindow::guessMillimetresPerUnit(double largestExtent) {
+    // The unit that makes the object closest to 100 mm (on a log scale): what is painted with
+    // subsurface scattering is held in the hand (a face, a fruit, a figurine). Blender's
+    // Suzanne, 2.7 units wide, comes out in cm (27 mm); the Stanford bunny, 0.16 units, in
+    // metres (160 mm).
+    if (!(largestExtent > 0.0) || !std::isfinite(largestExtent))
+        return 1.0;
+    // Only the metric units are guessed: inches are offered in the dialog, but with a factor
+    // of 2.54 between them and cm they would win by coincidence as often as not.
+    double best = 1.0, bestDistance = INFINITY;
+    for (const MeshUnit& u : meshUnits()) {
+        if (u.mm != 1.0 && u.mm != 10.0 && u.mm != 1000.0)
+            continue;
+        const double distance = std::abs(std::log10(largestExtent * u.mm / 100.0));
+        if (distance < bestDistance) {
+            bestDistance = distance;
+            best = u.mm;
+        }
+    }
+    return best;
+}
+
+const std::vector<MainWindow::MeshUnit>& MainWindow::meshUnits() {
+    static const std::vector<MeshUnit> units = {{QStringLiteral("mm"), 1.0},
+                                                {QStringLiteral("cm"), 10.0},
+                                                {QStringLiteral("m"), 1000.0},
+                                                {QStringLiteral("inch"), 25.4}};
+    return units;
+}
+
+QString MainWindow::meshSizeWarning(double largestExtentMm) {
+    // Outside what the 128³ grid and the default brush serve well: voxels under 0.04 mm or a
+    // mesh taller than a person.
+    if (largestExtentMm < 5.0)
+        return tr("At this scale the object is only %1 mm across: its voxels are %2 mm, and "
+                  "light passes through it almost unchanged. Is the unit right?")
+            .arg(largestExtentMm, 0, 'g', 3)
+            .arg(largestExtentMm / GridSpec::DEFAULT_RESOLUTION, 0, 'g', 2);
+    if (largestExtentMm > 2000.0)
+        return tr("At this scale the object is %1 m across: subsurface light travels a few mm, "
+                  "so it will look opaque. Is the unit right?")
+            .arg(largestExtentMm / 1000.0, 0, 'g', 3);
+    return {};
+}
+
+bool MainWindow::askMeshUnits(const QString& path, double largestExtent,
+                              const QStringList& warnings, double& mmPerUnit) {
+    QDialog dialog(this);
+    dialog.setWindowTitle(tr("Import mesh"));
+    auto* form = new QFormLayout(&dialog);
+    form->addRow(new QLabel(tr("<b>%1</b> is %2 units across. One unit of the file is:")
+                                .arg(QFileInfo(path).fileName())
+                                .arg(largestExtent, 0, 'g', 4)));
+    auto* unit = new QComboBox;
+    for (const MeshUnit& u : meshUnits())
+        unit->addItem(u.name, u.mm);
+    unit->addItem(tr("custom"), 0.0);
+    auto* scale = new QDoubleSpinBox;
+    scale->setRange(1e-6, 1e6);
+    scale->setDecimals(6);
+    scale->setSuffix(tr(" mm"));
+    scale->setValue(mmPerUnit);
+    auto* size = new QLabel;
+    auto* warning = new QLabel;
+    warning->setWordWrap(true);
+    warning->setStyleSheet(QStringLiteral("color: #e06c5a"));
+    form->addRow(tr("Unit"), unit);
+    form->addRow(tr("1 unit ="), scale);
+    form->addRow(tr("Size"), size);
+    form->addRow(warning);
+    const auto refresh = [&] {
+        const double mm = largestExtent * scale->value();
+        size->setText(tr("%1 mm across").arg(mm, 0, 'g', 4));
+        const QString w = meshSizeWarning(mm);
+        warning->setText(w);
+        warning->setVisible(!w.isEmpty());
+    };
+    connect(unit, &QComboBox::currentIndexChanged, &dialog, [&](int i) {
+        if (const double mm = unit->itemData(i).toDouble(); mm > 0.0)
+            scale->setValue(mm);
+    });
+    connect(scale, &QDoubleSpinBox::valueChanged, &dialog, [&](double v) {
+        const int i = unit->findData(v);
+        const QSignalBlocker block(unit);
+        unit->setCurrentIndex(i >= 0 ? i : unit->count() - 1);
+        refresh();
+    });
+    unit->setCurrentIndex(std::max(0, unit->findData(mmPerUnit)));
+    refresh();
+    if (!warnings.isEmpty()) {
+        auto* list = new QListWidget;
+        list->addItems(warnings);
+        list->setMaximumHeight(120);
+        form->addRow(new QLabel(
+            tr("The file was repaired on import (%n warning(s)):", "", int(warnings.size()))));
+        form->addRow(list);
+    }
+    if (!execWithOkCancel(dialog, form))
+        return false;
+    mmPerUnit = scale->value();
+    return true;
+}
+
+bool MainWindow::importMesh(const QString& path, double mmPerUnit) {
 #if LUCENT_APP_HAS_MESHIO
     try {
         MeshReport report;
         SceneObject obj;
+        // Loaded in the file's units first: the unit is chosen from its size, then applied
+        // (a uniform scale keeps the normals).
         obj.mesh = loadMesh(path.toStdString(), 1.f, &report);
+        const Vector3f e = obj.mesh.bounds().extent();
+        const double extent = double(std::max({e.x, e.y, e.z}));
+        m_importWarnings.clear();
+        for (const std::string& w : report.warnings)
+            m_importWarnings.push_back(readableMessage(w));
+        if (!(mmPerUnit > 0.0)) {
+            mmPerUnit = guessMillimetresPerUnit(extent);
+            if (m_useSettings && !askMeshUnits(path, extent, m_importWarnings, mmPerUnit))
+                return false;
+        }
+        for (Point3f& p : obj.mesh.positions)
+            p *= float(mmPerUnit);
         obj.meshSource.file = path.toStdString();
+        obj.meshSource.scale = float(mmPerUnit);
         const MaterialSample base =
             m_doc->material() ? m_doc->material()->base() : MaterialSample{};
         const GridSpec spec = GridSpec::around(obj.mesh.bounds(), GridSpec::DEFAULT_RESOLUTION);
@@ -543,19 +917,27 @@ bool MainWindow::importMesh(const QString& path) {
         m_doc->setScene(std::move(scene), QString());
         m_doc->noteSceneEdited();
         m_viewport->frameObject();
-        statusBar()->showMessage(
-            tr("Imported %1: %2 triangles%3")
-                .arg(path)
-                .arg(m_doc->mesh()->triangleCount())
-                .arg(report.warnings.empty() ? QString()
-                                             : tr(", %1 warnings").arg(report.warnings.size())),
-            8000);
+        const double sizeMm = extent * mmPerUnit;
+        QString message = tr("Imported %1: %2 triangles, %3 mm across (1 unit = %4 mm)")
+                              .arg(QFileInfo(path).fileName())
+                              .arg(m_doc->mesh()->triangleCount())
+                              .arg(sizeMm, 0, 'g', 4)
+                              .arg(mmPerUnit, 0, 'g', 6);
+        if (!m_importWarnings.isEmpty())
+            message += tr("; repaired: %1").arg(m_importWarnings.join(QStringLiteral("; ")));
+        if (const QString w = meshSizeWarning(sizeMm); !w.isEmpty())
+            message += QStringLiteral(" — ") + w;
+        m_lastImportMessage = message;
+        statusBar()->showMessage(message, 20000);
+        if (!m_useSettings && !m_importWarnings.isEmpty())
+            std::fprintf(stderr, "lucent: %s\n", qPrintable(message));
         return true;
     } catch (const std::exception& ex) {
         reportError(tr("Import mesh"), ex);
         return false;
     }
 #else
+    (void)mmPerUnit;
     QMessageBox::warning(this, tr("Import mesh"),
                          tr("Mesh import is not available in this build."));
     return false;
@@ -679,11 +1061,7 @@ bool MainWindow::askVdbExportChoice() {
     form->addRow(ready);
     form->addRow(mitsuba);
     form->addRow(tr("Material name"), name);
-    auto* buttons = new QDialogButtonBox(QDialogButtonBox::Ok | QDialogButtonBox::Cancel);
-    form->addRow(buttons);
-    connect(buttons, &QDialogButtonBox::accepted, &dialog, &QDialog::accept);
-    connect(buttons, &QDialogButtonBox::rejected, &dialog, &QDialog::reject);
-    if (dialog.exec() != QDialog::Accepted)
+    if (!execWithOkCancel(dialog, form))
         return false;
     m_vdbChoice.rendererGrids = ready->isChecked();
     m_vdbChoice.mitsubaVol = mitsuba->isChecked();
@@ -764,6 +1142,7 @@ void MainWindow::autosaveNow() {
         return;
     try {
         QDir().mkpath(QFileInfo(autosavePath()).absolutePath());
+        storeViewInScene();
         m_doc->saveCopy(autosavePath());
         statusBar()->showMessage(tr("Autosaved"), 2000);
     } catch (const std::exception& ex) {
@@ -815,6 +1194,7 @@ void MainWindow::closeEvent(QCloseEvent* e) {
         s.setValue("window/state", saveState());
         savePanelSettings(m_brush, s, QStringLiteral("brush"));
         savePanelSettings(m_render, s, QStringLiteral("render"));
+        s.setValue(QStringLiteral("render/defaultsVersion"), RENDER_DEFAULTS_VERSION);
         s.setValue("view/lightGizmos", m_viewport->lightGizmosVisible());
         removeAutosave();  // clean exit: nothing to recover
     }

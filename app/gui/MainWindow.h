@@ -8,6 +8,9 @@
 #include <QStringList>
 #include <QTimer>
 
+#include <string>
+#include <vector>
+
 class QAction;
 class QLabel;
 class QMenu;
@@ -43,6 +46,30 @@ public:
 
     //! @{ \name File operations; each reports errors in a message box and returns false
     bool openFile(const QString& path);
+    /// Imports a mesh file as the object (voxelised at 128³, filled with the base material).
+    /// @param mmPerUnit millimetres per unit of the file; ≤ 0: guessMillimetresPerUnit, which
+    ///        an interactive run shows in a dialog (unit, size, warnings) before importing.
+    bool importMesh(const QString& path, double mmPerUnit);
+    /// A length unit a mesh file may be in.
+    struct MeshUnit {
+        QString name;
+        double mm;  ///< millimetres per unit
+    };
+    /// mm, cm, m, inch.
+    static const std::vector<MeshUnit>& meshUnits();
+    /// The metric unit (mm, cm or m) that makes a mesh `largestExtent` file units across
+    /// closest to 100 mm (log scale). @return millimetres per unit; 1 for a degenerate extent.
+    static double guessMillimetresPerUnit(double largestExtent);
+    /// Why an object `largestExtentMm` across is probably in the wrong unit (< 5 mm or > 2 m),
+    /// empty when its size is plausible.
+    static QString meshSizeWarning(double largestExtentMm);
+    /// What the last mesh import repaired (MeshReport::warnings, readable).
+    [[nodiscard]] const QStringList& lastImportWarnings() const { return m_importWarnings; }
+    /// The status-bar line of the last import: size, unit, repairs and size warning.
+    [[nodiscard]] const QString& lastImportMessage() const { return m_lastImportMessage; }
+    /// `text` fit for a message box: invalid UTF-8 and control characters (bytes of a binary
+    /// file quoted by a reader) shown as "<binary data>", at most 600 characters.
+    static QString readableMessage(const std::string& text);
     bool saveTo(const QString& path);
     /// What File ▸ Export VDB writes (its options dialog; remembered in QSettings).
     struct VdbExportChoice {
@@ -104,6 +131,12 @@ public:
     static QString autosavePath();
     /// Writes the autosave copy now when the document has unsaved changes.
     void autosaveNow();
+    /// Help ▸ User Guide: docs/user-guide.md in a window (non-modal, kept open while working).
+    void showUserGuide();
+    /// Help ▸ Keyboard and Mouse: every menu shortcut and the viewport's mouse bindings.
+    void showShortcuts();
+    /// What showShortcuts shows (HTML), built from the menus' actions.
+    [[nodiscard]] QString shortcutsText() const;
     /// Environment variable answering the recovery question without a dialog (scripted runs,
     /// tests): "accept" recovers, "discard" deletes the autosave; unset asks the user.
     static constexpr const char* RECOVERY_ENV = "LUCENT_RECOVERY";
@@ -120,8 +153,16 @@ private:
     void addRecent(const QString& path);
     void rebuildRecentMenu();
     void updateTitle();
-    bool importMesh(const QString& path);
     bool importVdb(const QString& path);
+    /// The unit dialog of importMesh; false when cancelled.
+    bool askMeshUnits(const QString& path, double largestExtent, const QStringList& warnings,
+                      double& mmPerUnit);
+    /// Writes the viewport's camera into the scene (saved with the project).
+    void storeViewInScene();
+    /// Before saving to `projectPath`: a mesh file outside the project's folder is copied into
+    /// it (an interactive run asks first) and the scene refers to the copy. false: cancelled.
+    /// @throw IoError when the copy fails.
+    bool keepMeshWithProject(const QString& projectPath);
     void offerRecovery();
     /// Camera bookmarks of the open project, kept in QSettings under its path.
     void storeBookmarks();
@@ -144,6 +185,8 @@ private:
     QLabel* m_hoverLabel = nullptr;
     QStringList m_recent;
     QString m_lastError;
+    QStringList m_importWarnings;
+    QString m_lastImportMessage;
     QTimer m_autosave;
     bool m_useSettings;
     bool m_exporting = false;

@@ -24,6 +24,8 @@
 #include <QRadioButton>
 #include <QSpinBox>
 #include <QStandardItemModel>
+#include <QStyle>
+#include <QStyleOptionSpinBox>
 #include <QVBoxLayout>
 
 #include <QSettings>
@@ -35,6 +37,28 @@ namespace lucent::app {
 
 namespace {
 
+/// Smallest width of a spin box that shows `text` whole (what QAbstractSpinBox::
+/// minimumSizeHint computes for its range's extremes, here for the shown text).
+int spinWidthFor(const QAbstractSpinBox* s, const QString& text) {
+    QStyleOptionSpinBox opt;
+    opt.initFrom(s);
+    opt.buttonSymbols = s->buttonSymbols();
+    opt.frame = s->hasFrame();
+    opt.subControls = QStyle::SC_SpinBoxFrame | QStyle::SC_SpinBoxEditField | QStyle::SC_SpinBoxUp |
+                      QStyle::SC_SpinBoxDown;
+    // + a space and 2 px for the cursor, as Qt's own hint.
+    const QSize content(s->fontMetrics().horizontalAdvance(text + QLatin1Char(' ')) + 2,
+                        s->sizeHint().height());
+    return s->style()->sizeFromContents(QStyle::CT_SpinBox, &opt, content, s).width();
+}
+
+/// Keeps a spin box at least as wide as the value it shows (56 px at least), so that a value
+/// like "100.00 mm" is never cut ("100.00 mn"). Narrow values keep fields narrow, so three RGB
+/// fields still fit a slim dock; they grow with the dock.
+void fitWidthToValue(QDoubleSpinBox* s) {
+    s->setMinimumWidth(std::max(56, spinWidthFor(s, s->text())));
+}
+
 QDoubleSpinBox* spin(double lo, double hi, double value, int decimals, const QString& suffix,
                      double step = 0.1) {
     auto* s = new QDoubleSpinBox;
@@ -44,9 +68,9 @@ QDoubleSpinBox* spin(double lo, double hi, double value, int decimals, const QSt
     s->setValue(value);
     s->setSuffix(suffix);
     s->setKeyboardTracking(false);
-    // Narrow by default so three RGB fields fit a slim dock; they grow with the dock.
-    s->setMinimumWidth(56);
     s->setSizePolicy(QSizePolicy::Ignored, QSizePolicy::Fixed);
+    fitWidthToValue(s);
+    QObject::connect(s, &QDoubleSpinBox::textChanged, s, [s] { fitWidthToValue(s); });
     return s;
 }
 
@@ -82,7 +106,7 @@ BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
     m_paintTool->setChecked(true);
     form->addRow(tr("Tool"), row({m_paintTool, m_eyedropTool}));
     const BrushSettings defaults;
-    m_radius = spin(0.05, 500.0, 3.0, 2, tr(" mm"), 0.5);
+    m_radius = spin(0.01, 500.0, 3.0, 2, tr(" mm"), 0.5);
     m_depth = spin(0.0, 500.0, 0.0, 2, tr(" mm"), 0.5);
     m_falloff = new QComboBox;
     m_falloff->addItems({tr("Constant"), tr("Linear"), tr("Smooth"), tr("Gaussian")});
@@ -129,6 +153,14 @@ BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
     }
     form->addRow(tr("σt R G B (mm⁻¹)"), row({m_sigmaT[0], m_sigmaT[1], m_sigmaT[2]}));
     form->addRow(tr("σs′ R G B (mm⁻¹)"), row({m_sigmaS[0], m_sigmaS[1], m_sigmaS[2]}));
+    for (int c = 0; c < 3; ++c) {
+        m_sigmaT[size_t(c)]->setToolTip(
+            tr("Extinction σt: how much light the material takes out per mm (absorbed or "
+               "scattered)."));
+        m_sigmaS[size_t(c)]->setToolTip(
+            tr("Scattering σs′: the part of σt that is scattered rather than absorbed; it cannot "
+               "exceed σt when the brush sets both."));
+    }
     m_g = spin(-double(G_MAX), double(G_MAX), 0.0, 2, QString(), 0.05);
     form->addRow(tr("g"), m_g);
     m_swatch = new QPushButton(tr("Albedo colour…"));
@@ -136,6 +168,13 @@ BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
         tr("Pick the single-scattering albedo σs′/σt as a colour; σt is kept "
            "and σs′ = albedo × σt per channel."));
     form->addRow(tr("Albedo"), m_swatch);
+    // Why the brush cannot paint, in words, where the fields are (empty and hidden when it can).
+    m_problem = new QLabel;
+    m_problem->setObjectName(QStringLiteral("brushProblem"));
+    m_problem->setWordWrap(true);
+    m_problem->setStyleSheet(QStringLiteral("color: #e06c5a"));
+    m_problem->hide();
+    form->addRow(m_problem);
 
     auto* fills = new QGroupBox(tr("Fills (undoable)"));
     auto* fl = new QFormLayout(fills);
@@ -241,6 +280,8 @@ BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
             m_sigmaS[size_t(i)]->setValue(double(rgb[i]) * m_sigmaT[size_t(i)]->value());
         apply();
     });
+    // A new object (import, open, new): a brush out of proportion with it is rescaled.
+    connect(m_doc, &Document::sceneReplaced, this, [this] { fitRadiusToObject(); });
     connect(m_viewport, &Viewport::eyedropped, this, [this](const MaterialSample& s) {
         setBrushValue(s);
         m_paintTool->setChecked(true);
@@ -299,6 +340,23 @@ void BrushPanel::updateRadiusPx() {
     m_radiusPx->setValue(int(std::lround(m_radius->value() * pixelsPerMm())));
 }
 
+double BrushPanel::fitRadiusToObject() {
+    const TriangleMesh* mesh = m_doc->mesh();
+    if (!mesh || mesh->isEmpty())
+        return m_radius->value();
+    const double diagonal = double(glm::length(mesh->bounds().extent()));
+    const double radius = m_radius->value();
+    // Kept between 1/200 and 1/4 of the object's diagonal (a radius the user may have chosen
+    // for this object); otherwise 1/25 of it, two significant digits: 3 mm on a 75 mm object,
+    // 0.16 mm on a 4 mm one (a 6 mm brush covered all of a Suzanne imported in mm).
+    if (radius < diagonal / 200.0 || radius > diagonal / 4.0) {
+        const double fitted = diagonal / 25.0;
+        const double unit = std::pow(10.0, std::floor(std::log10(fitted)) - 1.0);
+        m_radius->setValue(std::max(m_radius->minimum(), std::round(fitted / unit) * unit));
+    }
+    return m_radius->value();
+}
+
 void BrushPanel::scaleRadius(double factor) {
     m_radius->setValue(m_radius->value() * factor);
 }
@@ -309,8 +367,12 @@ void BrushPanel::setEyedropper(bool on) {
 
 void BrushPanel::setBrushValue(const MaterialSample& s) {
     for (int c = 0; c < 3; ++c) {
-        QSignalBlocker b1(m_sigmaT[size_t(c)]), b2(m_sigmaS[size_t(c)]);
+        const QSignalBlocker b1(m_sigmaT[size_t(c)]);
         m_sigmaT[size_t(c)]->setValue(double(s.sigma_t[c]));
+    }
+    updateScatteringLimits();  // before σs′: its limit follows the new σt
+    for (int c = 0; c < 3; ++c) {
+        const QSignalBlocker b2(m_sigmaS[size_t(c)]);
         m_sigmaS[size_t(c)]->setValue(double(s.sigma_s[c]));
     }
     QSignalBlocker b3(m_g);
@@ -318,7 +380,19 @@ void BrushPanel::setBrushValue(const MaterialSample& s) {
     apply();
 }
 
+void BrushPanel::updateScatteringLimits() {
+    // Set mode writing σt and σs′ needs σs′ ≤ σt per channel (the engine refuses the stroke
+    // otherwise): the σs′ fields cannot go above σt, so the limit holds while typing (a larger
+    // value is not accepted; lowering σt lowers σs′ with it). Other modes take amounts or
+    // factors, which have no such bound.
+    const bool setsBoth = BrushMode(m_mode->currentIndex()) == BrushMode::Set &&
+                          m_chSigmaT->isChecked() && m_chSigmaS->isChecked();
+    for (int c = 0; c < 3; ++c)
+        m_sigmaS[size_t(c)]->setMaximum(setsBoth ? m_sigmaT[size_t(c)]->value() : 1000.0);
+}
+
 void BrushPanel::apply() {
+    updateScatteringLimits();
     AppBrush& b = m_viewport->brush();
     b.engine.radius = float(m_radius->value());
     b.depthMm = float(m_depth->value());
@@ -332,13 +406,15 @@ void BrushPanel::apply() {
                                     (m_chG->isChecked() ? int(Channel::G) : 0));
     for (int c = 0; c < 3; ++c) {
         b.engine.value.sigma_t[c] = float(m_sigmaT[size_t(c)]->value());
-        // In Set mode σs′ ≤ σt is what the material allows; show the clamp in the fields.
         b.engine.value.sigma_s[c] = float(m_sigmaS[size_t(c)]->value());
     }
     b.engine.value.g = Rgb(float(m_g->value()));
     m_viewport->setTool(m_paintTool->isChecked() ? Viewport::Tool::Paint
                                                  : Viewport::Tool::Eyedropper);
     updateSwatch();
+    const QString problem = brushProblem(b.engine);
+    m_problem->setText(problem);
+    m_problem->setVisible(!problem.isEmpty());
 }
 
 void BrushPanel::updateSwatch() {
@@ -763,10 +839,8 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     m_method = new QComboBox;
     // Order = RenderSettings::Method.
     m_method->setObjectName(QStringLiteral("renderMethod"));
-    m_method->addItems({tr("Direct (opaque surface)"), tr("Single scattering (ray-marched)"),
-                        tr("SSLPV (live translucency)"), tr("Dipole (progressive)"),
-                        tr("Better dipole (progressive)"), tr("Directional dipole (progressive)"),
-                        tr("Combined (dipole + SSLPV)")});
+    for (int i = 0; i <= int(RenderSettings::Method::Combined); ++i)
+        m_method->addItem(methodName(i));
     // Methods this build lacks stay listed (indices = RenderSettings::Method) but disabled.
     if (auto* model = qobject_cast<QStandardItemModel*>(m_method->model()))
         for (int i = 0; i < m_method->count(); ++i)
@@ -944,6 +1018,26 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     apply();
 }
 
+QString RenderPanel::methodName(int method) {
+    switch (RenderSettings::Method(method)) {
+        case RenderSettings::Method::Direct:
+            return tr("Direct (opaque surface)");
+        case RenderSettings::Method::SingleScattering:
+            return tr("Single scattering (ray-marched)");
+        case RenderSettings::Method::Sslpv:
+            return tr("SSLPV (live translucency)");
+        case RenderSettings::Method::Dipole:
+            return tr("Dipole (progressive)");
+        case RenderSettings::Method::BetterDipole:
+            return tr("Better dipole (progressive)");
+        case RenderSettings::Method::DirectionalDipole:
+            return tr("Directional dipole (progressive)");
+        case RenderSettings::Method::Combined:
+            return tr("Combined (dipole + SSLPV)");
+    }
+    return tr("method %1").arg(method);
+}
+
 void RenderPanel::apply() {
     RenderSettings s;
     s.method = RenderSettings::Method(m_method->currentIndex());
@@ -980,9 +1074,11 @@ void RenderPanel::apply() {
     m_lightSteps->setEnabled(single);
     m_ambient->setEnabled(single);
     m_smooth->setEnabled(single);
-    for (QWidget* w : std::initializer_list<QWidget*>{m_sslpvMode, m_sslpvGrid, m_sslpvSteps,
-                                                      m_sslpvOrder, m_sslpvSolve})
+    for (QWidget* w :
+         std::initializer_list<QWidget*>{m_sslpvGrid, m_sslpvSteps, m_sslpvOrder, m_sslpvSolve})
         w->setEnabled(sslpv);
+    // Combined keeps its SSLPV part in Calibrated mode (PreviewRenderer, Method::Combined).
+    m_sslpvMode->setEnabled(s.method == M::Sslpv);
     m_dipoleSpp->setEnabled(s.method == M::Dipole || s.method == M::BetterDipole || combined);
     m_dirpoleSpp->setEnabled(s.method == M::DirectionalDipole);
     m_splitRadius->setEnabled(combined);
@@ -1048,6 +1144,10 @@ void StatsPanel::refresh() {
              .arg(s.frameMs > 0 ? 1000.0 / s.frameMs : 0.0, 0, 'f', 1);
     t += tr("last upload: %1 bricks in %2 ms<br>").arg(s.bricksUploaded).arg(s.uploadMs, 0, 'f', 2);
     t += tr("frames: %1, GL errors: %2<br>").arg(s.frames).arg(s.glErrors);
+    if (!s.renderError.isEmpty())
+        t += tr("<b>last render error</b> (%1 frames failed): %2<br>")
+                 .arg(s.renderErrors)
+                 .arg(s.renderError.toHtmlEscaped());
     for (const PreviewStats::Pass& p : s.preview.passes)
         t += tr("&nbsp;&nbsp;%1: %2 ms GPU, %3 ms CPU<br>")
                  .arg(QString::fromStdString(p.name))

@@ -39,6 +39,9 @@ public:
     void setBrushValue(const MaterialSample& s);
     /// Pushes every widget value into the viewport's brush.
     void apply();
+    /// Rescales the radius to 1/25 of the object's bounding-box diagonal when it is outside
+    /// [1/200, 1/4] of it (called for every new scene). @return the radius, mm.
+    double fitRadiusToObject();
     /// Multiplies the radius (mm) by `factor` (the [ and ] shortcuts), within its range.
     void scaleRadius(double factor);
     /// Selects the eyedropper (true) or the paint tool (false).
@@ -54,6 +57,8 @@ public:
 private:
     void updateSwatch();
     void updateRadiusPx();
+    /// σs′ fields limited to σt while the brush sets both in Set mode.
+    void updateScatteringLimits();
     Document* m_doc;
     Viewport* m_viewport;
     QRadioButton* m_paintTool;
@@ -80,6 +85,7 @@ private:
     QDoubleSpinBox* m_layerThickness;
     QDoubleSpinBox* m_layerJitter;
     QComboBox* m_pressure;
+    QLabel* m_problem;  ///< why the brush cannot paint (brushProblem), hidden when it can
 };
 
 /// Preferences: saves the value of every named field of `panel` (spin boxes, combo boxes,
@@ -154,6 +160,8 @@ public:
     RenderPanel(Document* doc, Viewport* viewport, QWidget* parent = nullptr);
     /// Selects a preview method (index = RenderSettings::Method) as the combo box does.
     void setMethod(int method);
+    /// The selector's name of `method` (RenderSettings::Method).
+    [[nodiscard]] static QString methodName(int method);
     /// Camera bookmarks as text, one per entry: "name;target x;y;z (mm);distance (mm);yaw°;
     /// pitch°" (how MainWindow keeps them per project in QSettings).
     [[nodiscard]] QStringList bookmarks() const;

@@ -382,6 +382,12 @@ struct PreviewRenderer::Impl {
     std::vector<float> lights, sslpvLights;
     Method lastMethod = Method::Direct;
     PreviewStats stats;
+
+    /// One frame (PreviewRenderer::render).
+    void renderFrame(PreviewFrame& f);
+    /// After a frame of `method` threw: releases that method's provider and marks its inputs
+    /// unsynchronised, so the method starts from scratch when it is next used.
+    void dropFailedMethod(Method method);
 };
 
 PreviewRenderer::PreviewRenderer() : m(std::make_unique<Impl>()) {}
@@ -463,6 +469,10 @@ bool PreviewRenderer::hasMethod(RenderSettings::Method method) {
     return method != Method::Combined || LUCENT_APP_HAS_COMBINED != 0;
 }
 
+gpu::ShaderLibrary& PreviewRenderer::shaderLibrary() {
+    return m->library;
+}
+
 const PreviewStats& PreviewRenderer::stats() const {
     return m->stats;
 }
@@ -474,7 +484,59 @@ ImageRgb PreviewRenderer::linearImage() const {
 
 void PreviewRenderer::render(PreviewFrame& f) {
     LUCENT_CHECK(m->created, "PreviewRenderer::render before create()");
-    Impl& r = *m;
+    try {
+        m->renderFrame(f);
+    } catch (...) {
+        m->dropFailedMethod(f.settings.method);
+        throw;
+    }
+}
+
+void PreviewRenderer::Impl::dropFailedMethod(Method method) {
+    // The provider of the failed frame may be half-updated: the next frame that uses the method
+    // builds it again from the scene (a full material, mesh and light sync).
+    renderer.setSubsurfaceProvider(nullptr);
+    switch (method) {
+        case Method::Direct:
+        case Method::SingleScattering:
+            singleSynced = false;
+            break;
+        case Method::Sslpv:
+            if (sslpv)
+                sslpv->destroy();
+            sslpv.reset();
+            sslpvSynced = sslpvMeshSet = false;
+            sslpvLights.clear();
+            break;
+        case Method::Dipole:
+        case Method::BetterDipole:
+            if (dipole)
+                dipole->destroy();
+            dipole.reset();
+            dipoleSynced = false;
+            break;
+        case Method::DirectionalDipole:
+            if (dirpole)
+                dirpole->destroy();
+            dirpole.reset();
+            dirpoleSynced = false;
+            break;
+        case Method::Combined:
+#if LUCENT_APP_HAS_COMBINED
+            if (combined)
+                combined->destroy();
+            combined.reset();
+            combinedSynced = combinedMeshSet = false;
+            combinedLights.clear();
+#endif
+            break;
+    }
+    overlaySynced = false;
+    surfaceSet = false;
+}
+
+void PreviewRenderer::Impl::renderFrame(PreviewFrame& f) {
+    Impl& r = *this;
     const RenderSettings& s = f.settings;
     gpu::SceneRenderer& sr = r.renderer;
     sr.setSubsurfaceProvider(nullptr);
@@ -575,7 +637,8 @@ void PreviewRenderer::render(PreviewFrame& f) {
                 r.sslpv->setLights(lights);
                 r.sslpvLights = key;
             }
-            if (!r.sslpvSynced || r.sslpvEta != f.scene->eta) {
+            // A new grid resolution drops the provider's material (SslpvProvider.h, setOptions).
+            if (!r.sslpvSynced || !r.sslpv->hasMaterial() || r.sslpvEta != f.scene->eta) {
                 r.sslpvEta = f.scene->eta;
                 r.sslpv->setMaterial(*vol, std::clamp(f.scene->eta, 1.f, 3.f));
                 r.sslpvSynced = true;
@@ -636,12 +699,25 @@ void PreviewRenderer::render(PreviewFrame& f) {
             }
             combined::CombinedProviderSettings cs = r.combined->settings();
             const int spp = std::clamp(s.dipoleSpp, 1, 4096);
+            // The dock's SSLPV grid, steps, order and solve apply to the SSLPV part; its mode
+            // stays the module's (Calibrated, what the split was evaluated with).
+            SslpvProviderOptions so = sslpvOptions(s);
+            so.render.solver.mode = cs.sslpv.render.solver.mode;
+            so.render.direct = cs.sslpv.render.direct;
+            so.render.subsurface = cs.sslpv.render.subsurface;
             if (cs.splitRadius != s.combinedSplitRadius || cs.eta != eta || cs.meshId != 0 ||
-                cs.dipole.samplesPerFrame != spp) {
+                cs.dipole.samplesPerFrame != spp || !sameSslpv(so, cs.sslpv)) {
+                // A new SSLPV grid drops the SSLPV part's material: set it again below.
+                if (so.render.gridResolution != cs.sslpv.render.gridResolution)
+                    r.combinedSynced = false;
                 cs.splitRadius = s.combinedSplitRadius;
                 cs.eta = eta;
                 cs.meshId = 0;
                 cs.dipole.samplesPerFrame = spp;
+                cs.sslpv.render.gridResolution = so.render.gridResolution;
+                cs.sslpv.render.solver.maxSteps = so.render.solver.maxSteps;
+                cs.sslpv.render.solver.order = so.render.solver.order;
+                cs.sslpv.backend = so.backend;
                 r.combined->setSettings(cs);
             }
             if (!r.combinedMeshSet) {

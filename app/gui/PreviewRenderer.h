@@ -28,6 +28,10 @@
 #include <string>
 #include <vector>
 
+namespace lucent::gpu {
+class ShaderLibrary;
+}
+
 namespace lucent::app {
 
 /// Preview method and its parameters.
@@ -44,7 +48,7 @@ struct RenderSettings {
         /// + windowed dipole and SSLPV beyond the split radius (combined::
         /// CombinedSubsurfaceProvider; only in builds with the combined module)
         Combined = 6,
-    } method = Method::Sslpv;
+    } method = Method::Dipole;  ///< shows paint at once (SSLPV Paper 32³ hid a dark stroke)
     int steps = 24;             ///< view-ray march steps (single scattering)
     int lightSteps = 6;         ///< shadow-ray march steps per view step (single scattering)
     float exposureStops = 2.f;  ///< log2 of the exposure multiplier (Reinhard tone curve)
@@ -141,6 +145,10 @@ public:
     [[nodiscard]] ImageRgb linearImage() const;
     /// Whether this build has `method` (DirectionalDipole and Combined depend on the modules).
     [[nodiscard]] static bool hasMethod(RenderSettings::Method method);
+    /// The shaders every pass and provider is compiled from (embedded, or $LUCENT_SHADER_DIR).
+    /// An in-memory file set here (ShaderLibrary::setFile) is used by the programs compiled
+    /// after it, e.g. a provider created when its method is next selected.
+    [[nodiscard]] gpu::ShaderLibrary& shaderLibrary();
 
 private:
     struct Impl;

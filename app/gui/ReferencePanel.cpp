@@ -5,6 +5,7 @@
 #include "ReferencePanel.h"
 
 #include "Document.h"
+#include "ImageView.h"
 #include "Viewport.h"
 
 #include <lucent/reference/PathTracer.h>
@@ -68,9 +69,11 @@ ReferencePanel::ReferencePanel(Document* doc, Viewport* viewport, QWidget* paren
     m_info = new QLabel(tr("Monte Carlo path tracer: the ground truth of every preview."));
     m_info->setWordWrap(true);
     layout->addWidget(m_info);
-    m_picture = new QLabel;
-    m_picture->setAlignment(Qt::AlignCenter);
-    m_picture->setMinimumHeight(120);
+    // Drawn at the dock's size whenever the dock changes (not scaled once per pass), and
+    // never wider than the dock lets it be.
+    m_picture = new ImageView(Qt::SmoothTransformation);
+    m_picture->setObjectName(QStringLiteral("referencePicture"));
+    m_picture->setMinimumSize(96, 72);
     layout->addWidget(m_picture, 1);
     connect(m_startStop, &QPushButton::clicked, this, [this] {
         if (isRunning())
@@ -90,9 +93,7 @@ ReferencePanel::~ReferencePanel() {
 
 void ReferencePanel::showImage(const QImage& img) {
     m_image = img;
-    const QSize box = m_picture->size().expandedTo(QSize(64, 64));
-    m_picture->setPixmap(
-        QPixmap::fromImage(img.scaled(box, Qt::KeepAspectRatio, Qt::FastTransformation)));
+    m_picture->setImage(img);
 }
 
 void ReferencePanel::start() {

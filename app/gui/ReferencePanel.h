@@ -20,6 +20,7 @@ class QThread;
 namespace lucent::app {
 
 class Document;
+class ImageView;
 class Viewport;
 
 class ReferencePanel : public QWidget {
@@ -50,7 +51,7 @@ private:
     QPushButton* m_startStop;
     QProgressBar* m_progress;
     QLabel* m_info;
-    QLabel* m_picture;
+    ImageView* m_picture;
     QImage m_image;
     QThread* m_thread = nullptr;
     std::shared_ptr<std::atomic<bool>> m_cancel;

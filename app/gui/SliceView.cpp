@@ -5,42 +5,17 @@
 #include "SliceView.h"
 
 #include "Document.h"
+#include "ImageView.h"
 
 #include <QComboBox>
 #include <QHBoxLayout>
 #include <QLabel>
-#include <QPainter>
 #include <QSlider>
 #include <QVBoxLayout>
 
 #include <array>
 
 namespace lucent::app {
-
-namespace {
-/// Shows an image scaled to fit, aspect kept, nearest-neighbour (voxels stay square).
-class ImageWidget : public QWidget {
-public:
-    void setImage(const QImage& img) {
-        m_image = img;
-        update();
-    }
-
-protected:
-    void paintEvent(QPaintEvent*) override {
-        QPainter p(this);
-        p.fillRect(rect(), QColor(40, 40, 44));
-        if (m_image.isNull())
-            return;
-        const QSize s = m_image.size().scaled(size(), Qt::KeepAspectRatio);
-        p.drawImage(QRect(QPoint((width() - s.width()) / 2, (height() - s.height()) / 2), s),
-                    m_image);
-    }
-
-private:
-    QImage m_image;
-};
-}  // namespace
 
 QRgb viridis(float t) {
     // Nine samples of matplotlib's viridis, linearly interpolated.
@@ -93,8 +68,22 @@ SliceImage renderSlice(const MaterialVolume& volume, int axis, int component, in
         lo = hi = 0.f;
     out.minValue = lo;
     out.maxValue = hi;
+    // The colour map spans at least 1 % of the values' magnitude (and 10⁻³ absolute): a slice
+    // that is uniform up to rounding (0.9999 … 1 mm⁻¹) shows as one colour, not as the whole
+    // map stretched over float noise.
+    const float minSpan = std::max(1e-2f * std::max(std::abs(lo), std::abs(hi)), 1e-3f);
+    float mapLo = lo, mapHi = hi;
+    if (hi - lo < minSpan) {
+        const float mid = 0.5f * (lo + hi);
+        mapLo = mid - 0.5f * minSpan;
+        mapHi = mid + 0.5f * minSpan;
+        out.nearlyUniform = true;
+    }
+    out.mapMin = mapLo;
+    out.mapMax = mapHi;
     out.image = QImage(res, res, QImage::Format_RGB32);
-    const float span = hi > lo ? hi - lo : 1.f;
+    lo = mapLo;
+    const float span = mapHi - mapLo;
     for (int v = 0; v < res; ++v) {
         auto* row = reinterpret_cast<QRgb*>(out.image.scanLine(res - 1 - v));  // +v up
         for (int u = 0; u < res; ++u) {
@@ -120,8 +109,8 @@ SliceView::SliceView(Document* doc, QWidget* parent) : QWidget(parent), m_doc(do
     layout->addLayout(row);
     m_index = new QSlider(Qt::Horizontal);
     layout->addWidget(m_index);
-    m_picture = new ImageWidget;
-    m_picture->setMinimumSize(160, 160);
+    m_picture = new ImageView(Qt::FastTransformation);  // voxels stay square
+    m_picture->setMinimumSize(96, 96);
     layout->addWidget(m_picture, 1);
     m_legend = new QLabel;
     m_legend->setFixedHeight(14);
@@ -161,20 +150,21 @@ void SliceView::setSlice(int axis, int component, int index) {
 void SliceView::refresh() {
     const MaterialVolume* v = m_doc->material();
     if (!v) {
-        static_cast<ImageWidget*>(m_picture)->setImage(QImage());
+        m_picture->setImage(QImage());
         return;
     }
     const SliceImage s =
         renderSlice(*v, m_axis->currentIndex(), m_channel->currentIndex(), m_index->value());
     m_image = s.image;
-    static_cast<ImageWidget*>(m_picture)->setImage(m_image);
+    m_picture->setImage(m_image);
     const bool isG = m_channel->currentIndex() >= 6;
-    m_range->setText(tr("slice %1 of %2   %3 … %4 %5")
+    m_range->setText(tr("slice %1 of %2   %3 … %4 %5%6")
                          .arg(m_index->value())
                          .arg(v->resolution())
                          .arg(double(s.minValue), 0, 'g', 4)
                          .arg(double(s.maxValue), 0, 'g', 4)
-                         .arg(isG ? QString() : QStringLiteral("mm⁻¹")));
+                         .arg(isG ? QString() : QStringLiteral("mm⁻¹"))
+                         .arg(s.nearlyUniform ? tr(" (uniform within 1 %)") : QString()));
 }
 
 }  // namespace lucent::app

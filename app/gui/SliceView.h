@@ -16,12 +16,17 @@ class QSlider;
 namespace lucent::app {
 
 class Document;
+class ImageView;
 
-/// The slice image (one pixel per voxel, first in-plane axis to the right, second up) and the
-/// value range its colour map spans.
+/// The slice image (one pixel per voxel, first in-plane axis to the right, second up), the
+/// range of its values and the range its colour map spans.
 struct SliceImage {
     QImage image;
-    float minValue = 0.f, maxValue = 0.f;
+    float minValue = 0.f, maxValue = 0.f;  ///< of the inside voxels
+    /// The colour map's ends: the values' range, widened around its middle to at least 1 % of
+    /// the values' magnitude (10⁻³ at least), so rounding noise is not stretched over the map.
+    float mapMin = 0.f, mapMax = 0.f;
+    bool nearlyUniform = false;  ///< the range was widened
 };
 /// @param axis 0 x, 1 y, 2 z; @param component MaterialVolume component 0..8; @param index
 /// slice index along the axis (clamped). Outside voxels are drawn dark grey.
@@ -44,7 +49,7 @@ private:
     QComboBox* m_axis;
     QComboBox* m_channel;
     QSlider* m_index;
-    QWidget* m_picture;
+    ImageView* m_picture;
     QLabel* m_legend;
     QLabel* m_range;
     QImage m_image;

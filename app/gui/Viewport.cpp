@@ -283,15 +283,39 @@ void Viewport::onSceneReplaced() {
     const Scene& scene = m_doc->scene();
     m_camera.lookAt(scene.camera.position, scene.camera.target);
     m_camera.fovYDeg = scene.camera.fovYDeg;
+    // A project saved before the camera was kept, or a camera that looks past the object:
+    // show the object rather than an empty view.
+    if (!cameraShowsObject())
+        frameObject();
     m_meshDirty = true;
     m_sceneReplaced = true;
-    m_stroking = false;
+    m_stroking = m_strokeReached = m_strokeRefused = false;
     m_tabletStroke = false;
     m_drag = Drag::None;
     m_lightsBeforeDrag.clear();
     if (m_selectedLight >= int(scene.lights.size()))
         m_selectedLight = -1;
     update();
+}
+
+bool Viewport::cameraShowsObject() const {
+    const TriangleMesh* mesh = m_doc->mesh();
+    if (!mesh || mesh->isEmpty())
+        return true;
+    const Bounds3f b = mesh->bounds();
+    const float radius = std::max(0.5f * glm::length(b.extent()), 1e-4f);
+    const Point3f eye = m_camera.eye();
+    const Vector3f toCentre = b.center() - eye;
+    const float d = glm::length(toCentre);
+    if (d <= radius)
+        return false;  // inside the object's bounding sphere
+    const Vector3f forward = glm::normalize(m_camera.target - eye);
+    const float halfFov = glm::radians(0.5f * m_camera.fovYDeg);
+    const float offAxis = std::acos(std::clamp(glm::dot(toCentre, forward) / d, -1.f, 1.f));
+    const float sphere = std::asin(std::min(1.f, radius / d));  // angular radius
+    // Some of the sphere inside the (vertical) field of view, and not a speck: its angular
+    // size at least 2 % of the view's.
+    return offAxis - sphere < halfFov && sphere > 0.02f * halfFov;
 }
 
 void Viewport::frameObject() {
@@ -334,9 +358,16 @@ Point3f Viewport::stampCenter(const PickHit& hit) const {
 }
 
 void Viewport::beginStroke(const PickHit& hit) {
+    m_strokeReached = true;
+    if (const QString problem = brushProblem(m_brush.engine); !problem.isEmpty()) {
+        m_strokeRefused = true;  // said once per stroke, not at every mouse move
+        Q_EMIT paintError(problem);
+        return;
+    }
     try {
         m_doc->beginStroke(m_brush.engine);
     } catch (const std::exception& ex) {
+        m_strokeRefused = true;
         Q_EMIT paintError(QString::fromUtf8(ex.what()));
         return;
     }
@@ -372,6 +403,16 @@ void Viewport::endStroke() {
     m_doc->endStroke(tr("Paint stroke"));
 }
 
+void Viewport::finishDragStroke() {
+    const bool missed = !m_stroking && !m_strokeReached;
+    endStroke();
+    m_strokeReached = m_strokeRefused = false;
+    if (missed)
+        Q_EMIT paintError(
+            tr("The stroke never reached the object: drag across its surface "
+               "to paint."));
+}
+
 int Viewport::strokeBetween(const QPointF& a, const QPointF& b) {
     const int samples = 16;
     const size_t before = m_doc->history().undoCount();
@@ -380,17 +421,20 @@ int Viewport::strokeBetween(const QPointF& a, const QPointF& b) {
         const auto hit = pickAt(p);
         if (!hit)
             continue;
-        if (!m_stroking)
-            beginStroke(*hit);
-        else
+        if (m_stroking)
             continueStroke(*hit);
+        else if (!m_strokeRefused)
+            beginStroke(*hit);
     }
-    endStroke();
+    finishDragStroke();
     return int(m_doc->history().undoCount() - before);
 }
 
 void Viewport::updateHover(const QPointF& pos) {
     const auto hit = pickAt(pos);
+    // Off the object (or outside the grid) the readout is cleared rather than left showing the
+    // last voxel.
+    QString readout;
     if (hit) {
         m_cursor = hit->position;
         if (const MaterialVolume* vol = m_doc->material()) {
@@ -398,7 +442,7 @@ void Viewport::updateHover(const QPointF& pos) {
                 vol->spec().cellOf(hit->position - hit->normal * (0.5f * vol->spec().voxelSize));
             if (vol->spec().contains(c)) {
                 const MaterialSample s = vol->at(c);
-                Q_EMIT hoverVoxel(
+                readout =
                     QStringLiteral("voxel (%1, %2, %3)  σt = %4 %5 %6 mm⁻¹  σs′ = %7 %8 %9 mm⁻¹")
                         .arg(c.x)
                         .arg(c.y)
@@ -408,13 +452,21 @@ void Viewport::updateHover(const QPointF& pos) {
                         .arg(double(s.sigma_t.b), 0, 'g', 3)
                         .arg(double(s.sigma_s.r), 0, 'g', 3)
                         .arg(double(s.sigma_s.g), 0, 'g', 3)
-                        .arg(double(s.sigma_s.b), 0, 'g', 3));
+                        .arg(double(s.sigma_s.b), 0, 'g', 3);
             }
         }
     } else {
         m_cursor.reset();
     }
+    setHoverText(readout);
     update();
+}
+
+void Viewport::setHoverText(const QString& text) {
+    if (text == m_hoverText)
+        return;
+    m_hoverText = text;
+    Q_EMIT hoverVoxel(text);
 }
 
 // ---- Light gizmos ---------------------------------------------------------------------------
@@ -656,6 +708,12 @@ void Viewport::mousePressEvent(QMouseEvent* e) {
         }
         m_pressure = 1.f;  // the mouse paints at full pressure
         const auto hit = pickAt(e->position());
+        if (!hit && m_tool == Tool::Paint && !m_render.deform) {
+            // A stroke may start beside the object: it paints from where it reaches the
+            // surface (mouseMoveEvent), as in 2-D painting tools.
+            m_drag = Drag::Paint;
+            return;
+        }
         if (!hit)
             return;
         if (m_tool == Tool::Eyedropper) {
@@ -668,7 +726,8 @@ void Viewport::mousePressEvent(QMouseEvent* e) {
             return;
         }
         if (m_render.deform) {
-            Q_EMIT paintError(tr("painting is paused while the deformation animation runs"));
+            Q_EMIT paintError(
+                tr("Painting is paused while the deformation animation runs (Render settings)."));
             return;
         }
         m_drag = Drag::Paint;
@@ -697,8 +756,12 @@ void Viewport::mouseMoveEvent(QMouseEvent* e) {
             break;
         }
         case Drag::Paint:
-            if (const auto hit = pickAt(e->position()))
-                continueStroke(*hit);
+            if (const auto hit = pickAt(e->position())) {
+                if (m_stroking)
+                    continueStroke(*hit);
+                else if (!m_strokeRefused)
+                    beginStroke(*hit);  // the first time the drag reaches the surface
+            }
             updateHover(e->position());
             break;
         case Drag::Light:
@@ -714,7 +777,7 @@ void Viewport::mouseMoveEvent(QMouseEvent* e) {
 
 void Viewport::mouseReleaseEvent(QMouseEvent*) {
     if (m_drag == Drag::Paint)
-        endStroke();
+        finishDragStroke();
     if (m_drag == Drag::Light)
         endLightDrag();
     m_drag = Drag::None;
@@ -730,20 +793,26 @@ void Viewport::tabletEvent(QTabletEvent* e) {
         const bool paints = e->button() == Qt::LeftButton && m_tool == Tool::Paint &&
                             e->modifiers() == Qt::NoModifier && !m_render.deform &&
                             lightAt(e->position()) < 0;
-        if (const auto hit = paints ? pickAt(e->position()) : std::nullopt) {
+        if (paints) {
+            // As with the mouse, a pen stroke may start beside the object.
             m_pressure = pressure;
             m_drag = Drag::Paint;
             m_tabletStroke = handled = true;
-            beginStroke(*hit);
+            if (const auto hit = pickAt(e->position()))
+                beginStroke(*hit);
         }
     } else if (m_tabletStroke && e->type() == QEvent::TabletMove) {
         m_pressure = pressure;
-        if (const auto hit = pickAt(e->position()))
-            continueStroke(*hit);
+        if (const auto hit = pickAt(e->position())) {
+            if (m_stroking)
+                continueStroke(*hit);
+            else if (!m_strokeRefused)
+                beginStroke(*hit);
+        }
         updateHover(e->position());
         handled = true;
     } else if (m_tabletStroke && e->type() == QEvent::TabletRelease) {
-        endStroke();
+        finishDragStroke();
         m_drag = Drag::None;
         m_tabletStroke = false;
         m_pressure = 1.f;
@@ -771,6 +840,7 @@ void Viewport::keyPressEvent(QKeyEvent* e) {
 
 void Viewport::leaveEvent(QEvent*) {
     m_cursor.reset();
+    setHoverText(QString());
     update();
 }
 
@@ -955,12 +1025,33 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
         m_preview.render(f);
         m_meshDirty = m_sceneReplaced = false;
     } catch (const std::exception& ex) {
-        // Shown in the Statistics dock; the frame stays cleared. The dirty bricks taken above
-        // may be lost: the next frame re-synchronises everything.
-        m_stats.initError = QString::fromUtf8(ex.what());
-        ++m_stats.glErrors;
-        m_sceneReplaced = true;
-        clear();
+        // A method that fails must not leave the viewport blank: report the error, switch to
+        // Direct (which needs no subsurface provider) and draw this frame with it. The
+        // renderer dropped the failed method's provider, so choosing it again starts afresh.
+        // The dirty bricks taken above went to the failed provider: the retry re-synchronises
+        // everything as for a new scene.
+        const QString message = QString::fromUtf8(ex.what());
+        const RenderSettings::Method failed = f.settings.method;
+        m_stats.renderError = message;
+        ++m_stats.renderErrors;
+        bool drawn = false;
+        if (failed != RenderSettings::Method::Direct) {
+            m_render.method = RenderSettings::Method::Direct;
+            f.settings.method = RenderSettings::Method::Direct;
+            f.sceneReplaced = f.meshChanged = true;
+            try {
+                m_preview.render(f);
+                drawn = true;
+            } catch (const std::exception& again) {
+                m_stats.renderError = QString::fromUtf8(again.what());
+                ++m_stats.renderErrors;
+            }
+        }
+        m_meshDirty = false;
+        m_sceneReplaced = !drawn;
+        if (!drawn)
+            clear();
+        Q_EMIT renderFailed(message, int(failed));
     }
     m_stats.preview = m_preview.stats();
     m_stats.uploadMs = m_stats.preview.uploadMs;

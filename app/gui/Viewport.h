@@ -71,6 +71,10 @@ struct ViewportStats {
     int glErrors = 0;        ///< glGetError() != GL_NO_ERROR count since start
     QString glRenderer;      ///< GL_RENDERER / GL_VERSION
     QString initError;       ///< non-empty when GL set-up failed
+    /// Message of the last frame that failed to render (empty if none did); the viewport then
+    /// switched to the Direct method (Viewport::renderFailed).
+    QString renderError;
+    int renderErrors = 0;  ///< frames that failed to render since start
 };
 
 class Viewport : public QWidget, protected QOpenGLFunctions_4_5_Core {
@@ -90,9 +94,14 @@ public:
     void setTool(Tool t) { m_tool = t; }
     [[nodiscard]] Tool tool() const { return m_tool; }
     [[nodiscard]] const ViewportStats& stats() const { return m_stats; }
+    /// The renderer behind the GL window (its shader library, for tests and live editing).
+    PreviewRenderer& previewRenderer() { return m_preview; }
 
     /// Frames the object (F key): target at its centre, distance to fit its bounds.
     void frameObject();
+    /// Whether the camera sees part of the object's bounding sphere at a visible size (more
+    /// than 2 % of the field of view). A new scene whose camera does not is framed.
+    [[nodiscard]] bool cameraShowsObject() const;
     /// Camera ray through widget position `pos` (logical pixels, origin top-left).
     void cameraRay(const QPointF& pos, Point3f& origin, Vector3f& direction) const;
     /// True when the deformation animation is compiled in (mesh/Deform).
@@ -151,8 +160,13 @@ Q_SIGNALS:
     /// non-empty, stats().frames unchanged), so the failure can be shown.
     void frameRendered();
     void eyedropped(const lucent::MaterialSample& sample);
+    /// The voxel under the cursor and its coefficients; empty when the cursor is off the
+    /// object or outside the viewport.
     void hoverVoxel(const QString& text);
     void paintError(const QString& message);
+    /// A frame of preview method `method` (RenderSettings::Method) failed with `message`. The
+    /// frame was drawn with Direct instead, and renderSettings().method is now Direct.
+    void renderFailed(const QString& message, int method);
     /// The user picked light `index` by clicking its handle.
     void lightSelected(int index);
 
@@ -180,8 +194,13 @@ private:
     void beginStroke(const PickHit& hit);
     void continueStroke(const PickHit& hit);
     void endStroke();
+    /// End of a mouse or pen drag of the paint tool: closes the stroke, or says that it never
+    /// reached the surface.
+    void finishDragStroke();
     [[nodiscard]] Point3f stampCenter(const PickHit& hit) const;
     void updateHover(const QPointF& pos);
+    /// Emits hoverVoxel when the readout changes (empty: nothing under the cursor).
+    void setHoverText(const QString& text);
     void beginLightDrag(int index, const QPointF& pos);
     void continueLightDrag(const QPointF& pos);
     void endLightDrag();
@@ -200,6 +219,8 @@ private:
     enum class Drag { None, Paint, Orbit, Pan, Light } m_drag = Drag::None;
     QPointF m_lastMouse;
     bool m_stroking = false;
+    bool m_strokeReached = false;  ///< the current drag has reached the surface
+    bool m_strokeRefused = false;  ///< the brush could not paint (paintError said why)
     Point3f m_lastStamp{0.f};
     float m_pressure = 1.f;  ///< pen pressure of the current stamp (mouse: 1)
     bool m_tabletStroke = false;
@@ -212,6 +233,7 @@ private:
     Vector3f m_dragPlaneNormal{0.f};
     Vector3f m_dragOffset{0.f};  ///< light position − plane hit at the press
     std::optional<Point3f> m_cursor;
+    QString m_hoverText;  ///< the voxel readout last emitted (hoverVoxel)
     QTimer m_turntable;
     QTimer m_animation;
     QElapsedTimer m_clock;

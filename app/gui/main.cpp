@@ -3,7 +3,7 @@
 /// @brief Entry point of the `lucent` app.
 ///
 ///     lucent [PROJECT|MESH|VDB] [--screenshot PATH] [--frames N] [--benchmark]
-///            [--benchmark-json PATH] [--viewport WxH]
+///            [--benchmark-json PATH] [--viewport WxH] [--window WxH]
 ///            [--method direct|single|sslpv|dipole|better-dipole|dirpole|combined]
 ///                (also the selector's long names: single-scattering, directional-dipole)
 ///            [--paint-demo] [--reference SPP] [--raise DOCKS] [--no-settings]
@@ -462,6 +462,9 @@ int main(int argc, char** argv) {
     QCommandLineOption viewportSize(QStringLiteral("viewport"),
                                     QStringLiteral("Viewport size WxH (e.g. 640x360)."),
                                     QStringLiteral("WxH"));
+    QCommandLineOption windowSize(QStringLiteral("window"),
+                                  QStringLiteral("Main window size WxH (e.g. 1366x768)."),
+                                  QStringLiteral("WxH"));
     QCommandLineOption noSettings(
         QStringLiteral("no-settings"),
         QStringLiteral("Ignore saved layout, recent files and autosave."));
@@ -489,8 +492,8 @@ int main(int argc, char** argv) {
         QStringLiteral("Preview method: direct, single (single-scattering), sslpv, dipole, "
                        "better-dipole, dirpole (directional-dipole) or combined."),
         QStringLiteral("M"));
-    parser.addOptions({shot, frames, bench, benchJson, viewportSize, noSettings, paintDemo,
-                       raiseDock, method, reference, composeExperiment, swapInterval});
+    parser.addOptions({shot, frames, bench, benchJson, viewportSize, windowSize, noSettings,
+                       paintDemo, raiseDock, method, reference, composeExperiment, swapInterval});
     parser.process(app);
     if (parser.isSet(swapInterval)) {
         // Before any window exists, so every context (viewport and composition) gets it.
@@ -503,13 +506,28 @@ int main(int argc, char** argv) {
 
     const bool scripted = parser.isSet(shot) || parser.isSet(bench);
     MainWindow window(!scripted && !parser.isSet(noSettings));
+    // WxH of --viewport / --window; an empty size when malformed.
+    const auto parseSize = [&parser](const QCommandLineOption& option) {
+        const QStringList wh = parser.value(option).split(QLatin1Char('x'));
+        return wh.size() == 2 && wh[0].toInt() > 0 && wh[1].toInt() > 0
+                   ? QSize(wh[0].toInt(), wh[1].toInt())
+                   : QSize();
+    };
     if (parser.isSet(viewportSize)) {
-        const QStringList wh = parser.value(viewportSize).split(QLatin1Char('x'));
-        if (wh.size() != 2 || wh[0].toInt() <= 0 || wh[1].toInt() <= 0) {
+        const QSize size = parseSize(viewportSize);
+        if (size.isEmpty()) {
             std::fprintf(stderr, "lucent: --viewport expects WxH, e.g. 640x360\n");
             return 2;
         }
-        window.viewport()->setFixedSize(wh[0].toInt(), wh[1].toInt());
+        window.viewport()->setFixedSize(size);
+    }
+    if (parser.isSet(windowSize)) {
+        const QSize size = parseSize(windowSize);
+        if (size.isEmpty()) {
+            std::fprintf(stderr, "lucent: --window expects WxH, e.g. 1366x768\n");
+            return 2;
+        }
+        window.resize(size);
     }
     if (!parser.positionalArguments().isEmpty() &&
         !window.openFile(parser.positionalArguments().first()))

@@ -4,8 +4,10 @@
 /// relative standard error, on homogeneous spheres (marble, skin1), the default scene (a
 /// thin-and-thick back-lit shape with heterogeneous paint) and a sparse sphere (thin haze
 /// around a dense core, "cored"), with and without majorant bricks,
-/// on 1 and 2 threads. After the runs a table prints each figure as a ratio against its
-/// baseline measured in the same run (global majorant for bricks; 1 thread for 2 threads).
+/// on 1 and 2 threads, and with the matched boundary and the straight approximation. After
+/// the runs a table prints each figure as a ratio against its baseline measured in the same
+/// run (global majorant for bricks; 1 thread for 2 threads; for the exact dielectric `auto`
+/// run, matched and straight: the speed-up of the exact estimator over them, < 1 when slower).
 ///
 ///     bench_reference [--benchmark_filter=...]
 ///
@@ -98,7 +100,10 @@ struct Result {
 };
 std::map<std::string, Result> g_results;
 
-enum class Variant { Bricks, Global, Auto, PerChannel };
+/// Majorant and colour variants (dielectric boundary), and two boundary variants with the
+/// default majorant: `matched` (η = 1) and `straight` (the approximation), to compare the exact
+/// dielectric estimator (`auto`) with.
+enum class Variant { Bricks, Global, Auto, PerChannel, Matched, Straight };
 const char* variantName(Variant v) {
     switch (v) {
         case Variant::Bricks:
@@ -109,6 +114,10 @@ const char* variantName(Variant v) {
             return "auto";
         case Variant::PerChannel:
             return "auto-per-channel";
+        case Variant::Matched:
+            return "matched";
+        case Variant::Straight:
+            return "straight";
     }
     return "?";
 }
@@ -125,6 +134,9 @@ void runReference(benchmark::State& state, const std::string& scene, Variant v, 
                    : v == Variant::Global ? MajorantMode::Global
                                           : MajorantMode::Auto;
     opt.spectralMis = v != Variant::PerChannel;
+    opt.boundary = v == Variant::Matched    ? BoundaryModel::Matched
+                   : v == Variant::Straight ? BoundaryModel::Straight
+                                            : BoundaryModel::Dielectric;
     const Scene& s = sceneNamed(scene);
     ReferenceImage img;
     double seconds = 0;
@@ -174,7 +186,7 @@ int main(int argc, char** argv) {
                     [=](benchmark::State& st) { runReference(st, scene, v, threads); })
                     ->Iterations(1)
                     ->Unit(benchmark::kMillisecond);
-        for (Variant v : {Variant::Auto, Variant::PerChannel})
+        for (Variant v : {Variant::Auto, Variant::PerChannel, Variant::Matched, Variant::Straight})
             benchmark::RegisterBenchmark(
                 key(scene, v, 1).c_str(),
                 [=](benchmark::State& st) { runReference(st, scene, v, 1); })
@@ -203,7 +215,9 @@ int main(int argc, char** argv) {
         }
         if (name.find("/auto/") != std::string::npos)
             vs = "vs global: " + ratio(name, key(scene, Variant::Global, 1)) +
-                 ", vs per-channel: " + ratio(name, key(scene, Variant::PerChannel, 1));
+                 ", vs per-channel: " + ratio(name, key(scene, Variant::PerChannel, 1)) +
+                 ", vs matched: " + ratio(name, key(scene, Variant::Matched, 1)) +
+                 ", vs straight: " + ratio(name, key(scene, Variant::Straight, 1));
         std::printf("%-34s %9.4g %10.4g %10.4g %7.4f %9.4g  %s\n", name.c_str(), r.pathsPerSecond,
                     r.secondsTo1Percent, r.cpuTo1Percent, r.rse, r.lookupsPerPath, vs.c_str());
     }

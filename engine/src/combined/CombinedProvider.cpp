@@ -181,7 +181,7 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
                                                   unsigned targetTexture) {
     LUCENT_CHECK(m->created, "CombinedSubsurfaceProvider: create() was not called");
     const SplitPlan& plan = m->stats.plan;
-    m->profiler.beginFrame();
+    gpu::GpuProfiler::FrameScope frame(m->profiler);  // cancelled if a part throws
     if (plan.sslpvOn) {
         const auto scope = m->profiler.scope("sslpv");
         m->sslpv.renderSubsurface(g, targetTexture);  // writes the covered pixels of meshId
@@ -250,7 +250,7 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
                         GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
         glUseProgram(0);
     }
-    m->profiler.endFrame();
+    frame.end();
     ++m->stats.frames;
     m->stats.dipole = m->dipole.stats();
     m->stats.sslpv = m->sslpv.stats();

@@ -624,7 +624,7 @@ DirpoleSubsurfaceProvider::DebugTextures DirpoleSubsurfaceProvider::debugTexture
 void DirpoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsigned target) {
     requireCreated("renderSubsurface");
     Impl& r = *m;
-    r.profiler.beginFrame();
+    gpu::GpuProfiler::FrameScope frame(r.profiler);  // cancelled if a pass throws
     // Material: a new grid or unreported edits (revision moved) re-upload everything; the
     // prepare pass then finds the texels whose material changed.
     if (r.volume.syncForFrame(r.stats))
@@ -664,7 +664,7 @@ void DirpoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsi
         const auto scope = r.profiler.scope("combine");
         r.combine(g, target);
     }
-    r.profiler.endFrame();
+    frame.end();
     gpu::checkGlError("DirpoleSubsurfaceProvider::renderSubsurface");
 }
 

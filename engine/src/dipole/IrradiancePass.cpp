@@ -8,6 +8,7 @@
 #include <lucent/core/Parallel.h>
 #include <lucent/reference/MeshBoundary.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace lucent::dipole {
@@ -39,13 +40,51 @@ Rgb lightIrradiance(const Light& light, const Point3f& p, const Normal3f& n, flo
     return incident * (ft * cosI);
 }
 
+MaterialSample materialInside(const MaterialVolume& volume, const Point3f& p, const Normal3f& n) {
+    const GridSpec& spec = volume.spec();
+    const float inset = 0.5f * spec.voxelSize;
+    // Voxels cut by the surface may be masked out (their centre lies outside the mesh): step
+    // inwards, up to 3 voxels.
+    for (int step = 1; step <= 6; ++step) {
+        const MaterialSample mat = volume.sample(p - float(step) * inset * n);
+        if (mat.sigma_t != Rgb(0.f))
+            return mat;
+    }
+    // A hole in the mask under the surface: the nearest painted voxel around, shell by shell.
+    const Vector3f q = (p - inset * n - spec.origin) / spec.voxelSize;  // voxel units
+    const Coord c0(glm::floor(q));
+    for (int r = 1; r <= 4; ++r) {
+        float best = INF;
+        MaterialSample found;
+        for (int dz = -r; dz <= r; ++dz)
+            for (int dy = -r; dy <= r; ++dy)
+                for (int dx = -r; dx <= r; ++dx) {
+                    if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r)
+                        continue;  // the shell only
+                    const Coord c = c0 + Coord(dx, dy, dz);
+                    if (!spec.contains(c))
+                        continue;
+                    const MaterialSample mat = volume.at(c);
+                    if (mat.sigma_t == Rgb(0.f))
+                        continue;
+                    const Vector3f e = Vector3f(c) + Vector3f(0.5f) - q;
+                    if (const float d2 = glm::dot(e, e); d2 < best) {
+                        best = d2;
+                        found = mat;
+                    }
+                }
+        if (best < INF)
+            return found;
+    }
+    return {};
+}
+
 namespace {
 
 /// The irradiance pass proper for an arbitrary view `cam` (the scene camera or a light's).
 SurfaceBuffers renderView(const Scene& scene, const SceneObject& obj, const MeshBoundary& boundary,
                           const Camera& cam) {
     const MaterialVolume& volume = *obj.material;
-    const float inset = 0.5f * volume.spec().voxelSize;
 
     SurfaceBuffers buf;
     buf.resize(cam.width, cam.height);
@@ -69,15 +108,7 @@ SurfaceBuffers renderView(const Scene& scene, const SceneObject& obj, const Mesh
                 buf.position[i] = p;
                 buf.normal[i] = n;
                 buf.covered[i] = 1;
-                // Material just inside the surface. Voxels cut by the surface may be masked out
-                // (their centre lies outside the mesh): step inwards, up to 3 voxels.
-                MaterialSample mat;
-                for (int step = 1; step <= 6; ++step) {
-                    mat = volume.sample(p - float(step) * inset * n);
-                    if (mat.sigma_t != Rgb(0.f))
-                        break;
-                }
-                buf.material[i] = mat;
+                buf.material[i] = materialInside(volume, p, n);
                 Rgb e(0.f);
                 const Point3f origin = p + boundary.offsetAt(p) * n;
                 for (const Light& light : scene.lights) {

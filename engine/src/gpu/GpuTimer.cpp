@@ -65,6 +65,15 @@ void GpuProfiler::endFrame(bool wait) {
         collect(true);
 }
 
+void GpuProfiler::cancelFrame() {
+    if (!m_inFrame)
+        return;
+    recycle(m_current);  // the queries issued so far are reused; their results never read
+    m_current = Frame{};
+    m_open.clear();
+    m_inFrame = false;
+}
+
 void GpuProfiler::collect(bool wait) {
     while (!m_pending.empty() && tryResolve(m_pending.front(), wait))
         m_pending.pop_front();

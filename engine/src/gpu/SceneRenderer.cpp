@@ -646,7 +646,8 @@ void SceneRenderer::renderToFramebuffer(unsigned framebuffer, int width, int hei
 void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int tonemapHeight) {
     Impl& r = *this;
     r.ensureShadowMaps();
-    r.profiler.beginFrame();
+    // A provider or pass that throws cancels the frame: the next frame starts cleanly.
+    GpuProfiler::FrameScope frame(r.profiler);
 
     // Per-frame uniforms and light buffers.
     r.viewFromWorld = cameraViewFromWorld(r.camera);
@@ -745,7 +746,7 @@ void SceneRenderer::Impl::renderFrame(unsigned tonemapFbo, int tonemapWidth, int
         auto s = r.profiler.scope("tonemap");
         r.tonemapInto(tonemapFbo, tonemapWidth, tonemapHeight);
     }
-    r.profiler.endFrame();
+    frame.end();
     r.haveFrame = true;
 }
 

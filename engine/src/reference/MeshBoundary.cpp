@@ -34,7 +34,12 @@ std::optional<SurfaceHit> MeshBoundary::intersect(const Point3f& o, const Vector
     // The face normal; a degenerate (zero-area) triangle reports +z, as it always has.
     const Normal3f& n = m_impl->caster.faceNormal(hit->triangle);
     const bool degenerate = n.x == 0.f && n.y == 0.f && n.z == 0.f;
-    return SurfaceHit{hit->t, degenerate ? Normal3f(0.f, 0.f, 1.f) : n};
+    return SurfaceHit{hit->t, degenerate ? Normal3f(0.f, 0.f, 1.f) : n, hit->triangle};
+}
+
+bool MeshBoundary::occluded(const Point3f& o, const Vector3f& d, float tMin, float tMax) const {
+    const float tFar = std::isfinite(tMax) ? tMax : std::numeric_limits<float>::max();
+    return m_impl->caster.occluded(o, d, tMin, tFar);
 }
 
 }  // namespace lucent

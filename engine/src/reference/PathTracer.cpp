@@ -127,8 +127,9 @@ ReferenceImage renderReference(const Scene& scene, const ReferenceOptions& optio
 
     GridMedium::Options mediumOptions;
     mediumOptions.majorant = options.majorant;
-    const VolumeScene volumeScene(
-        object.mesh, GridMedium::fromMaterial(*object.material, mediumOptions), scene.lights);
+    const VolumeScene volumeScene(object.mesh,
+                                  GridMedium::fromMaterial(*object.material, mediumOptions),
+                                  scene.lights, scene.environment);
     TransportOptions transport;
     transport.boundary = options.boundary;
     transport.eta = eta;

@@ -19,6 +19,7 @@
 #include <lucent/core/Error.h>
 #include <lucent/core/Sampling.h>
 #include <lucent/core/SphericalHarmonics.h>
+#include <lucent/reference/SpecularChain.h>
 #include <lucent/reference/Transport.h>
 
 namespace lucent {
@@ -32,6 +33,18 @@ constexpr int MAX_SURFACE_EVENTS = 1 << 16;
 constexpr float ROULETTE_WEIGHT = 0.5f;
 /// Ratio-tracking roulette threshold on the running transmittance.
 constexpr float RATIO_ROULETTE = 0.1f;
+/// Refracted next-event estimation runs every time within this many mean free paths (σt at the
+/// scattering point) of the surface towards the light, and with probability e^{−(τ − this)}
+/// beyond (Russian roulette, unbiased; refractedLighting).
+constexpr float NEE_FULL_DEPTH = 2.f;
+/// ... but never with probability below this.
+constexpr float NEE_MIN_Q = 1.f / 256.f;
+/// The trials that estimate a chain's reciprocal probability run every time for a chain that
+/// carries at least this share of the light at x, and proportionally less often below it.
+constexpr float CHAIN_SHARE = 0.01f;
+/// A guard against an endless trial loop (a chain that a seed can no longer reach because of
+/// rounding); never reached in the tests and benchmarks.
+constexpr uint64_t MAX_CHAIN_TRIALS = uint64_t(1) << 24;
 
 Vector3f reflect(const Vector3f& d, const Normal3f& n) {
     return d - 2.f * glm::dot(d, n) * n;
@@ -143,8 +156,28 @@ float fresnelDielectric(float cosI, float eta) {
     return 0.5f * (rs * rs + rp * rp);
 }
 
-VolumeScene::VolumeScene(const TriangleMesh& mesh, GridMedium medium, std::vector<Light> lights)
-    : m_boundary(mesh), m_medium(std::move(medium)), m_lights(std::move(lights)) {
+const char* boundaryModelName(BoundaryModel model) {
+    switch (model) {
+        case BoundaryModel::Matched:
+            return "matched";
+        case BoundaryModel::Dielectric:
+            return "dielectric";
+        case BoundaryModel::Straight:
+            return "straight";
+    }
+    return "?";
+}
+
+VolumeScene::VolumeScene(const TriangleMesh& mesh, GridMedium medium, std::vector<Light> lights,
+                         const Rgb& environment)
+    : m_boundary(mesh),
+      m_refractions(mesh),
+      m_medium(std::move(medium)),
+      m_lights(std::move(lights)),
+      m_environment(environment) {
+    LUCENT_CHECK(isFinite(environment) && environment.r >= 0.f && environment.g >= 0.f &&
+                     environment.b >= 0.f,
+                 "environment radiance must be finite and ≥ 0 W/(mm²·sr)");
     for (size_t i = 0; i < m_lights.size(); ++i) {
         const Light& l = m_lights[i];
         LUCENT_CHECK(isFinite(l.position) && isFinite(l.direction) && isFinite(l.intensity) &&
@@ -175,7 +208,7 @@ bool enterSurface(const Point3f& x, const Normal3f& n, float off, bool specularC
         inside = true;
         return true;
     }
-    if (options.boundary != BoundaryModel::Dielectric) {
+    if (options.boundary == BoundaryModel::Matched) {
         pos = x - n * off;
         inside = true;
         return true;
@@ -193,8 +226,8 @@ bool enterSurface(const Point3f& x, const Normal3f& n, float off, bool specularC
         return false;  // impossible entering a denser medium; rounding guard
     // Radiance is not symmetric under refraction: L_outside = T·L_inside/η²
     // (Veach 1997 §5.2; pbrt-v3 §8.2.3), so a camera path entering the object
-    // carries 1/η². The straight shadow connections need no factor: for a point
-    // light the refracted fluence equals T·I/d² to first order in depth/d.
+    // carries 1/η². Next-event estimation needs no factor: it carries irradiance,
+    // and flux is conserved through the surface (RefractionSearch.h).
     weight /= double(options.eta) * options.eta;
     dir = *t;
     pos = x - n * off;
@@ -206,7 +239,7 @@ bool enterSurface(const Point3f& x, const Normal3f& n, float off, bool specularC
 /// reflection back inside, or refraction out with the inverse radiance scaling η².
 void exitSurface(const Point3f& x, const Normal3f& n, float off, Point3f& pos, Vector3f& dir,
                  bool& inside, double& weight, Pcg32& rng, const TransportOptions& options) {
-    if (options.boundary == BoundaryModel::Dielectric) {
+    if (options.boundary != BoundaryModel::Matched) {
         const float cosO = std::abs(glm::dot(dir, n));
         const float f = fresnelDielectric(cosO, 1.f / options.eta);
         const std::optional<Vector3f> t =
@@ -535,7 +568,7 @@ typename Channels::Value traceShadowRay(const VolumeScene& scene, const Point3f&
                                         const TransportOptions& options, TrackingStats* stats) {
     using Value = typename Channels::Value;
     const MeshBoundary& boundary = scene.boundary();
-    const bool dielectric = options.boundary == BoundaryModel::Dielectric;
+    const bool dielectric = options.boundary != BoundaryModel::Matched;
     Value tr(1.f);
     Point3f pos = p;
     float remaining = dist;
@@ -564,33 +597,275 @@ typename Channels::Value traceShadowRay(const VolumeScene& scene, const Point3f&
     return tr;
 }
 
-/// Next-event estimation from a real collision at x (inside the object): Σ over lights of
-/// phase · transmittance · radiance / pdf. `dirIn` is the path's travel direction at x.
+/// True when the segment o + t·d, t ∈ (0, tMax), meets a sphere light other than `except`
+/// (sphere lights are opaque emitters, for shadow rays as for camera rays).
+bool blockedBySphereLight(const VolumeScene& scene, const Point3f& o, const Vector3f& d, float tMax,
+                          const Light* except) {
+    for (const Light& light : scene.lights())
+        if (light.type == Light::Type::Sphere && &light != except &&
+            intersectSphere(o, d, light.position, light.radius) < tMax)
+            return true;
+    return false;
+}
+
+/// True when next-event estimation connects through RefractionSearch (the exact dielectric
+/// boundary); otherwise shadow rays go straight (exact for the matched boundary, and for a
+/// dielectric of η = 1, which refracts nothing).
+bool refractedNextEvent(const TransportOptions& options) {
+    return options.boundary == BoundaryModel::Dielectric && options.eta != 1.f;
+}
+
+/// A direction drawn uniformly on the unit sphere (pdf 1/4π).
+Vector3f uniformSphereDirection(Pcg32& rng) {
+    return sampleUniformSphere({rng.uniform(), rng.uniform()});
+}
+
+/// Next-event estimation with straight shadow rays from a real collision at x (inside the
+/// object): Σ over lights of phase · transmittance · radiance / pdf, plus the environment
+/// (one direction drawn uniformly). `dirIn` is the path's travel direction at x. Exact for the
+/// matched boundary; the Straight approximation with Fresnel factors otherwise.
+template <typename Path>
+typename Path::Value straightLighting(const VolumeScene& scene, const Point3f& x,
+                                      const Vector3f& dirIn, const typename Path::Value& g,
+                                      const Path& path, Pcg32& rng, const TransportOptions& options,
+                                      TrackingStats* stats) {
+    using Value = typename Path::Value;
+    const auto& tracker = static_cast<const typename Path::Tracker&>(path);
+    Value sum(0.f);
+    const auto connect = [&](const Vector3f& wi, float dist, const Rgb& radianceOverPdf,
+                             const Light* source) {
+        const Value le = path.pick(radianceOverPdf);
+        if (!(path.largest(le) > 0.f))
+            return;
+        // HG phase value for the angle between the path's travel direction and wi (the
+        // light's travel direction −wi against −dirIn gives the same cosine).
+        const Value phase = path.phase(g, glm::dot(dirIn, wi));
+        if (!(path.largest(phase) > 0.f))
+            return;  // hgPhase > 0 unless rounding of 1 + g² − 2g·cos bites (|g| ≳ 0.9995)
+        if (blockedBySphereLight(scene, x, wi, dist, source))
+            return;
+        const Value tr =
+            traceShadowRay(scene, x, wi, dist, /*pInside=*/true, tracker, rng, options, stats);
+        sum += phase * tr * le;
+    };
+    for (const Light& light : scene.lights())
+        if (const std::optional<LightSample> ls = sampleLightFrom(light, x, rng))
+            connect(ls->wi, ls->dist, ls->le, &light);
+    if (scene.environment() != Rgb(0.f))
+        connect(uniformSphereDirection(rng), INF, scene.environment() * (4.f * PI), nullptr);
+    return sum;
+}
+
+/// The light a point, spot, directional or sphere light sends to x along a specular chain, times
+/// the phase function toward the path: strength · Fresnel product · irradiance gain · medium
+/// transmittance of every inside segment · phase. Other sphere lights occlude the outside
+/// segments.
+template <typename Path>
+typename Path::Value chainContribution(const VolumeScene& scene, const Point3f& x,
+                                       const Vector3f& dirIn, const typename Path::Value& g,
+                                       const Path& path, const SpecularChain& chain,
+                                       const Light& light, Pcg32& rng, TrackingStats* stats) {
+    using Value = typename Path::Value;
+    // Directional: irradiance; point, spot: intensity toward the chain; sphere: radiance (the
+    // caller multiplies by cos θy·dA/pdf).
+    const Rgb strength = light.type == Light::Type::Point || light.type == Light::Type::Spot
+                             ? light.intensityToward(-chain.finalDirection)
+                             : light.intensity;
+    Value value = path.pick(strength) * float(chain.fresnel * chain.irradianceGain) *
+                  path.phase(g, glm::dot(dirIn, chain.directionAtX));
+    if (!(path.largest(value) > 0.f))
+        return Value(0.f);
+    const auto& tracker = static_cast<const typename Path::Tracker&>(path);
+    Point3f from = x;
+    for (int i = 0; i < chain.events; ++i) {
+        const Point3f to = chain.points[size_t(i)];
+        const Vector3f d = to - from;
+        const float len = glm::length(d);
+        if (len > 0.f) {
+            if (chain.insideBefore[size_t(i)])
+                value *=
+                    trackTransmittance(scene.medium(), from, d / len, len, tracker, rng, stats);
+            else if (blockedBySphereLight(scene, from, d / len, len, nullptr))
+                return Value(0.f);
+        }
+        from = to;
+    }
+    if (blockedBySphereLight(scene, from, chain.finalDirection, chain.distanceToSource, &light))
+        return Value(0.f);
+    return value;
+}
+
+/// Next-event estimation through the exact dielectric boundary from a real collision at x
+/// (docs/reference.md, "Refracted next-event estimation" and "Chains of surface events"), for
+/// every light (a point drawn on a sphere light, a direction of the environment):
+///  * the light that reaches x through one refraction: every refraction point p that
+///    RefractionSearch finds, with the visibility of x → p and p → light, the medium's
+///    transmittance along x → p, the Fresnel transmittance and the refracted pencil's gain;
+///  * the light of point, spot, directional and sphere lights that reaches x through more
+///    surface events (internal reflections, other parts of a non-convex object): specular
+///    chains. A random seed gives a chain type, Newton's method the exact chain; the
+///    probability that the seed process finds this chain is unknown, so its reciprocal is
+///    estimated without bias by the number K of independent trials until the process finds
+///    it again (Zeltner, Georgiev & Jakob 2020, Sec. 4.3).
+/// The environment's longer chains are found by the camera path itself (tracePath).
+/// Russian roulettes (unbiased: kept with probability q, weighted 1/q) spend the work where
+/// light arrives: light reaching x crosses at least the straight distance d to the surface
+/// towards the source, so its transmittance is about exp(−σt(x)·d); q = 1 within
+/// NEE_FULL_DEPTH mean free paths, then falling as that transmittance, never below NEE_MIN_Q.
+/// A chain's trials also run only with a probability that follows its share of the light.
+template <typename Path>
+typename Path::Value refractedLighting(const VolumeScene& scene, const Point3f& x,
+                                       const Vector3f& dirIn, const typename Path::Value& g,
+                                       const Path& path, Pcg32& rng,
+                                       const TransportOptions& options, TrackingStats* stats) {
+    using Value = typename Path::Value;
+    const MeshBoundary& boundary = scene.boundary();
+    const RefractionSearch& search = scene.refractions();
+    const SpecularChainTracer chains(boundary, options.eta);
+    const auto& tracker = static_cast<const typename Path::Tracker&>(path);
+    const float eta = options.eta;
+    float sigmaMin = INF;
+    for (int c = 0; c < 3; ++c)
+        sigmaMin = std::min(sigmaMin, scene.medium().sigmaT(x, c));
+    const auto keepProbability = [&](float distance) {
+        const float tau = sigmaMin * distance - NEE_FULL_DEPTH;
+        return tau <= 0.f ? 1.f : std::max(NEE_MIN_Q, std::exp(-tau));
+    };
+
+    // One refraction light → p → x; `strength`: intensity toward p (W/sr) or irradiance
+    // (W/mm²) per channel, times the estimator's weight.
+    Value refracted(0.f);
+    const auto connect = [&](const Refraction& r, const Rgb& strength, const Light* source) {
+        const Value le = path.pick(strength);
+        if (!(path.largest(le) > 0.f))
+            return;
+        const Vector3f wi = -r.transmitted;  // from x towards p
+        const Value phase = path.phase(g, glm::dot(dirIn, wi));
+        if (!(path.largest(phase) > 0.f))
+            return;
+        const float off = boundary.offsetAt(r.p);
+        if (r.distInside > 2.f * off && boundary.occluded(x, wi, 0.f, r.distInside - off))
+            return;  // another face between x and p: the path would have left the medium
+        const Point3f outside = r.p + r.normal * off;
+        const float reach = std::isfinite(r.distOutside) ? r.distOutside - off : INF;
+        if (boundary.occluded(outside, -r.incident, 0.f, reach) ||
+            blockedBySphereLight(scene, outside, -r.incident, reach, source))
+            return;
+        const Value tr =
+            trackTransmittance(scene.medium(), x, wi, r.distInside, tracker, rng, stats);
+        refracted += phase * tr * le * (r.fresnelTransmittance * r.irradianceGain);
+    };
+
+    // Chains from x to one source: seed, Newton, trials. `scale` converts the chain's
+    // per-unit-strength light into this source's, per channel.
+    Value chained(0.f);
+    const auto chainFrom = [&](const Light& light, const ChainSource& source, float q,
+                               auto&& scale) {
+        const std::optional<SpecularChain> seed = chains.sampleSeed(x, rng);
+        if (!seed || seed->isSingleRefraction())
+            return;  // a single refraction is the search's
+        // The seed's own length inside the object (the chain it leads to runs near it).
+        const float seedKeep = keepProbability(seed->insideLength(x));
+        if (seedKeep < 1.f && rng.uniform() >= seedKeep)
+            return;
+        const std::optional<SpecularChain> chain = chains.connect(x, *seed, source);
+        if (!chain)
+            return;
+        const Value value =
+            chainContribution(scene, x, dirIn, g, path, *chain, light, rng, stats) * scale(*chain);
+        const float share = path.largest(value);
+        if (!(share > 0.f))
+            return;
+        const float keep = std::min(1.f, share / (CHAIN_SHARE * (path.largest(refracted) + share)));
+        if (keep < 1.f && rng.uniform() >= keep)
+            return;
+        uint64_t trials = 1;
+        for (; trials < MAX_CHAIN_TRIALS; ++trials) {
+            const std::optional<SpecularChain> again = chains.sampleSeed(x, rng);
+            if (!again || !again->sameKinds(*chain))
+                continue;
+            const std::optional<SpecularChain> found = chains.connect(x, *again, source);
+            if (found && found->sameAs(*chain))
+                break;
+        }
+        if (trials == MAX_CHAIN_TRIALS)
+            return;  // never reached in the tests and benchmarks (docs/reference.md)
+        chained += value * (float(trials) / (q * seedKeep * keep));
+    };
+
+    for (const Light& light : scene.lights()) {
+        // The source: a point, a direction, or a point y drawn uniformly on a sphere light
+        // (pdf 1/(4πr²)), which emits like a point light of intensity L·cos θy·dA.
+        const bool directional = light.type == Light::Type::Directional;
+        Vector3f normalAtY(0.f);
+        Point3f position = light.position;
+        if (light.type == Light::Type::Sphere) {
+            normalAtY = uniformSphereDirection(rng);
+            position += light.radius * normalAtY;
+        }
+        const float area = 4.f * PI * light.radius * light.radius;
+        const auto sphereFactor = [&](const Vector3f& towardX) {
+            return std::max(0.f, glm::dot(normalAtY, towardX)) * area;
+        };
+        const Vector3f travel = directional ? glm::normalize(light.direction) : Vector3f(0.f);
+        const Vector3f toward = directional ? -travel : glm::normalize(position - x);
+        // The straight segment towards the source: the roulette's distance and the search's
+        // first face.
+        const std::optional<SurfaceHit> straight = boundary.intersect(x, toward, 0.f, INF);
+        if (!straight)
+            continue;  // x is not inside the closed mesh (rounding)
+        const float q = keepProbability(straight->t);
+        if (q < 1.f && rng.uniform() >= q)
+            continue;
+        if (directional) {
+            search.sampleFromDirection(
+                travel, x, eta, boundary, rng.uniform(),
+                [&](const Refraction& r, float w) {
+                    connect(r, (w / q) * light.intensity, &light);
+                },
+                straight->triangle);
+        } else {
+            search.sampleFromPoint(
+                position, x, eta, boundary, rng.uniform(),
+                [&](const Refraction& r, float w) {
+                    const Rgb strength = light.type == Light::Type::Sphere
+                                             ? light.intensity * sphereFactor(r.incident)
+                                             : light.intensityToward(r.incident);
+                    connect(r, (w / q) * strength, &light);
+                },
+                straight->triangle);
+        }
+        chainFrom(light, ChainSource{directional ? travel : position, directional}, q,
+                  [&](const SpecularChain& chain) {
+                      return light.type == Light::Type::Sphere ? sphereFactor(-chain.finalDirection)
+                                                               : 1.f;
+                  });
+    }
+    if (scene.environment() != Rgb(0.f)) {
+        // A direction drawn uniformly (pdf 1/4π): a directional light of irradiance 4π·L_env.
+        const Vector3f travel = -uniformSphereDirection(rng);
+        const std::optional<SurfaceHit> straight = boundary.intersect(x, -travel, 0.f, INF);
+        const float q = straight ? keepProbability(straight->t) : 1.f;
+        if (straight && (q >= 1.f || rng.uniform() < q))
+            search.sampleFromDirection(
+                travel, x, eta, boundary, rng.uniform(),
+                [&](const Refraction& r, float w) {
+                    connect(r, (w * 4.f * PI / q) * scene.environment(), nullptr);
+                },
+                straight->triangle);
+    }
+    return refracted + chained;
+}
+
+/// Next-event estimation from a real collision at x for the boundary model in `options`.
 template <typename Path>
 typename Path::Value directLighting(const VolumeScene& scene, const Point3f& x,
                                     const Vector3f& dirIn, const typename Path::Value& g,
                                     const Path& path, Pcg32& rng, const TransportOptions& options,
                                     TrackingStats* stats) {
-    using Value = typename Path::Value;
-    Value sum(0.f);
-    for (const Light& light : scene.lights()) {
-        const std::optional<LightSample> ls = sampleLightFrom(light, x, rng);
-        if (!ls)
-            continue;
-        const Value le = path.pick(ls->le);
-        if (!(path.largest(le) > 0.f))
-            continue;
-        // HG phase value for the angle between the path's travel direction and wi (the
-        // light's travel direction −wi against −dirIn gives the same cosine).
-        const Value phase = path.phase(g, glm::dot(dirIn, ls->wi));
-        if (!(path.largest(phase) > 0.f))
-            continue;  // hgPhase > 0 unless rounding of 1 + g² − 2g·cos bites (|g| ≳ 0.9995)
-        const Value tr =
-            traceShadowRay(scene, x, ls->wi, ls->dist, /*pInside=*/true,
-                           static_cast<const typename Path::Tracker&>(path), rng, options, stats);
-        sum += phase * tr * le;
-    }
-    return sum;
+    return refractedNextEvent(options)
+               ? refractedLighting(scene, x, dirIn, g, path, rng, options, stats)
+               : straightLighting(scene, x, dirIn, g, path, rng, options, stats);
 }
 
 /// The camera-path estimator of estimateRadiance / estimateRadianceRgb (Transport.h).
@@ -607,12 +882,22 @@ typename Path::Value tracePath(const VolumeScene& scene, const Point3f& o, const
     bool inside = false;
     bool specularChain = true;  // only surface events (no scattering) since the camera
     int scatterCount = 0;
+    // Emission found by the path after a scattering event counts only for chains that
+    // next-event estimation does not cover: with straight shadow rays, none (they reach every
+    // light through the surface); with the refracted estimation, sphere lights are reached
+    // through every chain (refraction search and specular chains) and the environment through
+    // a single refraction, so only the environment seen through longer chains counts.
+    const bool refracted = refractedNextEvent(options);
+    int eventsSinceScatter = 0;  // surface events since the last scattering event
+    const auto sphereLightCounts = [&] { return specularChain; };
+    const auto environmentCounts = [&] {
+        return specularChain || (refracted && eventsSinceScatter > 1);
+    };
     for (int surfaceEvents = 0; surfaceEvents < MAX_SURFACE_EVENTS;) {
         if (!inside) {
             const std::optional<SurfaceHit> hit = boundary.intersect(pos, dir, 0.f, INF);
             const float tHit = hit ? hit->t : INF;
-            // Sphere lights are opaque emitters. Their emission counts only along specular
-            // chains; after a scattering event they are reached by next-event estimation.
+            // Sphere lights are opaque emitters; so is the environment beyond everything.
             float tLight = INF;
             const Light* emitter = nullptr;
             for (const Light& light : scene.lights()) {
@@ -625,13 +910,17 @@ typename Path::Value tracePath(const VolumeScene& scene, const Point3f& o, const
                 }
             }
             if (tLight < tHit) {
-                if (specularChain)
+                if (sphereLightCounts())
                     radiance += path.throughput() * path.pick(emitter->intensity);
                 break;
             }
-            if (!hit)
-                break;  // black background
+            if (!hit) {
+                if (environmentCounts())
+                    radiance += path.throughput() * path.pick(scene.environment());
+                break;
+            }
             ++surfaceEvents;
+            ++eventsSinceScatter;
             const Point3f x = pos + dir * tHit;
             const Normal3f n = hit->normal;
             const float off = boundary.offsetAt(x);
@@ -659,6 +948,7 @@ typename Path::Value tracePath(const VolumeScene& scene, const Point3f& o, const
             radiance +=
                 path.throughput() * directLighting(scene, x, dir, g, path, rng, options, stats);
             specularChain = false;
+            eventsSinceScatter = 0;
             if (options.russianRoulette && !path.roulette(rng))
                 break;
             dir = path.scatter(dir, g, rng);
@@ -666,6 +956,7 @@ typename Path::Value tracePath(const VolumeScene& scene, const Point3f& o, const
             continue;
         }
         ++surfaceEvents;
+        ++eventsSinceScatter;
         const Point3f x = pos + dir * exit->t;
         const Normal3f n = exit->normal;
         const float off = boundary.offsetAt(x);

@@ -366,6 +366,19 @@ void checkMaterialFitsMesh(const TriangleMesh& mesh, const MaterialVolume& mater
                            " of their inside voxels (mesh edited after painting?)");
 }
 
+/// A scene without a camera looks at its object from +z: the bounding sphere fills the 40°
+/// vertical field of view with a 5 % margin.
+Camera framingCamera(const Bounds3f& bounds) {
+    Camera c;
+    const float radius = std::max(0.5f * glm::length(bounds.extent()), 1e-3f);
+    const float distance = 1.05f * radius / std::sin(glm::radians(0.5f * c.fovYDeg));
+    c.target = bounds.center();
+    c.position = c.target + Vector3f(0.f, 0.f, distance);
+    c.nearPlane = std::max(1e-3f, 0.01f * distance);
+    c.farPlane = std::max(c.farPlane, 100.f * distance);
+    return c;
+}
+
 /// Builds mesh, grid, mask and material of one object.
 SceneObject buildObject(const MeshSource& meshSrc, const MaterialSource& matSrc, float eta,
                         bool resolutionGiven, std::vector<std::string>& warnings) {
@@ -410,7 +423,8 @@ Scene parseScene(const std::string& jsonText, const std::string& baseDir) {
         LUCENT_THROW(IoError, "scene: not valid JSON (byte ", e.byte, "): ", e.what());
     }
     const Obj o(root, "");
-    o.allowOnly({"version", "mesh", "material", "resolution", "eta", "lights", "camera"});
+    o.allowOnly(
+        {"version", "mesh", "material", "resolution", "eta", "lights", "environment", "camera"});
     if (o.has("version")) {
         const int version = integer(o.at("version"), "version", 1, 1 << 20);
         if (version > SCENE_FORMAT_VERSION)
@@ -434,9 +448,17 @@ Scene parseScene(const std::string& jsonText, const std::string& baseDir) {
         fieldError("lights", "expected an array, got " + typeName(lights));
     for (size_t i = 0; i < lights.size(); ++i)
         scene.lights.push_back(parseLight(lights[i], "lights[" + std::to_string(i) + "]"));
-    scene.camera = parseCamera(o.at("camera"));
+    if (o.has("environment")) {
+        const Obj env(o.at("environment"), "environment");
+        env.allowOnly({"radiance"});
+        scene.environment = nonNegativeRgb(env.at("radiance"), env.sub("radiance"));
+    }
+    if (o.has("camera"))
+        scene.camera = parseCamera(o.at("camera"));
     scene.objects.push_back(
         buildObject(meshSrc, matSrc, scene.eta, resolutionGiven, scene.warnings));
+    if (!o.has("camera"))
+        scene.camera = framingCamera(scene.objects.front().mesh.bounds());
     return scene;
 }
 
@@ -533,6 +555,8 @@ std::string sceneToJson(const Scene& scene) {
         lights.push_back(jl);
     }
     root["lights"] = lights;
+    if (scene.environment != Rgb(0.f))
+        root["environment"] = {{"radiance", vecJson(scene.environment)}};
     const Camera& c = scene.camera;
     json cam = {{"position", vecJson(c.position)},
                 {"target", vecJson(c.target)},
@@ -562,6 +586,7 @@ void saveProject(const Scene& scene, const std::string& path) {
     // project folder when possible, so a project folder can be moved as a whole.
     Scene copy;
     copy.lights = scene.lights;
+    copy.environment = scene.environment;
     copy.camera = scene.camera;
     copy.eta = scene.eta;
     SceneObject o;

@@ -391,7 +391,7 @@ void SslpvGlPropagator::propagate(const SslpvSolver& solver) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, s.terms.id());
     const unsigned groups = unsigned((gpuPlane / 2 + 63) / 64);
     bool accWritten = false, exitWritten = false;
-    s.profiler.beginFrame();
+    gpu::GpuProfiler::FrameScope frame(s.profiler);  // cancelled if a pass throws
     {
         auto scope = s.profiler.scope("sslpv.propagate");
         // Step 1 reads the step-0 sources, then the ping-pong pair alternates (the sources
@@ -421,7 +421,7 @@ void SslpvGlPropagator::propagate(const SslpvSolver& solver) {
         glClearNamedBufferData(s.acc.id(), GL_R8, GL_RED, GL_UNSIGNED_BYTE, nullptr);
     if (!exitWritten)
         glClearNamedBufferData(s.exit.id(), GL_R8, GL_RED, GL_UNSIGNED_BYTE, nullptr);
-    s.profiler.endFrame(/*wait=*/true);
+    frame.end(/*wait=*/true);
     s.timings.propagateCpuMs = issue.elapsedMs();
     const gpu::PassTiming* t = s.profiler.find("sslpv.propagate");
     s.timings.propagateGpuMs = t ? t->gpuMs : 0.0;

@@ -218,6 +218,10 @@ void SslpvSubsurfaceProvider::setMaterial(const MaterialVolume& volume, float et
     m->materialDirty = true;
 }
 
+bool SslpvSubsurfaceProvider::hasMaterial() const {
+    return m->hasMaterial;
+}
+
 void SslpvSubsurfaceProvider::updateMaterial(const MaterialVolume& volume,
                                              const std::vector<int>& dirtyBricks) {
     if (!m->hasMaterial || !(volume.spec() == m->volumeSpec) ||

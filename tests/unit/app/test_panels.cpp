@@ -8,6 +8,7 @@
 #include "Document.h"
 #include "MainWindow.h"
 #include "Panels.h"
+#include "SliceView.h"
 #include "Viewport.h"
 
 #include <lucent/core/Error.h>
@@ -23,15 +24,19 @@
 #include <QDragEnterEvent>
 #include <QFile>
 #include <QFileInfo>
+#include <QLabel>
 #include <QMenu>
 #include <QMimeData>
 #include <QSettings>
+#include <QSignalSpy>
 #include <QSpinBox>
 #include <QStandardPaths>
+#include <QStatusBar>
 #include <QUrl>
 #include <QDoubleSpinBox>
 #include <QPushButton>
 #include <QTest>
+#include <QTextBrowser>
 
 #include <gtest/gtest.h>
 
@@ -482,7 +487,7 @@ TEST(MainWindowPrefs, BrushRenderAndViewPreferencesAreRemembered) {
         child<QComboBox>(w.brushPanel(), "brushFalloff")->setCurrentIndex(3);
         child<QDoubleSpinBox>(w.brushPanel(), "brushSigmaT1")->setValue(4.5);
         child<QComboBox>(w.renderPanel(), "renderMethod")
-            ->setCurrentIndex(int(RenderSettings::Method::Dipole));
+            ->setCurrentIndex(int(RenderSettings::Method::SingleScattering));
         child<QDoubleSpinBox>(w.renderPanel(), "renderExposure")->setValue(-1.5);
         child<QComboBox>(w.renderPanel(), "renderSslpvGrid")->setCurrentIndex(2);
         findAction(w, "actionLightGizmos")->setChecked(false);
@@ -496,7 +501,7 @@ TEST(MainWindowPrefs, BrushRenderAndViewPreferencesAreRemembered) {
         // ... and they reach the engine-side settings, not only the fields.
         EXPECT_FLOAT_EQ(w.viewport()->brush().engine.radius, 7.25f);
         EXPECT_EQ(w.viewport()->brush().engine.falloff, Falloff(3));
-        EXPECT_EQ(w.viewport()->renderSettings().method, RenderSettings::Method::Dipole);
+        EXPECT_EQ(w.viewport()->renderSettings().method, RenderSettings::Method::SingleScattering);
         EXPECT_FLOAT_EQ(w.viewport()->renderSettings().exposureStops, -1.5f);
         EXPECT_EQ(w.viewport()->renderSettings().sslpvGrid, 64);
         EXPECT_FALSE(w.viewport()->lightGizmosVisible());
@@ -507,6 +512,18 @@ TEST(MainWindowPrefs, BrushRenderAndViewPreferencesAreRemembered) {
         MainWindow w(/*restoreSettings=*/false);
         EXPECT_EQ(w.viewport()->renderSettings().method, RenderSettings{}.method);
         EXPECT_TRUE(w.viewport()->lightGizmosVisible());
+    }
+    {
+        // Preferences of a build before issue 17 saved SSLPV, the old default, at every exit:
+        // not taken as a choice (the new default shows paint); the other fields are.
+        QSettings s;
+        s.remove(QStringLiteral("render/defaultsVersion"));
+        s.setValue(QStringLiteral("render/renderMethod"), int(RenderSettings::Method::Sslpv));
+        s.sync();
+        MainWindow w(/*restoreSettings=*/true);
+        EXPECT_EQ(w.viewport()->renderSettings().method, RenderSettings{}.method);
+        EXPECT_FLOAT_EQ(w.viewport()->renderSettings().exposureStops, -1.5f);
+        ASSERT_TRUE(w.close());
     }
     QSettings().clear();
     qunsetenv(MainWindow::RECOVERY_ENV);
@@ -677,6 +694,122 @@ TEST(BrushPanelTest, RadiusOnScreenFollowsTheCamera) {
         [&] { return std::abs(px->value() - radiusMm * 2.0 * perMm) <= 1.0; }, 10000))
         << px->value();
     EXPECT_DOUBLE_EQ(mm->value(), radiusMm) << "zooming keeps the radius in mm";
+}
+
+// Issue 17, item 9: the slice's colour map stretched a 0.9999 … 1 range over the whole map,
+// showing rounding noise as strong structure. Below 1 % of the magnitude it is one colour;
+// real paint still spans the map.
+TEST(SliceViewTest, NearlyUniformSliceIsOneColour) {
+    const GridSpec spec = GridSpec::around(Bounds3f{Point3f(0.f), Point3f(16.f)}, 16);
+    MaterialVolume v(spec, {Rgb(1.f), Rgb(0.5f), Rgb(0.f)});
+    v.setInsideMask(std::vector<uint8_t>(spec.voxelCount(), 1));
+    v.set({3, 4, 8}, {Rgb(0.9999f), Rgb(0.5f), Rgb(0.f)});
+    SliceImage s = renderSlice(v, 2, /*component=*/0, 8);
+    EXPECT_FLOAT_EQ(s.minValue, 0.9999f);
+    EXPECT_FLOAT_EQ(s.maxValue, 1.f);
+    EXPECT_TRUE(s.nearlyUniform);
+    EXPECT_GE(s.mapMax - s.mapMin, 0.01f * 0.999f);
+    // A z slice: voxel x to the right, y up (row 0 at the top).
+    const auto pixel = [&](int x, int y) { return QColor(s.image.pixel(x, 15 - y)); };
+    const QColor painted = pixel(3, 4), other = pixel(5, 5);
+    const int diff = std::abs(painted.red() - other.red()) +
+                     std::abs(painted.green() - other.green()) +
+                     std::abs(painted.blue() - other.blue());
+    EXPECT_LE(diff, 6) << "rounding noise shown as colour";  // ~1 % of the map: ≤ 2 levels each
+    // A real difference keeps the full map: the ends are viridis' ends.
+    v.set({3, 4, 8}, {Rgb(2.f), Rgb(0.5f), Rgb(0.f)});
+    s = renderSlice(v, 2, 0, 8);
+    EXPECT_FALSE(s.nearlyUniform);
+    EXPECT_EQ(pixel(3, 4), QColor(viridis(1.f)));
+    EXPECT_EQ(pixel(5, 5), QColor(viridis(0.f)));
+}
+
+// Issue 17, item 9: Help had only About. It now opens the user guide and a list of every
+// shortcut (built from the menus, so it cannot drift from them).
+TEST(MainWindowMenus, HelpShowsTheUserGuideAndTheShortcuts) {
+    MainWindow w(/*restoreSettings=*/false);
+    QAction* guide = findAction(w, "actionUserGuide");
+    QAction* keys = findAction(w, "actionShortcuts");
+    ASSERT_TRUE(guide && keys);
+    EXPECT_EQ(guide->shortcut(), QKeySequence(QKeySequence::HelpContents));
+    guide->trigger();
+    auto* guideWindow = w.findChild<QTextBrowser*>(QStringLiteral("userGuide"));
+    ASSERT_NE(guideWindow, nullptr);
+    EXPECT_TRUE(guideWindow->isVisible());
+    const QString text = guideWindow->toPlainText();
+    EXPECT_TRUE(text.contains(QStringLiteral("User guide"))) << text.left(200).toStdString();
+    EXPECT_TRUE(text.contains(QStringLiteral("Undo and redo")));
+    keys->trigger();
+    auto* keysWindow = w.findChild<QTextBrowser*>(QStringLiteral("shortcuts"));
+    ASSERT_NE(keysWindow, nullptr);
+    const QString list = keysWindow->toPlainText();
+    // Every menu action with a shortcut is listed with its keys.
+    for (QAction* a : w.findChildren<QAction*>()) {
+        if (a->shortcut().isEmpty() || a->text().isEmpty())
+            continue;
+        EXPECT_TRUE(list.contains(a->shortcut().toString(QKeySequence::NativeText)))
+            << a->text().toStdString();
+    }
+    EXPECT_TRUE(list.contains(QStringLiteral("Orbit")));
+    guideWindow->close();
+    keysWindow->close();
+}
+
+// Issue 17, item 7: σs′ > σt was accepted by the fields, then every stroke was refused with
+// only a status-bar message in the engine's names (brush.value.sigma_s[0]). The σs′ fields now
+// stop at σt while typing, and a brush that still cannot paint says why in plain words.
+TEST(BrushPanelTest, ScatteringCannotExceedExtinctionAndProblemsAreInWords) {
+    auto w = shownWindow();
+    Viewport* vp = w->viewport();
+    BrushPanel* brush = w->brushPanel();
+    auto* sigmaT = child<QDoubleSpinBox>(brush, "brushSigmaT0");
+    auto* sigmaS = child<QDoubleSpinBox>(brush, "brushSigmaS0");
+    auto* mode = child<QComboBox>(brush, "brushMode");
+    auto* problem = child<QLabel>(brush, "brushProblem");
+    ASSERT_EQ(mode->currentIndex(), int(BrushMode::Set));
+    sigmaT->setValue(2.0);
+    // Typing 5 into σs′ (red): the field does not take more than σt.
+    sigmaS->selectAll();
+    QTest::keyClicks(sigmaS, QStringLiteral("5"));
+    QTest::keyClick(sigmaS, Qt::Key_Return);
+    EXPECT_LE(sigmaS->value(), 2.0);
+    EXPECT_LE(vp->brush().engine.value.sigma_s.r, vp->brush().engine.value.sigma_t.r);
+    // Lowering σt lowers σs′ with it.
+    sigmaS->setValue(1.5);
+    sigmaT->setValue(1.0);
+    EXPECT_DOUBLE_EQ(sigmaS->value(), 1.0);
+    EXPECT_TRUE(problem->isHidden());
+    EXPECT_TRUE(brushProblem(vp->brush().engine).isEmpty());
+    // In Add mode σs′ is an amount: larger than σt is fine.
+    mode->setCurrentIndex(int(BrushMode::Add));
+    sigmaS->setValue(3.0);
+    EXPECT_DOUBLE_EQ(sigmaS->value(), 3.0);
+    EXPECT_TRUE(problem->isHidden()) << problem->text().toStdString();
+    // Back in Set mode the fields hold the limit again.
+    mode->setCurrentIndex(int(BrushMode::Set));
+    EXPECT_LE(sigmaS->value(), sigmaT->value());
+    // A brush set past the fields (a script) is refused with a sentence an artist can act on.
+    AppBrush& b = vp->brush();
+    b.engine.mode = BrushMode::Set;
+    b.engine.channels = ALL_CHANNELS;
+    b.engine.value.sigma_t = Rgb(1.f);
+    b.engine.value.sigma_s = Rgb(1.f, 2.f, 0.5f);
+    QSignalSpy refused(vp, &Viewport::paintError);
+    const QPointF c(vp->width() / 2.0, vp->height() / 2.0);
+    EXPECT_EQ(vp->strokeBetween(c - QPointF(20, 0), c + QPointF(20, 0)), 0);
+    ASSERT_GE(refused.count(), 1);
+    const QString message = refused[0][0].toString();
+    EXPECT_TRUE(message.contains(QStringLiteral("scattering σs′ (green)")))
+        << message.toStdString();
+    EXPECT_TRUE(message.contains(QStringLiteral("Lower σs′ or raise σt"))) << message.toStdString();
+    EXPECT_FALSE(message.contains(QStringLiteral("brush.value"))) << message.toStdString();
+    EXPECT_TRUE(QTest::qWaitFor(
+        [&] { return w->statusBar()->currentMessage().contains(QStringLiteral("scattering σs′")); },
+        2000))
+        << w->statusBar()->currentMessage().toStdString();
+    // No channel: said in words too.
+    b.engine.channels = 0;
+    EXPECT_TRUE(brushProblem(b.engine).contains(QStringLiteral("at least one channel")));
 }
 
 }  // namespace lucent::app

@@ -260,6 +260,40 @@ TEST_F(DirpoleFixture, MatchesCpuPipelineOnLitBox) {
     }
 }
 
+// Issue 17, item 8: the directional dipole showed blocky stroke edges. The combination pass read
+// the nearest cube-face texel, so every texel was a flat block on screen once it covered
+// several pixels. With 32² faces over the 34.9 mm bounding sphere (1.09 mm texels) and 0.31 mm
+// pixels, a texel spans about 3.5 pixels: with the nearest texel about 70 % of horizontally
+// adjacent pixels of the lit top read the same texel and, the camera being orthographic (T₂₁
+// constant), have exactly the same value. Interpolated between texels, neighbours differ.
+TEST_F(DirpoleFixture, CubeFaceTexelsDoNotShowAsBlocks) {
+    const Scene s = litBox();
+    DirpoleSettings ds;
+    ds.eta = s.eta;
+    ds.samplesPerFrame = 16;
+    ds.maxFrames = 4;
+    ds.convergenceThreshold = 0.f;
+    ds.lightMapSize = 256;
+    ds.cubeMapSize = 32;
+    ds.frameSampleBudget = ds.firstFrameSampleBudget = 0;
+    load(s, ds);
+    renderUntilConverged(10);
+    const ImageRgb img = renderer.readRadiance();
+    ASSERT_TRUE(allFinite(img));
+    int pairs = 0, equal = 0;
+    for (int y = 0; y < img.height(); ++y)
+        for (int x = 0; x + 1 < img.width(); ++x) {
+            const Rgb a = img.at(x, y), b = img.at(x + 1, y);
+            if (!(a.r > 0.f && b.r > 0.f))
+                continue;
+            ++pairs;
+            equal += a == b;
+        }
+    ASSERT_GT(pairs, 3000);
+    // Bilinear weights differ between any two pixel centres: only coincidences are equal.
+    EXPECT_LT(double(equal) / pairs, 0.05) << equal << " of " << pairs << " neighbours equal";
+}
+
 // Progressive refinement: the largest per-texel change of the running mean shrinks like 1/N
 // (the N-th frame moves the mean by (C_N − C̄_{N−1})/N); accumulation stops at the threshold,
 // survives camera motion (the cube faces are view-independent) and restarts when a light moves.

@@ -12,6 +12,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <cmath>
+#include <stdexcept>
 
 using namespace lucent;
 using namespace lucent::gpu;
@@ -335,15 +336,23 @@ private:
 };
 }  // namespace
 
-TEST_F(RendererFixture, SubsurfaceProviderIsAddedAndIsolated) {
+namespace {
+/// A 10 mm grey sphere at the origin, a point light in front of it, the default camera at
+/// `pixels`² (the scene of the subsurface-provider tests).
+void setUpLitSphere(SceneRenderer& r, int pixels) {
     r.addMesh(uvSphere(10.f, Point3f(0.f), 32, 16), {Rgb(0.5f), Rgb(0.f), 1.f});
     Light light;
     light.position = {0.f, 0.f, 60.f};
     light.intensity = Rgb(1000.f);
     r.setLights({light});
     Camera cam;
-    cam.width = cam.height = 64;
+    cam.width = cam.height = pixels;
     r.setCamera(cam);
+}
+}  // namespace
+
+TEST_F(RendererFixture, SubsurfaceProviderIsAddedAndIsolated) {
+    setUpLitSphere(r, 64);
     DirectSettings s;
     s.specular = false;
     s.background = Rgb(0.25f);
@@ -375,6 +384,64 @@ TEST_F(RendererFixture, SubsurfaceProviderIsAddedAndIsolated) {
         EXPECT_EQ(onlyNone.at(c, c)[k], 0.f);  // --subsurface-only with no provider: black
     }
     EXPECT_GT(direct.at(c, c).r, 0.f);
+}
+
+namespace {
+/// Test provider whose pass fails, as a provider with a missing input does (e.g. SSLPV before
+/// setMaterial).
+class ThrowingSubsurface : public SubsurfaceProvider {
+public:
+    void renderSubsurface(const GBufferView&, unsigned) override {
+        ++calls;
+        LUCENT_THROW(ValueError, "test provider: no material");
+    }
+    int calls = 0;
+};
+}  // namespace
+
+// Regression: a provider that threw inside the frame left the profiler mid-frame, so every
+// later frame failed with "GpuProfiler::beginFrame called twice without endFrame", whatever
+// the provider (the app's viewport stayed blank until restart).
+TEST_F(RendererFixture, FrameAfterAFailedProviderRenders) {
+    setUpLitSphere(r, 32);
+    r.render();
+    const ImageRgb before = r.readRadiance();
+
+    ThrowingSubsurface failing;
+    r.setSubsurfaceProvider(&failing);
+    EXPECT_THROW(r.render(), ValueError);
+    EXPECT_THROW(r.render(), ValueError);  // the provider's own error, not the profiler's
+    EXPECT_EQ(failing.calls, 2);
+    EXPECT_FALSE(r.profiler().isInFrame());
+    r.setSubsurfaceProvider(nullptr);
+    ASSERT_NO_THROW(r.render());
+    // The frame after the failures is the frame before them: nothing stale was kept.
+    const ImageRgb after = r.readRadiance();
+    for (int y = 0; y < after.height(); ++y)
+        for (int x = 0; x < after.width(); ++x)
+            ASSERT_EQ(after.at(x, y), before.at(x, y)) << x << ", " << y;
+    r.profiler().collect(/*wait=*/true);  // the frame's timings resolve again
+    EXPECT_FALSE(r.profiler().latest().empty());
+}
+
+TEST(GpuProfilerFrames, CancelledFrameLeavesTheProfilerReady) {
+    LUCENT_REQUIRE_GL();
+    GpuProfiler prof;
+    try {
+        GpuProfiler::FrameScope frame(prof);
+        auto pass = prof.scope("pass");
+        throw std::runtime_error("pass failed");
+    } catch (const std::runtime_error&) {
+    }
+    EXPECT_FALSE(prof.isInFrame());
+    {
+        GpuProfiler::FrameScope frame(prof);
+        { auto pass = prof.scope("next"); }
+        frame.end(/*wait=*/true);
+    }
+    ASSERT_EQ(prof.latest().size(), 1u);  // only the completed frame's pass
+    EXPECT_EQ(prof.latest()[0].name, "next");
+    prof.destroy();
 }
 
 namespace {

@@ -3,8 +3,10 @@
 /// @file
 /// @brief Small analytic set-ups for the path-tracer tests: box meshes and grids.
 
+#include <lucent/core/Sampling.h>
 #include <lucent/mesh/TriangleMesh.h>
 #include <lucent/reference/GridMedium.h>
+#include <lucent/reference/Transport.h>
 
 #include <array>
 #include <functional>
@@ -78,5 +80,33 @@ struct MeanSe {
         return std::sqrt(std::max(0.0, (sumSq / double(n) - m * m) / double(n - 1)));
     }
 };
+
+/// Fluence (W/mm²) at `probe` from the scene's lights via the object (channel 0): directions
+/// sampled uniformly in the cone around the object's bounding sphere (radius `radius` about
+/// `centre`, probe outside it), pdf = 1/(2π(1 − cos θmax)); fluence = E[L / pdf] (radiance
+/// from outside the cone is zero: the lights here are points or directional).
+inline MeanSe fluenceAt(const VolumeScene& scene, const Point3f& probe, const Point3f& centre,
+                        float radius, int n, uint64_t seed, const TransportOptions& to) {
+    Pcg32 rng(seed);
+    MeanSe f;
+    const Vector3f axis = centre - probe;
+    const float d2 = glm::dot(axis, axis);
+    const float cosMax = std::sqrt(1.f - radius * radius / d2);
+    const double invPdf = 2.0 * PI * (1.0 - cosMax);
+    const Frame frame(axis / std::sqrt(d2));
+    for (int i = 0; i < n; ++i) {
+        const float cosT = 1.f - rng.uniform() * (1.f - cosMax);
+        const float sinT = std::sqrt(std::max(0.f, 1.f - cosT * cosT));
+        const float phi = 2.f * PI * rng.uniform();
+        const Vector3f d = frame.toWorld({sinT * std::cos(phi), sinT * std::sin(phi), cosT});
+        f.add(invPdf * estimateRadiance(scene, probe, glm::normalize(d), 0, rng, to));
+    }
+    return f;
+}
+
+inline MediumCoefficients lumpy(int i, int j, int k) {
+    const float s = 0.2f + 0.25f * float((i * 5 + j * 11 + k * 3) % 6);
+    return grey(s, 0.8f * s, 0.3f);
+}
 
 }  // namespace lucent::test

@@ -130,7 +130,6 @@ TEST(SceneFile, UnknownFieldsAreNamed) {
 }
 
 TEST(SceneFile, MissingFieldsAreNamed) {
-    expectErrorNaming(minimalWith([](json& j) { j.erase("camera"); }), "camera");
     expectErrorNaming(minimalWith([](json& j) { j.erase("mesh"); }), "mesh");
     expectErrorNaming(minimalWith([](json& j) { j["mesh"].erase("radius"); }), "mesh.radius");
     expectErrorNaming(minimalWith([](json& j) { j["lights"][0].erase("intensity"); }),
@@ -142,6 +141,35 @@ TEST(SceneFile, MissingFieldsAreNamed) {
                           j["material"] = {{"sigma_t", {1, 1, 1}}};
                       }),
                       "material.sigma_s");
+}
+
+// A scene without a camera (hand-written, or from a tool that has none) opens looking at its
+// object instead of being refused: every corner of the object's box projects into the image.
+TEST(SceneFile, MissingCameraFramesTheObject) {
+    const Scene s = parseScene(minimalWith([](json& j) {
+        j.erase("camera");
+        j["mesh"] = {{"procedural", "box"}, {"size", {40, 6, 8}}};
+        j["lights"][0]["position"] = {0, 0, 300};
+    }));
+    const Bounds3f b = s.objects[0].mesh.bounds();
+    EXPECT_EQ(s.camera.target, b.center());
+    const Mat4f clipFromWorld = s.camera.clipFromView() * s.camera.viewFromWorld();
+    for (int corner = 0; corner < 8; ++corner) {
+        const Point3f p((corner & 1) ? b.hi.x : b.lo.x, (corner & 2) ? b.hi.y : b.lo.y,
+                        (corner & 4) ? b.hi.z : b.lo.z);
+        const glm::vec4 clip = clipFromWorld * glm::vec4(p, 1.f);
+        ASSERT_GT(clip.w, 0.f) << corner;
+        // Square image (256²): the bounding sphere fits the vertical field, so x and y do.
+        EXPECT_LE(std::abs(clip.x / clip.w), 1.f) << corner;
+        EXPECT_LE(std::abs(clip.y / clip.w), 1.f) << corner;
+        EXPECT_LE(std::abs(clip.z / clip.w), 1.f) << corner << " clipped by near/far";
+    }
+    // Not a speck either: the 40 mm box spans more than half of the image width.
+    const auto ndcX = [&](float x) {
+        const glm::vec4 c = clipFromWorld * glm::vec4(x, b.center().y, b.center().z, 1.f);
+        return c.x / c.w;
+    };
+    EXPECT_GT(ndcX(b.hi.x) - ndcX(b.lo.x), 1.f);
 }
 
 TEST(SceneFile, WrongTypesAndValuesAreNamed) {
@@ -232,6 +260,25 @@ TEST(SceneFile, JsonRoundTrip) {
     EXPECT_EQ(b.objects[0].material->spec(), a.objects[0].material->spec());
     EXPECT_EQ(b.objects[0].material->base(), a.objects[0].material->base());
     EXPECT_EQ(b.objects[0].material->insideMask(), a.objects[0].material->insideMask());
+}
+
+TEST(SceneFile, EnvironmentLightParsesAndRoundTrips) {
+    // Optional, black by default; radiance [r,g,b] ≥ 0; written back only when not black.
+    EXPECT_EQ(parseScene(minimalWith([](json&) {})).environment, Rgb(0.f));
+    const Scene s = parseScene(minimalWith([](json& j) {
+        j["environment"] = {{"radiance", {0.5, 1.0, 2.0}}};
+    }));
+    EXPECT_EQ(s.environment, Rgb(0.5f, 1.f, 2.f));
+    EXPECT_EQ(parseScene(sceneToJson(s)).environment, s.environment);
+    EXPECT_EQ(json::parse(sceneToJson(parseScene(MINIMAL))).count("environment"), 0u);
+    expectErrorNaming(minimalWith([](json& j) {
+                          j["environment"] = {{"radiance", {0.5, -1.0, 2.0}}};
+                      }),
+                      "environment.radiance");
+    expectErrorNaming(minimalWith([](json& j) {
+                          j["environment"] = {{"colour", {1, 1, 1}}};
+                      }),
+                      "environment.colour");
 }
 
 TEST(SceneFile, DefaultSceneIsBackLitAndHeterogeneous) {

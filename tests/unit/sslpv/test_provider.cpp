@@ -156,6 +156,36 @@ TEST(SslpvProvider, SolvesTheSameGridAsTheCpuRenderer) {
     EXPECT_GT(p.solver().accumulation().maxAbs(), 0.f);
 }
 
+// A new grid resolution needs the material again (the app kept rendering without it and every
+// frame failed with "no material"): hasMaterial() tells the caller, and a setMaterial() at the
+// new resolution solves the same grid as a provider made with it.
+TEST(SslpvProvider, NewGridResolutionAsksForTheMaterialAgain) {
+    const TestScene s = makeScene();
+    SslpvSubsurfaceProvider p(providerOptions());
+    EXPECT_FALSE(p.hasMaterial());
+    setUp(p, s);
+    EXPECT_TRUE(p.hasMaterial());
+    (void)p.update();
+    SslpvProviderOptions finer = providerOptions();
+    finer.render.gridResolution = 32;
+    p.setOptions(finer);
+    EXPECT_FALSE(p.hasMaterial());
+    EXPECT_THROW(p.update(), ValueError);
+    p.setMaterial(s.volume, s.eta);
+    ASSERT_TRUE(p.hasMaterial());
+    SslpvProviderOptions fewerSteps = finer;
+    fewerSteps.render.solver.maxSteps = 8;
+    p.setOptions(fewerSteps);  // other options keep the material
+    EXPECT_TRUE(p.hasMaterial());
+    p.setOptions(finer);
+    ASSERT_TRUE(p.hasMaterial());
+    (void)p.update();
+    SslpvSubsurfaceProvider fresh(finer);
+    setUp(fresh, s);
+    (void)fresh.update();
+    EXPECT_EQ(p.solver().accumulation().raw(), fresh.solver().accumulation().raw());
+}
+
 TEST(SslpvProvider, RejectsBadInput) {
     SslpvProviderOptions o = providerOptions();
     o.meshId = -2;

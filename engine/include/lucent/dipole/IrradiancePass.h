@@ -25,10 +25,17 @@ namespace lucent::dipole {
 /// valid for distances ≫ R. Shadowing is not included here.
 Rgb lightIrradiance(const Light& light, const Point3f& p, const Normal3f& n, float eta);
 
+/// The painted material just inside the surface point `p` (mm) with outward unit normal `n`:
+/// the first non-empty voxel among p − k·(h/2)·n, k = 1..6 (voxels cut by the surface may be
+/// masked out), else the nearest non-empty voxel (by cell centre) in the first shell of
+/// Chebyshev radius 1..4 voxels around the voxel of p − (h/2)·n that holds one (a hole in the
+/// inside mask under the surface, as where two closed parts of a mesh overlap). Zero when
+/// neither finds material. The GPU providers use the same rule (shaders/dipole_material.glsl).
+MaterialSample materialInside(const MaterialVolume& volume, const Point3f& p, const Normal3f& n);
+
 /// Camera-view buffers of `scene.objects[objectIndex]` (pixel centres, scene.camera size).
 /// Pixels that miss the object stay uncovered. Irradiance includes shadow rays against the
-/// object itself (the scene holds one object). The material is sampled half a voxel inside,
-/// stepping further in (≤ 3 voxels) past masked-out voxels cut by the surface.
+/// object itself (the scene holds one object). The material is materialInside().
 /// @throw ValueError if the scene has no such object, no material, or a bad camera.
 SurfaceBuffers buildSurfaceBuffers(const Scene& scene, int objectIndex = 0);
 

@@ -12,6 +12,11 @@
 ///   { auto s = prof.scope("shade"); ...draw... }
 ///   prof.endFrame();                  // results arrive a frame or two later, without stalling
 ///   for (auto& t : prof.latest()) printf("%s %.2f ms GPU, %.2f ms CPU\n", ...);
+///   {                                 // a frame whose code may throw:
+///       GpuProfiler::FrameScope frame(prof);   // beginFrame()
+///       { auto s = prof.scope("pass"); ...may throw... }
+///       frame.end();                  // endFrame(); an exception before it cancels the frame
+///   }
 ///   prof.destroy();                   // context current
 /// @endcode
 
@@ -46,6 +51,29 @@ public:
         GpuProfiler* m_profiler;
     };
 
+    /// Begins a frame; ends it with end(), or cancels it (cancelFrame) when left without end(),
+    /// e.g. by an exception thrown by a pass: the profiler is then ready for the next frame
+    /// instead of refusing every later beginFrame().
+    class FrameScope {
+    public:
+        explicit FrameScope(GpuProfiler& p) : m_profiler(&p) { p.beginFrame(); }
+        FrameScope(const FrameScope&) = delete;
+        FrameScope& operator=(const FrameScope&) = delete;
+        ~FrameScope() {
+            if (m_open)
+                m_profiler->cancelFrame();
+        }
+        /// endFrame(wait).
+        void end(bool wait = false) {
+            m_profiler->endFrame(wait);
+            m_open = false;
+        }
+
+    private:
+        GpuProfiler* m_profiler;
+        bool m_open = true;
+    };
+
     GpuProfiler() = default;
     GpuProfiler(const GpuProfiler&) = delete;
     GpuProfiler& operator=(const GpuProfiler&) = delete;
@@ -54,6 +82,10 @@ public:
     void beginFrame();
     /// Ends the frame; with `wait`, blocks until its queries are available and resolves it.
     void endFrame(bool wait = false);
+    /// Drops the open frame (its passes, open or closed, are never resolved) so that the next
+    /// beginFrame() starts cleanly. No-op outside a frame.
+    void cancelFrame();
+    [[nodiscard]] bool isInFrame() const { return m_inFrame; }
     /// Opens a pass (nestable). Must be closed by end() in the same frame.
     void begin(const char* name);
     void end();

@@ -17,8 +17,9 @@ namespace lucent {
 
 /// A ray's first surface crossing.
 struct SurfaceHit {
-    float t = 0.f;         ///< distance along the (unit) ray direction, mm
-    Normal3f normal{0.f};  ///< unit geometric normal of the triangle, pointing out of the object
+    float t = 0.f;          ///< distance along the (unit) ray direction, mm
+    Normal3f normal{0.f};   ///< unit geometric normal of the triangle, pointing out of the object
+    uint32_t triangle = 0;  ///< index into the mesh's triangles
 };
 
 /// A closed triangle mesh (outward counter-clockwise faces) as the medium's boundary.
@@ -35,6 +36,9 @@ public:
     /// First crossing of o + t·d with t ∈ (tMin, tMax]; `d` must be unit. Thread-safe.
     [[nodiscard]] std::optional<SurfaceHit> intersect(const Point3f& o, const Vector3f& d,
                                                       float tMin, float tMax) const;
+    /// True if the segment o + t·d, t ∈ (tMin, tMax], meets the surface (a cheaper query than
+    /// intersect when only visibility matters). `d` must be unit. Thread-safe.
+    [[nodiscard]] bool occluded(const Point3f& o, const Vector3f& d, float tMin, float tMax) const;
     [[nodiscard]] const Bounds3f& bounds() const { return m_bounds; }
     /// Offset (mm) that moves a point on the surface off it robustly: scales with the
     /// magnitude of the coordinates (float spacing) and is never below 1e-5 mm.

@@ -21,6 +21,11 @@
 
 namespace lucent {
 
+/// Version of the reference estimator: part of every cached reference's key, so a cache made
+/// by an older estimator is never reused. 2: exact refracted next-event estimation at the
+/// dielectric boundary (1: straight shadow connections).
+constexpr int REFERENCE_ESTIMATOR_VERSION = 2;
+
 /// Progress of a running render (called from the rendering thread between passes).
 struct ReferenceProgress {
     int spp = 0;      ///< samples per pixel done

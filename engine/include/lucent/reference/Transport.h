@@ -19,6 +19,7 @@
 #include <lucent/core/Types.h>
 #include <lucent/reference/GridMedium.h>
 #include <lucent/reference/MeshBoundary.h>
+#include <lucent/reference/RefractionSearch.h>
 #include <lucent/scene/Scene.h>
 
 #include <cstdint>
@@ -29,9 +30,19 @@ namespace lucent {
 
 /// How light crosses the object's surface.
 enum class BoundaryModel : uint8_t {
-    Matched,     ///< η = 1: rays cross unchanged (exact)
-    Dielectric,  ///< smooth dielectric, Fresnel reflection/refraction; shadow rays straight
+    Matched,  ///< η = 1: rays cross unchanged (exact)
+    /// Smooth dielectric, exact: Fresnel reflection/refraction at every crossing, and
+    /// next-event estimation through every refraction point that connects a light to the
+    /// scattering point (RefractionSearch), so delta lights behind the surface are reached.
+    Dielectric,
+    /// Fast approximation of Dielectric, never ground truth: shadow rays go straight through
+    /// the surface, weighted by the Fresnel transmittance (light arriving past the critical
+    /// angle is lost). Kept for comparison (`--boundary straight`).
+    Straight,
 };
+
+/// The name used on the command line and in reports: "matched", "dielectric", "straight".
+const char* boundaryModelName(BoundaryModel model);
 
 /// Parameters of the estimators.
 struct TransportOptions {
@@ -45,17 +56,25 @@ struct TransportOptions {
 /// Mesh + medium + lights, prepared for tracing. Immutable; share between threads.
 class VolumeScene {
 public:
-    /// @throw ValueError for an empty mesh or a light with non-finite/negative parameters.
-    VolumeScene(const TriangleMesh& mesh, GridMedium medium, std::vector<Light> lights);
+    /// @param environment radiance of a constant environment light, W/(mm²·sr) per channel,
+    ///        seen wherever a ray leaves the scene (0: black background).
+    /// @throw ValueError for an empty mesh, a light with non-finite/negative parameters or a
+    ///        negative/non-finite environment radiance.
+    VolumeScene(const TriangleMesh& mesh, GridMedium medium, std::vector<Light> lights,
+                const Rgb& environment = Rgb(0.f));
 
     [[nodiscard]] const MeshBoundary& boundary() const { return m_boundary; }
+    [[nodiscard]] const RefractionSearch& refractions() const { return m_refractions; }
     [[nodiscard]] const GridMedium& medium() const { return m_medium; }
     [[nodiscard]] const std::vector<Light>& lights() const { return m_lights; }
+    [[nodiscard]] const Rgb& environment() const { return m_environment; }
 
 private:
     MeshBoundary m_boundary;
+    RefractionSearch m_refractions;
     GridMedium m_medium;
     std::vector<Light> m_lights;
+    Rgb m_environment{0.f};
 };
 
 /// Counters of the work a walk did (to measure the majorant grid's effect).
@@ -93,15 +112,19 @@ WalkResult walkMedium(const VolumeScene& scene, const Point3f& p, const Vector3f
 
 /// Transmittance from p to the light sample at distance `dist` along unit `wi` (INF for a
 /// directional light), through every stretch of the object the segment crosses, times the
-/// Fresnel transmittance 1 − F at each surface crossing for the Dielectric model (the straight
-/// shadow-connection approximation of docs/reference.md). `pInside` says whether p is inside.
+/// Fresnel transmittance 1 − F at each surface crossing unless the boundary is Matched: the
+/// straight shadow connection of the Straight approximation (docs/reference.md); the exact
+/// Dielectric model connects through RefractionSearch instead. `pInside`: p is inside.
 float shadowTransmittance(const VolumeScene& scene, const Point3f& p, const Vector3f& wi,
                           float dist, bool pInside, int ch, Pcg32& rng,
                           const TransportOptions& options, TrackingStats* stats = nullptr);
 
 /// Radiance (W/(mm²·sr), channel ch) arriving at `o` from direction −d: camera-side surface
 /// reflection, subsurface transport with next-event estimation to every light, light seen
-/// directly or through the unscattered medium. Black background.
+/// directly or through the unscattered medium, the environment where a ray leaves the scene.
+/// With the Dielectric boundary, next-event estimation covers the light that reaches the last
+/// scattering event through one refraction, the path itself every other chain of reflections
+/// and refractions that ends on a sphere light or the environment (docs/reference.md).
 float estimateRadiance(const VolumeScene& scene, const Point3f& o, const Vector3f& d, int ch,
                        Pcg32& rng, const TransportOptions& options, TrackingStats* stats = nullptr);
 

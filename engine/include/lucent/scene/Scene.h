@@ -79,6 +79,10 @@ struct SceneObject {
 struct Scene {
     std::vector<SceneObject> objects;  ///< one in the current format
     std::vector<Light> lights;
+    /// Radiance of a constant environment light (uniform over all directions, W/(mm²·sr) per
+    /// channel), seen wherever a ray leaves the scene; black by default. The path tracer treats
+    /// it exactly; the previews may treat it as ambient irradiance (docs/file-formats.md).
+    Rgb environment{0.f};
     Camera camera;
     float eta = 1.3f;  ///< relative index of refraction of the object(s)
     /// What loading found and repaired but accepted (e.g. an open mesh, dropped faces): one

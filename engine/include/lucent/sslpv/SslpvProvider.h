@@ -99,7 +99,10 @@ public:
 
     //! @{ \name Live inputs
     /// @throw ValueError for options out of range. Switching to the Gl backend needs create()
-    /// again (or is picked up at the next frame when created).
+    /// again (or is picked up at the next frame when created). A new gridResolution drops the
+    /// material (the coarse grid is resampled from the fine volume, which the provider does not
+    /// keep): call setMaterial() or updateMaterial() again before the next frame
+    /// (hasMaterial() says whether one is needed).
     void setOptions(const SslpvProviderOptions& options);
     [[nodiscard]] const SslpvProviderOptions& options() const;
     /// The object's rest-space mesh (mm): rebuilds the RSM ray caster and the inside mask,
@@ -115,6 +118,9 @@ public:
     /// (re-injection too when the grid moved). @param eta relative index, [1, 3].
     /// @throw ValueError for eta out of range or an empty volume.
     void setMaterial(const MaterialVolume& volume, float eta);
+    /// Whether a material is set for the current gridResolution (update() and
+    /// renderSubsurface() throw without one).
+    [[nodiscard]] bool hasMaterial() const;
     /// Painted bricks (e.g. volume.takeDirtyBricks()): updateCoarseMaterial on the coarse
     /// cells they overlap, then re-propagation. Falls back to setMaterial() (η of the last
     /// setMaterial, else volume.eta()) when no material was set, the volume's grid or
