@@ -2,15 +2,19 @@
 # SPDX-License-Identifier: MIT
 # Lucent set-up on Debian 12: install what is missing, build, then launch the app or run the tests.
 #   .ci/setup.sh run    install, build (Release), launch `lucent` on the default scene
-#   .ci/setup.sh test   install, build (ci preset), run the whole test suite with ctest
+#   .ci/setup.sh test   install, build (ci preset), run the whole test suite with ctest (what CI
+#                       runs, through .ci/run)
+#   .ci/setup.sh asan   install, build the asan-ubsan-ci preset and run the whole suite again
+#                       (GUI tests included) under AddressSanitizer, LeakSanitizer and UBSan,
+#                       halting on the first error (docs/benchmarks.md, "Sanitizer stage")
 # Idempotent: apt-get runs only when a package is missing; works as root or through sudo.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 mode=${1:-}
 case "$mode" in
-    run | test) ;;
-    *) echo "usage: .ci/setup.sh run|test" >&2; exit 2 ;;
+    run | test | asan) ;;
+    *) echo "usage: .ci/setup.sh run|test|asan" >&2; exit 2 ;;
 esac
 
 packages=(build-essential cmake ninja-build pkg-config ccache
@@ -33,16 +37,23 @@ if ((${#missing[@]})); then
     "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-preset=release
-[ "$mode" = test ] && preset=ci
-cmake --preset "$preset"
-cmake --build --preset "$preset"
+# Configure, build and (unless it is the release preset) test one preset; each has its own
+# build folder (build/<preset>).
+stage() {
+    cmake --preset "$1"
+    cmake --build --preset "$1"
+    [ "$1" = release ] || ctest --preset "$1"
+}
 
-if [ "$mode" = test ]; then
-    exec ctest --preset ci
-fi
+case "$mode" in
+    # The sanitizer stage joins `test` once every entry is green and its cold time is measured
+    # within CI's budget (docs/benchmarks.md, "Sanitizer stage").
+    test) stage ci; exit 0 ;;
+    asan) stage asan-ubsan-ci; exit 0 ;;
+esac
 
-app=build/$preset/app/gui/lucent
+stage release
+app=build/release/app/gui/lucent
 if [ -z "${DISPLAY:-}" ] && [ -z "${WAYLAND_DISPLAY:-}" ]; then
     echo "lucent: no display found, launching under xvfb-run"
     exec xvfb-run -a -s "-screen 0 1600x1000x24" env QT_QPA_PLATFORM=xcb "$app" "${@:2}"

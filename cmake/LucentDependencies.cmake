@@ -16,7 +16,7 @@ find_package(VTK 9.1 REQUIRED COMPONENTS CommonCore CommonDataModel FiltersCore 
     FiltersSources FiltersModeling IOGeometry IOPLY IOLegacy IOXML)
 list(APPEND CMAKE_MODULE_PATH /usr/lib/x86_64-linux-gnu/cmake/OpenVDB)
 find_package(OpenVDB REQUIRED COMPONENTS openvdb)
-if(LUCENT_BUILD_APP)
+if(LUCENT_BUILD_GUI)
     find_package(Qt6 REQUIRED COMPONENTS Core Gui Widgets OpenGL OpenGLWidgets Test Charts)
 endif()
 if(LUCENT_BUILD_TESTS)

@@ -31,7 +31,6 @@
 #include "PreviewRenderer.h"
 
 #include <QElapsedTimer>
-#include <QOpenGLFunctions_4_5_Core>
 #include <QPixmap>
 #include <QTimer>
 #include <QWidget>
@@ -77,7 +76,7 @@ struct ViewportStats {
     int renderErrors = 0;  ///< frames that failed to render since start
 };
 
-class Viewport : public QWidget, protected QOpenGLFunctions_4_5_Core {
+class Viewport : public QWidget {
     Q_OBJECT
 public:
     enum class Tool { Paint, Eyedropper };
@@ -191,6 +190,8 @@ private:
     void setViewCursor(Qt::CursorShape shape);
     void onSceneReplaced();
     void cleanupGL();
+    /// Adds the pending glGetError() codes of the current context to stats().glErrors.
+    void countGlErrors();
     void beginStroke(const PickHit& hit);
     void continueStroke(const PickHit& hit);
     void endStroke();

@@ -10,6 +10,7 @@
 #include "Panels.h"
 #include "SliceView.h"
 #include "Viewport.h"
+#include "KeepLibrariesLoaded.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/material/Procedural.h>
@@ -818,5 +819,7 @@ int main(int argc, char** argv) {
     lucent::app::MainWindow::useGlSurfaceFormat();
     QApplication app(argc, argv);
     ::testing::InitGoogleTest(&argc, argv);
-    return RUN_ALL_TESTS();
+    const int result = RUN_ALL_TESTS();
+    lucent::app::test::keepLibrariesLoaded();  // LSan names the GL driver's leaks at exit
+    return result;
 }
