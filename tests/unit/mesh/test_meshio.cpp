@@ -239,6 +239,19 @@ TEST(MeshIO, CorruptCountsAreRejectedBeforeTheReaders) {
     expectLoadError(robustInput("vtp_compression_header.vtp"), "claims 1073741824 blocks");
 }
 
+/// A checked-in input found by the fuzz targets (tests/data/fuzz/README.md).
+std::string fuzzFinding(const std::string& name) {
+    return std::string(LUCENT_TEST_DATA_DIR) + "/fuzz/" + name;
+}
+
+TEST(MeshIO, FuzzFindingsAreClearErrors) {
+    // A PLY format line without its version number ("format ascii"): OpenMesh's header loop
+    // printed "Unsupported keyword : format" forever (a frozen app). Now the header check
+    // refuses it before OpenMesh sees the file.
+    expectLoadError(fuzzFinding("ply_format_without_version.ply"),
+                    "expected 'format <encoding> <version number>'");
+}
+
 TEST(MeshIO, ImportLimitsApplyBeforeAllocation) {
     const std::string sphere = robustInput("sphere_closed.off");
     EXPECT_EQ(loadMesh(sphere).triangleCount(), 224u);
