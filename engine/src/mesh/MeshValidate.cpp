@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cfloat>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -119,6 +120,12 @@ bool isNumber(const std::string& t) {
     char* end = nullptr;
     const double v = std::strtod(t.c_str(), &end);
     return end == t.c_str() + t.size() && std::isfinite(v);
+}
+
+/// A plain decimal number that also fits a float: OpenMesh extracts some values into a float,
+/// and an overflow fails its stream like a malformed word.
+bool isFloatNumber(const std::string& t) {
+    return isNumber(t) && std::abs(std::strtod(t.c_str(), nullptr)) <= double(FLT_MAX);
 }
 
 /// A non-negative integer (no sign: extracting "-3" into an unsigned gives 4294967293).
@@ -359,13 +366,13 @@ std::vector<PlyElement> readPlyHeader(Reader& in, const std::string& path, uint6
             LUCENT_THROW(IoError, "mesh file '", path,
                          "': PLY header has no end_header in its first 65536 bytes");
         // OpenMesh reads the header word by word across lines, and a word it cannot extract
-        // (a version or count that is not a number) leaves its stream failed and its header
-        // loop printing "Unsupported keyword" forever (found by fuzzing): every line must
-        // have exactly the words OpenMesh will read.
+        // (a version or count that is not a number, or a version beyond a float's range)
+        // leaves its stream failed and its header loop printing "Unsupported keyword" forever
+        // (found by fuzzing): every line must have exactly the words OpenMesh will read.
         if (w0 == "format") {
             if (w1 != "ascii" && w1 != "binary_little_endian" && w1 != "binary_big_endian")
                 bad("unknown format");
-            if (!isNumber(w2) || !w3.empty())
+            if (!isFloatNumber(w2) || !w3.empty())
                 bad("expected 'format <encoding> <version number>'");
             format = w1;
         } else if (w0 == "element") {

@@ -250,6 +250,10 @@ TEST(MeshIO, FuzzFindingsAreClearErrors) {
     // refuses it before OpenMesh sees the file.
     expectLoadError(fuzzFinding("ply_format_without_version.ply"),
                     "expected 'format <encoding> <version number>'");
+    // The same loop when the version does not fit a float ("format ascii 1e39"; the fuzzer's
+    // input had a version of 76 digits).
+    expectLoadError(fuzzFinding("ply_version_overflows_float.ply"),
+                    "expected 'format <encoding> <version number>'");
 }
 
 TEST(MeshIO, ImportLimitsApplyBeforeAllocation) {
