@@ -423,6 +423,10 @@ Scene parseScene(const std::string& jsonText, const std::string& baseDir) {
         root = json::parse(jsonText);
     } catch (const json::parse_error& e) {
         LUCENT_THROW(IoError, "scene: not valid JSON (byte ", e.byte, "): ", e.what());
+    } catch (const json::exception& e) {
+        // E.g. out_of_range for a number beyond a double's range (found by fuzzing): the
+        // parser's other exceptions must not leave the importer as foreign exceptions.
+        LUCENT_THROW(IoError, "scene: not valid JSON: ", e.what());
     }
     const Obj o(root, "");
     o.allowOnly(
