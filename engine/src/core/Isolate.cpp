@@ -23,8 +23,15 @@ namespace lucent {
 
 namespace {
 
+// GCC defines __SANITIZE_ADDRESS__, clang answers __has_feature.
 #if defined(__SANITIZE_ADDRESS__)
 constexpr bool ADDRESS_SANITIZER = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool ADDRESS_SANITIZER = true;
+#else
+constexpr bool ADDRESS_SANITIZER = false;
+#endif
 #else
 constexpr bool ADDRESS_SANITIZER = false;
 #endif
@@ -51,6 +58,24 @@ bool writeAll(int fd, const void* data, size_t n) {
     return true;
 }
 
+/// Runs `work` and turns what it throws into the status byte and payload the child sends.
+/// @return true if `work` succeeded.
+bool runWork(const ImportLimits& limits, const std::function<std::string()>& work,
+             std::string& payload) {
+    try {
+        payload = work();
+        return true;
+    } catch (const std::bad_alloc&) {
+        payload = "out of memory: the file needs more than the import limit of " +
+                  std::to_string(limits.maxDecodedBytes) + " bytes";
+    } catch (const std::exception& e) {
+        payload = e.what();
+    } catch (...) {
+        payload = "unknown error";
+    }
+    return false;
+}
+
 [[noreturn]] void runChild(int fd, const ImportLimits& limits, uint64_t baseBytes,
                            const std::function<std::string()>& work) {
     std::signal(SIGXCPU, SIG_DFL);
@@ -67,19 +92,8 @@ bool writeAll(int fd, const void* data, size_t n) {
                         rlim_t(baseBytes + limits.maxDecodedBytes)};
         ::setrlimit(RLIMIT_AS, &as);
     }
-    char status = 'E';
     std::string payload;
-    try {
-        payload = work();
-        status = 'K';
-    } catch (const std::bad_alloc&) {
-        payload = "out of memory: the file needs more than the import limit of " +
-                  std::to_string(limits.maxDecodedBytes) + " bytes";
-    } catch (const std::exception& e) {
-        payload = e.what();
-    } catch (...) {
-        payload = "unknown error";
-    }
+    const char status = runWork(limits, work, payload) ? 'K' : 'E';
     const uint64_t n = payload.size();
     const bool ok = writeAll(fd, &status, 1) && writeAll(fd, &n, sizeof n) &&
                     writeAll(fd, payload.data(), payload.size());
@@ -91,6 +105,15 @@ bool writeAll(int fd, const void* data, size_t n) {
 
 std::string runIsolated(const std::string& what, const std::function<std::string()>& work) {
     const ImportLimits limits = importLimits();
+#if LUCENT_ISOLATE_IN_PROCESS
+    // Fuzz builds only (the `fuzz` preset): the reader runs in this process, so that the
+    // sanitizers and libFuzzer's coverage, memory and time limits see it; errors read as they
+    // would from the child.
+    std::string result;
+    if (!runWork(limits, work, result))
+        throw IoError(what + ": " + result);
+    return result;
+#endif
     int fds[2];
     if (::pipe2(fds, O_CLOEXEC) != 0)
         LUCENT_THROW(IoError, what, ": cannot create a pipe: ", std::strerror(errno));

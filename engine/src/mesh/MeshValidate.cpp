@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cfloat>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -119,6 +120,12 @@ bool isNumber(const std::string& t) {
     char* end = nullptr;
     const double v = std::strtod(t.c_str(), &end);
     return end == t.c_str() + t.size() && std::isfinite(v);
+}
+
+/// A plain decimal number that also fits a float: OpenMesh extracts some values into a float,
+/// and an overflow fails its stream like a malformed word.
+bool isFloatNumber(const std::string& t) {
+    return isNumber(t) && std::abs(std::strtod(t.c_str(), nullptr)) <= double(FLT_MAX);
 }
 
 /// A non-negative integer (no sign: extracting "-3" into an unsigned gives 4294967293).
@@ -344,8 +351,8 @@ std::vector<PlyElement> readPlyHeader(Reader& in, const std::string& path, uint6
     uint64_t lineNo = 0;
     while (in.line(line)) {
         std::istringstream words(line);
-        std::string w0, w1, w2, w3, w4;
-        words >> w0 >> w1 >> w2 >> w3 >> w4;
+        std::string w0, w1, w2, w3, w4, w5;
+        words >> w0 >> w1 >> w2 >> w3 >> w4 >> w5;
         auto bad = [&](const char* why) {
             LUCENT_THROW(IoError, "mesh file '", path, "': malformed PLY header (", why, "): '",
                          line, "'");
@@ -358,13 +365,19 @@ std::vector<PlyElement> readPlyHeader(Reader& in, const std::string& path, uint6
         if (in.offset() > 65536)
             LUCENT_THROW(IoError, "mesh file '", path,
                          "': PLY header has no end_header in its first 65536 bytes");
+        // OpenMesh reads the header word by word across lines, and a word it cannot extract
+        // (a version or count that is not a number, or a version beyond a float's range)
+        // leaves its stream failed and its header loop printing "Unsupported keyword" forever
+        // (found by fuzzing): every line must have exactly the words OpenMesh will read.
         if (w0 == "format") {
             if (w1 != "ascii" && w1 != "binary_little_endian" && w1 != "binary_big_endian")
                 bad("unknown format");
+            if (!isFloatNumber(w2) || !w3.empty())
+                bad("expected 'format <encoding> <version number>'");
             format = w1;
         } else if (w0 == "element") {
             uint64_t count = 0;
-            if (w1.empty() || !parseCount(w2, count))
+            if (w1.empty() || !parseCount(w2, count) || !w3.empty())
                 bad("expected 'element <name> <count>'");
             elements.push_back({w1, count, {}});
         } else if (w0 == "property") {
@@ -373,14 +386,14 @@ std::vector<PlyElement> readPlyHeader(Reader& in, const std::string& path, uint6
             PlyProperty p;
             p.isList = w1 == "list";
             if (p.isList) {
-                if (!plyTypeSize(w2) || !plyTypeSize(w3) || w4.empty() || w2 == "float" ||
-                    w2 == "float32" || w2 == "double" || w2 == "float64")
+                if (!plyTypeSize(w2) || !plyTypeSize(w3) || w4.empty() || !w5.empty() ||
+                    w2 == "float" || w2 == "float32" || w2 == "double" || w2 == "float64")
                     bad("expected 'property list <integer type> <type> <name>'");
                 p.countType = w2;
                 p.type = w3;
                 p.name = w4;
             } else {
-                if (!plyTypeSize(w1) || w2.empty())
+                if (!plyTypeSize(w1) || w2.empty() || !w3.empty())
                     bad("expected 'property <type> <name>'");
                 p.type = w1;
                 p.name = w2;

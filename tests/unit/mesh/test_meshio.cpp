@@ -239,6 +239,31 @@ TEST(MeshIO, CorruptCountsAreRejectedBeforeTheReaders) {
     expectLoadError(robustInput("vtp_compression_header.vtp"), "claims 1073741824 blocks");
 }
 
+/// A checked-in input found by the fuzz targets (tests/data/fuzz/README.md).
+std::string fuzzFinding(const std::string& name) {
+    return std::string(LUCENT_TEST_DATA_DIR) + "/fuzz/" + name;
+}
+
+TEST(MeshIO, FuzzFindingsAreClearErrors) {
+    // A PLY format line without its version number ("format ascii"): OpenMesh's header loop
+    // printed "Unsupported keyword : format" forever (a frozen app). Now the header check
+    // refuses it before OpenMesh sees the file.
+    expectLoadError(fuzzFinding("ply_format_without_version.ply"),
+                    "expected 'format <encoding> <version number>'");
+    // The same loop when the version does not fit a float ("format ascii 1e39"; the fuzzer's
+    // input had a version of 76 digits).
+    expectLoadError(fuzzFinding("ply_version_overflows_float.ply"),
+                    "expected 'format <encoding> <version number>'");
+    // A VTP whose cell offsets (raw appended data, uncompressed) end in 0x7272727272727272:
+    // VTK 9.1 sizes the connectivity array by that value before reading it. The child process
+    // (lucent/core/Isolate.h) contains it: the allocation fails there and becomes a clear
+    // error in half a second. The fuzz build reads VTK in-process and found it under ASan.
+    expectLoadError(fuzzFinding("vtp_cell_offsets_huge.vtp"), "out of memory");
+    // The same with a last offset of 3 GiB: 25 s and 3 GiB in the in-process fuzz build, a
+    // clear error from the child process in under a second.
+    expectLoadError(fuzzFinding("vtp_cell_offsets_3gib.vtp"), "VTK reader");
+}
+
 TEST(MeshIO, ImportLimitsApplyBeforeAllocation) {
     const std::string sphere = robustInput("sphere_closed.off");
     EXPECT_EQ(loadMesh(sphere).triangleCount(), 224u);

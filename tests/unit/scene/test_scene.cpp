@@ -497,5 +497,21 @@ TEST(SceneFile, MeshWarningsReachTheScene) {
     EXPECT_NE(s.warnings.front().find("open"), std::string::npos) << s.warnings.front();
 }
 
+TEST(SceneFile, NumberOverflowIsAClearError) {
+    // Found by fuzz_scene (tests/data/fuzz/README.md): a number beyond a double's range makes
+    // nlohmann::json throw out_of_range, not parse_error; it left parseScene as a foreign
+    // exception (the app expects lucent::Error) without the file name.
+    const std::string path = std::string(LUCENT_TEST_DATA_DIR) + "/fuzz/scene_number_overflow.json";
+    try {
+        loadScene(path);
+        ADD_FAILURE() << "no error";
+    } catch (const IoError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find(path), std::string::npos) << msg;
+        EXPECT_NE(msg.find("not valid JSON"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("number overflow"), std::string::npos) << msg;
+    }
+}
+
 }  // namespace
 }  // namespace lucent
