@@ -21,6 +21,7 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
+#include <lucent/scene/SceneFile.h>
 #include <lucent/gpu/Shader.h>
 #if LUCENT_APP_HAS_IO
 #include <lucent/io/VdbIO.h>
@@ -1440,7 +1441,8 @@ TEST(AppFiles, SaveOpenRoundTripOfUniformFill) {
     ASSERT_TRUE(w->document()->isModified());
     const QString path = outputPath("app_uniform.json");
     ASSERT_TRUE(w->saveTo(path)) << w->lastError().toStdString();
-    EXPECT_TRUE(QFile::exists(outputPath("app_uniform.vdb"))) << "sidecar VDB next to the JSON";
+    // The JSON and one sidecar VDB next to it (<stem>.vdb or <stem>.1.vdb: saves alternate).
+    EXPECT_EQ(projectFiles(path.toStdString()).size(), 2u);
     MainWindow other(/*restoreSettings=*/false);
     ASSERT_TRUE(other.openFile(path)) << other.lastError().toStdString();
     EXPECT_EQ(snapshot(*other.document()->material()), snapshot(*w->document()->material()));
@@ -1624,7 +1626,10 @@ TEST(AppFiles, ProjectKeepsTheCameraAndItsMesh) {
         ASSERT_TRUE(f.open(QIODevice::WriteOnly));
         f.write(QJsonDocument(root).toJson());
     }
-    QFile::copy(dir.filePath(QStringLiteral("head.vdb")), dir.filePath(QStringLiteral("away.vdb")));
+    // The sidecar head.json refers to now (saves alternate <stem>.vdb and <stem>.1.vdb).
+    const std::vector<std::string> headFiles = projectFiles(project.toStdString());
+    ASSERT_EQ(headFiles.size(), 2u);
+    QFile::copy(QString::fromStdString(headFiles[1]), dir.filePath(QStringLiteral("away.vdb")));
     ASSERT_TRUE(other.openFile(awayPath)) << other.lastError().toStdString();
     EXPECT_TRUE(other.viewport()->cameraShowsObject());
     const Bounds3f b = other.document()->mesh()->bounds();
