@@ -14,6 +14,8 @@ namespace lucent::planner {
 
 namespace {
 
+constexpr double PI_D = 3.14159265358979323846;
+
 /// Irradiance (luminance, W/mm²) the light gives a surface facing it at `p`, and the unit
 /// direction from `p` toward the light.
 double irradianceAt(const Light& light, const Point3f& p, Vector3f& towardLight) {
@@ -25,7 +27,7 @@ double irradianceAt(const Light& light, const Point3f& p, Vector3f& towardLight)
     const double dist2 = std::max(double(glm::dot(d, d)), 1e-12);
     towardLight = glm::normalize(d);
     if (light.type == Light::Type::Sphere)  // a sphere light seen from afar: intensity L·πr²
-        return double(luminance(light.intensity)) * 3.14159265358979 * double(light.radius) *
+        return double(luminance(light.intensity)) * PI_D * double(light.radius) *
                double(light.radius) / dist2;
     return double(luminance(light.intensityToward(-towardLight))) / dist2;
 }
@@ -116,11 +118,10 @@ SceneFeatures analyzeScene(const Scene& scene) {
     } else {
         const double dist = std::max(double(glm::length(cam.position - centre)), radius + 1e-6);
         const double halfAngle = std::asin(std::min(1.0, radius / dist));
-        const double halfFov = 0.5 * double(cam.fovYDeg) * 3.14159265358979 / 180.0;
+        const double halfFov = 0.5 * double(cam.fovYDeg) * PI_D / 180.0;
         radiusPx = std::tan(halfAngle) / std::tan(halfFov) * 0.5 * double(cam.height);
     }
-    f.pixelsCovered =
-        std::min(3.14159265358979 * radiusPx * radiusPx, double(cam.width) * double(cam.height));
+    f.pixelsCovered = std::min(PI_D * radiusPx * radiusPx, double(cam.width) * double(cam.height));
     return f;
 }
 
