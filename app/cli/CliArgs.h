@@ -56,6 +56,6 @@ struct Command {
 
 /// The subcommands, one per Command_<name>.cpp (CliMain.cpp lists them in this order).
 extern const Command exportCommand, infoCommand, renderCommand, methodsCommand, referenceCommand,
-    compareCommand, benchCommand, profileCommand, evaluateCommand;
+    compareCommand, benchCommand, profileCommand, evaluateCommand, planCommand;
 
 }  // namespace lucent::cli

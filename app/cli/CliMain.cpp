@@ -16,7 +16,7 @@ namespace lucent::cli {
 
 static std::vector<const Command*> commands() {
     return {&exportCommand,  &infoCommand,  &renderCommand,  &methodsCommand, &referenceCommand,
-            &compareCommand, &benchCommand, &profileCommand, &evaluateCommand};
+            &compareCommand, &benchCommand, &profileCommand, &evaluateCommand, &planCommand};
 }
 
 static void printUsage(std::FILE* out) {
