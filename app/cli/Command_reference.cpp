@@ -45,19 +45,6 @@ void printProgress(const ReferenceProgress& p) {
     std::fflush(stderr);
 }
 
-BoundaryModel parseBoundary(const std::string& s) {
-    if (s == "matched")
-        return BoundaryModel::Matched;
-    if (s == "dielectric")
-        return BoundaryModel::Dielectric;
-    if (s == "straight")
-        return BoundaryModel::Straight;
-    LUCENT_THROW(ValueError,
-                 "--boundary: expected 'dielectric' (exact, the default), 'matched' "
-                 "(η = 1) or 'straight' (fast approximation, not ground truth), got '",
-                 s, "'");
-}
-
 int runReference(const std::vector<std::string>& argv) {
     const Args args(argv,
                     {"spp", "rse", "o", "output", "seed", "threads", "boundary", "max-scatter",
@@ -93,7 +80,7 @@ int runReference(const std::vector<std::string>& argv) {
         LUCENT_THROW(ValueError, "--seed: expected a non-negative integer, got '", seed, "'");
     }
     opt.threads = args.intOr("threads", 0, 0, 1024);
-    opt.boundary = parseBoundary(args.valueOr("boundary", "dielectric"));
+    opt.boundary = parseBoundaryModel(args.valueOr("boundary", "dielectric"));
     opt.subsurfaceOnly = args.has("subsurface-only");
     const std::string majorant = args.valueOr("majorant", "auto");
     if (majorant == "auto")
