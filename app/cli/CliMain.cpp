@@ -15,7 +15,7 @@
 namespace lucent::cli {
 
 static std::vector<const Command*> commands() {
-    return {&exportCommand,  &infoCommand,  &renderCommand,  &methodsCommand, &referenceCommand,
+    return {&exportCommand,  &infoCommand,  &renderCommand,  &methodsCommand,  &referenceCommand,
             &compareCommand, &benchCommand, &profileCommand, &evaluateCommand, &planCommand};
 }
 

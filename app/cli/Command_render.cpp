@@ -28,17 +28,6 @@ bool endsWith(const std::string& s, const std::string& suffix) {
            s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-/// One-line terminal progress bar on stderr.
-void printProgress(double fraction, const std::string& status) {
-    constexpr int WIDTH = 30;
-    const int filled = int(std::clamp(fraction, 0.0, 1.0) * WIDTH + 0.5);
-    std::string bar(size_t(WIDTH), '-');
-    for (int i = 0; i < filled; ++i)
-        bar[size_t(i)] = '#';
-    std::fprintf(stderr, "\r[%s] %s ", bar.c_str(), status.c_str());
-    std::fflush(stderr);
-}
-
 int runRender(const std::vector<std::string>& argv) {
     // The method decides which --NAME VALUE options are its parameters; Auto takes the
     // planner's instead.
@@ -82,7 +71,7 @@ int runRender(const std::vector<std::string>& argv) {
         options.backend = methods::Backend::Gl;
     options.subsurfaceOnly = args.has("subsurface-only");
     options.log = [](const std::string& m) { std::fprintf(stderr, "render: %s\n", m.c_str()); };
-    options.progress = printProgress;
+    options.progress = printProgressBar;
 
     Scene scene = loadScene(args.positional().front());
     for (const std::string& w : scene.warnings)
