@@ -71,13 +71,52 @@ int runFit(const Args& args) {
     return 0;
 }
 
+int runCheck(const Args& args) {
+    const planner::Models models =
+        args.has("models") ? planner::loadModels(*args.value("models")) : planner::defaultModels();
+    const double budgetRatio = args.floatOr("budget-ratio", 20.f, 1e-3f, 1e9f);
+    std::vector<planner::MeasuredRow> rows;
+    for (const std::string& csv : args.values("check")) {
+        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv);
+        rows.insert(rows.end(), r.begin(), r.end());
+    }
+    const std::vector<planner::FrontCheck> checks =
+        planner::checkAgainstFront(rows, models, budgetRatio);
+    if (checks.empty())
+        LUCENT_THROW(ValueError, "plan --check: no case has a measured candidate with a model");
+    std::printf(
+        "budget: %g x the Direct frame; times are measured cost ratios, errors measured\n"
+        "block rel. L1\n\n",
+        budgetRatio);
+    std::printf("%-28s %-36s %8s %7s  %-36s %6s  %s\n", "case", "Auto's choice", "cost", "error",
+                "cheapest at that error", "ratio", "best in budget");
+    int within = 0, best = 0;
+    for (const planner::FrontCheck& c : checks) {
+        within += c.timeRatio <= 1.2 ? 1 : 0;
+        best += c.choseBest ? 1 : 0;
+        std::printf("%-28s %-36s %8.2f %7.3f  %-36s %6.2f  %s%s\n", c.caseName.c_str(),
+                    c.chosen.c_str(), c.chosenCost, c.chosenError, c.cheapestAtError.c_str(),
+                    c.timeRatio, c.choseBest ? "= chosen" : c.bestInBudget.c_str(),
+                    c.choseBest
+                        ? ""
+                        : (" (error " + std::to_string(c.bestError).substr(0, 5) + ")").c_str());
+    }
+    std::printf(
+        "\nwithin 1.2x of the front at equal error: %d of %zu cases; the best point in the "
+        "budget: %d of %zu\n",
+        within, checks.size(), best, checks.size());
+    return 0;
+}
+
 int runPlan(const std::vector<std::string>& argv) {
     const Args args(argv,
                     {"budget-ms", "max-error", "direct-ms", "models", "width", "height", "fit", "o",
-                     "output", "ridge", "source"},
+                     "output", "ridge", "source", "check", "budget-ratio"},
                     {"cpu"});
     if (args.has("fit"))
         return runFit(args);
+    if (args.has("check"))
+        return runCheck(args);
     if (args.positional().size() != 1)
         LUCENT_THROW(ValueError, "expected exactly one SCENE.json (see --help)");
     Scene scene = loadScene(args.positional().front());
@@ -132,6 +171,7 @@ const Command planCommand{
     "usage: lucent-cli plan SCENE.json [--budget-ms B | --max-error E] [--direct-ms D]\n"
     "                       [--models models.json] [--width W] [--height H] [--cpu]\n"
     "       lucent-cli plan --fit suite.csv [--fit more.csv ...] -o models.json [--ridge R]\n"
+    "       lucent-cli plan --check suite.csv [--models F] [--budget-ratio R]\n"
     "\n"
     "Prints the scene's features and class, every candidate (a method at one quality level)\n"
     "with its predicted time and 4x4-block error against the exact reference, the choice and\n"
@@ -146,7 +186,12 @@ const Command planCommand{
     "  --cpu             plan as if no OpenGL were available\n"
     "  --fit CSV         fit the models on an evaluation CSV (`lucent-cli evaluate --suite`),\n"
     "                    one model per method and setting measured on at least 2 cases\n"
-    "  --ridge R         regularisation of the fit (default 0.05)\n",
+    "  --ridge R         regularisation of the fit (default 0.05)\n"
+    "  --check CSV       judge Auto on measured cases: per case its choice (from the models)\n"
+    "                    against the measured front: the time ratio to the cheapest candidate\n"
+    "                    at or under its measured error (goal <= 1.2) and whether it is the\n"
+    "                    measured best within the budget\n"
+    "  --budget-ratio R  the budget of --check as a multiple of the Direct frame (default 20)\n",
     &runPlan};
 
 }  // namespace lucent::cli

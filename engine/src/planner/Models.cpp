@@ -360,6 +360,7 @@ std::vector<MeasuredRow> readMeasurements(const std::string& csvPath) {
             features.emplace_back(c, fc.field);
     }
     const int lightsCol = column({"lights"});
+    const int floorCol = column({"noise_floor", "block_rel_l1_floor"});
 
     std::vector<MeasuredRow> rows;
     int lineNo = 1;
@@ -386,6 +387,8 @@ std::vector<MeasuredRow> readMeasurements(const std::string& csvPath) {
         }
         for (const auto& [c, field] : features)
             r.features.*field = parseNumber(f[size_t(c)], header[size_t(c)], where);
+        if (floorCol >= 0)
+            r.noiseFloor = parseNumber(f[size_t(floorCol)], header[size_t(floorCol)], where);
         if (lightsCol >= 0)
             r.features.lights = int(parseNumber(f[size_t(lightsCol)], "lights", where));
         rows.push_back(std::move(r));
@@ -506,6 +509,74 @@ const Models& defaultModels() {
     static const Models models =
         parseModels(detail::PLANNER_MODELS_JSON, "resources/planner/models.json (embedded)");
     return models;
+}
+
+std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
+                                          const Models& models, double budgetRatio) {
+    LUCENT_CHECK(budgetRatio > 0, "front check: the budget must be > 0 times the Direct frame");
+    std::vector<std::string> cases;
+    for (const MeasuredRow& r : rows)
+        if (std::find(cases.begin(), cases.end(), r.caseName) == cases.end())
+            cases.push_back(r.caseName);
+    auto label = [](const std::string& method, const std::string& setting) {
+        return method + " " + setting;
+    };
+    std::vector<FrontCheck> out;
+    for (const std::string& name : cases) {
+        // The case's measured candidates that have a model, in the models' order.
+        std::vector<const MeasuredRow*> measured;
+        std::vector<Candidate> candidates;
+        std::vector<Candidate> all = toCandidates(models);
+        for (size_t i = 0; i < models.candidates.size(); ++i) {
+            const CandidateModel& m = models.candidates[i];
+            const auto row = std::find_if(rows.begin(), rows.end(), [&](const MeasuredRow& r) {
+                return r.caseName == name && r.method == m.method && r.setting == m.setting &&
+                       r.costRatio > 0 && std::isfinite(r.costRatio) && std::isfinite(r.blockRelL1);
+            });
+            if (row == rows.end())
+                continue;
+            measured.push_back(&*row);
+            candidates.push_back(all[i]);
+        }
+        if (measured.empty())
+            continue;
+        Budget budget;
+        budget.directMs = 1.0;
+        budget.frameMs = budgetRatio;
+        const Plan p = plan(candidates, measured.front()->features, budget);
+        const MeasuredRow& chosen = *measured[p.choice];
+        FrontCheck c;
+        c.caseName = name;
+        c.chosen = label(chosen.method, chosen.setting);
+        c.chosenCost = chosen.costRatio;
+        c.chosenError = chosen.blockRelL1;
+        const MeasuredRow* cheapest = &chosen;
+        for (const MeasuredRow* r : measured)
+            if (r->blockRelL1 <= chosen.blockRelL1 + std::max(r->noiseFloor, chosen.noiseFloor) &&
+                r->costRatio < cheapest->costRatio)
+                cheapest = r;
+        c.cheapestAtError = label(cheapest->method, cheapest->setting);
+        c.cheapestCost = cheapest->costRatio;
+        c.timeRatio = chosen.costRatio / cheapest->costRatio;
+        const MeasuredRow* best = nullptr;
+        for (const MeasuredRow* r : measured) {
+            const bool fits = r->costRatio <= budgetRatio;
+            if (!best) {
+                best = r;
+                continue;
+            }
+            const bool bestFits = best->costRatio <= budgetRatio;
+            if (fits != bestFits
+                    ? fits
+                    : (fits ? r->blockRelL1 < best->blockRelL1 : r->costRatio < best->costRatio))
+                best = r;
+        }
+        c.bestInBudget = label(best->method, best->setting);
+        c.bestError = best->blockRelL1;
+        c.choseBest = best == &chosen;
+        out.push_back(std::move(c));
+    }
+    return out;
 }
 
 std::vector<Candidate> toCandidates(const Models& models) {

@@ -290,3 +290,56 @@ TEST(PlannerAuto, ChoiceResolvesToRegistryParametersAndSkipsWhatCannotRender) {
             << e.what();
     }
 }
+
+TEST(PlannerModels, FrontCheckJudgesTheChoiceByMeasurement) {
+    // Two candidates on two cases; the models predict "fast" as accurate as "slow" on case a,
+    // so Auto takes fast there. Measured: on a, fast is 0.30 and slow 0.10 at 10× the cost;
+    // on b the models are right.
+    auto row = [](const std::string& c, const std::string& m, double cost, double err,
+                  double opticalSize) {
+        MeasuredRow r;
+        r.caseName = c;
+        r.method = m;
+        r.setting = "s";
+        r.costRatio = cost;
+        r.blockRelL1 = err;
+        r.features.opticalSize = opticalSize;
+        r.features.albedo = 0.9;
+        r.features.eta = 1.3;
+        return r;
+    };
+    Models models;
+    CandidateModel fast, slow;
+    fast.method = "fast";
+    slow.method = "slow";
+    fast.setting = slow.setting = "s";
+    fast.cost = {std::log(1.0), 0, 0};
+    slow.cost = {std::log(10.0), 0, 0};
+    fast.error.assign(errorTermNames().size(), 0.0);
+    slow.error = fast.error;
+    fast.error[0] = std::log(0.1);
+    slow.error[0] = std::log(0.2);
+    models.candidates = {fast, slow};
+    const std::vector<MeasuredRow> rows = {
+        row("a", "fast", 1.0, 0.30, 10), row("a", "slow", 10.0, 0.10, 10),
+        row("b", "fast", 1.2, 0.05, 100), row("b", "slow", 9.0, 0.20, 100),
+        row("c", "other", 1.0, 0.01, 1)};  // no model: ignored
+    const std::vector<FrontCheck> checks = checkAgainstFront(rows, models, 20.0);
+    ASSERT_EQ(checks.size(), 2u);
+    EXPECT_EQ(checks[0].chosen, "fast s");
+    EXPECT_DOUBLE_EQ(checks[0].timeRatio, 1.0);  // fast is the cheapest at its own error
+    EXPECT_EQ(checks[0].bestInBudget, "slow s");
+    EXPECT_FALSE(checks[0].choseBest);
+    EXPECT_TRUE(checks[1].choseBest);
+    // A budget below both: the best in budget is the cheapest.
+    EXPECT_EQ(checkAgainstFront(rows, models, 0.5)[0].bestInBudget, "fast s");
+    // If Auto had to take slow at 0.30 measured error, fast (0.30) is as good for 1/10 the time.
+    std::vector<MeasuredRow> worse = rows;
+    worse[1].blockRelL1 = 0.30;
+    models.candidates[0].error[0] = std::log(0.5);  // now fast is predicted worse
+    const FrontCheck w = checkAgainstFront(worse, models, 20.0)[0];
+    EXPECT_EQ(w.chosen, "slow s");
+    EXPECT_EQ(w.cheapestAtError, "fast s");
+    EXPECT_DOUBLE_EQ(w.timeRatio, 10.0);
+    EXPECT_THROW(checkAgainstFront(rows, models, 0.0), ValueError);
+}

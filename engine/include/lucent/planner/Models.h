@@ -33,6 +33,9 @@ struct MeasuredRow {
     std::string setting;      ///< quality level name: "16 spp"
     double costRatio = 0.0;   ///< frame time / the Direct render of the same frame
     double blockRelL1 = 0.0;  ///< 4×4-block relative L1 against the exact reference
+    /// The reference's own noise in the same metric (0 when unknown): errors closer than this
+    /// are equal as far as the measurement can tell.
+    double noiseFloor = 0.0;
     SceneFeatures features;
 };
 
@@ -77,7 +80,8 @@ Models fitModels(const std::vector<MeasuredRow>& rows, double ridge = 0.05);
 /// Reads an evaluation CSV (`lucent-cli evaluate --suite` writes one): a header row naming
 /// the columns, then one row per case, method and setting. Columns are found by name:
 /// case (or scene), method, setting, cost_ratio (or time_ms with direct_ms), block_rel_l1,
-/// and one column per SceneFeatures field (camelCase or snake_case). Rows of the `direct` and
+/// one column per SceneFeatures field (camelCase or snake_case); optional: lights, noise_floor
+/// (or block_rel_l1_floor). Rows of the `direct` and
 /// `reference` methods are read like any other (the caller decides what to fit).
 /// @throw IoError naming the file; ValueError naming the missing column or the bad line.
 std::vector<MeasuredRow> readMeasurements(const std::string& csvPath);
@@ -93,6 +97,32 @@ void saveModels(const Models& models, const std::string& path);
 
 /// The models shipped with this build (resources/planner/models.json, embedded).
 const Models& defaultModels();
+
+/// Auto's choice on one measured case against the measured run-time-vs-error front (issue 15's
+/// check: within 1.2× the time of the best point at equal error).
+struct FrontCheck {
+    std::string caseName;
+    std::string chosen;  ///< "method setting" Auto picked from the models' predictions
+    double chosenCost = 0.0, chosenError = 0.0;  ///< its measured cost ratio and block error
+    /// The cheapest measured candidate at or under the chosen one's measured error plus the
+    /// reference noise floor (errors closer than the floor are equal).
+    std::string cheapestAtError;
+    double cheapestCost = 0.0;
+    /// chosenCost / cheapestCost (≥ 1; 1 when Auto's choice is on the front).
+    double timeRatio = 1.0;
+    /// The measured best under the budget: least error among candidates within it (the
+    /// cheapest when none is).
+    std::string bestInBudget;
+    double bestError = 0.0;
+    bool choseBest = false;  ///< Auto's choice is bestInBudget
+};
+
+/// For every case in `rows`, plans with `models` on the case's features (only candidates that
+/// were measured on that case take part) under a budget of `budgetRatio` × the Direct frame,
+/// then judges the choice by the measured rows. Rows of candidates without a model are left
+/// out. @throw ValueError if budgetRatio ≤ 0.
+std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
+                                          const Models& models, double budgetRatio);
 
 /// The planner's candidates for `models` (costRatio and error bound to the models; `unusable`
 /// left empty: the caller knows what the scene and backend allow).
