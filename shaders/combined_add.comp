@@ -1,9 +1,9 @@
 #version 450 core
 // SPDX-License-Identifier: MIT
 // Combined subsurface mode (docs/methods/combined.md), the last pass of
-// lucent::combined::CombinedSubsurfaceProvider: the SSLPV term (Borlum et al. 2011, seed 000,
+// lucent::combined::CombinedSubsurfaceProvider: the SSLPV term (Borlum et al. 2011, Børlum et al. 2011,
 // Eq. 4/7) is already in the target, the windowed image-space dipole term (Mertens et al. 2005,
-// seed 004, Eq. 3 restricted to r <= r_s) is in u_addend. Steps split: target += addend.
+// Mertens et al. 2005, Eq. 3 restricted to r <= r_s) is in u_addend. Steps split: target += addend.
 // Kernel split: SSLPV's own local part is removed as well,
 //   L(x_o) = max(0, L_sslpv + L_dipole,r<=r_s - min(Lhat, f L_sslpv)),
 //   Lhat = F_t(eta, w_o)/pi B_near,  f = B_near / (B_near + B_far),

@@ -1,6 +1,6 @@
 #version 450 core
 // SPDX-License-Identifier: MIT
-// Image-space dipole gather (Mertens et al. 2005, seed 004 §4–6), GLSL port of
+// Image-space dipole gather (Mertens et al. 2005 §4–6), GLSL port of
 // engine/src/dipole/ImageSpace.cpp (same samples, same weights; float arithmetic).
 // One invocation per pixel: tangent-plane importance samples of R_d(r)·r per channel (exact
 // sampling, §4) + uniform disc samples, combined by the multi-sample balance heuristic (§6.1),

@@ -1,6 +1,6 @@
 #version 450 core
 // SPDX-License-Identifier: MIT
-// Irradiance pass of the GPU image-space dipole (dipole::DipoleSubsurfaceProvider; seed 004 §5):
+// Irradiance pass of the GPU image-space dipole (dipole::DipoleSubsurfaceProvider; Mertens et al. 2005 §5):
 // per covered G-buffer pixel, the Fresnel-transmitted irradiance of Eq. 5,
 //   E = Σ_lights F_t(η, cos θ_i) · E⊥ · cos θ_i · V,   F_t = 1 − F_r,
 // with E⊥ and V exactly as the renderer's shading pass (common/lighting.glsl, common/shadow.glsl),
@@ -10,7 +10,7 @@
 // channel's virtual source, as the CPU gather's PixelMaterial), so the per-frame gather does not
 // repeat the three Newton solves. Outputs (GL rows, bottom first): E (W/mm²), σt and σs′ (mm⁻¹),
 // R′ (mm) in the σs′ image's alpha.
-// LIGHT_VIEW 1 (the light views of seed 004 §7.1, docs/methods/dipole.md §3d): E only. The
+// LIGHT_VIEW 1 (the light views of Mertens et al. 2005 §7.1, docs/methods/dipole.md §3d): E only. The
 // gather takes the profile from x_o's material, so a light view needs neither the material
 // nor R′ (three Newton solves per texel); a separate program, not a uniform branch (llvmpipe
 // runs both sides of a branch under its execution mask).

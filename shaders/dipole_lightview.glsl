@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Irradiance images ("views") of the image-space dipole: the camera's (view 0) and the light
-// views of seed 004 §7.1 (views 1..). GLSL mirror of the view helpers of
+// views of Mertens et al. 2005 §7.1 (views 1..). GLSL mirror of the view helpers of
 // engine/src/dipole/ImageSpace.cpp (lookUp, areaJacobian, pixelFootprint, visibleIn,
 // tangentPlanePoint); docs/methods/dipole.md §3d.
 //
@@ -42,7 +42,7 @@ struct ViewHit {
 };
 
 // The covered texel of view v behind pPlane; the view's ray through pPlane meets that texel's
-// tangent plane ("location p_i on the surface from the depth texture", seed 004 §6.2).
+// tangent plane ("location p_i on the surface from the depth texture", Mertens et al. 2005 §6.2).
 bool lookUp(int v, vec3 pPlane, out ViewHit h) {
     if (!projectView(v, pPlane, h.pix)) return false;
     vec4 q = viewPosition(v, h.pix);

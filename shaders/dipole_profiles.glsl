@@ -57,7 +57,7 @@ float pdfArea(Profile p, float r) {
 float expm1Safe(float x) { return abs(x) < 1e-3 ? x * (1.0 + x * (0.5 + x / 6.0)) : exp(x) - 1.0; }
 float log1pSafe(float x) { return abs(x) < 1e-3 ? x * (1.0 - x * (0.5 - x / 3.0)) : log(1.0 + x); }
 
-// σz(u − 1) + log u + log(1 − ξ) = 0 in v = log u: bracketed Newton (seed 004 §4).
+// σz(u − 1) + log u + log(1 − ξ) = 0 in v = log u: bracketed Newton (Mertens et al. 2005 §4).
 float solveLogU(float c, float xi) {
     float L = -log1pSafe(-min(xi, 0.99999994));
     if (L <= 0.0) return 0.0;
@@ -143,7 +143,7 @@ float dirpoleSd(Dirpole d, vec3 xi, vec3 ni, vec3 w12, vec3 xo, vec3 no) {
     return (v > 0.0 && !isinf(v)) ? v : 0.0;  // clamp as the paper's §6.1 (NaN fails v > 0)
 }
 
-// P(radius ≤ r) of one source, 1 − (z/d)e^{−σ(d − z)} (seed 004 Eq. 6–7; Sampling.cpp).
+// P(radius ≤ r) of one source, 1 − (z/d)e^{−σ(d − z)} (Mertens et al. 2005 Eq. 6–7; Sampling.cpp).
 float sourceRadiusCdf(float sigma, float z, float r) {
     float d = sqrt(r * r + z * z);
     return 1.0 - (z / d) * exp(-sigma * (d - z));

@@ -1,7 +1,7 @@
 #version 450 core
 // SPDX-License-Identifier: MIT
 // Progressive image-space dipole gather of dipole::DipoleSubsurfaceProvider (Mertens et al.
-// 2005, seed 004 §4–6): the estimator of dipole_gather.comp / engine/src/dipole/ImageSpace.cpp
+// 2005, Mertens et al. 2005 §4–6): the estimator of dipole_gather.comp / engine/src/dipole/ImageSpace.cpp
 // (importance samples of R_d(r)·r per channel + uniform disc samples, multi-sample balance
 // heuristic §6.1, Eq. 9 Jacobian, interleaved Cranley–Patterson shifts), reading the renderer's
 // G-buffer and the irradiance pass's images (GL rows, bottom first; the interleave cell and the
@@ -13,11 +13,11 @@
 // equal however many frames are averaged and the converged image keeps a k×k-periodic error
 // pattern (the "waffle" of issue 17, docs/methods/dipole.md §3c).
 // Convergence statistics: atomic max of |B̄_N − B̄_{N−1}| and of B̄_N over pixels and channels.
-// Light views (seed 004 §7.1): the camera and the gathered light views split the pixel's sample
+// Light views (Mertens et al. 2005 §7.1): the camera and the gathered light views split the pixel's sample
 // budget (viewSamples) and are combined by the balance heuristic with sample counts in
 // surface-area measure (dipole_lightview.glsl; docs/methods/dipole.md §3d); maxRadius > 0
 // truncates the camera's samplers to the local window, a light view's are truncated to the disc
-// A′ (r′ ≤ R′, seed 004 §5: the issue-6 firefly fix, as ImageSpace.cpp).
+// A′ (r′ ≤ R′, Mertens et al. 2005 §5: the issue-6 firefly fix, as ImageSpace.cpp).
 // MULTI_VIEW 0 (a second program of the provider, used when no light view is gathered): the
 // camera gather alone, without the code of the view combination: on llvmpipe that code slowed
 // even the camera-only loop ≈ 2× (23 → 12 ms per frame on the back-lit scene at 256×192; a
@@ -44,7 +44,7 @@ layout(rgba32f, binding = 1) writeonly uniform image2D u_target;  // renderer's 
 layout(std430, binding = 0) readonly buffer ShiftBlock { vec4 b_shift[]; };  // 2 per cell
 layout(std430, binding = 1) buffer StatsBlock { uint b_maxChange; uint b_maxMean; };
 
-// Light views (seed 004 §7.1), one array layer per light; b_views lists the gathered ones.
+// Light views (Mertens et al. 2005 §7.1), one array layer per light; b_views lists the gathered ones.
 layout(binding = 5) uniform sampler2DArray u_lvPosition;    // xyz mm, a covered
 layout(binding = 6) uniform sampler2DArray u_lvNormal;      // outward unit normal
 layout(binding = 7) uniform sampler2DArray u_lvIrradiance;  // E (W/mm²), all lights, shadowed
@@ -95,7 +95,7 @@ uniform int u_previewInAccum;  // RESOLVE_ONLY: u_accum holds a preview (one fra
 const float PI = 3.14159265358979;
 
 // Views (dipole_lightview.glsl): 0 the camera (G-buffer + the irradiance pass's E), 1.. the
-// light views gathered (seed 004 §7.1; layers of the u_lv* arrays, descriptors in b_views).
+// light views gathered (Mertens et al. 2005 §7.1; layers of the u_lv* arrays, descriptors in b_views).
 mat4 viewClip(int v) { return v == 0 ? u_clipFromWorld : b_views[v - 1].clipFromWorld; }
 bool viewOrtho(int v) { return v == 0 ? u_ortho != 0 : b_views[v - 1].eyeOrtho.w > 0.5; }
 vec3 viewEye(int v) { return v == 0 ? u_eye : b_views[v - 1].eyeOrtho.xyz; }
@@ -176,9 +176,9 @@ ivec2 viewSamples(int nImp, int nUni, int views, int v) {
 }
 
 // Multi-sample balance heuristic over the techniques of view v with `counts` samples
-// (Veach 1997 Eq. 9.13; seed 004 §6.1): Σ_t n_t p_t at tangent-plane radius r′, the importance
+// (Veach 1997 Eq. 9.13; Mertens et al. 2005 §6.1): Σ_t n_t p_t at tangent-plane radius r′, the importance
 // samples assigned to the valid channels round robin. The camera's samplers have the window
-// u_maxRadius; a light view's are conditioned on the disc A′ (r′ ≤ g_R, seed 004 §5), as in
+// u_maxRadius; a light view's are conditioned on the disc A′ (r′ ≤ g_R, Mertens et al. 2005 §5), as in
 // ImageSpace.cpp (docs/methods/dipole.md §3d "Light views sample the disc A′").
 float techniquePdf(int v, ivec2 counts, float rPlane) {
     float sum = rPlane <= g_R ? float(counts.y) * g_pUniform : 0.0;
@@ -255,7 +255,7 @@ vec3 gatherExitance(ivec2 xy, vec3 xo, vec3 no) {
             if (!(J > 0.0)) continue;
             float own = techniquePdf(v, counts, rPlane);
             if (!(own > 0.0)) continue;
-            // Balance heuristic across the views' techniques in surface-area measure (seed 004
+            // Balance heuristic across the views' techniques in surface-area measure (Mertens et al. 2005
             // §7.1): w = 1/Σ_j q_j, q_j = Σ_t n_jt p_t(r′_j)/J_j over the views j in which hit.p
             // is visible (q_v = own/J); one view: J/Σ_t n_t p_t. The MULTI_VIEW 0 program has
             // no code for the other views (see the top of the file).

@@ -1,6 +1,6 @@
 #version 450 core
 // SPDX-License-Identifier: MIT
-// Combination pass of dipole::DirpoleSubsurfaceProvider (seed 001 §4.1 step 3): every camera
+// Combination pass of dipole::DirpoleSubsurfaceProvider (the dirpole thesis §4.1 step 3): every camera
 // pixel x_o of the object averages the cube faces that see it,
 //   L(x_o) = T₂₁(ω_o) · Σ_f V_f C̄^f(x_proj^f) / Σ_f V_f,
 // C̄^f the running mean (rgb / sample count a of the gather pass's accumulator; a face texel
@@ -52,7 +52,7 @@ void main() {
     }
     vec3 xo = pos.xyz;
     vec3 no = normalize(normalId.xyz);
-    vec3 xc = xo - u_intrusion * no;  // seed 001 §4.3.2
+    vec3 xc = xo - u_intrusion * no;  // the dirpole thesis §4.3.2
     vec3 sum = vec3(0.0);
     int visible = 0;
     for (int f = 0; f < 6; ++f) {

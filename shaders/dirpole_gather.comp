@@ -1,14 +1,14 @@
 #version 450 core
 // SPDX-License-Identifier: MIT
-// Gather pass of dipole::DirpoleSubsurfaceProvider (seed 001 §4.1 step 2, "render to cubemap"):
+// Gather pass of dipole::DirpoleSubsurfaceProvider (the dirpole thesis §4.1 step 2, "render to cubemap"):
 // for every cube-face fragment x_o (normal n_o) and light, k new disc samples around x_o in the
 // light's view add to a running sum (one layer per face)
-//   C^f(x_o) += Σ_i E⊥(x_i) T₁₂(ω_i) S_d(x_i, ω₁₂; x_o) ΔA⊥_i          (seed 001 §4.1, C^f)
+//   C^f(x_o) += Σ_i E⊥(x_i) T₁₂(ω_i) S_d(x_i, ω₁₂; x_o) ΔA⊥_i          (the dirpole thesis §4.1, C^f)
 // where x_i, n_i are the light G-buffer texel the sample falls in, ω₁₂ the refracted light
 // direction (Snell), T₁₂ = 1 − F_r (Fresnel), S_d the Frisvad et al. 2014 directional dipole
 // and ΔA⊥_i = 1/(k·p(r)) the light-plane area a sample stands for: the disc is importance-
-// sampled with the better dipole's exact sampler per channel (seed 004 §4; multi-sample balance
-// heuristic over the channels, as the CPU DirectionalDipoleRenderer) instead of seed 001's
+// sampled with the better dipole's exact sampler per channel (Mertens et al. 2005 §4; multi-sample balance
+// heuristic over the channels, as the CPU DirectionalDipoleRenderer) instead of the dirpole thesis's
 // uniform disc, because S_d falls off over a few diffusion lengths while a uniform disc must
 // reach the far tail. Point/spot lights: the flux crossing the disc plane (normal along the ray
 // to x′_o) is I(ω)cosθ_p/ρ_p² per unit plane area (inverse-square law), which the same
@@ -96,7 +96,7 @@ vec3 gatherLight(int l, vec3 xo, vec3 no, Dirpole dd[3], Profile prof[3], int ch
     vec3 wl, unusedE;
     float unusedD;
     lightIncidence(light, xo, wl, unusedE, unusedD);  // ω_l: unit, toward the light
-    vec3 xs = xo - shrink * (no - wl * dot(wl, no));  // seed 001 §4.3.1
+    vec3 xs = xo - shrink * (no - wl * dot(wl, no));  // the dirpole thesis §4.3.1
     // Disc plane through x′_o, perpendicular to the light ray (Duff et al. 2017 basis).
     vec3 pn = directional ? -wl : normalize(xs - light.positionType.xyz);
     float sgn = pn.z >= 0.0 ? 1.0 : -1.0;

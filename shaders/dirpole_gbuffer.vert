@@ -1,6 +1,6 @@
 #version 450 core
 // SPDX-License-Identifier: MIT
-// Light-view and cube-face G-buffers of dipole::DirpoleSubsurfaceProvider (seed 001 §4.1, steps
+// Light-view and cube-face G-buffers of dipole::DirpoleSubsurfaceProvider (the dirpole thesis §4.1, steps
 // 1 and 2), vertex stage: world-space (mm) position and normal of the object.
 
 layout(location = 0) in vec3 a_position;

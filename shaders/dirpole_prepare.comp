@@ -2,7 +2,7 @@
 // SPDX-License-Identifier: MIT
 // Prepare pass of dipole::DirpoleSubsurfaceProvider, before each gather (docs/methods/dipole.md
 // §7, "Latency"): a face texel's running sum C^f(x_o) depends on the material only through σt,
-// σs′ just inside x_o (the gather builds S_d and the samplers from x_o's material, seed 001 §4.1
+// σs′ just inside x_o (the gather builds S_d and the samplers from x_o's material, the dirpole thesis §4.1
 // step 2), so a texel whose material differs from the one its sum was computed for restarts
 // (sum and count 0) and stores the new material; every other texel keeps its sum. The gather
 // then reads the stored material instead of looking it up again.

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: MIT
 /// @file
-/// @brief Image-space dipole gather on the CPU (seed 004 §5–6): time at 640×360 and 1280×720 for
-/// 8…256 samples per pixel on a lit sphere, against two baselines measured in the same run: the
-/// camera-view irradiance pass (one primary + one shadow ray per pixel, Embree) and a single
-/// R_d evaluation per pixel-sample (the arithmetic floor of the gather). Variants: camera image
-/// only, camera + light views (shared budget, as the renderer gathers), the combined mode's
+/// @brief Image-space dipole gather on the CPU (Mertens et al. 2005 §5–6): time at 640×360 and
+/// 1280×720 for 8…256 samples per pixel on a lit sphere, against two baselines measured in the same
+/// run: the camera-view irradiance pass (one primary + one shadow ray per pixel, Embree) and a
+/// single R_d evaluation per pixel-sample (the arithmetic floor of the gather). Variants: camera
+/// image only, camera + light views (shared budget, as the renderer gathers), the combined mode's
 /// local-radius window, the better dipole; GL compute (camera only). `--light-view-cost`: the
 /// light views' share of a frame (back-lit scene, CPU and GL). Results:
 /// docs/benchmarks.md, "Dipoles".
@@ -119,7 +119,7 @@ void BM_ProfileFloor(benchmark::State& state) {
 
 /// Gather variants (third argument of BM_Gather / BM_GpuGather).
 enum GatherMode : int {
-    CAMERA = 0,       ///< dipole, camera irradiance image only (seed 004 as published)
+    CAMERA = 0,       ///< dipole, camera irradiance image only (Mertens et al. 2005 as published)
     BETTER = 1,       ///< better dipole, camera only
     LIGHT_VIEWS = 2,  ///< dipole, camera + light views sharing the per-pixel budget (§3d)
     WINDOW = 3,       ///< dipole, camera only, r ≤ WINDOW_RADIUS_MM (combined mode's local part)
@@ -307,7 +307,7 @@ double wallMs(F&& f) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/// `bench_dipole --light-view-cost`: cost of gathering the light views (seed 004 §7.1,
+/// `bench_dipole --light-view-cost`: cost of gathering the light views (Mertens et al. 2005 §7.1,
 /// docs/methods/dipole.md §3d) on the back-lit thin/thick scene at 256×192, CPU gather (32 spp)
 /// and GL provider (16 spp per frame), relative to the camera-only gather measured in the same
 /// run. "full set per view" gives every view the whole per-pixel budget (importance and uniform

@@ -28,7 +28,8 @@ void shEvaluate(int order, const Vector3f& w, float* out) {
 }
 
 float clampedCosineZonal(int l) {
-    // ∫ max(0,cos θ) Y_l0 dω: √π/2, √(π/3), √(5π)/8 (seed 003 errata; Ramamoorthi & Hanrahan 2001).
+    // ∫ max(0,cos θ) Y_l0 dω: √π/2, √(π/3), √(5π)/8 (the SSLPV project page errata errata;
+    // Ramamoorthi & Hanrahan 2001).
     switch (l) {
         case 0:
             return 0.886226925452758f;  // √π/2

@@ -152,8 +152,8 @@ struct DipoleSubsurfaceProvider::Impl {
     gpu::GlObject irradiance, sigmaT, sigmaS, accum;
     gpu::GlObject shiftBuffer, statsBuffer, radiusBuffer;
 
-    // Light views (seed 004 §7.1): scratch images of one view, then the gathered views as
-    // layers of three arrays, with their cameras and descriptors (LightViewBlock).
+    // Light views (Mertens et al. 2005 §7.1): scratch images of one view, then the gathered views
+    // as layers of three arrays, with their cameras and descriptors (LightViewBlock).
     gpu::GlProgram lightGbufferProgram, lightStatsProgram;
     /// dipole_irradiance.comp with LIGHT_VIEW=1: E only (no material, no R′).
     gpu::GlProgram lightIrradianceProgram;

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 /// @file
-/// @brief CPU directional-dipole pipeline (seed 001 §4, Frisvad et al. 2014 BSSRDF).
+/// @brief CPU directional-dipole pipeline (the dirpole thesis §4, Frisvad et al. 2014 BSSRDF).
 
 #include <lucent/dipole/DirectionalPipeline.h>
 
@@ -112,7 +112,7 @@ void DirectionalDipoleRenderer::addPass() {
                         dd[size_t(c)] = DirectionalDipole(med.sigma_a, med.sigma_s, med.eta,
                                                           m.energy.scale(alphaP));
                         // Importance function: the better dipole's exact sampler (same D and
-                        // σ_tr as the directional dipole), seed 004 §4.
+                        // σ_tr as the directional dipole), Mertens et al. 2005 §4.
                         samplers[size_t(c)] = DipoleSampler(
                             DipoleProfile::make(Model::BetterDipole, med.sigma_a, med.sigma_s, bd));
                         if (samplers[size_t(c)].isValid() && !dd[size_t(c)].isZero())

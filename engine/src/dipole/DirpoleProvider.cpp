@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 /// @file
-/// @brief GL side of dipole::DirpoleSubsurfaceProvider (seed 001 §4): light-view and cube-face
-/// G-buffers (shaders/dirpole_gbuffer.*), progressive gather (shaders/dirpole_gather.comp) and
-/// the six-face combination (shaders/dirpole_combine.comp).
+/// @brief GL side of dipole::DirpoleSubsurfaceProvider (the dirpole thesis §4): light-view and
+/// cube-face G-buffers (shaders/dirpole_gbuffer.*), progressive gather
+/// (shaders/dirpole_gather.comp) and the six-face combination (shaders/dirpole_combine.comp).
 
 #include <lucent/dipole/DirpoleProvider.h>
 
@@ -273,7 +273,8 @@ struct DirpoleSubsurfaceProvider::Impl {
         for (size_t l = 0; l < ls.size(); ++l) {
             const int type = int(ls[l].positionType.w + 0.5f);
             if (type == LUCENT_LIGHT_DIRECTIONAL) {
-                // Orthographic, covering the object's bounding sphere (seed 001 §4.1 step 1).
+                // Orthographic, covering the object's bounding sphere (the dirpole thesis §4.1 step
+                // 1).
                 const Vector3f dir = glm::normalize(Vector3f(ls[l].directionCosOuter));
                 const Mat4f view = glm::lookAt(c - dir * (2.f * R), c, upFor(dir));
                 lightClip[l] = glm::ortho(-R, R, -R, R, 0.5f * R, 3.5f * R) * view;
@@ -630,7 +631,7 @@ void DirpoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsi
     if (r.volume.syncForFrame(r.stats))
         r.markRestart();
     // Lights (the renderer's SSBO, 64 bytes each) and the rasterised meshes' uploads. The
-    // camera is not compared: the cube faces do not depend on it (seed 001 §4.1).
+    // camera is not compared: the cube faces do not depend on it (the dirpole thesis §4.1).
     const int lightCount = std::clamp(g.lightBuffer ? g.lightCount : 0, 0, LUCENT_MAX_LIGHTS);
     std::vector<unsigned char> lightBytes(size_t(lightCount) * sizeof(gpu::shared::GpuLight));
     if (!lightBytes.empty())

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 /// @file
-/// @brief CPU image-space dipole integration (seed 004 §5–7).
+/// @brief CPU image-space dipole integration (Mertens et al. 2005 §5–7).
 
 #include <lucent/dipole/ImageSpace.h>
 
@@ -30,8 +30,8 @@ struct PixelMaterial {
     bool valid = false;
     std::array<DipoleProfile, 3> profile;
     std::array<DipoleSampler, 3> sampler;
-    /// The light views' samplers: conditioned on the disc A′ (r′ ≤ discRadius, seed 004 §5;
-    /// docs/methods/dipole.md §3d "Light views sample the disc A′").
+    /// The light views' samplers: conditioned on the disc A′ (r′ ≤ discRadius, Mertens et al. 2005
+    /// §5; docs/methods/dipole.md §3d "Light views sample the disc A′").
     std::array<DipoleSampler, 3> lightSampler;
     std::array<int, 3> channels{};  // channels whose sampler is valid
     int channelCount = 0;
@@ -63,8 +63,8 @@ struct PixelMaterial {
 
 /// The surface point an irradiance image shows "behind" a point p′: the pixel containing p′'s
 /// projection, with the image's ray through p′ intersected with that pixel's tangent plane
-/// (exact on planar regions; "location p_i on the surface from the depth texture", seed 004
-/// §6.2).
+/// (exact on planar regions; "location p_i on the surface from the depth texture", Mertens et al.
+/// 2005 §6.2).
 struct ImageHit {
     size_t pixel = 0;
     Point3f p{0.f};
@@ -213,7 +213,7 @@ void SurfaceBuffers::validate() const {
 }
 
 std::vector<std::array<float, 5>> interleaveShifts(const GatherSettings& gs) {
-    // Interleaved sampling (Keller & Heidrich 2001, seed 004 §6.1): a k×k table of
+    // Interleaved sampling (Keller & Heidrich 2001, Mertens et al. 2005 §6.1): a k×k table of
     // Cranley–Patterson shifts; pixel (x, y) uses shift (x mod k, y mod k) on one shared set.
     std::vector<std::array<float, 5>> shifts(size_t(gs.interleave) * size_t(gs.interleave));
     Pcg32 rng(gs.seed, 0x5eed);
@@ -385,8 +385,8 @@ GatherResult gatherImageSpace(const SurfaceBuffers& buf, const std::vector<Surfa
                             ++a.perChannel[size_t(pm.channels[size_t(i % pm.channelCount)])];
                     }
                     // Multi-sample balance heuristic over view v's techniques (the channel
-                    // samplers and the disc; Veach 1997 Eq. 9.13, seed 004 §6.1): Σ_t n_t p_t at
-                    // tangent-plane radius r′, with view v's sample counts n_t.
+                    // samplers and the disc; Veach 1997 Eq. 9.13, Mertens et al. 2005 §6.1): Σ_t
+                    // n_t p_t at tangent-plane radius r′, with view v's sample counts n_t.
                     const auto techniquePdf = [&](int v, double rPlane) {
                         const ViewSamples& a = alloc[size_t(v)];
                         double sum = rPlane <= R ? a.uniform * pUniform : 0.0;
@@ -426,9 +426,9 @@ GatherResult gatherImageSpace(const SurfaceBuffers& buf, const std::vector<Surfa
                         if (!(own > 0.0) || !(J > 0.0))
                             return;
                         // Balance heuristic across the views' techniques in surface-area measure
-                        // (seed 004 §7.1; Veach 1997 Eq. 9.13 with sample counts): view j reaches
-                        // hit.p with density q_j = Σ_t n_jt p_t(r′_j)/J_j, r′_j where its ray
-                        // through hit.p meets the tangent plane, if hit.p is visible in view j;
+                        // (Mertens et al. 2005 §7.1; Veach 1997 Eq. 9.13 with sample counts): view
+                        // j reaches hit.p with density q_j = Σ_t n_jt p_t(r′_j)/J_j, r′_j where its
+                        // ray through hit.p meets the tangent plane, if hit.p is visible in view j;
                         // the sample counts f/Σ_j q_j. One view: J/Σ_t n_t p_t (§3).
                         double w = J / own;
                         if (viewCount > 1) {

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 /// @file
-/// @brief Camera-view irradiance pass for the image-space dipole (seed 004 §5–6).
+/// @brief Camera-view irradiance pass for the image-space dipole (Mertens et al. 2005 §5–6).
 
 #include <lucent/dipole/IrradiancePass.h>
 

@@ -202,8 +202,8 @@ double DipoleProfile::Rd(double r) const {
     const double dr = std::sqrt(r2 + m_zr * m_zr), dv = std::sqrt(r2 + m_zv * m_zv);
     const double s = m_sigmaTr;
     const double er = std::exp(-s * dr), ev = std::exp(-s * dv);
-    // Flux term, seed 004 Table 1 (z_v enters with + because the virtual source is negative
-    // and sits above the surface). (1 + σd)e^{−σd} is written as e^{−σd} + σd·e^{−σd} so
+    // Flux term, Mertens et al. 2005 Table 1 (z_v enters with + because the virtual source is
+    // negative and sits above the surface). (1 + σd)e^{−σd} is written as e^{−σd} + σd·e^{−σd} so
     // that σd → ∞ gives 0, not ∞·0.
     const auto decay = [](double x, double e) { return e > 0.0 ? e + x * e : 0.0; };
     const double flux =

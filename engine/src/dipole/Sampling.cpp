@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 /// @file
-/// @brief Exact importance sampling of the dipole profile (seed 004 §4).
+/// @brief Exact importance sampling of the dipole profile (Mertens et al. 2005 §4).
 
 #include <lucent/dipole/Sampling.h>
 
@@ -63,7 +63,7 @@ double sampleSourceRadius(double sigma, double z, double xi) {
 
 double sourceRadiusCdf(double sigma, double z, double r) {
     const double d = std::sqrt(r * r + z * z);
-    // ∫_z^d (1+σt)e^{−σt}/t² dt / (e^{−σz}/z) = 1 − (z/d)e^{−σ(d−z)} (seed 004 Eq. 6–7).
+    // ∫_z^d (1+σt)e^{−σt}/t² dt / (e^{−σz}/z) = 1 − (z/d)e^{−σ(d−z)} (Mertens et al. 2005 Eq. 6–7).
     return 1.0 - (z / d) * std::exp(-sigma * (d - z));
 }
 
@@ -85,8 +85,8 @@ DipoleSampler DipoleSampler::truncated(double maxRadius) const {
     t.m_pRealKept = m_pReal;
     if (!isValid() || !(maxRadius > 0.0) || !std::isfinite(maxRadius))
         return t;
-    // Conditioning the two-source mixture of seed 004 §4 on r ≤ R: with F_s(R) of Eq. 6–7,
-    // P(s | r ≤ R) = P(s)F_s(R)/F(R) and r | s has the cdf F_s(r)/F_s(R) on [0, R].
+    // Conditioning the two-source mixture of Mertens et al. 2005 §4 on r ≤ R: with F_s(R) of Eq.
+    // 6–7, P(s | r ≤ R) = P(s)F_s(R)/F(R) and r | s has the cdf F_s(r)/F_s(R) on [0, R].
     t.m_maxRadius = maxRadius;
     t.m_cdfReal = sourceRadiusCdf(m_sigma, m_zr, maxRadius);
     t.m_cdfVirtual = sourceRadiusCdf(m_sigma, m_zv, maxRadius);

@@ -162,7 +162,7 @@ TEST(CombinedSplit, ThickSlabStepsSplitDropsNothingFarAndDoubleCountsTheOverlap)
         const dipole::ScalarMedium med = dipole::fromReduced(1.f, albedo, eta);
         const dipole::DipoleProfile prof = dipole::DipoleProfile::make(dipole::Model::Dipole, med);
         // Dipole L/E (without T(ω_o), like the kernel): F_t(0)·∫R_d dA/π (Jensen 2001 Eq. 4
-        // integrated, seed 004 Table 1); the window integral by Simpson in r = R u².
+        // integrated, Mertens et al. 2005 Table 1); the window integral by Simpson in r = R u².
         const auto windowed = [&](double R) {
             return ft0 * dipole::testutil::radialIntegral(prof, R) / PI_D;
         };
@@ -388,14 +388,14 @@ TEST(CombinedCpu, KernelSplitOnFrontLitSlabMatchesItsBookkeeping) {
 
 // Issue 6: at η = 1 the Kernel split lost 20–50 % of the light (docs/evaluation.md, presets × η).
 // The flat half-space kernel R_lpv overstates what SSLPV deposits on the voxelised sphere, and at
-// η = 1 (calibrated exit gain G/η², seed 000 Eq. 7 as calibrated in docs/methods/sslpv.md) its
-// absolute local integral exceeds the dipole's by 36 % for marble: the old subtraction
-// F_t/π ∫_{≤r_s} R_lpv E dA removed more than SSLPV's whole image held. The split must keep
-// its two limits: SSLPV's subtracted part is a share of SSLPV's own radiance (0 ≤ f·L_sslpv ≤
-// L_sslpv per pixel), and the total is the splice of the two parts' energies,
+// η = 1 (calibrated exit gain G/η², Børlum et al. 2011 Eq. 7 as calibrated in
+// docs/methods/sslpv.md) its absolute local integral exceeds the dipole's by 36 % for marble: the
+// old subtraction F_t/π ∫_{≤r_s} R_lpv E dA removed more than SSLPV's whole image held. The split
+// must keep its two limits: SSLPV's subtracted part is a share of SSLPV's own radiance (0 ≤
+// f·L_sslpv ≤ L_sslpv per pixel), and the total is the splice of the two parts' energies,
 //   Σ L ≥ (f_D + 1 − f_S) · min(Σ L_dipole, Σ L_sslpv),
-// f_D = ∫_{≤r_s} R_d / ∫ R_d (Jensen 2001 Eq. 4 via seed 004 Table 1) and f_S the kernel's near
-// fraction, less the gathers' Monte Carlo error.
+// f_D = ∫_{≤r_s} R_d / ∫ R_d (Jensen 2001 Eq. 4 via Mertens et al. 2005 Table 1) and f_S the
+// kernel's near fraction, less the gathers' Monte Carlo error.
 TEST(CombinedCpu, KernelSplitKeepsThePartsEnergyAtEtaOne) {
     Scene s = litSphere();
     s.eta = 1.f;

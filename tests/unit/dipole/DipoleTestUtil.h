@@ -216,7 +216,8 @@ protected:
 /// the eye ray through p′ meets it at p′ (r = r′); the old fallback took the pixel's point,
 /// r = 0, and weighted R_d(0) over the whole strip. One covered pixel (1×1 image, orthographic,
 /// plane z = 0, material rgbMaterial-like, uniform E = 1): the estimator's expectation is exactly
-///   B = ∫_{|x| ≤ h/2, |y| ≤ h/(2 cos α), r ≤ window} R_d(r) dA   (seed 004 Eq. 4, J = 1).
+///   B = ∫_{|x| ≤ h/2, |y| ≤ h/(2 cos α), r ≤ window} R_d(r) dA   (Mertens et al. 2005 Eq. 4, J =
+///   1).
 struct GrazingPixel {
     static constexpr float H = 0.1f, COS_A = 0.05f, WINDOW = 1.5f;  // mm, -, mm
 

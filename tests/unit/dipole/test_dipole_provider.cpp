@@ -209,7 +209,7 @@ TEST_F(ProviderFixture, FirstFrameMatchesCpuGatherOnALitSphere) {
             }
         ASSERT_GT(lit, 1000);
         // With the light views the GPU gathered (the side light reaches points near the
-        // silhouette the camera does not see: its view is gathered, seed 004 §7.1).
+        // silhouette the camera does not see: its view is gathered, Mertens et al. 2005 §7.1).
         const std::vector<SurfaceBuffers> views = provider.debugLightViews();
         std::printf("%s: %d light view(s) gathered, back-lit fraction %.3g\n", modelName(model),
                     provider.stats().lightViewsGathered,
@@ -300,7 +300,7 @@ TEST_F(ProviderFixture, MaskHoleUnderTheSurfaceStillFindsTheMaterial) {
 }
 
 // Centre of a large slab under normal incidence: E = F_t(0)·I uniform, so B = E·ρ with ρ the
-// total diffuse reflectance (closed form), and L = F_t(0)² ρ I/π (seed 004 Eq. 3–5). The
+// total diffuse reflectance (closed form), and L = F_t(0)² ρ I/π (Mertens et al. 2005 Eq. 3–5). The
 // progressive mean must match within its Monte Carlo standard error, and the per-pixel RMS error
 // must fall as 1/√frames.
 TEST_F(ProviderFixture, SlabCentreMatchesClosedFormAndConvergesAsInverseSqrtFrames) {
@@ -845,12 +845,12 @@ static ProviderSettings minimalSettings(const Scene& s) {
 // sphere's hidden side at r = 9.2 mm, with p(r′) = 2.3e-7 mm⁻² and no other technique there
 // (neither the camera nor the light view's disc samples reach it): w = J/p = 2.4e7. The CPU
 // gather on the same buffers gave the same value (the estimator, not float). Light views now
-// sample the disc A′ (r′ ≤ R′, seed 004 §5; docs/methods/dipole.md §3d).
+// sample the disc A′ (r′ ≤ R′, Mertens et al. 2005 §5; docs/methods/dipole.md §3d).
 //
 // Bound: a sample whose surface point lies where the tangent plane puts it (r = r′) contributes
 // R_d,c(r)·E·w ≤ R_d,c(r)·E·J/(n_c p_c(r)) = ρ_c E J/n_c (the channel sampler is exact for the
-// Jensen profile, R_d,c/p_c = ρ_c, seed 004 §4; balance heuristic w ≤ J/(n_c p_c)), so one
-// frame of N samples gives B_c ≤ N·J_max·ρ_c·E_max/n_c, n_c the fewest importance samples a
+// Jensen profile, R_d,c/p_c = ρ_c, Mertens et al. 2005 §4; balance heuristic w ≤ J/(n_c p_c)), so
+// one frame of N samples gives B_c ≤ N·J_max·ρ_c·E_max/n_c, n_c the fewest importance samples a
 // view gives channel c. The old frame exceeds it 6.7×; the fixed one stays 50× below it.
 TEST_F(ProviderFixture, LightViewsAddNoFireflyOnTheTerminator) {
     Scene s = minimalScene("skin1", 128);

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 /// @file
-/// @brief dipole::DirpoleSubsurfaceProvider (GPU directional-dipole pipeline, seed 001 §4)
-/// through gpu::SceneRenderer on a headless context (every GL test skips cleanly without EGL):
+/// @brief dipole::DirpoleSubsurfaceProvider (GPU directional-dipole pipeline, the dirpole thesis
+/// §4) through gpu::SceneRenderer on a headless context (every GL test skips cleanly without EGL):
 /// parity with the CPU DirectionalDipoleRenderer, progressive convergence, resets, point lights,
 /// settings validation, no GL errors, no NaN.
 
@@ -358,7 +358,7 @@ TEST_F(DirpoleFixture, ConvergesProgressivelyAndResets) {
 
 // The §4.3 fixes are live switches: without the world-space shadow bias (ε_b) the intruded
 // lookup point x_o − ε_c n_o lies behind the stored depth of every face that sees it, so the
-// combination finds no visible face and most pixels go black (seed 001 Fig. 4.6 a/b).
+// combination finds no visible face and most pixels go black (the dirpole thesis Fig. 4.6 a/b).
 TEST_F(DirpoleFixture, ShadowBiasSwitchRemovesVisibilityFailures) {
     const Scene s = pointLitSphere();
     DirpoleSettings ds = smallMaps(4, 1);

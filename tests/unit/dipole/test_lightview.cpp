@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Light-view irradiance images for the image-space dipole (seed 004 §7.1): the balance
+// Light-view irradiance images for the image-space dipole (Mertens et al. 2005 §7.1): the balance
 // heuristic over the camera and light images, "through" transport of thin parts, the skip
 // criterion and the scene-level pass (buildLightViewBuffers / renderImageSpaceDipole).
 #include <lucent/core/Error.h>

@@ -32,7 +32,8 @@ constexpr int shIndex(int l, int m) {
 void shEvaluate(int order, const Vector3f& w, float* out);
 
 /// Zonal coefficient of the clamped cosine max(0, cos θ) in band l (l ≤ 2), orthonormal basis.
-/// Band 0: √π/2, band 1: √(π/3), band 2: √(5π)/8 (SSLPV errata, seed 003; Ramamoorthi-Hanrahan).
+/// Band 0: √π/2, band 1: √(π/3), band 2: √(5π)/8 (SSLPV errata, the SSLPV project page errata;
+/// Ramamoorthi-Hanrahan).
 float clampedCosineZonal(int l);
 
 /// Henyey–Greenstein phase function moment for band l: its Legendre coefficient is g^l.

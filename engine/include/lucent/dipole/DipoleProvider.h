@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief The image-space dipole (Mertens et al. 2005, seed 004) as a gpu::SubsurfaceProvider:
+/// @brief The image-space dipole (Mertens et al. 2005) as a gpu::SubsurfaceProvider:
 /// live, progressive subsurface radiance for gpu::SceneRenderer (CLI and Qt preview).
 ///
 /// Per frame, with the renderer's context current:
 ///  1. (after a reset only) irradiance pass: per covered G-buffer pixel, the Fresnel-transmitted
-///     irradiance E = Σ_lights F_t(η, cos θ_i) E⊥ cos θ_i V (seed 004 Eq. 5; V from the
+///     irradiance E = Σ_lights F_t(η, cos θ_i) E⊥ cos θ_i V (Mertens et al. 2005 Eq. 5; V from the
 ///     renderer's shadow maps) and the painted material just inside the surface (the volume is a
 ///     3-D texture, re-uploaded brick by brick); then the light views (§7.1: the object
 ///     rasterised from each light and its E, kept while meshes, lights and shadow maps are
@@ -67,8 +67,8 @@ struct ProviderSettings {
     /// SceneRenderer mesh id (addMesh's return) the material belongs to: other meshes (a ground
     /// plane) get no subsurface term and lend no irradiance to the gather. −1: every mesh.
     int meshId = -1;
-    /// Light-view irradiance images (seed 004 §7.1, docs/methods/dipole.md §3d): after a reset,
-    /// the object is rasterised from each light (lightViewCamera()), its E computed like the
+    /// Light-view irradiance images (Mertens et al. 2005 §7.1, docs/methods/dipole.md §3d): after a
+    /// reset, the object is rasterised from each light (lightViewCamera()), its E computed like the
     /// camera's, and the view is gathered with the camera's (balance heuristic; the views share
     /// samplesPerFrame, viewSamples()) when its back-lit flux fraction exceeds
     /// lightViewThreshold; false: the camera image only.

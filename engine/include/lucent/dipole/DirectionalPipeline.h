@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief CPU version of the directional-dipole pipeline (seed 001 §4): for every pixel the
-/// camera sees (x_o), points are sampled in the light's view around x_o (shrunk towards the
-/// inside, seed 001 §4.3.1) — importance-sampled with the better dipole's exact sampler (seed 004
-/// §4) instead of seed 001's uniform disc — and the directional dipole S_d(x_i, ω₁₂; x_o)
-/// (Frisvad et al. 2014) is accumulated over the lit points x_i; passes accumulate progressively
-/// while the scene is static. The light-view G-buffer of the GPU method is replaced on the CPU by
-/// one Embree ray per sample (an exact "G-buffer" at infinite resolution).
+/// @brief CPU version of the directional-dipole pipeline (the dirpole thesis §4): for every pixel
+/// the camera sees (x_o), points are sampled in the light's view around x_o (shrunk towards the
+/// inside, the dirpole thesis §4.3.1) — importance-sampled with the better dipole's exact sampler
+/// (Mertens et al. 2005 §4) instead of the dirpole thesis's uniform disc — and the directional
+/// dipole S_d(x_i, ω₁₂; x_o) (Frisvad et al. 2014) is accumulated over the lit points x_i; passes
+/// accumulate progressively while the scene is static. The light-view G-buffer of the GPU method is
+/// replaced on the CPU by one Embree ray per sample (an exact "G-buffer" at infinite resolution).
 ///
 ///     DirectionalDipoleRenderer r(scene);         // directional lights only
 ///     for (int i = 0; i < 8; ++i) r.addPass();     // progressive refinement
@@ -24,7 +24,7 @@ namespace lucent::dipole {
 struct DirectionalSettings {
     int samplesPerPass = 16;     ///< disc samples per pixel and light per pass, ≥ 1
     float discQuantile = 0.99f;  ///< disc radius: this quantile of the widest channel's profile
-    float shrink = 0.05f;        ///< ε_g of seed 001 §4.3.1, mm
+    float shrink = 0.05f;        ///< ε_g of the dirpole thesis §4.3.1, mm
     uint32_t seed = 1;
     /// Scale S_d per channel by DirpoleEnergyTable::scale(α′) so that its normal-incidence
     /// total equals the better dipole's ρ(α′, η) (docs/methods/dipole.md §1); false: the

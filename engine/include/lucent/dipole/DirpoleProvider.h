@@ -1,11 +1,12 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief The GPU directional-dipole pipeline of seed 001 §4 (Frisvad et al. 2014 BSSRDF) as a
-/// gpu::SubsurfaceProvider: live, progressive subsurface radiance for gpu::SceneRenderer.
+/// @brief The GPU directional-dipole pipeline of the dirpole thesis §4 (Frisvad et al. 2014 BSSRDF)
+/// as a gpu::SubsurfaceProvider: live, progressive subsurface radiance for gpu::SceneRenderer.
 ///
 /// Passes (context current; docs/methods/dipole.md, "GPU directional-dipole pipeline"):
-///  1. light-view G-buffer per light (after a reset only; seed 001 §4.1 step 1): world positions
+///  1. light-view G-buffer per light (after a reset only; the dirpole thesis §4.1 step 1): world
+///  positions
 ///     and normals of the object seen from the light (directional: orthographic over the
 ///     object's bounding sphere; point/spot: perspective from the light);
 ///  2. cube-face G-buffers (after a reset only; §4.1 step 2): the object rasterised by six
@@ -118,7 +119,7 @@ struct DirpoleStats {
     int maxSamples = 0;        ///< most samples of any covered texel after the last frame
 };
 
-/// gpu::SubsurfaceProvider running seed 001 §4 on the GPU, progressively. Create/destroy
+/// gpu::SubsurfaceProvider running the dirpole thesis §4 on the GPU, progressively. Create/destroy
 /// explicitly with a current GL 4.5 context (the renderer's).
 class DirpoleSubsurfaceProvider final : public MaterialSubsurfaceProvider {
 public:

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief Image-space integration of the dipole BSSRDF on the CPU (Mertens et al. 2005, seed 004
+/// @brief Image-space integration of the dipole BSSRDF on the CPU (Mertens et al. 2005
 /// §5–7): for each visible surface point x_o, importance samples of R_d(r)·r (§4) and uniform
 /// disc samples are placed on the tangent plane of x_o, projected into the camera's irradiance
 /// image, and combined with the balance heuristic (§6.1); per-pixel Cranley–Patterson shifts from
@@ -29,8 +29,8 @@
 namespace lucent::dipole {
 
 /// What the camera sees, one entry per pixel (row 0 = top row), as produced by the irradiance
-/// pass: the visible surface point, its normal, the Fresnel-transmitted irradiance E (seed 004
-/// Eq. 5) and the painted material there.
+/// pass: the visible surface point, its normal, the Fresnel-transmitted irradiance E (Mertens et
+/// al. 2005 Eq. 5) and the painted material there.
 struct SurfaceBuffers {
     int width = 0;
     int height = 0;
@@ -123,8 +123,8 @@ GatherResult gatherImageSpace(const SurfaceBuffers& buffers, const GatherSetting
 double backlitFluxFraction(const SurfaceBuffers& camera, const SurfaceBuffers& lightView,
                            const GatherSettings& settings);
 
-/// The gather over several irradiance images (seed 004 §7.1): for each camera pixel x_o the
-/// per-pixel sample budget is split over the images (the camera's `buffers`, then each of
+/// The gather over several irradiance images (Mertens et al. 2005 §7.1): for each camera pixel x_o
+/// the per-pixel sample budget is split over the images (the camera's `buffers`, then each of
 /// `lightViews`, e.g. from buildLightViewBuffers(); viewSamples()) and the images are combined
 /// with the multi-sample balance heuristic in surface-area measure: a surface point x reached
 /// through image k is weighted by 1/Σ_j q_j(x), q_j = (Σ_t n_jt p_t(r′_j))/J_j(x) over the

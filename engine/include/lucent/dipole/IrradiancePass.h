@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief CPU irradiance pass for the image-space dipole (seed 004 §5): ray-casts the scene's
-/// camera against the object (Embree via lucent/reference/MeshBoundary.h), computes the
+/// @brief CPU irradiance pass for the image-space dipole (Mertens et al. 2005 §5): ray-casts the
+/// scene's camera against the object (Embree via lucent/reference/MeshBoundary.h), computes the
 /// Fresnel-transmitted irradiance E (Eq. 5) of every light with a shadow ray, and reads the
-/// painted material just inside the surface. Light views (seed 004 §7.1) are the same pass from
-/// each light. Then renderImageSpaceDipole() gathers.
+/// painted material just inside the surface. Light views (Mertens et al. 2005 §7.1) are the same
+/// pass from each light. Then renderImageSpaceDipole() gathers.
 ///
 ///     SurfaceBuffers buf = buildSurfaceBuffers(scene);
 ///     GatherResult g = gatherImageSpace(buf, settings);   // or renderImageSpaceDipole(scene,
@@ -39,8 +39,8 @@ MaterialSample materialInside(const MaterialVolume& volume, const Point3f& p, co
 /// @throw ValueError if the scene has no such object, no material, or a bad camera.
 SurfaceBuffers buildSurfaceBuffers(const Scene& scene, int objectIndex = 0);
 
-/// Irradiance image rendered from light `lightIndex` (seed 004 §7.1), same content as the
-/// camera's (positions, normals, E of *all* lights with shadow rays, material), so that the
+/// Irradiance image rendered from light `lightIndex` (Mertens et al. 2005 §7.1), same content as
+/// the camera's (positions, normals, E of *all* lights with shadow rays, material), so that the
 /// gather can combine both: orthographic along the light for a directional light (square,
 /// framing the object's bounding sphere), perspective from the light's position towards the
 /// bounding sphere's centre for point, spot and sphere lights (a field of view that just frames

@@ -2,7 +2,7 @@
 #pragma once
 /// @file
 /// @brief Diffusion BSSRDF profiles: Jensen et al. 2001 dipole (as tabulated in Mertens et al.
-/// 2005, seed 004, Table 1), d'Eon 2012 "A better dipole", and the Frisvad et al. 2014
+/// 2005, Mertens et al. 2005, Table 1), d'Eon 2012 "A better dipole", and the Frisvad et al. 2014
 /// directional dipole (ACM TOG 34(1), article 5). Each radial profile has its total diffuse
 /// reflectance in closed form and by numerical quadrature. Units: σ in mm⁻¹, r in mm,
 /// R_d(r) in mm⁻² (exitance per unit incident flux per unit area).
@@ -28,7 +28,7 @@ namespace lucent::dipole {
 /// @return reflectance in [0, 1]; 1 under total internal reflection.
 double fresnelReflectance(double cosThetaI, double eta);
 
-/// Jensen et al. 2001 diffuse Fresnel reflectance fit (seed 004, Table 1):
+/// Jensen et al. 2001 diffuse Fresnel reflectance fit (Mertens et al. 2005, Table 1):
 /// F_dr = −1.440/η² + 0.710/η + 0.668 + 0.0636 η, η = n_medium / n_outside.
 double fresnelDiffuseReflectanceJensen(double eta);
 
@@ -43,7 +43,7 @@ double fresnelMoment(int n, double eta);
 
 /// Which diffusion profile.
 enum class Model {
-    Dipole,        ///< Jensen et al. 2001 (seed 004 Table 1)
+    Dipole,        ///< Jensen et al. 2001 (Mertens et al. 2005 Table 1)
     BetterDipole,  ///< d'Eon 2012
     Directional,   ///< Frisvad et al. 2014 (radial use: normal incidence)
 };
@@ -75,12 +75,12 @@ struct Boundary {
 ///     E(r) = α′/(4π) [z_r(1 + σ_tr d_r) e^{−σ_tr d_r}/d_r³ + z_v(1 + σ_tr d_v) e^{−σ_tr
 ///     d_v}/d_v³],
 /// d_r = √(r² + z_r²), d_v = √(r² + z_v²), z_v > 0 the height of the virtual source above the
-/// surface. Jensen's dipole is C_φ = 0, C_E = 1 (seed 004 Table 1). Medium with σt′ = 0 or
-/// σs′ = 0 gives the zero profile (documented clamp: no scattering, no diffuse reflectance).
+/// surface. Jensen's dipole is C_φ = 0, C_E = 1 (Mertens et al. 2005 Table 1). Medium with σt′ = 0
+/// or σs′ = 0 gives the zero profile (documented clamp: no scattering, no diffuse reflectance).
 class DipoleProfile {
 public:
     DipoleProfile() = default;
-    /// Jensen 2001 dipole, exactly seed 004 Table 1: σt′ = σa + σs′, α′ = σs′/σt′,
+    /// Jensen 2001 dipole, exactly Mertens et al. 2005 Table 1: σt′ = σa + σs′, α′ = σs′/σt′,
     /// D = 1/(3σt′), σ_tr = √(3σaσt′), z_r = 1/σt′, z_v = z_r + 4AD, A = (1+F_dr)/(1−F_dr).
     /// @throw ValueError for negative/NaN/Inf coefficients (> 1e6 mm⁻¹) or η outside [1, 3].
     static DipoleProfile jensen(double sigma_a, double sigma_s, double eta);
@@ -94,7 +94,7 @@ public:
 
     /// R_d(r) in mm⁻² (r in mm, r ≥ 0; negative r is treated as |r|).
     [[nodiscard]] double Rd(double r) const;
-    /// ∫ R_d dA over the plane in closed form (seed 004 Eq. 7 / Jensen 2001):
+    /// ∫ R_d dA over the plane in closed form (Mertens et al. 2005 Eq. 7 / Jensen 2001):
     /// α′/2 [C_E (e^{−σ z_r} + e^{−σ z_v}) + C_φ/(Dσ) (e^{−σ z_r} − e^{−σ z_v})];
     /// the C_φ term → C_φ (z_v − z_r)/D as σ → 0.
     [[nodiscard]] double totalReflectance() const;

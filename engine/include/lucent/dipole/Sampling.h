@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief Exact importance sampling of the dipole's R_d(r)·r (Mertens et al. 2005, seed 004 §4).
+/// @brief Exact importance sampling of the dipole's R_d(r)·r (Mertens et al. 2005 §4).
 ///
 ///     DipoleSampler s(DipoleProfile::jensen(0.0021, 2.19, 1.3));
 ///     double r = s.sample(u1, u2);        // mm, distributed as R_d(r)·r / ρ
@@ -16,7 +16,7 @@
 
 namespace lucent::dipole {
 
-/// Solves σz(u − 1) + log u + log(1 − ξ) = 0 for u ≥ 1 (seed 004 §4) by a bracketed,
+/// Solves σz(u − 1) + log u + log(1 − ξ) = 0 for u ≥ 1 (Mertens et al. 2005 §4) by a bracketed,
 /// safeguarded Newton iteration on v = log u (convex, increasing; converges for every
 /// ξ ∈ [0, 1) and σz ≥ 0). @return log u. @param iterations receives the iteration count.
 /// @throw ValueError if σz < 0 or non-finite, or ξ ∉ [0, 1).
@@ -27,7 +27,8 @@ double sampleSourceRadius(double sigma, double z, double xi);
 /// P(radius ≤ r) for one source: 1 − (z/d) e^{−σ(d − z)}, d = √(r² + z²).
 double sourceRadiusCdf(double sigma, double z, double r);
 
-/// Mixture of the real and virtual sources, chosen with probability ∝ e^{−σz} (seed 004 §4).
+/// Mixture of the real and virtual sources, chosen with probability ∝ e^{−σz} (Mertens et al. 2005
+/// §4).
 class DipoleSampler {
 public:
     DipoleSampler() = default;
