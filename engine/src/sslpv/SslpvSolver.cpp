@@ -587,6 +587,49 @@ void SslpvSolver::rebuildFactors() {
         /*grain=*/1);
 }
 
+Rgb SslpvSolver::interactingFraction(const Point3f& entry, const Vector3f& wt,
+                                     const Coord& injectionCell) const {
+    // Optical depth τ of the refracted beam's chord, by midpoint samples every half cell from
+    // the entry point until the beam leaves the medium (the object's inside cells with sinks,
+    // the whole grid without) or every channel is opaque. A concave object's re-entry is not
+    // followed: light leaving the object is refracted out there, not carried on.
+    const GridSpec& s = m_material.spec;
+    const float step = 0.5f * s.voxelSize;
+    constexpr float OPAQUE_DEPTH = 20.f;  // e^−20 = 2·10⁻⁹: below float resolution of 1 − e^−τ
+    const int maxSamples = 4 * s.resolution;  // a half-cell step crosses the grid in ≤ 2√3·N
+    auto isMedium = [&](const Coord& c) {
+        return m_opt.removeExitant ? isInside(c) : s.contains(c);
+    };
+    Rgb tau(0.f);
+    bool entered = false;
+    for (int k = 0; k < maxSamples; ++k) {
+        const Coord c = s.cellOf(entry + (float(k) + 0.5f) * step * wt);
+        if (!isMedium(c)) {
+            // Before the medium (the entry point lies on the mesh, the voxelised surface is a
+            // staircase around it) keep looking for up to two cells; after it, the beam is out.
+            if (entered || k >= 4)
+                break;
+            continue;
+        }
+        entered = true;
+        const size_t i = s.linearIndex(c);
+        for (int ch = 0; ch < 3; ++ch)
+            tau[ch] += m_material.sigma_t[ch][i] * step;
+        if (tau.x > OPAQUE_DEPTH && tau.y > OPAQUE_DEPTH && tau.z > OPAQUE_DEPTH)
+            break;
+    }
+    if (!entered) {
+        // The staircase missed the beam: one cell of the injection cell's material.
+        const size_t i = s.linearIndex(injectionCell);
+        for (int ch = 0; ch < 3; ++ch)
+            tau[ch] = m_material.sigma_t[ch][i] * s.voxelSize;
+    }
+    Rgb f;
+    for (int ch = 0; ch < 3; ++ch)
+        f[ch] = -std::expm1(-tau[ch]);
+    return f;
+}
+
 void SslpvSolver::inject() {
     const Timer timer;
     const GridSpec& s = m_material.spec;
@@ -628,12 +671,13 @@ void SslpvSolver::inject() {
         // coefficients √π/2, √(π/3), √(5π)/8 (seed 003).
         const float T = 1.f - dielectricReflectance(cosI, m_eta);
         const Vector3f wt = refractInto(smp.direction, smp.normal, m_eta);
+        const Rgb interacting = interactingFraction(smp.position, wt, cell);
         const ShCoeffs<2> lobe = clampedCosineLobe<2>(wt);
         const size_t idx = m_injection.index(cell);
         m_injBrickLit[(size_t(cell.z) * bricksY + size_t(cell.y / SSLPV_BRICK_Y)) * bricksX +
                       size_t(cell.x / SSLPV_BRICK_X)] = 1;
         for (int ch = 0; ch < 3; ++ch) {
-            const float k = T * smp.flux[ch] * INV_PI;
+            const float k = T * interacting[ch] * smp.flux[ch] * INV_PI;
             for (int i = 0; i < count; ++i)
                 m_injection.plane(ch, i)[idx] += k * lobe.c[i];
         }

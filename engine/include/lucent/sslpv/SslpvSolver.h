@@ -149,7 +149,9 @@ constexpr int SSLPV_BRICK_Z = 1;
 /// Results and energy bookkeeping of the last solve. Fluxes in W per channel.
 struct SslpvStats {
     int stepsUsed = 0;
-    Rgb injected{0.f};   ///< flux put into the grid (after Fresnel transmission)
+    /// Flux put into the grid: after Fresnel transmission, times the fraction of each refracted
+    /// beam that interacts inside the object (1 − exp(−τ), τ its chord's optical depth)
+    Rgb injected{0.f};
     Rgb remaining{0.f};  ///< flux still in the propagation grid
     Rgb exitant{0.f};    ///< flux that reached sink cells (removeExitant)
     Rgb absorbed{0.f};   ///< flux removed by the Beer attenuation
@@ -232,6 +234,12 @@ private:
     void validateMaterial(const CoarseMaterial& m) const;
     void rebuildFactors();
     void inject();
+    /// Fraction 1 − exp(−τ) of a refracted beam entering at `entry` (mm) along unit `wt` that
+    /// interacts before it leaves the object, τ the optical depth of its chord through the
+    /// medium (σt′ of the cells crossed, per channel). Light that crosses without interacting
+    /// is not subsurface light: it leaves as a refracted beam, which SSLPV does not render.
+    [[nodiscard]] Rgb interactingFraction(const Point3f& entry, const Vector3f& wt,
+                                          const Coord& injectionCell) const;
     void propagate();
 
     SslpvOptions m_opt;
