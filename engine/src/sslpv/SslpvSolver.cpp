@@ -1089,11 +1089,13 @@ std::vector<float> SslpvSolver::sinkMaskPlane() const {
 }
 
 float SslpvSolver::exitScale() const {
+    // Radiance scaling at refraction, L_o = T·L_i/η² (docs/reference.md; Veach 1997 §5.2): the
+    // paper's Eq. 4 leaves it out, which made Paper mode η² too bright (1.69× at η = 1.3).
+    const float refraction = 1.f / (m_eta * m_eta);
     if (m_opt.mode != SslpvMode::Calibrated)
-        return 1.f;  // Eq. 4: L_o = T·L_i (the paper has no 1/η²)
-    // Radiance scaling at refraction, L_o = T·L_i/η² (docs/reference.md; Veach 1997 §5.2),
-    // times the fitted normalisation of the Eq. 7 estimate.
-    return m_opt.calibration.gain[m_opt.order - 1] / (m_eta * m_eta);
+        return refraction;
+    // Calibrated: times the fitted normalisation of the Eq. 7 estimate.
+    return m_opt.calibration.gain[m_opt.order - 1] * refraction;
 }
 
 Rgb SslpvSolver::radiance(const Point3f& p, const Normal3f& n) const {

@@ -84,7 +84,7 @@ enum class SslpvAttenuation {
 
 /// How material parameters map to the per-step factors and the exitant radiance.
 enum class SslpvMode {
-    Paper,       ///< §3.2.1 + Eq. 3 with `attenuation`; L_o = T·L_i (Eq. 4, no 1/η²)
+    Paper,       ///< §3.2.1 + Eq. 3 with `attenuation`; L_o = T·L_i/η² (Eq. 4 + refraction)
     Calibrated,  ///< fitted per-step absorption (SslpvCalibration); L_o = G·T·L_i/η²
 };
 
@@ -216,9 +216,9 @@ public:
     /// from the accumulation grid sampled half a cell inside along −n (trilinear over inside
     /// cells only). Not multiplied by Fresnel T (the caller knows ω_o).
     [[nodiscard]] Rgb radiance(const Point3f& p, const Normal3f& n) const;
-    /// Factor from radiance() times Fresnel T(ω_o) to the exitant radiance: 1 in Paper mode
-    /// (Eq. 4), gain[order − 1]/η² in Calibrated mode (radiance scaling at refraction,
-    /// docs/reference.md). L_o = exitScale()·T(ω_o)·radiance(p, n).
+    /// Factor from radiance() times Fresnel T(ω_o) to the exitant radiance: 1/η² in Paper mode
+    /// (Eq. 4 with the radiance scaling at refraction the paper leaves out, docs/reference.md),
+    /// gain[order − 1]/η² in Calibrated mode. L_o = exitScale()·T(ω_o)·radiance(p, n).
     [[nodiscard]] float exitScale() const;
     //! @}
 
