@@ -5,10 +5,10 @@
 /// calibrated SSLPV at several cell sizes. What the calibrated mode's spatial spread is, and the
 /// data a profile fit needs (docs/methods/sslpv.md, "Limits of the calibration").
 ///
-///     build/ci/tests/bench/sslpv_profile [walks=200000]
+///     build/ci/tests/bench/sslpv_profile [walks=200000] [eta=1.3]
 ///
-/// Prints per reduced albedo α′ (σt′ = 1 mm⁻¹, g = 0, η = 1.3) the radii (mm) that hold 50 % and
-/// 90 % of the exitant flux within 12 mm of the beam, for the exact walk and for SSLPV at
+/// Prints per reduced albedo α′ (σt′ = 1 mm⁻¹, g = 0, η = 1.3 or as given) the radii (mm) that hold
+/// 50 % and 90 % of the exitant flux within 12 mm of the beam, for the exact walk and for SSLPV at
 /// Δx = 0.5, 1 and 2 mm, and SSLPV's total over the exact total (flux leaving the top face per
 /// unit flux entering, within 12 mm).
 
@@ -18,6 +18,7 @@
 #include <lucent/reference/Transport.h>
 #include <lucent/sslpv/SslpvSolver.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -28,7 +29,7 @@ using namespace lucent;
 namespace {
 
 constexpr double PI_D = 3.14159265358979323846;
-constexpr float ETA = 1.3f;
+float g_eta = 1.3f;             ///< relative index (second argument)
 constexpr double R_MAX = 12.0;  ///< mm: the profile's extent
 constexpr int BINS = 48;        ///< annuli of 0.25 mm
 
@@ -73,7 +74,7 @@ Profile exactProfile(float albedo, int walks) {
     const VolumeScene scene(box, std::move(medium), {});
     TransportOptions opt;
     opt.boundary = BoundaryModel::Dielectric;
-    opt.eta = ETA;
+    opt.eta = g_eta;
     Profile p;
     for (int i = 0; i < walks; ++i) {
         Pcg32 rng(uint64_t(i) * 2654435761u + 17u);
@@ -117,7 +118,7 @@ Profile sslpvProfile(float albedo, float dx, int n) {
     SslpvOptions o{.order = 1, .maxSteps = 4096, .stopEpsilon = 1e-4f};
     o.mode = SslpvMode::Calibrated;
     SslpvSolver solver(o);
-    solver.setMaterial(m, ETA);
+    solver.setMaterial(m, g_eta);
     solver.setInjectionSamples(texels);
     solver.solve();
     // Flux leaving per unit transmitted flux: L_o = exitScale·T(θ_o)·L_i integrated over the
@@ -127,9 +128,9 @@ Profile sslpvProfile(float albedo, float dx, int n) {
     constexpr int K = 2000;
     for (int i = 0; i < K; ++i) {
         const double mu = (i + 0.5) / K;
-        fbar += 2.0 * double(dielectricReflectance(float(mu), ETA)) * mu / K;
+        fbar += 2.0 * double(dielectricReflectance(float(mu), g_eta)) * mu / K;
     }
-    const double t0 = 1.0 - double(dielectricReflectance(1.f, ETA));
+    const double t0 = 1.0 - double(dielectricReflectance(1.f, g_eta));
     Profile p;
     for (int y = 1; y < n - 1; ++y)
         for (int x = 1; x < n - 1; ++x) {
@@ -146,10 +147,12 @@ Profile sslpvProfile(float albedo, float dx, int n) {
 
 int main(int argc, char** argv) {
     const int walks = argc > 1 ? std::max(1000, std::atoi(argv[1])) : 200000;
+    if (argc > 2)
+        g_eta = std::clamp(float(std::atof(argv[2])), 1.f, 3.f);
     std::printf(
         "Thick slab, pencil beam at normal incidence, sigma_t' = 1/mm, g = 0, eta = %.2f; "
         "r50 / r90 (mm) of the exitant flux within %.0f mm\n",
-        double(ETA), R_MAX);
+        double(g_eta), R_MAX);
     std::printf(
         "| alpha' | exact r50 / r90 | SSLPV dx 0.5 | dx 1 | dx 2 | SSLPV total / exact "
         "(dx 0.5, 1, 2) |\n|---|---|---|---|---|---|\n");
