@@ -5,7 +5,7 @@
 // (engine/src/sslpv/SslpvRenderer.cpp + SslpvSolver::radiance), line for line:
 //   L_i = (2/A)(c00·Y00 + ½·K1·c10^(n)),  A = Δx²,  c10^(n) = n·(c11, c1−1, c10)   (Eq. 5–7)
 //   L_o = S·(1 − F_r(cos θ_o, η))·max(0, L_i)                                     (Eq. 4/7)
-// S = SslpvSolver::exitScale(): 1 in Paper mode, gain/η² in Calibrated mode.
+// S = SslpvSolver::exitScale(): 1/η² in Paper mode, gain/η² in Calibrated mode.
 // with the coefficients read at p − d·Δx·n, d = ½, 1, 3⁄2 (first depth whose inside weight
 // exceeds 1e-4), trilinear over the 8 nearest cell centres that are inside, renormalised.
 // Only bands 0 and 1 are read: band 2's hemisphere integral vanishes (Eq. 7).

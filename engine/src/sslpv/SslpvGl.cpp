@@ -396,9 +396,12 @@ void SslpvGlPropagator::propagate(const SslpvSolver& solver) {
         auto scope = s.profiler.scope("sslpv.propagate");
         // Step 1 reads the step-0 sources, then the ping-pong pair alternates (the sources
         // stay untouched, so an unchanged injection is never re-uploaded).
+        // As many steps as the CPU solve ran: with SslpvOptions::stopEpsilon it stopped once
+        // converged, so both paths propagate to the same point without a GPU reduction.
         const gpu::GlObject* src = &s.source;
         int next = 0;
-        for (int step = 1; step <= opt.maxSteps; ++step) {
+        const int steps = solver.stats().stepsUsed;
+        for (int step = 1; step <= steps; ++step) {
             const bool accumulate = step > opt.skipAccumulateSteps;
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, src->id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, s.prop[next].id());

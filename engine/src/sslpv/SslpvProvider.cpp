@@ -53,8 +53,8 @@ struct SslpvSubsurfaceProvider::Impl {
     std::vector<Light> lights;
     Mat4f objectFromWorld{1.f};
 
-    CoarseMaterial coarse;  ///< unmasked, incrementally updated
-    std::vector<uint8_t> meshInside;
+    CoarseMaterial coarse;          ///< unmasked, incrementally updated
+    std::vector<float> meshInside;  ///< mesh fraction per coarse cell (meshInsideFractions)
     GridSpec meshInsideSpec;
     bool meshInsideValid = false;
     float eta = 1.3f;
@@ -244,16 +244,16 @@ const SslpvStats& SslpvSubsurfaceProvider::update() {
     Impl& s = *m;
     const bool wasDirty = s.materialDirty || s.rsmDirty || s.solver.isDirty();
     if (s.materialDirty) {
-        // Cells count as inside only where the mesh voxelisation agrees (as SslpvRenderer).
+        // Cells count as inside only as far as the mesh agrees (as SslpvRenderer, with the
+        // mesh's partial cells for the solver's partial sinks).
         if (!s.meshInsideValid || !(s.meshInsideSpec == s.coarse.spec)) {
-            s.meshInside = voxelizeSolid(s.mesh, s.coarse.spec);
+            s.meshInside = meshInsideFractions(s.mesh, s.coarse.spec);
             s.meshInsideSpec = s.coarse.spec;
             s.meshInsideValid = true;
         }
         CoarseMaterial masked = s.coarse;
         for (size_t k = 0; k < s.meshInside.size(); ++k)
-            if (!s.meshInside[k])
-                masked.insideFraction[k] = 0.f;
+            masked.insideFraction[k] = std::min(masked.insideFraction[k], s.meshInside[k]);
         s.solver.setMaterial(masked, s.eta);
         s.materialDirty = false;
     }

@@ -178,13 +178,33 @@ void SslpvRenderer::setMaterial(const MaterialVolume& volume, float eta) {
     m_materialDirty = true;
 }
 
+std::vector<float> meshInsideFractions(const TriangleMesh& mesh, const GridSpec& spec,
+                                       int subdivisions) {
+    LUCENT_CHECK(subdivisions >= 1 && subdivisions <= 8,
+                 "SSLPV: mesh inside fractions: subdivisions must be in [1, 8], got ",
+                 subdivisions);
+    GridSpec fine = spec;
+    fine.resolution = spec.resolution * subdivisions;
+    fine.voxelSize = spec.voxelSize / float(subdivisions);
+    const std::vector<uint8_t> inside = voxelizeSolid(mesh, fine);
+    std::vector<float> f(spec.voxelCount(), 0.f);
+    const float w = 1.f / float(subdivisions * subdivisions * subdivisions);
+    for (int z = 0; z < fine.resolution; ++z)
+        for (int y = 0; y < fine.resolution; ++y)
+            for (int x = 0; x < fine.resolution; ++x)
+                if (inside[fine.linearIndex({x, y, z})])
+                    f[spec.linearIndex({x / subdivisions, y / subdivisions, z / subdivisions})] +=
+                        w;
+    return f;
+}
+
 void SslpvRenderer::applyInsideMask() {
-    // Cells count as inside only where the mesh voxelisation agrees: the painted volume's own
-    // mask may be all-inside when no mesh was voxelised into it.
-    const std::vector<uint8_t> inside = voxelizeSolid(m_mesh, m_coarse.spec);
+    // Cells count as inside only as far as the mesh agrees: the painted volume's own mask may
+    // be all-inside when no mesh was voxelised into it. The mesh's own fraction per cell
+    // (4³ sub-cells) keeps the partial cells the solver's partial sinks need.
+    const std::vector<float> inside = meshInsideFractions(m_mesh, m_coarse.spec);
     for (size_t k = 0; k < inside.size(); ++k)
-        if (!inside[k])
-            m_coarse.insideFraction[k] = 0.f;
+        m_coarse.insideFraction[k] = std::min(m_coarse.insideFraction[k], inside[k]);
 }
 
 const SslpvStats& SslpvRenderer::update() {

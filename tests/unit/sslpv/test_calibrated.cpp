@@ -146,7 +146,8 @@ TEST(SslpvCalibrated, ExitScaleIsGainOverEtaSquared) {
     const CoarseMaterial m = ball(8, 1.f, 1.f, 0.9f, 0.f);
     SslpvSolver paper({.order = 1, .maxSteps = 2});
     paper.setMaterial(m, 1.5f);
-    EXPECT_EQ(paper.exitScale(), 1.f);  // Eq. 4: no 1/η² in the paper's convention
+    // Eq. 4 with the radiance scaling at refraction (the paper had L_o = T·L_i, η² too bright).
+    EXPECT_FLOAT_EQ(paper.exitScale(), 1.f / (1.5f * 1.5f));
     for (int order : {1, 2}) {
         SslpvSolver cal(calibrated(order, 2));
         cal.setMaterial(m, 1.5f);

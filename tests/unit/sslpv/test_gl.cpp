@@ -123,6 +123,27 @@ TEST_F(SslpvGl, Fp32MatchesCpuInCalibratedMode) {
     gl.destroy();
 }
 
+TEST_F(SslpvGl, StopsWhereTheCpuSolveStopped) {
+    // With stopEpsilon the CPU solve stops before maxSteps; the GPU must run the same number of
+    // steps (it used to run maxSteps whatever the CPU did, so the two paths' images differed).
+    SslpvOptions o{.order = 1, .maxSteps = 400, .skipAccumulateSteps = 2, .stopEpsilon = 0.05f};
+    o.mode = SslpvMode::Calibrated;
+    SslpvSolver cpu(o);
+    cpu.setMaterial(hetBall(20), 1.3f);
+    cpu.setInjectionSamples(topTexels(20));
+    const int used = cpu.solve().stepsUsed;
+    ASSERT_GT(used, 2);
+    ASSERT_LT(used, o.maxSteps);
+    SslpvGlPropagator gl(SslpvGlStorage::Float32);
+    gl.propagate(cpu);
+    const float peak = cpu.accumulation().maxAbs();
+    ASSERT_GT(peak, 0.f);
+    // Same fp32 tolerance as Fp32MatchesCpu; one step more or less changes the accumulation
+    // by the remaining ≤ 5 % of the injection, far above it.
+    EXPECT_LT(maxDiff(gl.accumulation(), cpu.accumulation()), 1e-4f * peak);
+    gl.destroy();
+}
+
 TEST_F(SslpvGl, Fp16WithinDerivedBound) {
     // Error model: every fp16 store rounds with relative error u = 2⁻¹¹. Let P be the largest
     // |value| any propagation grid holds in steps 1..K and ρ = max_i Σ_j |M_i,j| summed over

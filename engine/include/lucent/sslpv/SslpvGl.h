@@ -6,13 +6,15 @@
 ///
 ///     SslpvSolver cpu(opt);  cpu.setMaterial(m, eta);  cpu.setInjectionSamples(s);  cpu.solve();
 ///     SslpvGlPropagator gl(SslpvGlStorage::Float16);   // a GL 4.5 context is current
-///     gl.propagate(cpu);           // re-runs cpu's propagation on the GPU (all maxSteps steps)
+///     gl.propagate(cpu);           // re-runs cpu's propagation on the GPU (cpu's stepsUsed)
 ///     gl.writeTextures(tex);       // GPU → four RGBA32F 3-D textures, no read-back
 ///     gl.accumulation();           // read back into an SslpvGrid (only when a CPU user asks)
 ///     gl.destroy();                // context current
 ///
 /// The CPU solver still does injection and folds the per-cell factors; the GPU runs the
-/// steps. No early stop on the GPU (it would need a reduction per step): always maxSteps.
+/// steps. The GPU runs as many steps as the CPU solve used (SslpvStats::stepsUsed: maxSteps,
+/// or fewer where SslpvOptions::stopEpsilon stopped it), so both paths converge alike without a
+/// reduction per step on the GPU.
 /// The GL buffers persist: they are created when the grid size, SH order or storage first
 /// appears and reused afterwards; each propagate() uploads only the z-slices of the factor,
 /// mask, inside and step-0 source planes whose contents changed since the last upload (a paint
@@ -49,7 +51,8 @@ public:
     SslpvGlPropagator& operator=(const SslpvGlPropagator&) = delete;
 
     /// Runs `solver`'s propagation (its injection grid, folded factors, sink mask, order,
-    /// maxSteps, skipAccumulateSteps) and reads back the accumulation and exitant grids.
+    /// stepsUsed of its last solve, skipAccumulateSteps); nothing is read back until
+    /// accumulation() or exitant() is called.
     /// @throw ValueError if the solver has not been solved; GpuError on GL errors.
     void propagate(const SslpvSolver& solver);
     /// The accumulation grid of the last propagate(), read back from the GPU on the first call

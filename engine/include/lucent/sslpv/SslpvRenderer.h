@@ -97,6 +97,13 @@ private:
     SslpvRenderTimings m_timings;
 };
 
+/// Fraction of each cell of `spec` inside `mesh` (closed), from a solid voxelisation at
+/// `subdivisions`³ sub-cells per cell: the partial cells along the surface that the solver's
+/// partial sinks use (SslpvSolver: a cell keeps min(1, 2f) of its light).
+/// @throw ValueError for subdivisions outside [1, 8].
+std::vector<float> meshInsideFractions(const TriangleMesh& mesh, const GridSpec& spec,
+                                       int subdivisions = 4);
+
 /// One-shot render of scene.objects[0] with the scene's lights and camera.
 /// @throw ValueError if the scene has no object, mesh or material.
 ImageRgb renderSslpv(const Scene& scene, const SslpvRenderOptions& options = {},

@@ -84,7 +84,7 @@ enum class SslpvAttenuation {
 
 /// How material parameters map to the per-step factors and the exitant radiance.
 enum class SslpvMode {
-    Paper,       ///< §3.2.1 + Eq. 3 with `attenuation`; L_o = T·L_i (Eq. 4, no 1/η²)
+    Paper,       ///< §3.2.1 + Eq. 3 with `attenuation`; L_o = T·L_i/η² (Eq. 4 + refraction)
     Calibrated,  ///< fitted per-step absorption (SslpvCalibration); L_o = G·T·L_i/η²
 };
 
@@ -149,7 +149,9 @@ constexpr int SSLPV_BRICK_Z = 1;
 /// Results and energy bookkeeping of the last solve. Fluxes in W per channel.
 struct SslpvStats {
     int stepsUsed = 0;
-    Rgb injected{0.f};   ///< flux put into the grid (after Fresnel transmission)
+    /// Flux put into the grid: after Fresnel transmission, times the fraction of each refracted
+    /// beam that interacts inside the object (1 − exp(−τ), τ its chord's optical depth)
+    Rgb injected{0.f};
     Rgb remaining{0.f};  ///< flux still in the propagation grid
     Rgb exitant{0.f};    ///< flux that reached sink cells (removeExitant)
     Rgb absorbed{0.f};   ///< flux removed by the Beer attenuation
@@ -214,9 +216,9 @@ public:
     /// from the accumulation grid sampled half a cell inside along −n (trilinear over inside
     /// cells only). Not multiplied by Fresnel T (the caller knows ω_o).
     [[nodiscard]] Rgb radiance(const Point3f& p, const Normal3f& n) const;
-    /// Factor from radiance() times Fresnel T(ω_o) to the exitant radiance: 1 in Paper mode
-    /// (Eq. 4), gain[order − 1]/η² in Calibrated mode (radiance scaling at refraction,
-    /// docs/reference.md). L_o = exitScale()·T(ω_o)·radiance(p, n).
+    /// Factor from radiance() times Fresnel T(ω_o) to the exitant radiance: 1/η² in Paper mode
+    /// (Eq. 4 with the radiance scaling at refraction the paper leaves out, docs/reference.md),
+    /// gain[order − 1]/η² in Calibrated mode. L_o = exitScale()·T(ω_o)·radiance(p, n).
     [[nodiscard]] float exitScale() const;
     //! @}
 
@@ -232,6 +234,12 @@ private:
     void validateMaterial(const CoarseMaterial& m) const;
     void rebuildFactors();
     void inject();
+    /// Fraction 1 − exp(−τ) of a refracted beam entering at `entry` (mm) along unit `wt` that
+    /// interacts before it leaves the object, τ the optical depth of its chord through the
+    /// medium (σt′ of the cells crossed, per channel). Light that crosses without interacting
+    /// is not subsurface light: it leaves as a refracted beam, which SSLPV does not render.
+    [[nodiscard]] Rgb interactingFraction(const Point3f& entry, const Vector3f& wt,
+                                          const Coord& injectionCell) const;
     void propagate();
 
     SslpvOptions m_opt;
