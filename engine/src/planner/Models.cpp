@@ -352,14 +352,15 @@ std::vector<MeasuredRow> readMeasurements(const std::string& csvPath) {
     std::vector<std::pair<int, double SceneFeatures::*>> features;
     for (const FeatureColumn& fc : FEATURE_COLUMNS) {
         const std::string snake = snakeCase(fc.name);
-        const int c = column({fc.name, snake.c_str()});
+        const std::string prefixed = "feature_" + snake;
+        const int c = column({fc.name, snake.c_str(), prefixed.c_str()});
         if (c < 0 && requiredFeature(fc.name))
             LUCENT_THROW(ValueError, csvPath, ": no scene-feature column '", snake,
                          "' (the models need the SceneFeatures of each case)");
         if (c >= 0)
             features.emplace_back(c, fc.field);
     }
-    const int lightsCol = column({"lights"});
+    const int lightsCol = column({"lights", "feature_lights"});
     const int floorCol = column({"noise_floor", "block_rel_l1_floor"});
 
     std::vector<MeasuredRow> rows;

@@ -80,7 +80,8 @@ Models fitModels(const std::vector<MeasuredRow>& rows, double ridge = 0.05);
 /// Reads an evaluation CSV (`lucent-cli evaluate --suite` writes one): a header row naming
 /// the columns, then one row per case, method and setting. Columns are found by name:
 /// case (or scene), method, setting, cost_ratio (or time_ms with direct_ms), block_rel_l1,
-/// one column per SceneFeatures field (camelCase or snake_case); optional: lights, noise_floor
+/// one column per SceneFeatures field (camelCase, snake_case or feature_snake_case); optional:
+/// lights, noise_floor
 /// (or block_rel_l1_floor). Rows of the `direct` and
 /// `reference` methods are read like any other (the caller decides what to fit).
 /// @throw IoError naming the file; ValueError naming the missing column or the bad line.
