@@ -1,10 +1,12 @@
 # SPDX-License-Identifier: MIT
-# cmake -DCLI=<lucent-cli> -DOUT=<dir> -DSCENE=<scene.json> -P RunEvaluate.cmake
-# End-to-end test of `lucent-cli evaluate` on a tiny render (32x32, reference 64 spp, two CPU
-# methods with two quality settings each, so no GL is needed): checks the CSV rows and columns,
-# that every error is finite and non-negative, results.json, the PNG chart, the reference cache
-# and the errors for unknown method names; the --presets/--etas overrides (named cases, their own
-# cached references) and their usage errors. Fails (FATAL_ERROR) with the reason.
+# cmake -DCLI=<lucent-cli> -DOUT=<dir> -DSCENE=<scene.json> [-DMODE=suite] -P RunEvaluate.cmake
+# End-to-end tests of `lucent-cli evaluate`. Default mode, on a scene file and a tiny render
+# (32x32, reference 64 spp, two methods with two quality settings each): the CSV rows and
+# columns, that every error is finite and non-negative, results.json, the report files, the
+# reference cache and the errors for unknown method names; the --presets/--etas overrides (named
+# cases, their own cached references) and their usage errors. MODE=suite: `--suite smoke` (two
+# cases built through the engine API, 32x32, 16 spp) runs, its metrics are finite and every row
+# carries the case's scene features. Fails (FATAL_ERROR) with the reason.
 
 function(run prefix)
     execute_process(COMMAND ${CLI} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -48,57 +50,123 @@ endfunction()
 # A finite, non-negative decimal as printed by %.6g (no nan, inf or minus sign).
 set(nonneg "^[0-9]+(\\.[0-9]*)?(e[-+][0-9]+)?$")
 
+# The index of each named column of results.csv's header, as <name>_COL.
+function(csv_header_columns header)
+    string(REPLACE "," ";" names "${header}")
+    set(i 0)
+    foreach(name IN LISTS names)
+        set(${name}_COL ${i} PARENT_SCOPE)
+        math(EXPR i "${i} + 1")
+    endforeach()
+    set(HEADER_COLUMNS ${i} PARENT_SCOPE)
+endfunction()
+
+# Checks every data row: as many columns as the header, and the named columns finite and
+# non-negative.
+function(check_rows lines)
+    list(LENGTH lines n)
+    math(EXPR last "${n} - 1")
+    foreach(i RANGE 1 ${last})
+        list(GET lines ${i} row)
+        csv_columns("${row}" cols)
+        list(LENGTH cols ncols)
+        if(NOT ncols EQUAL HEADER_COLUMNS)
+            message(FATAL_ERROR "results.csv: row '${row}' has ${ncols} columns, expected ${HEADER_COLUMNS}")
+        endif()
+        foreach(v IN ITEMS time_ms direct_ms cost_ratio block_rel_l1 block_rel_rmse mean_ratio p95
+                noise_floor pixel_rel_rmse block_rel_l1_r block_rel_l1_g block_rel_l1_b)
+            list(GET cols ${${v}_COL} value)
+            if(NOT "${value}" MATCHES "${nonneg}")
+                message(FATAL_ERROR "results.csv: row '${row}': ${v} = '${value}' is not a finite non-negative number")
+            endif()
+        endforeach()
+        list(GET cols ${pixels_COL} pixels)
+        # The object covers part of the 32x32 image: some, but not all, pixels are compared.
+        if(pixels LESS 20 OR pixels GREATER_EQUAL 1024)
+            message(FATAL_ERROR "results.csv: row '${row}': ${pixels} compared pixels")
+        endif()
+        # With <= 64 spp the reference noise floor is well above 0 (variance layer read).
+        list(GET cols ${noise_floor_COL} floor)
+        if(floor STREQUAL "0")
+            message(FATAL_ERROR "results.csv: row '${row}': zero noise floor (variance layer lost?)")
+        endif()
+    endforeach()
+endfunction()
+
+function(expect_reports dir)
+    foreach(f results.json summary.md pareto.md charts.gp chart_summary.dat)
+        if(NOT EXISTS ${dir}/${f})
+            message(FATAL_ERROR "${f} was not written")
+        endif()
+    endforeach()
+endfunction()
+
+if(MODE STREQUAL "suite")
+    set(dir ${OUT}/evaluate-suite)
+    file(REMOVE_RECURSE ${dir})
+    evaluate_ok(suite ${dir} 4 --suite smoke --methods direct,dirpole --levels 1 --repeats 1
+        --ref-spp 16 --no-images)
+    list(GET suite_LINES 0 header)
+    csv_header_columns("${header}")
+    check_rows("${suite_LINES}")
+    expect_reports(${dir})
+    set(cases_seen)
+    foreach(i 1 2 3 4)
+        list(GET suite_LINES ${i} row)
+        csv_columns("${row}" cols)
+        list(GET cols ${case_COL} c)
+        list(APPEND cases_seen ${c})
+        # The planner's features of the case: a positive optical size on every row.
+        list(GET cols ${feature_optical_size_COL} optical)
+        if(NOT optical MATCHES "${nonneg}" OR optical STREQUAL "0")
+            message(FATAL_ERROR "results.csv: row '${row}': feature_optical_size '${optical}'")
+        endif()
+    endforeach()
+    list(REMOVE_DUPLICATES cases_seen)
+    if(NOT cases_seen STREQUAL "sphere-skin1-eta1.3;veins-marble")
+        message(FATAL_ERROR "smoke suite: cases '${cases_seen}'")
+    endif()
+    file(READ ${dir}/summary.md summary)
+    expect_contains(summary "${summary}" "| veins-marble |")
+    run(badcase evaluate --suite smoke --cases nothing --out ${dir}/bad)
+    if(NOT badcase_RC STREQUAL "2")
+        message(FATAL_ERROR "--cases nothing: expected exit 2, got '${badcase_RC}'")
+    endif()
+    expect_contains(badcase "${badcase_ERR}" "matches no case")
+    return()
+endif()
+
 set(dir ${OUT}/evaluate)
 file(REMOVE_RECURSE ${dir})
 set(common ${SCENE} --methods sslpv:paper,dirpole --levels 2 --repeats 1 --width 32 --height 32
     --ref-spp 64)
 
-# results.csv: the header and 2 methods x 2 settings = 4 rows of 14 columns.
+# results.csv: the header and 2 methods x 2 settings = 4 rows.
 evaluate_ok(ev ${dir} 4 ${common})
 set(lines "${ev_LINES}")
 list(GET lines 0 header)
-set(expected_header "scene,method,setting,quality,ms_median,ms_min,runs,rel_rmse,rel_rmse_floor,rmse,mean_rel_error,mean_reference,mean_ratio,pixels")
-if(NOT header STREQUAL expected_header)
+string(FIND "${header}" "case,group,method,setting,quality,backend,time_ms," pos)
+if(NOT pos EQUAL 0)
     message(FATAL_ERROR "results.csv: header is '${header}'")
 endif()
+csv_header_columns("${header}")
+check_rows("${lines}")
 list(SUBLIST lines 1 4 rows)
 set(methods_seen)
 foreach(row IN LISTS rows)
     csv_columns("${row}" cols)
-    list(LENGTH cols ncols)
-    if(NOT ncols EQUAL 14)
-        message(FATAL_ERROR "results.csv: row '${row}' has ${ncols} columns, expected 14")
-    endif()
-    list(GET cols 0 scene)
-    list(GET cols 1 method)
-    list(GET cols 4 ms)
-    list(GET cols 7 rel)
-    list(GET cols 8 floor)
-    list(GET cols 9 rmse)
-    list(GET cols 13 pixels)
-    list(GET cols 12 ratio)
+    list(GET cols ${case_COL} scene)
+    list(GET cols ${method_COL} method)
     if(NOT scene STREQUAL "skin_sphere")
-        message(FATAL_ERROR "results.csv: row '${row}': scene '${scene}'")
+        message(FATAL_ERROR "results.csv: row '${row}': case '${scene}'")
     endif()
     list(APPEND methods_seen ${method})
-    foreach(v IN ITEMS ms rel floor rmse ratio)
-        if(NOT "${${v}}" MATCHES "${nonneg}")
-            message(FATAL_ERROR "results.csv: row '${row}': ${v} = '${${v}}' is not a finite non-negative number")
-        endif()
-    endforeach()
-    # The sphere covers part of the 32x32 image: some, but not all, pixels are compared.
-    if(pixels LESS 20 OR pixels GREATER_EQUAL 1024)
-        message(FATAL_ERROR "results.csv: row '${row}': ${pixels} compared pixels")
-    endif()
-    # With 64 spp the reference noise floor of this scene is well above 0 (variance layer read).
-    if(floor STREQUAL "0")
-        message(FATAL_ERROR "results.csv: row '${row}': zero noise floor (variance layer lost?)")
-    endif()
 endforeach()
 list(REMOVE_DUPLICATES methods_seen)
 if(NOT methods_seen STREQUAL "sslpv:paper;dirpole")
     message(FATAL_ERROR "results.csv: methods '${methods_seen}', expected sslpv:paper;dirpole")
 endif()
+expect_reports(${dir})
 
 # results.json: 4 results with the same fields.
 file(READ ${dir}/results.json json)
@@ -106,22 +174,9 @@ string(JSON nres LENGTH "${json}" results)
 if(NOT nres EQUAL 4)
     message(FATAL_ERROR "results.json: ${nres} results, expected 4")
 endif()
-string(JSON rel0 GET "${json}" results 0 rel_rmse)
+string(JSON rel0 GET "${json}" results 0 block_rel_l1)
 if(NOT rel0 MATCHES "${nonneg}")
-    message(FATAL_ERROR "results.json: rel_rmse '${rel0}'")
-endif()
-
-# The chart: a PNG file (signature) of a plausible size.
-if(NOT EXISTS ${dir}/runtime_vs_error.png)
-    message(FATAL_ERROR "runtime_vs_error.png was not written")
-endif()
-file(READ ${dir}/runtime_vs_error.png sig LIMIT 8 HEX)
-if(NOT sig STREQUAL "89504e470d0a1a0a")
-    message(FATAL_ERROR "runtime_vs_error.png is not a PNG (signature ${sig})")
-endif()
-file(SIZE ${dir}/runtime_vs_error.png png_size)
-if(png_size LESS 2000)
-    message(FATAL_ERROR "runtime_vs_error.png: only ${png_size} bytes")
+    message(FATAL_ERROR "results.json: block_rel_l1 '${rel0}'")
 endif()
 
 # Second run: the reference comes from the cache; --json prints the same document.
@@ -151,37 +206,36 @@ if(EXISTS ${dir}/bad/results.csv)
 endif()
 
 # Overrides: --presets marble --etas 1,1.3 evaluates the scene twice, as named cases with their
-# own references (the overrides are part of the cache key): the two references' mean luminance
-# differs (the boundary's Fresnel transmittance changes with eta) and both keys name the preset.
+# own references: the scene hash in the two cache keys differs (eta is part of the scene).
 set(ovdir ${dir}/overrides)
 evaluate_ok(ov ${ovdir} 2 ${SCENE} --methods sslpv:paper --levels 1 --repeats 1 --width 32
     --height 32 --ref-spp 16 --presets marble --etas 1,1.3)
 set(ovscenes)
-set(ovrefs)
 foreach(i 1 2)
     list(GET ov_LINES ${i} row)
     csv_columns("${row}" cols)
-    list(GET cols 0 scene)
-    list(GET cols 11 meanref)
+    list(GET cols ${case_COL} scene)
     list(APPEND ovscenes ${scene})
-    list(APPEND ovrefs ${meanref})
 endforeach()
 if(NOT ovscenes STREQUAL "skin_sphere-marble-eta1;skin_sphere-marble-eta1.3")
     message(FATAL_ERROR "overrides: cases '${ovscenes}'")
 endif()
-list(GET ovrefs 0 ref_eta1)
-list(GET ovrefs 1 ref_eta13)
-if(ref_eta1 STREQUAL ref_eta13)
-    message(FATAL_ERROR "overrides: both references have mean ${ref_eta1}: eta not applied")
-endif()
+set(hashes)
 foreach(case eta1 eta1.3)
     set(key ${ovdir}/skin_sphere-marble-${case}_ref_32x32_16spp.key)
     if(NOT EXISTS ${key})
         message(FATAL_ERROR "overrides: ${key} missing")
     endif()
     file(READ ${key} keytext)
-    expect_contains(key "${keytext}" "preset=marble")
+    expect_contains(key "${keytext}" "case=skin_sphere-marble-${case} ")
+    string(REGEX MATCH "scene-fnv1a=[0-9a-f]+" h "${keytext}")
+    list(APPEND hashes ${h})
 endforeach()
+list(REMOVE_DUPLICATES hashes)
+list(LENGTH hashes nh)
+if(NOT nh EQUAL 2)
+    message(FATAL_ERROR "overrides: both references have the same scene hash '${hashes}'")
+endif()
 run(badeta evaluate ${SCENE} --etas 0.5 --out ${dir}/bad)
 if(NOT badeta_RC STREQUAL "2")
     message(FATAL_ERROR "--etas 0.5: expected exit 2, got '${badeta_RC}'")

@@ -1,0 +1,345 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief The evaluation's output files (Report.h).
+
+#include <lucent/core/Error.h>
+#include <lucent/core/FileIO.h>
+#include <lucent/evaluation/Report.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <sstream>
+
+namespace lucent::evaluation {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string fmt(double v, const char* f = "%.6g") {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, f, v);
+    return buf;
+}
+
+std::string jsonEscape(const std::string& s) {
+    std::string out;
+    for (char c : s) {
+        if (c == '"' || c == '\\')
+            out += '\\';
+        if (uint8_t(c) < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\u%04x", unsigned(c));
+            out += buf;
+            continue;
+        }
+        out += c;
+    }
+    return out;
+}
+
+/// CSV field: quoted when it holds a comma or a quote.
+std::string csvField(const std::string& s) {
+    if (s.find_first_of(",\"") == std::string::npos)
+        return s;
+    std::string out = "\"";
+    for (char c : s)
+        out += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return out + "\"";
+}
+
+/// The scene features as (name, value) in SceneFeatures' field order.
+std::vector<std::pair<std::string, double>> featureColumns(const planner::SceneFeatures& f) {
+    return {{"size_mm", f.sizeMm},
+            {"mean_sigma_t", f.meanSigmaT},
+            {"mean_free_path_mm", f.meanFreePathMm},
+            {"optical_size", f.opticalSize},
+            {"albedo", f.albedo},
+            {"diffusion_length_mm", f.diffusionLengthMm},
+            {"sigma_t_variation", f.sigmaTVariation},
+            {"albedo_variation", f.albedoVariation},
+            {"mean_abs_g", f.meanAbsG},
+            {"eta", f.eta},
+            {"max_depth_mm", f.maxDepthMm},
+            {"thin_fraction", f.thinFraction},
+            {"back_lit_fraction", f.backLitFraction},
+            {"curvature", f.curvature},
+            {"pixels_covered", f.pixelsCovered},
+            {"inside_voxels", double(f.insideVoxels)},
+            {"lights", double(f.lights)}};
+}
+
+/// Every column of a result but the features: (name, text, is-a-string).
+struct Field {
+    std::string name;
+    std::string text;
+    bool isString = false;
+};
+
+std::vector<Field> fields(const Result& r) {
+    const Metrics& m = r.metrics;
+    const BlockError& lum = m.report.blocks[Metrics::LUM];
+    std::vector<Field> f = {
+        {"case", r.caseName, true},
+        {"group", r.group, true},
+        {"method", r.variant, true},
+        {"setting", r.setting, true},
+        {"quality", std::to_string(r.quality)},
+        {"backend", r.backend, true},
+        {"time_ms", fmt(r.msMedian)},
+        {"time_min_ms", fmt(r.msMin)},
+        {"runs", std::to_string(r.runs)},
+        {"direct_ms", fmt(r.directMs)},
+        {"cost_ratio", fmt(r.costRatio)},
+        {"block_rel_l1", fmt(m.blockRelL1())},
+        {"block_rel_l1_raw", fmt(lum.relL1)},
+        {"block_rel_rmse", fmt(m.blockRelRmse())},
+        {"block_rel_rmse_raw", fmt(lum.relRmse)},
+        {"mean_ratio", fmt(m.meanRatio())},
+        {"p95", fmt(m.p95())},
+        {"noise_floor", fmt(lum.relL1Floor)},
+        {"noise_floor_rmse", fmt(lum.relRmseFloor)},
+        {"pixel_rel_rmse", fmt(m.report.channels[Metrics::LUM].relRmse)},
+        {"pixel_rel_rmse_floor", fmt(m.report.channels[Metrics::LUM].relRmseFloor)},
+    };
+    const char* rgb[] = {"r", "g", "b"};
+    for (int c = 0; c < 3; ++c)
+        f.push_back({std::string("block_rel_l1_") + rgb[c], fmt(m.blockRelL1(c))});
+    for (int c = 0; c < 3; ++c)
+        f.push_back({std::string("block_rel_rmse_") + rgb[c], fmt(m.blockRelRmse(c))});
+    for (int c = 0; c < 3; ++c)
+        f.push_back({std::string("mean_ratio_") + rgb[c], fmt(m.meanRatio(c))});
+    f.push_back({"pixels", std::to_string(m.report.pixelCount)});
+    f.push_back({"meets_goal", m.meetsGoal() ? "1" : "0"});
+    const std::vector<std::pair<std::string, double>> features =
+        featureColumns(r.features.value_or(planner::SceneFeatures{}));
+    for (const auto& [name, value] : features)
+        f.push_back({"feature_" + name, r.features ? fmt(value) : std::string()});
+    return f;
+}
+
+/// Results grouped by case, in first-seen order.
+std::vector<std::vector<const Result*>> byCase(const std::vector<Result>& results) {
+    std::vector<std::vector<const Result*>> out;
+    std::map<std::string, size_t> index;
+    for (const Result& r : results) {
+        const auto [it, inserted] = index.emplace(r.caseName, out.size());
+        if (inserted)
+            out.emplace_back();
+        out[it->second].push_back(&r);
+    }
+    return out;
+}
+
+std::string label(const Result& r) {
+    return r.setting == "-" ? r.variant : r.variant + " (" + r.setting + ")";
+}
+
+/// gnuplot data of one chart: one block per method (two blank lines apart, `index i`), rows
+/// "cost_ratio block_rel_l1 time_ms" in quality order.
+std::string chartData(const std::vector<const Result*>& results,
+                      const std::vector<std::string>& methods) {
+    std::string s;
+    for (const std::string& m : methods) {
+        s += "# " + m + "\n";
+        std::vector<const Result*> mine;
+        for (const Result* r : results)
+            if (r->variant == m)
+                mine.push_back(r);
+        std::sort(mine.begin(), mine.end(), [](const Result* a, const Result* b) {
+            return a->caseName != b->caseName ? a->caseName < b->caseName : a->quality < b->quality;
+        });
+        std::string lastCase;
+        for (const Result* r : mine) {
+            if (!lastCase.empty() && r->caseName != lastCase)
+                s += "\n";  // a blank line breaks the line between cases
+            lastCase = r->caseName;
+            s += fmt(std::max(r->costRatio, 1e-3)) + " " +
+                 fmt(std::max(r->metrics.blockRelL1(), 1e-4)) + " " + fmt(r->msMedian) + "\n";
+        }
+        s += "\n\n";
+    }
+    return s;
+}
+
+/// The methods among `results`, in first-seen order (one gnuplot index each).
+std::vector<std::string> methodNames(const std::vector<const Result*>& results) {
+    std::vector<std::string> names;
+    for (const Result* r : results)
+        if (std::find(names.begin(), names.end(), r->variant) == names.end())
+            names.push_back(r->variant);
+    return names;
+}
+
+std::vector<const Result*> pointers(const std::vector<Result>& results) {
+    std::vector<const Result*> all;
+    for (const Result& r : results)
+        all.push_back(&r);
+    return all;
+}
+
+}  // namespace
+
+std::string csvHeader() {
+    std::string s;
+    for (const Field& f : fields(Result{})) {
+        if (!s.empty())
+            s += ',';
+        s += f.name;
+    }
+    return s + "\n";
+}
+
+std::string toCsv(const std::vector<Result>& results) {
+    std::string s = csvHeader();
+    for (const Result& r : results) {
+        std::string row;
+        for (const Field& f : fields(r)) {
+            if (!row.empty())
+                row += ',';
+            row += csvField(f.text);
+        }
+        s += row + "\n";
+    }
+    return s;
+}
+
+std::string toJson(const std::vector<Result>& results, const RunInfo& info) {
+    std::ostringstream s;
+    s << "{\n  \"suite\": \"" << jsonEscape(info.suite) << "\",\n  \"command\": \""
+      << jsonEscape(info.command) << "\",\n  \"width\": " << info.width
+      << ",\n  \"height\": " << info.height << ",\n  \"ref_spp\": " << info.refSpp
+      << ",\n  \"repeats\": " << info.repeats
+      << ",\n  \"subsurface_only\": " << (info.subsurfaceOnly ? "true" : "false")
+      << ",\n  \"metric\": \"4x4-block relative L1 of luminance over object-covered pixels, "
+         "reference noise floor removed in quadrature\",\n"
+      << "  \"goal\": {\"block_rel_l1\": " << GOAL_BLOCK_REL_L1
+      << ", \"mean_ratio_tolerance\": " << GOAL_MEAN_RATIO_TOLERANCE << "},\n  \"cases\": [";
+    for (size_t i = 0; i < info.cases.size(); ++i) {
+        s << (i ? ", " : "") << "{\"name\": \"" << jsonEscape(info.cases[i]) << "\"";
+        if (i < info.noiseFloors.size())
+            s << ", \"noise_floor\": " << fmt(info.noiseFloors[i]);
+        if (i < info.referenceSeconds.size())
+            s << ", \"reference_seconds\": " << fmt(info.referenceSeconds[i]);
+        s << "}";
+    }
+    s << "],\n  \"skipped\": [";
+    for (size_t i = 0; i < info.skipped.size(); ++i)
+        s << (i ? ", " : "") << "\"" << jsonEscape(info.skipped[i]) << "\"";
+    s << "],\n  \"results\": [\n";
+    for (size_t i = 0; i < results.size(); ++i) {
+        s << "    {";
+        bool first = true;
+        for (const Field& f : fields(results[i])) {
+            if (f.text.empty() && !f.isString)
+                continue;  // a feature of a case that could not be analysed
+            s << (first ? "" : ", ") << "\"" << f.name << "\": ";
+            if (f.isString)
+                s << "\"" << jsonEscape(f.text) << "\"";
+            else
+                s << f.text;
+            first = false;
+        }
+        s << "}" << (i + 1 < results.size() ? "," : "") << "\n";
+    }
+    s << "  ]\n}\n";
+    return s.str();
+}
+
+std::string summaryMarkdown(const std::vector<Result>& results) {
+    std::string s =
+        "| case | best method | block rel. L1 | mean ratio | p95 | noise floor | cost (× direct) "
+        "| goal |\n|---|---|---:|---:|---:|---:|---:|---|\n";
+    for (const std::vector<const Result*>& rs : byCase(results)) {
+        const Result* best = *std::min_element(rs.begin(), rs.end(), [](auto* a, auto* b) {
+            const double ea = a->metrics.blockRelL1(), eb = b->metrics.blockRelL1();
+            return ea != eb ? ea < eb : a->costRatio < b->costRatio;
+        });
+        s += "| " + best->caseName + " | " + label(*best) + " | " +
+             fmt(best->metrics.blockRelL1(), "%.3f") + " | " +
+             fmt(best->metrics.meanRatio(), "%.3f") + " | " + fmt(best->metrics.p95(), "%.2f") +
+             " | " + fmt(best->noiseFloor, "%.3f") + " | " + fmt(best->costRatio, "%.1f") + " | " +
+             (best->metrics.meetsGoal() ? "met" : "**missed**") + " |\n";
+    }
+    return s;
+}
+
+std::string paretoMarkdown(const std::vector<Result>& results) {
+    std::string s =
+        "| case | method | cost (× direct) | time (ms) | block rel. L1 | mean ratio |\n"
+        "|---|---|---:|---:|---:|---:|\n";
+    for (const std::vector<const Result*>& rs : byCase(results)) {
+        std::vector<double> cost, error;
+        for (const Result* r : rs) {
+            cost.push_back(r->costRatio);
+            error.push_back(r->metrics.blockRelL1());
+        }
+        for (size_t i : paretoFront(cost, error)) {
+            const Result& r = *rs[i];
+            s += "| " + r.caseName + " | " + label(r) + " | " + fmt(r.costRatio, "%.2f") + " | " +
+                 fmt(r.msMedian, "%.0f") + " | " + fmt(r.metrics.blockRelL1(), "%.3f") + " | " +
+                 fmt(r.metrics.meanRatio(), "%.3f") + " |\n";
+        }
+    }
+    return s;
+}
+
+std::string gnuplotScript(const std::vector<Result>& results, const RunInfo& info) {
+    std::ostringstream s;
+    s << "# Run time vs error of the translucency methods (lucent-cli evaluate).\n"
+      << "# Draw with: cd <this folder> && gnuplot charts.gp\n"
+      << "# x: cost = wall time / the Direct render's of the same frame (log); y: 4x4-block\n"
+      << "# relative L1 of luminance against the exact reference, noise floor removed (log).\n"
+      << "set terminal pngcairo size 1100,760 font 'sans,11'\n"
+      << "set logscale xy\nset grid\nset key outside right top\n"
+      << "set xlabel 'cost (wall time / Direct render of the same frame)'\n"
+      << "set ylabel 'block relative L1 of luminance (noise floor removed)'\n"
+      << "goal = " << GOAL_BLOCK_REL_L1 << "\n";
+    const auto plot = [&](const std::string& data, const std::vector<std::string>& methods,
+                          bool lines) {
+        s << "plot goal with lines dt 2 lc rgb 'grey40' title 'goal (10 %)'";
+        for (size_t i = 0; i < methods.size(); ++i)
+            s << ", \\\n     '" << data << "' index " << i << " using 1:2 with "
+              << (lines ? "linespoints" : "points") << " pt " << (i % 13) + 1 << " lc " << i + 1
+              << " title '" << methods[i] << "'";
+        s << "\n";
+    };
+    s << "\nset output 'runtime_vs_error.png'\n"
+      << "set title 'run time vs error, all cases (" << info.width << "x" << info.height
+      << ", reference " << info.refSpp << " spp)'\n";
+    plot("chart_summary.dat", methodNames(pointers(results)), false);
+    for (const std::vector<const Result*>& rs : byCase(results)) {
+        const std::string c = fileSafe(rs.front()->caseName);
+        s << "\nset output 'runtime_vs_error_" << c << ".png'\n"
+          << "set title 'run time vs error: " << rs.front()->caseName << " (noise floor "
+          << fmt(rs.front()->noiseFloor, "%.3f") << ")'\n";
+        plot("chart_" + c + ".dat", methodNames(rs), true);
+    }
+    return s.str();
+}
+
+std::vector<std::string> writeReports(const std::vector<Result>& results, const RunInfo& info,
+                                      const std::string& dir) {
+    std::vector<std::string> written;
+    const auto write = [&](const std::string& name, const std::string& text) {
+        const std::string path = (fs::path(dir) / name).string();
+        writeFileAtomically(path, text);
+        written.push_back(path);
+    };
+    write("results.csv", toCsv(results));
+    write("results.json", toJson(results, info));
+    write("summary.md", summaryMarkdown(results));
+    write("pareto.md", paretoMarkdown(results));
+    const std::vector<const Result*> all = pointers(results);
+    write("chart_summary.dat", chartData(all, methodNames(all)));
+    for (const std::vector<const Result*>& rs : byCase(results))
+        write("chart_" + fileSafe(rs.front()->caseName) + ".dat", chartData(rs, methodNames(rs)));
+    write("charts.gp", gnuplotScript(results, info));
+    return written;
+}
+
+}  // namespace lucent::evaluation
