@@ -7,6 +7,7 @@
 #include "CliArgs.h"
 
 #include <lucent/core/Error.h>
+#include <lucent/core/FileIO.h>
 #include <lucent/evaluation/Evaluate.h>
 #include <lucent/evaluation/Report.h>
 #include <lucent/evaluation/Suite.h>
@@ -54,11 +55,32 @@ std::vector<float> parseEtas(const std::vector<std::string>& items) {
     return out;
 }
 
+/// `--report DIR`: the derived reports redrawn from DIR/results.csv and DIR/results.json.
+int redrawReports(const std::string& dir) {
+    const std::string csv = (fs::path(dir) / "results.csv").string();
+    const std::string json = (fs::path(dir) / "results.json").string();
+    const std::vector<evaluation::Result> results =
+        evaluation::parseResultsCsv(readInputFile(csv, "evaluation results"), csv);
+    const evaluation::RunInfo info =
+        evaluation::parseRunInfoJson(readInputFile(json, "evaluation run info"), json);
+    evaluation::writeDerivedReports(results, info, dir);
+    std::printf(
+        "%s\nrewrote the summary, the Pareto front and the chart data of %zu results in "
+        "%s; charts: cd %s && gnuplot charts.gp\n",
+        evaluation::summaryMarkdown(results).c_str(), results.size(), dir.c_str(), dir.c_str());
+    return 0;
+}
+
 int runEvaluate(const std::vector<std::string>& argv) {
     const Args args(argv,
                     {"suite", "cases", "methods", "ref-spp", "width", "height", "out", "repeats",
-                     "levels", "presets", "etas"},
+                     "levels", "presets", "etas", "report"},
                     {"subsurface-only", "json", "verbose", "no-images"});
+    if (const auto report = args.value("report")) {
+        if (argv.size() != 2 && !(argv.size() == 1 && argv[0].rfind("--report=", 0) == 0))
+            LUCENT_THROW(ValueError, "--report DIR takes no other option");
+        return redrawReports(*report);
+    }
     const auto suite = args.value("suite");
     if (suite && !args.positional().empty())
         LUCENT_THROW(ValueError, "give either --suite NAME or SCENE.json files, not both");
@@ -172,6 +194,7 @@ const Command evaluateCommand{
     "                           [--methods M1,M2,...] [--ref-spp N] [--width W] [--height H]\n"
     "                           [--repeats R] [--levels L] [--subsurface-only] [--no-images]\n"
     "                           [--json] [--verbose]\n"
+    "       lucent-cli evaluate --report DIR\n"
     "\n"
     "For each case: the exact path-traced reference with variance and coverage (seed 1,\n"
     "dielectric boundary), cached in DIR by scene hash and reference estimator version, with\n"
@@ -205,7 +228,9 @@ const Command evaluateCommand{
     "  --subsurface-only reference and methods without the surface reflection\n"
     "  --no-images       write no EXR/PNG per render\n"
     "  --json            print results.json to stdout (progress goes to stderr)\n"
-    "  --verbose         keep the methods' own logs on stderr\n",
+    "  --verbose         keep the methods' own logs on stderr\n"
+    "  --report DIR      render nothing: rewrite summary.md, pareto.md and the chart data and\n"
+    "                    script from DIR/results.csv and DIR/results.json\n",
     &runEvaluate};
 
 }  // namespace lucent::cli

@@ -6,9 +6,12 @@
 #include <lucent/core/FileIO.h>
 #include <lucent/evaluation/Report.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -52,25 +55,33 @@ std::string csvField(const std::string& s) {
     return out + "\"";
 }
 
-/// The scene features as (name, value) in SceneFeatures' field order.
-std::vector<std::pair<std::string, double>> featureColumns(const planner::SceneFeatures& f) {
-    return {{"size_mm", f.sizeMm},
-            {"mean_sigma_t", f.meanSigmaT},
-            {"mean_free_path_mm", f.meanFreePathMm},
-            {"optical_size", f.opticalSize},
-            {"albedo", f.albedo},
-            {"diffusion_length_mm", f.diffusionLengthMm},
-            {"sigma_t_variation", f.sigmaTVariation},
-            {"albedo_variation", f.albedoVariation},
-            {"mean_abs_g", f.meanAbsG},
-            {"eta", f.eta},
-            {"max_depth_mm", f.maxDepthMm},
-            {"thin_fraction", f.thinFraction},
-            {"back_lit_fraction", f.backLitFraction},
-            {"curvature", f.curvature},
-            {"pixels_covered", f.pixelsCovered},
-            {"inside_voxels", double(f.insideVoxels)},
-            {"lights", double(f.lights)}};
+/// The scene features' columns, in SceneFeatures' field order.
+struct FeatureColumn {
+    const char* name;
+    double planner::SceneFeatures::*real = nullptr;
+    int planner::SceneFeatures::*integer = nullptr;
+};
+const std::vector<FeatureColumn>& featureColumns() {
+    using F = planner::SceneFeatures;
+    static const std::vector<FeatureColumn> columns = {
+        {"size_mm", &F::sizeMm},
+        {"mean_sigma_t", &F::meanSigmaT},
+        {"mean_free_path_mm", &F::meanFreePathMm},
+        {"optical_size", &F::opticalSize},
+        {"albedo", &F::albedo},
+        {"diffusion_length_mm", &F::diffusionLengthMm},
+        {"sigma_t_variation", &F::sigmaTVariation},
+        {"albedo_variation", &F::albedoVariation},
+        {"mean_abs_g", &F::meanAbsG},
+        {"eta", &F::eta},
+        {"max_depth_mm", &F::maxDepthMm},
+        {"thin_fraction", &F::thinFraction},
+        {"back_lit_fraction", &F::backLitFraction},
+        {"curvature", &F::curvature},
+        {"pixels_covered", &F::pixelsCovered},
+        {"inside_voxels", nullptr, &F::insideVoxels},
+        {"lights", nullptr, &F::lights}};
+    return columns;
 }
 
 /// Every column of a result but the features: (name, text, is-a-string).
@@ -115,10 +126,12 @@ std::vector<Field> fields(const Result& r) {
         f.push_back({std::string("mean_ratio_") + rgb[c], fmt(m.meanRatio(c))});
     f.push_back({"pixels", std::to_string(m.report.pixelCount)});
     f.push_back({"meets_goal", m.meetsGoal() ? "1" : "0"});
-    const std::vector<std::pair<std::string, double>> features =
-        featureColumns(r.features.value_or(planner::SceneFeatures{}));
-    for (const auto& [name, value] : features)
-        f.push_back({"feature_" + name, r.features ? fmt(value) : std::string()});
+    for (const FeatureColumn& c : featureColumns()) {
+        std::string text;
+        if (r.features)
+            text = c.real ? fmt((*r.features).*c.real) : std::to_string((*r.features).*c.integer);
+        f.push_back({std::string("feature_") + c.name, text});
+    }
     return f;
 }
 
@@ -296,42 +309,187 @@ std::string gnuplotScript(const std::vector<Result>& results, const RunInfo& inf
       << "# relative L1 of luminance against the exact reference, noise floor removed (log).\n"
       << "set terminal pngcairo size 1100,760 font 'sans,11'\n"
       << "set logscale xy\nset grid\nset key outside right top\n"
+
       << "set xlabel 'cost (wall time / Direct render of the same frame)'\n"
       << "set ylabel 'block relative L1 of luminance (noise floor removed)'\n"
       << "goal = " << GOAL_BLOCK_REL_L1 << "\n";
+    // One colour and marker per method in every chart: its index among all the methods.
+    const std::vector<std::string> allMethods = methodNames(pointers(results));
     const auto plot = [&](const std::string& data, const std::vector<std::string>& methods,
-                          bool lines) {
+                          const std::vector<const Result*>& points, bool lines) {
+        // The y range holds the points and the goal line (at least 0.05 .. 0.2).
+        double lo = 0.05, hi = 0.2;
+        for (const Result* r : points) {
+            lo = std::min(lo, std::max(r->metrics.blockRelL1(), 1e-4));
+            hi = std::max(hi, r->metrics.blockRelL1());
+        }
+        s << "set yrange [" << fmt(lo / 1.2) << ":" << fmt(hi * 1.2) << "]\n";
         s << "plot goal with lines dt 2 lc rgb 'grey40' title 'goal (10 %)'";
-        for (size_t i = 0; i < methods.size(); ++i)
+        for (size_t i = 0; i < methods.size(); ++i) {
+            const size_t k = size_t(std::find(allMethods.begin(), allMethods.end(), methods[i]) -
+                                    allMethods.begin());
             s << ", \\\n     '" << data << "' index " << i << " using 1:2 with "
-              << (lines ? "linespoints" : "points") << " pt " << (i % 13) + 1 << " lc " << i + 1
+              << (lines ? "linespoints" : "points") << " pt " << (k % 13) + 1 << " lc " << k + 1
               << " title '" << methods[i] << "'";
+        }
         s << "\n";
     };
     s << "\nset output 'runtime_vs_error.png'\n"
       << "set title 'run time vs error, all cases (" << info.width << "x" << info.height
       << ", reference " << info.refSpp << " spp)'\n";
-    plot("chart_summary.dat", methodNames(pointers(results)), false);
+    plot("chart_summary.dat", allMethods, pointers(results), false);
     for (const std::vector<const Result*>& rs : byCase(results)) {
         const std::string c = fileSafe(rs.front()->caseName);
-        s << "\nset output 'runtime_vs_error_" << c << ".png'\n"
+        s << "\nset terminal pngcairo size 760,480 font 'sans,9'\n"
+          << "set output 'runtime_vs_error_" << c << ".png'\n"
           << "set title 'run time vs error: " << rs.front()->caseName << " (noise floor "
           << fmt(rs.front()->noiseFloor, "%.3f") << ")'\n";
-        plot("chart_" + c + ".dat", methodNames(rs), true);
+        plot("chart_" + c + ".dat", methodNames(rs), rs, true);
     }
     return s.str();
 }
 
-std::vector<std::string> writeReports(const std::vector<Result>& results, const RunInfo& info,
-                                      const std::string& dir) {
+namespace {
+
+/// Writes `text` to dir/name atomically and records the path.
+void writeInto(std::vector<std::string>& written, const std::string& dir, const std::string& name,
+               const std::string& text) {
+    const std::string path = (fs::path(dir) / name).string();
+    writeFileAtomically(path, text);
+    written.push_back(path);
+}
+
+/// The fields of one CSV line (RFC 4180 quoting: "a ""b"", c" is one field).
+std::vector<std::string> csvSplit(const std::string& line) {
+    std::vector<std::string> out(1);
+    bool quoted = false;
+    for (size_t i = 0; i < line.size(); ++i) {
+        const char c = line[i];
+        if (quoted && c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+            out.back() += '"';
+            ++i;
+        } else if (c == '"') {
+            quoted = !quoted;
+        } else if (c == ',' && !quoted) {
+            out.emplace_back();
+        } else if (c != '\r') {
+            out.back() += c;
+        }
+    }
+    return out;
+}
+
+}  // namespace
+
+std::vector<Result> parseResultsCsv(const std::string& text, const std::string& origin) {
+    std::istringstream in(text);
+    std::string line;
+    if (!std::getline(in, line))
+        LUCENT_THROW(IoError, origin, ": empty (expected the header of results.csv)");
+    const std::vector<std::string> header = csvSplit(line);
+    std::vector<Result> results;
+    int lineNo = 1;
+    while (std::getline(in, line)) {
+        ++lineNo;
+        if (line.empty())
+            continue;
+        const std::vector<std::string> cells = csvSplit(line);
+        if (cells.size() != header.size())
+            LUCENT_THROW(IoError, origin, ":", lineNo, ": ", cells.size(),
+                         " fields, the header has ", header.size());
+        const auto text = [&](const std::string& name) -> const std::string& {
+            const auto it = std::find(header.begin(), header.end(), name);
+            if (it == header.end())
+                LUCENT_THROW(IoError, origin, ": no column '", name, "'");
+            return cells[size_t(it - header.begin())];
+        };
+        const auto number = [&](const std::string& name) {
+            const std::string& t = text(name);
+            char* end = nullptr;
+            const double v = std::strtod(t.c_str(), &end);
+            if (t.empty() || *end != '\0')
+                LUCENT_THROW(IoError, origin, ":", lineNo, ": ", name, " '", t,
+                             "' is not a number");
+            return v;
+        };
+        Result r;
+        r.caseName = text("case");
+        r.group = text("group");
+        r.variant = text("method");
+        r.setting = text("setting");
+        r.quality = int(number("quality"));
+        r.backend = text("backend");
+        r.msMedian = number("time_ms");
+        r.msMin = number("time_min_ms");
+        r.runs = int(number("runs"));
+        r.directMs = number("direct_ms");
+        r.costRatio = number("cost_ratio");
+        ErrorReport& rep = r.metrics.report;
+        BlockError& lum = rep.blocks[Metrics::LUM];
+        lum.relL1Net = number("block_rel_l1");
+        lum.relL1 = number("block_rel_l1_raw");
+        lum.relRmseNet = number("block_rel_rmse");
+        lum.relRmse = number("block_rel_rmse_raw");
+        rep.channels[Metrics::LUM].meanRatio = number("mean_ratio");
+        lum.p95 = number("p95");
+        lum.relL1Floor = number("noise_floor");
+        lum.relRmseFloor = number("noise_floor_rmse");
+        rep.channels[Metrics::LUM].relRmse = number("pixel_rel_rmse");
+        rep.channels[Metrics::LUM].relRmseFloor = number("pixel_rel_rmse_floor");
+        const char* rgb[] = {"r", "g", "b"};
+        for (int c = 0; c < 3; ++c) {
+            rep.blocks[c].relL1Net = number(std::string("block_rel_l1_") + rgb[c]);
+            rep.blocks[c].relRmseNet = number(std::string("block_rel_rmse_") + rgb[c]);
+            rep.channels[c].meanRatio = number(std::string("mean_ratio_") + rgb[c]);
+        }
+        rep.pixelCount = size_t(number("pixels"));
+        r.noiseFloor = lum.relL1Floor;
+        if (!text("feature_size_mm").empty()) {
+            planner::SceneFeatures f;
+            for (const FeatureColumn& c : featureColumns()) {
+                const double v = number(std::string("feature_") + c.name);
+                if (c.real)
+                    f.*c.real = v;
+                else
+                    f.*c.integer = int(v);
+            }
+            r.features = f;
+        }
+        results.push_back(std::move(r));
+    }
+    return results;
+}
+
+RunInfo parseRunInfoJson(const std::string& text, const std::string& origin) {
+    RunInfo info;
+    try {
+        const nlohmann::json j = nlohmann::json::parse(text);
+        info.suite = j.value("suite", "");
+        info.command = j.value("command", "");
+        info.width = j.value("width", 0);
+        info.height = j.value("height", 0);
+        info.refSpp = j.value("ref_spp", 0);
+        info.repeats = j.value("repeats", 0);
+        info.subsurfaceOnly = j.value("subsurface_only", false);
+        for (const nlohmann::json& c : j.at("cases")) {
+            info.cases.push_back(c.at("name").get<std::string>());
+            info.noiseFloors.push_back(c.value("noise_floor", 0.0));
+            info.referenceSeconds.push_back(c.value("reference_seconds", 0.0));
+        }
+        for (const nlohmann::json& s : j.at("skipped"))
+            info.skipped.push_back(s.get<std::string>());
+    } catch (const nlohmann::json::exception& e) {
+        LUCENT_THROW(IoError, origin, ": not the results.json of an evaluation (", e.what(), ")");
+    }
+    return info;
+}
+
+std::vector<std::string> writeDerivedReports(const std::vector<Result>& results,
+                                             const RunInfo& info, const std::string& dir) {
     std::vector<std::string> written;
     const auto write = [&](const std::string& name, const std::string& text) {
-        const std::string path = (fs::path(dir) / name).string();
-        writeFileAtomically(path, text);
-        written.push_back(path);
+        writeInto(written, dir, name, text);
     };
-    write("results.csv", toCsv(results));
-    write("results.json", toJson(results, info));
     write("summary.md", summaryMarkdown(results));
     write("pareto.md", paretoMarkdown(results));
     const std::vector<const Result*> all = pointers(results);
@@ -339,6 +497,16 @@ std::vector<std::string> writeReports(const std::vector<Result>& results, const 
     for (const std::vector<const Result*>& rs : byCase(results))
         write("chart_" + fileSafe(rs.front()->caseName) + ".dat", chartData(rs, methodNames(rs)));
     write("charts.gp", gnuplotScript(results, info));
+    return written;
+}
+
+std::vector<std::string> writeReports(const std::vector<Result>& results, const RunInfo& info,
+                                      const std::string& dir) {
+    std::vector<std::string> written;
+    writeInto(written, dir, "results.csv", toCsv(results));
+    writeInto(written, dir, "results.json", toJson(results, info));
+    const std::vector<std::string> derived = writeDerivedReports(results, info, dir);
+    written.insert(written.end(), derived.begin(), derived.end());
     return written;
 }
 

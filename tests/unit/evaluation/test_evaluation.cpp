@@ -232,5 +232,54 @@ TEST(EvaluationReport, CsvHasTheColumnsThePlannerFitNeeds) {
     EXPECT_NE(gnuplotScript({cheap, good}, info).find("chart_two-blocks.dat"), std::string::npos);
 }
 
+TEST(EvaluationReport, ResultsReadBackAsWritten) {
+    // What --report redraws from: the CSV and the run info round-trip through their parsers.
+    const CachedReference ref = twoBlockReference(0.04f);
+    Result r;
+    r.caseName = "round-trip";
+    r.group = "test";
+    r.variant = "sslpv:paper";
+    r.setting = "grid 16, 16 steps";  // quoted in the CSV
+    r.quality = 2;
+    r.backend = "gl";
+    r.msMedian = 12.5;
+    r.msMin = 11.0;
+    r.runs = 3;
+    r.directMs = 5.0;
+    r.costRatio = 2.5;
+    ImageRgb test = ref.mean;
+    test.at(1, 1) = Rgb(2.f, 1.f, 0.5f);
+    r.metrics = scoreImage(test, ref);
+    r.noiseFloor = r.metrics.report.blocks[Metrics::LUM].relL1Floor;
+    planner::SceneFeatures f;
+    f.opticalSize = 123.5;
+    f.insideVoxels = 4096;
+    r.features = f;
+    Result noFeatures = r;
+    noFeatures.features.reset();
+    const std::string csv = toCsv({r, noFeatures});
+    const std::vector<Result> back = parseResultsCsv(csv, "results.csv");
+    ASSERT_EQ(back.size(), 2u);
+    EXPECT_EQ(toCsv(back), csv);
+    ASSERT_TRUE(back[0].features);
+    EXPECT_EQ(back[0].features->insideVoxels, 4096);
+    EXPECT_FALSE(back[1].features);
+    EXPECT_THROW(parseResultsCsv(csvHeader() + "a,b\n", "bad.csv"), IoError);
+
+    RunInfo info;
+    info.suite = "default";
+    info.command = "lucent-cli evaluate --suite default --out \"x\"";
+    info.width = 64;
+    info.height = 48;
+    info.refSpp = 256;
+    info.cases = {"a", "b"};
+    info.noiseFloors = {0.01, 0.02};
+    info.referenceSeconds = {3.0, 0.0};
+    info.skipped = {"b: combined (8 spp): no GL"};
+    const RunInfo again = parseRunInfoJson(toJson({}, info), "results.json");
+    EXPECT_EQ(toJson({}, again), toJson({}, info));
+    EXPECT_THROW(parseRunInfoJson("{", "bad.json"), IoError);
+}
+
 }  // namespace
 }  // namespace lucent::evaluation

@@ -53,5 +53,15 @@ std::string gnuplotScript(const std::vector<Result>& results, const RunInfo& inf
 /// `dir` (atomically, file by file). @return the paths written. @throw IoError.
 std::vector<std::string> writeReports(const std::vector<Result>& results, const RunInfo& info,
                                       const std::string& dir);
+/// Writes what is derived from the results: summary.md, pareto.md, chart_*.dat, charts.gp.
+std::vector<std::string> writeDerivedReports(const std::vector<Result>& results,
+                                             const RunInfo& info, const std::string& dir);
+
+/// Reads results.csv back (every column toCsv writes; the metrics it does not hold stay 0), so
+/// that the derived reports can be redrawn without rendering again (`evaluate --report DIR`).
+/// @param origin the file name for messages. @throw IoError naming the line and column.
+std::vector<Result> parseResultsCsv(const std::string& text, const std::string& origin);
+/// Reads the run info of results.json. @throw IoError when it is not one.
+RunInfo parseRunInfoJson(const std::string& text, const std::string& origin);
 
 }  // namespace lucent::evaluation
