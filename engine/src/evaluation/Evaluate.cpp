@@ -10,6 +10,7 @@
 #include <lucent/reference/PathTracer.h>
 
 #include <fcntl.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -323,17 +324,35 @@ methods::RenderResult renderVariant(const Scene& scene, const Variant& v,
     return methods::renderImage(scene, v.method, params, ro);
 }
 
-/// Warm-up, then `repeats` timed renders. @return the last image and the times (ms).
+/// CPU time of the whole process (every thread, llvmpipe's included), ms.
+double processCpuMs() {
+    timespec t{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return double(t.tv_sec) * 1e3 + double(t.tv_nsec) * 1e-6;
+}
+
+/// Wall and process CPU times of a render's runs, ms.
+struct Timings {
+    std::vector<double> wall, cpu;
+    void append(const Timings& other) {
+        wall.insert(wall.end(), other.wall.begin(), other.wall.end());
+        cpu.insert(cpu.end(), other.cpu.begin(), other.cpu.end());
+    }
+};
+
+/// Warm-up, then `repeats` timed renders. @return the last image; `times` gets each run's.
 methods::RenderResult timedRender(const Scene& scene, const Variant& v,
                                   const methods::ParamPreset& s, const RunOptions& options,
-                                  std::vector<double>& ms) {
+                                  Timings& times) {
     StderrSilencer quiet(options.silenceMethods);
     // Warm-up (first-use costs: shader compilation, caches, thread pool).
     methods::RenderResult r = renderVariant(scene, v, s, options);
     for (int i = 0; i < std::max(options.repeats, 1); ++i) {
         const auto t0 = std::chrono::steady_clock::now();
+        const double c0 = processCpuMs();
         r = renderVariant(scene, v, s, options);
-        ms.push_back(
+        times.cpu.push_back(processCpuMs() - c0);
+        times.wall.push_back(
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
                 .count());
     }
@@ -384,7 +403,7 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
 
     // The Direct render of the same frame: the unit of cost, at least 3 timed runs (a single
     // one on a loaded box can be off by 2x); a "direct" variant's runs join them below.
-    std::vector<double> directTimes;
+    Timings directTimes;
     {
         const Variant direct = parseVariant("direct");
         RunOptions unitOptions = options;
@@ -407,10 +426,10 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
             r.variant = v.name;
             r.setting = s.name;
             r.quality = q;
-            std::vector<double> ms;
+            Timings times;
             methods::RenderResult image;
             try {
-                image = timedRender(evalCase.scene, v, s, options, ms);
+                image = timedRender(evalCase.scene, v, s, options, times);
             } catch (const std::exception& e) {
                 run.skipped.push_back(label + ": " + e.what());
                 say("skipping " + run.skipped.back());
@@ -424,11 +443,12 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
                 continue;
             }
             r.backend = methods::backendName(image.backend);
-            r.msMedian = median(ms);
-            r.msMin = *std::min_element(ms.begin(), ms.end());
-            r.runs = int(ms.size());
+            r.msMedian = median(times.wall);
+            r.msMin = *std::min_element(times.wall.begin(), times.wall.end());
+            r.cpuMsMedian = median(times.cpu);
+            r.runs = int(times.wall.size());
             if (v.method == "direct" && v.variant.values.empty() && s.values.empty())
-                directTimes.insert(directTimes.end(), ms.begin(), ms.end());
+                directTimes.append(times);
             r.noiseFloor = ref.blockRelL1Floor;
             r.features = run.features;
             if (options.writeImages) {
@@ -450,15 +470,20 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
             run.results.push_back(std::move(r));
         }
     }
-    run.directMs = directTimes.empty() ? 0.0 : median(directTimes);
+    run.directMs = directTimes.wall.empty() ? 0.0 : median(directTimes.wall);
+    run.directCpuMs = directTimes.cpu.empty() ? 0.0 : median(directTimes.cpu);
     for (Result& r : run.results) {
         r.directMs = run.directMs;
         r.costRatio = run.directMs > 0.0 ? r.msMedian / run.directMs : 0.0;
+        r.directCpuMs = run.directCpuMs;
+        r.cpuCostRatio = run.directCpuMs > 0.0 ? r.cpuMsMedian / run.directCpuMs : 0.0;
     }
     {
-        char buf[128];
-        std::snprintf(buf, sizeof buf, "  Direct render (the unit of cost): %.1f ms, median of %zu",
-                      run.directMs, directTimes.size());
+        char buf[160];
+        std::snprintf(
+            buf, sizeof buf,
+            "  Direct render (the unit of cost): %.1f ms wall, %.1f ms CPU, median of %zu",
+            run.directMs, run.directCpuMs, directTimes.wall.size());
         say(buf);
     }
     return run;

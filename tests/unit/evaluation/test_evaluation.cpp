@@ -190,10 +190,10 @@ TEST(EvaluationReport, CsvHasTheColumnsThePlannerFitNeeds) {
     cheap.caseName = good.caseName = "two-blocks";
     cheap.variant = "direct";
     cheap.setting = "-";
-    cheap.costRatio = 1.0;
+    cheap.costRatio = cheap.cpuCostRatio = 1.0;
     good.variant = "dirpole";
     good.setting = "grid 16, 16 steps";
-    good.costRatio = 10.0;
+    good.costRatio = good.cpuCostRatio = 10.0;
     ImageRgb off = ref.mean;
     for (Rgb& p : off.pixels())
         p *= 1.3f;
@@ -247,6 +247,9 @@ TEST(EvaluationReport, ResultsReadBackAsWritten) {
     r.runs = 3;
     r.directMs = 5.0;
     r.costRatio = 2.5;
+    r.cpuMsMedian = 20.0;
+    r.directCpuMs = 8.0;
+    r.cpuCostRatio = 2.5;
     ImageRgb test = ref.mean;
     test.at(1, 1) = Rgb(2.f, 1.f, 0.5f);
     r.metrics = scoreImage(test, ref);

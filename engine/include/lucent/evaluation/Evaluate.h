@@ -16,7 +16,8 @@
 /// coverage layer marks as object, 4×4-pixel blocks, luminance (Rec. 709) and per channel:
 /// block relative L1 and block relative RMSE with the reference's noise floor subtracted in
 /// quadrature, the 95th-percentile block error and the mean ratio Σ test / Σ reference.
-/// Cost: a method's wall time over the Direct render's of the same frame in the same run.
+/// Cost: a method's wall time over the Direct render's of the same frame in the same run, and
+/// the same ratio of process CPU times (steadier when other processes share the cores).
 
 #include <lucent/bench/ErrorMetrics.h>
 #include <lucent/core/Image.h>
@@ -136,6 +137,11 @@ struct Result {
     int runs = 0;
     double directMs = 0.0;   ///< the Direct render of the same frame, same run (median)
     double costRatio = 0.0;  ///< msMedian / directMs
+    /// Process CPU time (all threads, llvmpipe's included; median), and its ratio to the Direct
+    /// render's: unlike wall time, barely moved by other processes on a shared box.
+    double cpuMsMedian = 0.0;
+    double directCpuMs = 0.0;
+    double cpuCostRatio = 0.0;
     Metrics metrics;
     double noiseFloor = 0.0;  ///< the reference's block rel. L1 floor (luminance)
     std::optional<planner::SceneFeatures> features;  ///< of the case (empty if not analysable)
@@ -157,7 +163,8 @@ struct RunOptions {
 /// What a case's run produced.
 struct CaseRun {
     CachedReference reference;
-    double directMs = 0.0;
+    double directMs = 0.0;     ///< wall, median
+    double directCpuMs = 0.0;  ///< process CPU time, median
     std::optional<planner::SceneFeatures> features;
     std::vector<Result> results;
     std::vector<std::string> skipped;  ///< "case: variant (setting): why"

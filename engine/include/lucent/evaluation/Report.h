@@ -30,7 +30,8 @@ struct RunInfo {
 };
 
 /// results.csv: header and one row per result. Columns: case, group, method, setting,
-/// quality, backend, time_ms, time_min_ms, runs, direct_ms, cost_ratio, block_rel_l1,
+/// quality, backend, time_ms, time_min_ms, runs, direct_ms, cost_ratio, cpu_ms, direct_cpu_ms,
+/// cpu_cost_ratio, block_rel_l1,
 /// block_rel_l1_raw, block_rel_rmse, block_rel_rmse_raw, mean_ratio, p95, noise_floor,
 /// noise_floor_rmse, pixel_rel_rmse, pixel_rel_rmse_floor, block_rel_l1_{r,g,b},
 /// block_rel_rmse_{r,g,b}, mean_ratio_{r,g,b}, pixels, meets_goal, then one feature_<name>
@@ -40,10 +41,13 @@ std::string toCsv(const std::vector<Result>& results);
 std::string csvHeader();
 /// results.json: the run info and the results with the same fields as the CSV.
 std::string toJson(const std::vector<Result>& results, const RunInfo& info);
-/// Per case: the best result (lowest block rel. L1, then lowest cost), its errors, the noise
-/// floor, the cost ratio and whether it meets the goal, as a Markdown table.
+/// Per case: the best result (lowest block rel. L1, then lowest CPU cost), its errors, the
+/// noise floor, the wall and CPU cost ratios and whether it meets the goal, and the result of
+/// lowest CPU cost within the goal (if any), as a Markdown table.
 std::string summaryMarkdown(const std::vector<Result>& results);
-/// Per case: the Pareto front of (cost ratio, block rel. L1), cheapest first, as Markdown.
+/// Per case: the Pareto front of (CPU cost ratio, block rel. L1), cheapest first, as Markdown.
+/// CPU rather than wall time: other processes on a shared box move a case's wall-time ratios
+/// by up to 3x (docs/evaluation.md), its CPU-time ratios far less.
 std::string paretoMarkdown(const std::vector<Result>& results);
 /// The gnuplot script that reads DIR/chart_<case>.dat and DIR/chart_summary.dat (written by
 /// writeReports) and writes runtime_vs_error_<case>.png and runtime_vs_error.png.
