@@ -124,6 +124,7 @@ int runEvaluate(const std::vector<std::string>& argv) {
         evaluation::SuiteOptions so;
         so.width = args.intOr("width", so.width, 8, 4096);
         so.height = args.intOr("height", args.value("width") ? so.width : so.height, 8, 4096);
+        so.log = [](const std::string& m) { std::fprintf(stderr, "evaluate: %s\n", m.c_str()); };
         cases = evaluation::filterCases(evaluation::buildSuite(*suite, so),
                                         splitComma(args.valueOr("cases", "")));
         info.suite = *suite;

@@ -15,6 +15,7 @@
 #include <lucent/material/Presets.h>
 #include <lucent/scene/Scene.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -32,9 +33,15 @@ struct SuiteOptions {
     int width = 64;   ///< image width, pixels (cases with another aspect scale the height)
     int height = 64;  ///< image height, pixels
     int materialResolution = 48;  ///< voxels per axis of the painted grids built here
-    /// Folder holding scenes/ and meshes/ (the bunny, the back-lit scene file). Empty: the
-    /// LUCENT_RESOURCES_DIR environment variable, else the source tree's resources/.
+    /// Folder holding scenes/ (the back-lit scene file). Empty: the LUCENT_RESOURCES_DIR
+    /// environment variable, else the source tree's resources/.
     std::string resourcesDir;
+    /// The project's shared test meshes (the painted bunny is decimated from
+    /// bunny_closed_75k.ply there; they are not part of the repository). Empty: the
+    /// LUCENT_SHARED_MESHES environment variable, else ../shared/meshes beside the source tree.
+    std::string sharedMeshesDir;
+    /// Notes for the user: a case left out because its input is absent. May be empty.
+    std::function<void(const std::string&)> log;
 };
 
 /// "default", "smoke".
@@ -62,5 +69,7 @@ std::vector<EvalCase> casesFromSceneFiles(const std::vector<std::string>& paths,
 
 /// The resources folder `options` points to (see SuiteOptions::resourcesDir).
 std::string resourcesDir(const SuiteOptions& options);
+/// The shared test meshes folder `options` points to (see SuiteOptions::sharedMeshesDir).
+std::string sharedMeshesDir(const SuiteOptions& options);
 
 }  // namespace lucent::evaluation
