@@ -41,15 +41,24 @@ void printFeatures(const planner::SceneFeatures& f) {
                 f.backLitFraction, f.pixelsCovered, f.imagePixels);
 }
 
+planner::CostMeasure costMeasure(const Args& args) {
+    const std::string c = args.valueOr("cost", "wall");
+    if (c == "wall")
+        return planner::CostMeasure::WallTime;
+    if (c == "cpu")
+        return planner::CostMeasure::CpuTime;
+    LUCENT_THROW(ValueError, "--cost: expected wall or cpu, got '", c, "'");
+}
+
 int runFit(const Args& args) {
     const std::string out = args.value("o").value_or(args.valueOr("output", ""));
     if (out.empty())
         LUCENT_THROW(ValueError, "plan --fit: missing -o/--output models.json");
     const double ridge = args.floatOr("ridge", 0.05f, 0.f, 100.f);
     std::vector<planner::MeasuredRow> rows;
-    std::string source = "lucent-cli plan --fit";
+    std::string source = "lucent-cli plan --cost " + args.valueOr("cost", "wall") + " --fit";
     for (const std::string& csv : args.values("fit")) {
-        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv);
+        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv, costMeasure(args));
         rows.insert(rows.end(), r.begin(), r.end());
         source += " " + csv;
     }
@@ -77,7 +86,7 @@ int runCheck(const Args& args) {
     const double budgetRatio = args.floatOr("budget-ratio", 20.f, 1e-3f, 1e9f);
     std::vector<planner::MeasuredRow> rows;
     for (const std::string& csv : args.values("check")) {
-        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv);
+        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv, costMeasure(args));
         rows.insert(rows.end(), r.begin(), r.end());
     }
     const std::vector<planner::FrontCheck> checks =
@@ -111,7 +120,7 @@ int runCheck(const Args& args) {
 int runPlan(const std::vector<std::string>& argv) {
     const Args args(argv,
                     {"budget-ms", "max-error", "direct-ms", "models", "width", "height", "fit", "o",
-                     "output", "ridge", "source", "check", "budget-ratio"},
+                     "output", "ridge", "source", "check", "budget-ratio", "cost"},
                     {"cpu"});
     if (args.has("fit"))
         return runFit(args);
@@ -187,6 +196,8 @@ const Command planCommand{
     "  --fit CSV         fit the models on an evaluation CSV (`lucent-cli evaluate --suite`),\n"
     "                    one model per method and setting measured on at least 2 cases\n"
     "  --ridge R         regularisation of the fit (default 0.05)\n"
+    "  --cost wall|cpu   --fit/--check: the cost column, wall-time or process CPU-time ratio\n"
+    "                    to the Direct render (default wall; cpu on a shared machine)\n"
     "  --check CSV       judge Auto on measured cases: per case its choice (from the models)\n"
     "                    against the measured front: the time ratio to the cheapest candidate\n"
     "                    at or under its measured error (goal <= 1.2) and whether it is the\n"

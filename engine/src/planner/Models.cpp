@@ -318,7 +318,7 @@ double parseNumber(const std::string& text, const std::string& column, const std
 
 }  // namespace
 
-std::vector<MeasuredRow> readMeasurements(const std::string& csvPath) {
+std::vector<MeasuredRow> readMeasurements(const std::string& csvPath, CostMeasure cost) {
     const std::string text = readInputFile(csvPath, "evaluation CSV");
     std::istringstream in(text);
     std::string line;
@@ -343,12 +343,15 @@ std::vector<MeasuredRow> readMeasurements(const std::string& csvPath) {
     const int methodCol = require({"method"});
     const int settingCol = require({"setting"});
     const int errorCol = require({"block_rel_l1"});
-    const int costCol = column({"cost_ratio"});
-    const int timeCol = column({"time_ms", "ms_median"});
-    const int directCol = column({"direct_ms"});
+    const bool cpu = cost == CostMeasure::CpuTime;
+    const char* costName = cpu ? "cpu_cost_ratio" : "cost_ratio";
+    const int costCol = column({costName});
+    const int timeCol = cpu ? column({"cpu_ms"}) : column({"time_ms", "ms_median"});
+    const int directCol = cpu ? column({"direct_cpu_ms"}) : column({"direct_ms"});
     if (costCol < 0 && (timeCol < 0 || directCol < 0))
-        LUCENT_THROW(ValueError, csvPath,
-                     ": no column 'cost_ratio' (nor 'time_ms' with 'direct_ms') in the header");
+        LUCENT_THROW(ValueError, csvPath, ": no column '", costName, "' (nor ",
+                     cpu ? "'cpu_ms' with 'direct_cpu_ms'" : "'time_ms' with 'direct_ms'",
+                     ") in the header");
     std::vector<std::pair<int, double SceneFeatures::*>> features;
     for (const FeatureColumn& fc : FEATURE_COLUMNS) {
         const std::string snake = snakeCase(fc.name);
@@ -380,7 +383,7 @@ std::vector<MeasuredRow> readMeasurements(const std::string& csvPath) {
         r.setting = f[size_t(settingCol)];
         r.blockRelL1 = parseNumber(f[size_t(errorCol)], "block_rel_l1", where);
         if (costCol >= 0) {
-            r.costRatio = parseNumber(f[size_t(costCol)], "cost_ratio", where);
+            r.costRatio = parseNumber(f[size_t(costCol)], costName, where);
         } else {
             const double direct = parseNumber(f[size_t(directCol)], "direct_ms", where);
             r.costRatio =
@@ -574,7 +577,12 @@ std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
         }
         c.bestInBudget = label(best->method, best->setting);
         c.bestError = best->blockRelL1;
-        c.choseBest = best == &chosen;
+        // Errors closer than the reference noise floor are the same point as far as the
+        // measurement can tell.
+        c.choseBest =
+            best == &chosen ||
+            ((chosen.costRatio <= budgetRatio) == (best->costRatio <= budgetRatio) &&
+             chosen.blockRelL1 <= best->blockRelL1 + std::max(chosen.noiseFloor, best->noiseFloor));
         out.push_back(std::move(c));
     }
     return out;

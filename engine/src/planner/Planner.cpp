@@ -64,6 +64,8 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
     LUCENT_CHECK(budget.frameMs > 0, "plan: the frame budget must be > 0 ms, got ", budget.frameMs);
     LUCENT_CHECK(budget.hysteresis >= 0 && budget.hysteresis < 1,
                  "plan: hysteresis must be in [0, 1), got ", budget.hysteresis);
+    LUCENT_CHECK(budget.errorTolerance >= 0 && budget.errorTolerance < 1,
+                 "plan: the error tolerance must be in [0, 1), got ", budget.errorTolerance);
     const bool errorTarget = budget.maxError > 0;
 
     Plan p;
@@ -105,6 +107,15 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
     });
     p.valid = true;
     p.chosen = p.options.front();
+    bool cheaperAtEqualError = false;
+    if (!errorTarget && p.chosen.fits) {
+        const double equalBelow = p.chosen.error * (1.0 + budget.errorTolerance);
+        for (const Option& o : p.options)
+            if (o.fits && o.error <= equalBelow && o.ms < p.chosen.ms) {
+                p.chosen = o;
+                cheaperAtEqualError = true;
+            }
+    }
 
     // Hysteresis: within one scene class, keep the previous choice while it still fits and
     // the new best is not clearly better.
@@ -136,6 +147,9 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
         p.reason += format(" (target %.2f)", budget.maxError);
     if (!p.chosen.fits)
         p.reason += errorTarget ? ", no method reaches the target" : ", over budget";
+    if (cheaperAtEqualError && !p.kept)
+        p.reason += format(", the cheapest within %.0f %% of the least error",
+                           100.0 * budget.errorTolerance);
     if (p.kept)
         p.reason +=
             ", kept: the best differs by less than " + format("%.0f %%", 100.0 * budget.hysteresis);

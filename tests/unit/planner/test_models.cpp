@@ -158,6 +158,18 @@ TEST(PlannerModels, ReadsEvaluationCsvByColumnName) {
     EXPECT_DOUBLE_EQ(rows[0].features.meanAbsG, 0.8);
     EXPECT_DOUBLE_EQ(rows[0].features.pixelsCovered, 500);
     EXPECT_EQ(rows[0].features.lights, 2);
+    // The CPU-time cost needs its own columns, and says which are missing.
+    EXPECT_THROW(readMeasurements(path, CostMeasure::CpuTime), ValueError);
+    const std::string cpu = writeTemp(
+        "lucent_models_cpu.csv",
+        "case,method,setting,cost_ratio,cpu_cost_ratio,block_rel_l1,feature_optical_size,"
+        "feature_albedo,feature_sigma_t_variation,feature_albedo_variation,feature_mean_abs_g,"
+        "feature_eta,feature_back_lit_fraction,feature_curvature,feature_thin_fraction,"
+        "feature_pixels_covered\n"
+        "a,dipole,8 spp,30,1.5,0.2,10,0.9,0,0,0,1.3,0,0.1,0.5,100\n");
+    EXPECT_DOUBLE_EQ(readMeasurements(cpu, CostMeasure::CpuTime)[0].costRatio, 1.5);
+    EXPECT_DOUBLE_EQ(readMeasurements(cpu)[0].costRatio, 30.0);
+    EXPECT_DOUBLE_EQ(readMeasurements(cpu)[0].features.opticalSize, 10.0);
 }
 
 TEST(PlannerModels, CsvErrorsNameTheProblem) {

@@ -145,7 +145,8 @@ TEST(Planner, ReplansWhenTheSceneClassChangesOrThePreviousNoLongerFits) {
     EXPECT_EQ(cands[moved.choice].method, "back");
     EXPECT_FALSE(moved.kept);
     // The previous choice no longer fits the budget: replaced whatever the hysteresis.
-    const std::vector<Candidate> costly = {fixed("front", 9.0, 0.10), fixed("back", 2.0, 0.11)};
+    // (0.13 is more than the 10 % error tolerance above 0.10, so the costly one is first.)
+    const std::vector<Candidate> costly = {fixed("front", 9.0, 0.10), fixed("back", 2.0, 0.13)};
     Plan fromFront = plan(costly, frontLit(), budget(100.0));
     EXPECT_EQ(costly[fromFront.choice].method, "front");
     Plan tight = plan(costly, frontLit(), budget(50.0), &fromFront);
@@ -184,4 +185,22 @@ TEST(Planner, SkippedSettingsOfOneMethodAreNamedOnce) {
         p.reason.find("; dirpole (2 settings), sslpv s skipped: no GL; sslpv s skipped: other"),
         std::string::npos)
         << p.reason;
+}
+
+TEST(Planner, PredictedErrorsWithinTheToleranceGoToTheCheaper) {
+    // 8, 32 and 128 spp of one method: predicted 0.105, 0.100, 0.099 at 2×, 5×, 9× Direct.
+    // Within 10 % of the least error the cheapest wins; at 0 tolerance the least error does.
+    const std::vector<Candidate> cands = {fixed("d8", 2.0, 0.105), fixed("d32", 5.0, 0.100),
+                                          fixed("d128", 9.0, 0.099), fixed("other", 1.0, 0.2)};
+    Plan p = plan(cands, frontLit(), budget(100.0));
+    EXPECT_EQ(cands[p.choice].method, "d8");
+    EXPECT_NE(p.reason.find("the cheapest within 10 % of the least error"), std::string::npos)
+        << p.reason;
+    Budget strict = budget(100.0);
+    strict.errorTolerance = 0.0;
+    EXPECT_EQ(cands[plan(cands, frontLit(), strict).choice].method, "d128");
+    // Only candidates within the budget compete: with 60 ms, d128 (90 ms) is out, d8 still wins.
+    EXPECT_EQ(cands[plan(cands, frontLit(), budget(60.0)).choice].method, "d8");
+    strict.errorTolerance = 1.0;
+    EXPECT_THROW(plan(cands, frontLit(), strict), ValueError);
 }

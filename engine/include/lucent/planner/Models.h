@@ -85,7 +85,12 @@ Models fitModels(const std::vector<MeasuredRow>& rows, double ridge = 0.05);
 /// (or block_rel_l1_floor). Rows of the `direct` and
 /// `reference` methods are read like any other (the caller decides what to fit).
 /// @throw IoError naming the file; ValueError naming the missing column or the bad line.
-std::vector<MeasuredRow> readMeasurements(const std::string& csvPath);
+/// Which cost to read: the wall-time ratio (cost_ratio, or time_ms / direct_ms) or the process
+/// CPU-time ratio (cpu_cost_ratio, or cpu_ms / direct_cpu_ms). On a shared machine the wall
+/// time of the same render varies many-fold with the other load while its CPU time does not.
+enum class CostMeasure { WallTime, CpuTime };
+std::vector<MeasuredRow> readMeasurements(const std::string& csvPath,
+                                          CostMeasure cost = CostMeasure::WallTime);
 
 /// JSON (docs/planner.md, "Models file"). @throw IoError / ValueError naming the file, for an
 /// unreadable file, malformed JSON, another VERSION or a coefficient count that does not match
@@ -115,7 +120,9 @@ struct FrontCheck {
     /// cheapest when none is).
     std::string bestInBudget;
     double bestError = 0.0;
-    bool choseBest = false;  ///< Auto's choice is bestInBudget
+    /// Auto's choice is bestInBudget, or within the reference noise floor of its error (and on
+    /// the same side of the budget).
+    bool choseBest = false;
 };
 
 /// For every case in `rows`, plans with `models` on the case's features (only candidates that

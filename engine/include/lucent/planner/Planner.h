@@ -48,6 +48,12 @@ struct Budget {
     /// A new best replaces the previous choice of the same scene class only if its predicted
     /// error is lower by more than this fraction (or the previous no longer fits).
     double hysteresis = 0.15;
+    /// Within the frame budget, predicted errors within this fraction of the least are equal
+    /// and the cheapest of them wins: the models predict errors to a factor of 1.5–2
+    /// (docs/planner.md), and more samples of a progressive method that buy a predicted 2 %
+    /// cost twice the time for an error the measurement cannot tell apart (the suite's
+    /// 8/32/128 spp rows).
+    double errorTolerance = 0.1;
 };
 
 /// One scored candidate.
