@@ -1,6 +1,6 @@
 #version 450 core
 // SPDX-License-Identifier: MIT
-// SSLPV per-pixel sample pass of SslpvSubsurfaceProvider (Børlum et al. 2011, seed 000, §3.3):
+// SSLPV per-pixel sample pass of SslpvSubsurfaceProvider (Børlum et al. 2011, Børlum et al. 2011, §3.3):
 // at every covered G-buffer pixel, the exitant radiance estimate of the CPU SslpvRenderer
 // (engine/src/sslpv/SslpvRenderer.cpp + SslpvSolver::radiance), line for line:
 //   L_i = (2/A)(c00·Y00 + ½·K1·c10^(n)),  A = Δx²,  c10^(n) = n·(c11, c1−1, c10)   (Eq. 5–7)

@@ -239,8 +239,8 @@ double slabResponse(const FitCase& fc, int n, const SslpvOptions& base, float et
 }
 
 /// The fit's target for the quantity of slabResponse(): Jensen et al. 2001's BSSRDF
-/// S_d = F_t(ω_i) R_d F_t(ω_o)/π (Eq. 4 of the paper, seed 004 Table 1) integrated over the
-/// surface for uniform normal irradiance gives L_o/E = F_t(0)·R_d·F_t(ω_o)/π; slabResponse()
+/// S_d = F_t(ω_i) R_d F_t(ω_o)/π (Eq. 4 of the paper, Mertens et al. 2005 Table 1) integrated over
+/// the surface for uniform normal irradiance gives L_o/E = F_t(0)·R_d·F_t(ω_o)/π; slabResponse()
 /// leaves out F_t(ω_o), so the target is F_t(0)·R_d/π with R_d the classical dipole's total
 /// diffuse reflectance.
 double slabTarget(float albedo, float eta) {

@@ -25,7 +25,7 @@ void planeBasis(const Vector3f& forward, Vector3f& right, Vector3f& up) {
 }
 
 /// Perspective RSM from `origin` along `forward` (§3.1): Φ_p = I(ω_p)·Δω_p with Δω_p from
-/// rsmTexelSolidAngle (the near-plane-corrected formula of seed 003).
+/// rsmTexelSolidAngle (the near-plane-corrected formula of the SSLPV project page errata).
 void perspectiveRsm(const RayCaster& mesh, const Light& light, const Point3f& origin,
                     const Vector3f& forward, float tanHalf, int res, const Rgb& scale,
                     std::vector<SslpvInjectionSample>& out) {

@@ -100,7 +100,8 @@ PropagationMatrix computePropagationMatrix(int order, int axis, int sign, int no
                 }
             }
             // (1/π) ∫_{2π} (n_f·ω) y_i dω = (1/π) √(4π/(2l+1)) z_l y_i(n_f): the clamped cosine
-            // lobe rotated to n_f (zonal rotation, Sloan 2008; zonal z_l from seed 003).
+            // lobe rotated to n_f (zonal rotation, Sloan 2008; zonal z_l from the SSLPV project
+            // page errata).
             double nf[3] = {0.0, 0.0, 0.0};
             nf[fa] = double(fs);
             double yn[SSLPV_MAX_COEFFS];

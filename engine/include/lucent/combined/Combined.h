@@ -3,8 +3,8 @@
 /// @file
 /// @brief Combined subsurface mode: the image-space dipole for the *local* part of the
 /// transport (x_i within the split radius r_s of x_o) plus SSLPV for what travels further
-/// (Mertens et al. 2005, seed 004 §7.1: the two are "perfectly complementary"; Børlum et al.
-/// 2011, seed 000). Two splits (docs/methods/combined.md):
+/// (Mertens et al. 2005 §7.1: the two are "perfectly complementary"; Børlum et al.
+/// 2011, Børlum et al. 2011). Two splits (docs/methods/combined.md):
 ///
 ///  - SplitMode::Kernel (default): SSLPV's own estimate of its local part is replaced by the
 ///    dipole's,

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief SSLPV (Børlum et al. 2011, seed 000) as a gpu::SubsurfaceProvider: the live preview
-/// while the artist paints. The CPU SslpvSolver (or SslpvGl for the propagation steps) solves
-/// the light volume; the accumulation grid is uploaded to 3-D textures; a compute pass
+/// @brief SSLPV (Børlum et al. 2011, Børlum et al. 2011) as a gpu::SubsurfaceProvider: the live
+/// preview while the artist paints. The CPU SslpvSolver (or SslpvGl for the propagation steps)
+/// solves the light volume; the accumulation grid is uploaded to 3-D textures; a compute pass
 /// (shaders/sslpv_sample.comp) evaluates at every covered G-buffer pixel exactly what the CPU
 /// SslpvRenderer evaluates per ray hit: L_o = T(ω_o)·L_i with L_i from Eq. 5–7, read half a
 /// cell (then 1, 1.5 cells) inside the surface, trilinear over inside cells

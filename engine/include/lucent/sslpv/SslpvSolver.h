@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief Subsurface Light Propagation Volumes on the CPU (Børlum et al. 2011, seed 000):
+/// @brief Subsurface Light Propagation Volumes on the CPU (Børlum et al. 2011, Børlum et al. 2011):
 /// injection of refracted light (§3.1, Eq. 1), iterative propagation with absorption and
 /// scattering (§3.2, Eq. 2–3), exitant-flux sinks, and the area-light radiance estimate of
 /// §3.3 (Eq. 5–7). Incremental: the app sets what changed and calls solve().

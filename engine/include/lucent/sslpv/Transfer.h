@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief The fixed maths of SSLPV (Børlum et al. 2011, seed 000): the per-face propagation
-/// matrices of §4 computed by numerical integration, exact dielectric Fresnel transmittance and
-/// Snell refraction used by injection (§3.1, Eq. 1) and rendering (§3.3, Eq. 4/7), and the
-/// reflective-shadow-map texel solid angle of §3.1 with the near-plane correction of seed 003.
+/// @brief The fixed maths of SSLPV (Børlum et al. 2011, Børlum et al. 2011): the per-face
+/// propagation matrices of §4 computed by numerical integration, exact dielectric Fresnel
+/// transmittance and Snell refraction used by injection (§3.1, Eq. 1) and rendering (§3.3, Eq.
+/// 4/7), and the reflective-shadow-map texel solid angle of §3.1 with the near-plane correction of
+/// the SSLPV project page errata.
 ///
 ///     const auto& mats = propagationMatrices(1);            // 6 matrices, 4×4 each
 ///     float m = mats[neighbourIndex(0, +1)].at(0, 3);        // ≈ −0.240 (paper, §4)
@@ -36,8 +37,9 @@ struct PropagationMatrix {
 ///   [M_f]_{ij} = (1/π) ∫_{2π} (n_f·ω) y_i(ω) dω · ∫_{Δω_{f,s}} y_j(ω) dω       (§4)
 /// summed over the five faces f of d other than the one shared with s. The first factor is the
 /// analytic projection of the clamped-cosine lobe about the face normal n_f (zonal coefficients
-/// √π/2, √(π/3), √(5π)/8, seed 003); the solid-angle integral over each face is computed by
-/// tensor Gauss–Legendre quadrature over the face area, dω = |n_f·r| / |r|³ dA, in double.
+/// √π/2, √(π/3), √(5π)/8, the SSLPV project page errata); the solid-angle integral over each face
+/// is computed by tensor Gauss–Legendre quadrature over the face area, dω = |n_f·r| / |r|³ dA, in
+/// double.
 /// @param order 1 (4 coefficients, the paper) or 2 (9).
 /// @param axis 0, 1, 2. @param sign +1 or −1.
 /// @param nodes Gauss–Legendre nodes per face dimension (≥ 2).
@@ -63,7 +65,7 @@ Vector3f refractInto(const Vector3f& wi, const Normal3f& n, float eta);
 /// Solid angle (sr) of one texel of a perspective reflective shadow map (§3.1):
 ///   Δω_p = A_p cos θ_p / |r_p|²,  A_p = (2·near·tan(FOV/2))²·α / (N_x N_y),  |r_p| = near/cos θ_p
 /// which is the paper's 4α tan²(FOV/2) cos³θ_p / (N_x N_y) once A_p is divided by near²
-/// (seed 003: the printed formula assumes near = 1).
+/// (the SSLPV project page errata: the printed formula assumes near = 1).
 /// @param tanHalfFov tan(FOV/2) of the horizontal field of view. @param aspect α = height/width.
 /// @param nx, ny texels. @param cosTheta angle between the plane normal and r_p.
 /// @param nearPlane distance of the virtual plane (mm); cancels out, kept to state the units.
