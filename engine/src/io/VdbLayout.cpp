@@ -61,6 +61,8 @@ public:
     }
     void bytes(void* dst, size_t n, const char* what) {
         need(n, what);
+        if (n == 0)
+            return;  // an empty block: `dst` may be null, and memcpy(null, ..., 0) is undefined
         fetch(m_pos, dst, n);
         m_pos += n;
     }

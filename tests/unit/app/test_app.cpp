@@ -17,6 +17,7 @@
 #endif
 #include "SliceView.h"
 #include "Viewport.h"
+#include "GuiTestWaits.h"
 #include "KeepLibrariesLoaded.h"
 
 #include <lucent/core/Error.h>
@@ -85,7 +86,7 @@ std::unique_ptr<MainWindow> shownWindow(int frames = 2) {
     auto w = std::make_unique<MainWindow>(/*restoreSettings=*/false);
     w->viewport()->setFixedSize(640, 360);
     w->show();
-    EXPECT_TRUE(QTest::qWaitForWindowExposed(w.get()));
+    EXPECT_TRUE(QTest::qWaitForWindowExposed(w.get(), test::kWindowWaitMs));
     Viewport* vp = w->viewport();
     for (int i = 0; vp->stats().frames < frames && i < frames + 5; ++i) {
         const long long f = vp->stats().frames;
@@ -264,7 +265,7 @@ double darkStrokeContrast(RenderSettings::Method method, int frames) {
     Viewport* vp = w->viewport();
     vp->setFixedSize(640, 360);
     w->show();
-    EXPECT_TRUE(QTest::qWaitForWindowExposed(w.get()));
+    EXPECT_TRUE(QTest::qWaitForWindowExposed(w.get(), test::kWindowWaitMs));
     for (int i = 0; i < frames; ++i)
         renderOneFrame(vp);
     const QImage before = vp->grabRender().convertToFormat(QImage::Format_RGB32);
@@ -836,7 +837,8 @@ TEST(AppWindow, StrokeOnTheGlWindowChangesVoxelsAndThePreview) {
     Viewport* vp = w->viewport();
     QWindow* gl = vp->glWindow();
     ASSERT_NE(gl, nullptr);
-    ASSERT_TRUE(gl->isExposed());
+    // The GL window is a child of the main window: Xvfb may expose it after its parent.
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(gl, test::kWindowWaitMs));
     // The container fills the facade: window and widget positions are the same.
     EXPECT_EQ(gl->size(), vp->size());
     EXPECT_EQ(gl->mapToGlobal(QPoint(0, 0)), vp->mapToGlobal(QPoint(0, 0)));
@@ -906,7 +908,7 @@ TEST(AppWindow, FitsA1366x768ScreenWithEveryDockReachable) {
     EXPECT_LE(w.minimumSizeHint().width(), laptop.width());
     w.resize(laptop);
     w.show();
-    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w, test::kWindowWaitMs));
     QTest::qWait(50);  // the default dock proportions are applied after the first layout
     EXPECT_EQ(w.size(), laptop) << "the window grew past the screen";
     expectLaidOut(w);
@@ -940,7 +942,7 @@ TEST(AppWindow, ReferencePictureFollowsTheDock) {
     MainWindow w(/*restoreSettings=*/false);
     w.resize(1366, 708);
     w.show();
-    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w, test::kWindowWaitMs));
     auto* dock = w.findChild<QDockWidget*>(QStringLiteral("dockReference"));
     ASSERT_NE(dock, nullptr);
     dock->raise();
@@ -973,7 +975,7 @@ TEST(AppWindow, SpinBoxesShowTheirWholeValue) {
     MainWindow w(/*restoreSettings=*/false);
     w.resize(1366, 708);
     w.show();
-    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w, test::kWindowWaitMs));
     int checked = 0;
     for (QDockWidget* d : w.findChildren<QDockWidget*>()) {
         d->raise();
@@ -1356,7 +1358,7 @@ TEST(AppRender, FailingMethodFallsBackToDirectAndRecovers) {
     w->setRenderMethod(int(M::Direct));
     w->viewport()->setFixedSize(640, 360);
     w->show();
-    ASSERT_TRUE(QTest::qWaitForWindowExposed(w.get()));
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(w.get(), test::kWindowWaitMs));
     Viewport* vp = w->viewport();
     renderOneFrame(vp);
     gpu::ShaderLibrary& shaders = vp->previewRenderer().shaderLibrary();
@@ -1397,7 +1399,7 @@ TEST(AppDocs, Screenshots) {
     // The whole screen (the user guide's pictures are taken on 1366×768 and 1920×1080 screens).
     w.resize(w.screen()->availableGeometry().size());
     w.show();
-    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w, test::kWindowWaitMs));
     Viewport* vp = w.viewport();
     renderOneFrame(vp);
     const QString suffix = qEnvironmentVariable("LUCENT_SCREENSHOT_SUFFIX");

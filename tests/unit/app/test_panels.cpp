@@ -10,6 +10,7 @@
 #include "Panels.h"
 #include "SliceView.h"
 #include "Viewport.h"
+#include "GuiTestWaits.h"
 #include "KeepLibrariesLoaded.h"
 
 #include <lucent/core/Error.h>
@@ -85,7 +86,7 @@ std::unique_ptr<MainWindow> shownWindow() {
     auto w = std::make_unique<MainWindow>(/*restoreSettings=*/false);
     w->viewport()->setFixedSize(320, 180);
     w->show();
-    EXPECT_TRUE(QTest::qWaitForWindowExposed(w.get()));
+    EXPECT_TRUE(QTest::qWaitForWindowExposed(w.get(), test::kWindowWaitMs));
     return w;
 }
 
@@ -658,7 +659,7 @@ TEST(BrushPanelTest, ShortcutsResizeAndSwitchTools) {
     radius->setValue(4.0);
     // The keys themselves, pressed in the active window, go through the Brush menu.
     w->activateWindow();
-    ASSERT_TRUE(QTest::qWaitForWindowActive(w.get()));
+    ASSERT_TRUE(QTest::qWaitForWindowActive(w.get(), test::kWindowWaitMs));
     vp->setFocus();
     QTest::keyClick(vp, Qt::Key_BracketRight);
     EXPECT_NEAR(vp->brush().engine.radius, 5.f, 1e-6f);

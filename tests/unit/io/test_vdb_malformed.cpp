@@ -1,19 +1,16 @@
 // SPDX-License-Identifier: MIT
 // Malformed and foreign VDB files: every one must give an IoError naming the file, never a
-// crash. This TU includes OpenVDB to craft the bad files (wrong types, NaN, missing grids...).
+// crash. The bad files (wrong types, NaN, missing grids...) are crafted with OpenVDB in
+// VdbFixtures.cpp, a library of its own (not instrumented in the sanitizer build).
 #include "IoTestUtil.h"
+#include "VdbFixtures.h"
 
 #include <lucent/core/FileIO.h>
 #include <lucent/io/VdbIO.h>
 
-#include <openvdb/io/File.h>
-#include <openvdb/io/Stream.h>
-#include <openvdb/openvdb.h>
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <bit>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -23,8 +20,6 @@ using namespace lucent;
 using namespace lucent::test;
 
 namespace {
-
-namespace vdb = openvdb;
 
 std::vector<char> readBytes(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
@@ -36,52 +31,19 @@ void writeBytes(const std::string& path, const char* data, size_t n) {
     out.write(data, std::streamsize(n));
 }
 
-/// A valid Lucent file, read back with plain OpenVDB so that a test can break one thing.
-struct RawFile {
-    vdb::GridPtrVec grids;
-    vdb::MetaMap meta;
+/// A valid Lucent file (16³, seed 11), read back with plain OpenVDB so that a test can break
+/// one thing.
+struct RawFile : RawVdbFile {
+    RawFile() : RawVdbFile(exportSource()) {}
+    std::string write(const std::string& name) const { return RawVdbFile::write(outputPath(name)); }
 
-    RawFile() {
-        vdb::initialize();
+private:
+    static std::string exportSource() {
         const std::string path = outputPath("raw-source.vdb");
         exportVdb(randomPaintedVolume(16, /*seed=*/11), path);
-        vdb::io::File file(path);
-        file.open(false);
-        grids = *file.getGrids();
-        meta = *file.getMetadata();
-        file.close();
-    }
-    vdb::GridBase::Ptr grid(const std::string& name) {
-        for (auto& g : grids)
-            if (g->getName() == name)
-                return g;
-        return nullptr;
-    }
-    void remove(const std::string& name) {
-        std::erase_if(grids, [&](const vdb::GridBase::Ptr& g) { return g->getName() == name; });
-    }
-    void replace(const std::string& name, vdb::GridBase::Ptr g) {
-        remove(name);
-        g->setName(name);
-        grids.push_back(g);
-    }
-    std::string write(const std::string& name) const {
-        const std::string path = outputPath(name);
-        vdb::io::File(path).write(grids, meta);
         return path;
     }
 };
-
-/// The first active voxel of grid `name`, set to `v`.
-void poison(RawFile& raw, const std::string& name, float v) {
-    auto grid = vdb::gridPtrCast<vdb::Vec3SGrid>(raw.grid(name));
-    ASSERT_TRUE(grid);
-    auto it = grid->beginValueOn();
-    ASSERT_TRUE(bool(it));
-    vdb::CoordBBox box;
-    it.getBoundingBox(box);
-    grid->tree().setValueOn(box.min(), vdb::Vec3s(0.5f, v, 0.25f));
-}
 
 }  // namespace
 
@@ -124,14 +86,8 @@ TEST(VdbMalformed, GarbageBytesAreRejected) {
 }
 
 TEST(VdbMalformed, ForeignFileIsSummarisedButNotImported) {
-    vdb::initialize();
-    auto fog = vdb::FloatGrid::create(0.f);
-    fog->setName("density");
-    fog->setGridClass(vdb::GRID_FOG_VOLUME);
-    fog->tree().setValueOn(vdb::Coord(-3, 4, 1000), 2.5f);
-    fog->tree().setValueOn(vdb::Coord(7, -2, 999), 0.5f);
     const std::string path = outputPath("foreign.vdb");
-    vdb::io::File(path).write({fog});
+    writeForeignFogVdb(path);
     expectIoError([&] { importVdb(path); }, path, "not a Lucent material file");
     const VdbFileSummary s = summarizeVdb(path);
     ASSERT_EQ(s.grids.size(), 1u);
@@ -172,7 +128,7 @@ TEST(VdbMalformed, FileRewrittenByAnotherToolStillImports) {
 
 TEST(VdbMalformed, WrongGridTypeIsRejected) {
     RawFile raw;
-    raw.replace("g", vdb::FloatGrid::create(0.f));
+    raw.replaceWithFloatGrid("g");
     const std::string path = raw.write("wrong-type.vdb");
     expectIoError([&] { importVdb(path); }, path, "grid 'g' has type 'float', expected 'vec3s'");
 }
@@ -180,7 +136,7 @@ TEST(VdbMalformed, WrongGridTypeIsRejected) {
 TEST(VdbMalformed, MissingGridIsRejected) {
     for (const char* name : {"sigma_t", "sigma_s", "g"}) {
         RawFile raw;
-        raw.remove(name);
+        raw.removeGrid(name);
         const std::string path = raw.write(std::string("missing-") + name + ".vdb");
         expectIoError([&] { importVdb(path); }, path, std::string("missing grid '") + name + "'");
     }
@@ -192,7 +148,7 @@ TEST(VdbMalformed, NonFiniteValuesAreRejected) {
     for (const char* name : {"sigma_t", "sigma_s", "g"})
         for (float v : bad) {
             RawFile raw;
-            poison(raw, name, v);
+            ASSERT_TRUE(raw.setFirstActiveValue(name, v));
             const std::string path = raw.write(std::string("nonfinite-") + name +
                                                (std::isnan(v) ? "-nan" : "-inf") + ".vdb");
             expectIoError([&] { importVdb(path); }, path,
@@ -208,7 +164,7 @@ TEST(VdbMalformed, NonFiniteValuesAreRejected) {
 
 TEST(VdbMalformed, OutOfDomainValueIsRejected) {
     RawFile raw;
-    poison(raw, "g", 1.5f);  // |g| > 0.99
+    ASSERT_TRUE(raw.setFirstActiveValue("g", 1.5f));  // |g| > 0.99
     const std::string path = raw.write("out-of-domain.vdb");
     expectIoError([&] { importVdb(path); }, path, "outside the valid domain");
 }
@@ -216,28 +172,26 @@ TEST(VdbMalformed, OutOfDomainValueIsRejected) {
 TEST(VdbMalformed, AbsurdMetadataIsRejected) {
     {
         RawFile raw;
-        raw.meta.insertMeta("lucent_resolution", vdb::Int32Metadata(1 << 20));
+        raw.setFileMetaInt("lucent_resolution", 1 << 20);
         const std::string path = raw.write("absurd-resolution.vdb");
         expectIoError([&] { importVdb(path); }, path, "resolution 1048576 is outside");
     }
     {
         RawFile raw;
-        raw.meta.insertMeta("lucent_voxel_size_mm",
-                            vdb::FloatMetadata(std::numeric_limits<float>::quiet_NaN()));
+        raw.setFileMetaFloat("lucent_voxel_size_mm", std::numeric_limits<float>::quiet_NaN());
         const std::string path = raw.write("nan-voxel-size.vdb");
         expectIoError([&] { importVdb(path); }, path, "voxel size");
     }
     {
         RawFile raw;
-        raw.meta.removeMeta("lucent_resolution");
-        raw.meta.insertMeta("lucent_resolution", vdb::StringMetadata("sixteen"));
+        raw.setFileMetaString("lucent_resolution", "sixteen");
         const std::string path = raw.write("string-resolution.vdb");
         expectIoError([&] { importVdb(path); }, path,
                       "metadata 'lucent_resolution' has type 'string'");
     }
     {
         RawFile raw;
-        raw.meta.removeMeta("lucent_origin_mm");
+        raw.removeFileMeta("lucent_origin_mm");
         const std::string path = raw.write("no-origin.vdb");
         expectIoError([&] { importVdb(path); }, path, "missing metadata 'lucent_origin_mm'");
     }
@@ -246,26 +200,21 @@ TEST(VdbMalformed, AbsurdMetadataIsRejected) {
 TEST(VdbMalformed, ActiveVoxelsOutsideTheGridAreRejected) {
     RawFile raw;
     for (const char* name : {"sigma_t", "sigma_s", "g"})
-        vdb::gridPtrCast<vdb::Vec3SGrid>(raw.grid(name))
-            ->tree()
-            .setValueOn(vdb::Coord(16, 0, 0), vdb::Vec3s(0.f));
+        ASSERT_TRUE(raw.activateVoxel(name, 16, 0, 0));
     const std::string path = raw.write("outside.vdb");
     expectIoError([&] { importVdb(path); }, path, "outside the 16^3 grid");
 }
 
 TEST(VdbMalformed, MismatchedTopologyIsRejected) {
     RawFile raw;
-    auto g = vdb::gridPtrCast<vdb::Vec3SGrid>(raw.grid("g"));
-    vdb::CoordBBox box;
-    g->beginValueOn().getBoundingBox(box);
-    g->tree().setValueOff(box.min());
+    ASSERT_TRUE(raw.deactivateFirstActiveVoxel("g"));
     const std::string path = raw.write("topology.vdb");
     expectIoError([&] { importVdb(path); }, path, "not active on the same voxels");
 }
 
 TEST(VdbMalformed, MismatchedTransformIsRejected) {
     RawFile raw;
-    raw.grid("sigma_s")->setTransform(vdb::math::Transform::createLinearTransform(2.0));
+    raw.setUniformTransform("sigma_s", 2.0);
     const std::string path = raw.write("transform.vdb");
     expectIoError([&] { importVdb(path); }, path, "transform of grid 'sigma_s'");
 }
@@ -276,22 +225,11 @@ TEST(VdbMalformed, MismatchedTransformIsRejected) {
 
 namespace {
 
-/// A vec3s grid of `leaves` 8³ leaves of random (incompressible) values: Blosc cannot shrink
-/// them and copies them behind its 16-byte header, so each leaf's block is int64 6160 followed
-/// by the header and the 6144 bytes of values.
+/// `name` in the output folder: writeRandomLeavesVdb's grid of `leaves` incompressible leaves,
+/// so each leaf's block is int64 6160 followed by Blosc's header and the 6144 bytes of values.
 std::string writeRandomLeaves(const std::string& name, int leaves) {
-    vdb::initialize();
-    auto grid = vdb::Vec3SGrid::create(vdb::Vec3s(0.f));
-    grid->setName("velocity");
-    Pcg32 rng(5);
-    // Random bit patterns (finite: exponent below 255) compress by nothing.
-    auto randomFloat = [&] { return std::bit_cast<float>(rng.nextUint() & 0xbf7fffffu); };
-    for (int l = 0; l < leaves; ++l)
-        for (int i = 0; i < 512; ++i)
-            grid->tree().setValueOn(vdb::Coord(8 * l + i % 8, (i / 8) % 8, i / 64),
-                                    vdb::Vec3s(randomFloat(), randomFloat(), randomFloat()));
     const std::string path = outputPath(name);
-    vdb::io::File(path).write({grid});
+    writeRandomLeavesVdb(path, leaves);
     return path;
 }
 
@@ -377,7 +315,7 @@ TEST(VdbMalformed, GridMetadataSizesAreChecked) {
     // Regression: grid-level metadata was not checked; a corrupt string length made OpenVDB
     // allocate (and fill) gigabytes in MetaMap::readMeta.
     RawFile raw;
-    raw.grid("g")->insertMeta("zz_probe", vdb::StringMetadata("abcdefgh"));
+    raw.setGridMetaString("g", "zz_probe", "abcdefgh");
     const std::string src = raw.write("grid-meta-source.vdb");
     std::vector<char> bytes = readBytes(src);
     const std::string name = "zz_probe";
@@ -391,7 +329,7 @@ TEST(VdbMalformed, GridMetadataSizesAreChecked) {
     expectIoError([&] { importVdb(path); }, path, "metadata name of 2147483632 bytes");
     // A fixed-size value whose size field disagrees with its type desynchronises OpenVDB (it
     // reads sizeof(T) whatever the size field says).
-    raw.grid("g")->insertMeta("zz_vec", vdb::Vec3SMetadata(vdb::Vec3s(1.f)));
+    raw.setGridMetaVec3s("g", "zz_vec", 1.f, 1.f, 1.f);
     std::vector<char> typed = readBytes(raw.write("grid-meta-typed.vdb"));
     const std::string key = "zz_vec", type = "vec3s";
     const auto kt = std::search(typed.begin(), typed.end(), key.begin(), key.end());
@@ -442,47 +380,6 @@ TEST(VdbMalformed, ValidFilesOfEveryCheckedKindAreRead) {
     // The preflight walk must accept whatever OpenVDB writes: every value type, half floats,
     // zip / no compression, active-mask compression off, tiles at every level, instances and
     // stream-written files.
-    vdb::initialize();
-    auto fill = [](auto grid, auto value) {
-        grid->tree().setValueOn(vdb::Coord(1, 2, 3), value);
-        grid->tree().setValueOn(vdb::Coord(-100, 50, 7), value);
-        grid->tree().addTile(1, vdb::Coord(4096, 0, 0), value, true);     // 8³ tile
-        grid->tree().addTile(2, vdb::Coord(8192, 4096, 0), value, true);  // 128³ tile
-        grid->tree().addTile(3, vdb::Coord(0, 0, 40960), value, true);    // 4096³ root tile
-        return grid;
-    };
-    vdb::GridPtrVec grids{
-        fill(vdb::FloatGrid::create(0.5f), 2.f),
-        fill(vdb::DoubleGrid::create(0.0), 3.0),
-        fill(vdb::Int32Grid::create(0), 4),
-        fill(vdb::Int64Grid::create(0), int64_t(5)),
-        fill(vdb::BoolGrid::create(false), true),
-        fill(vdb::MaskGrid::create(false), true),
-        fill(vdb::Vec3SGrid::create(vdb::Vec3s(0.f)), vdb::Vec3s(1.f, 2.f, 3.f)),
-        fill(vdb::Vec3DGrid::create(vdb::Vec3d(0.0)), vdb::Vec3d(1.0, 2.0, 3.0)),
-        fill(vdb::Vec3IGrid::create(vdb::Vec3i(0)), vdb::Vec3i(1, 2, 3)),
-    };
-    for (size_t i = 0; i < grids.size(); ++i)
-        grids[i]->setName("grid" + std::to_string(i));
-    auto half = vdb::FloatGrid::create(0.f);
-    half->setName("half");
-    half->setSaveFloatAsHalf(true);
-    half->tree().setValueOn(vdb::Coord(5, 5, 5), 0.25f);
-    grids.push_back(half);
-    auto halfVec = vdb::Vec3SGrid::create(vdb::Vec3s(0.f));
-    halfVec->setName("halfvec");
-    halfVec->setSaveFloatAsHalf(true);
-    halfVec->tree().setValueOn(vdb::Coord(5, 5, 5), vdb::Vec3s(0.5f));
-    grids.push_back(halfVec);
-    auto shared = grids[0]->copyGrid();  // shares the tree: written as an instance
-    shared->setName("instance");
-    grids.push_back(shared);
-    for (float v : {1.f, 2.f}) {  // two grids of the same name: both listed, each its own
-        auto dup = vdb::FloatGrid::create(0.f);
-        dup->setName("dup");
-        dup->tree().setValueOn(vdb::Coord(int(v), 0, 0), v);
-        grids.push_back(dup);
-    }
     auto checkAll = [&](const std::string& path, size_t expected) {
         const VdbFileSummary s = summarizeVdb(path);
         ASSERT_EQ(s.grids.size(), expected) << path;
@@ -496,24 +393,15 @@ TEST(VdbMalformed, ValidFilesOfEveryCheckedKindAreRead) {
         std::sort(dupValues.begin(), dupValues.end());
         EXPECT_EQ(dupValues, (std::vector<double>{1.0, 2.0})) << path;
     };
-    const uint32_t modes[] = {vdb::io::COMPRESS_BLOSC | vdb::io::COMPRESS_ACTIVE_MASK,
-                              vdb::io::COMPRESS_ZIP | vdb::io::COMPRESS_ACTIVE_MASK,
-                              vdb::io::COMPRESS_NONE, vdb::io::COMPRESS_ACTIVE_MASK,
-                              vdb::io::COMPRESS_BLOSC};
-    for (const uint32_t mode : modes) {
-        const std::string path = outputPath("every-kind-" + std::to_string(mode) + ".vdb");
-        vdb::io::File file(path);
-        file.setCompression(mode);
-        file.write(grids);
-        checkAll(path, grids.size());
+    for (const VdbCompression mode :
+         {VdbCompression::BloscActiveMask, VdbCompression::ZipActiveMask, VdbCompression::None,
+          VdbCompression::ActiveMaskOnly, VdbCompression::BloscOnly}) {
+        const std::string path = outputPath("every-kind-" + std::to_string(int(mode)) + ".vdb");
+        checkAll(path, writeEveryKindVdb(path, mode));
     }
     // Stream-written (no grid offsets): OpenVDB reads every grid when it opens the file.
     const std::string streamed = outputPath("every-kind-stream.vdb");
-    {
-        std::ofstream os(streamed, std::ios::binary);
-        vdb::io::Stream(os).write(grids);
-    }
-    checkAll(streamed, grids.size());
+    checkAll(streamed, writeEveryKindVdbStream(streamed));
 }
 
 TEST(VdbMalformed, SummaryOfHugeBoxesDoesNotOverflow) {
