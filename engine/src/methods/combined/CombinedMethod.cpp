@@ -151,6 +151,10 @@ private:
                              s.sslpv.render.gridResolution != o.sslpv.render.gridResolution ||
                              s.sslpv.render.solver.maxSteps != o.sslpv.render.solver.maxSteps ||
                              s.sslpv.render.solver.order != o.sslpv.render.solver.order;
+        // A new SSLPV grid drops the SSLPV part's material (SslpvProvider::setOptions): the
+        // next setScene hands it the volume again.
+        if (m_settingsSet && s.sslpv.render.gridResolution != o.sslpv.render.gridResolution)
+            m_materialSet = false;
         if (changed)
             m_provider->setSettings(s);
         m_settingsSet = true;
