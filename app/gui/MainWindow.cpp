@@ -63,6 +63,7 @@
 #include <QUrl>
 
 #include <algorithm>
+#include <iterator>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -79,8 +80,13 @@ namespace lucent::app {
 
 namespace {
 constexpr int MAX_RECENT = 8;
-/// Version of the Render settings defaults saved with the preferences (2: Dipole by default).
-constexpr int RENDER_DEFAULTS_VERSION = 2;
+/// Version of the Render settings defaults saved with the preferences (2: Dipole by default;
+/// 3: the method saved by registry name).
+constexpr int RENDER_DEFAULTS_VERSION = 3;
+/// Registry names of the selector's entries before version 3 of the preferences, by index: what
+/// a saved index meant then (a migration table, not a list of methods to offer).
+constexpr const char* PRE_REGISTRY_METHOD_ORDER[] = {
+    "direct", "single-scattering", "sslpv", "dipole", "better-dipole", "dirpole", "combined"};
 constexpr int AUTOSAVE_INTERVAL_MS = 120 * 1000;
 /// Factor of one [ / ] step on the brush radius (eight steps ≈ ×6).
 constexpr double BRUSH_STEP = 1.25;
@@ -200,10 +206,12 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
     // the user is told why (queued: the viewport emits it from inside its frame).
     connect(
         m_viewport, &Viewport::renderFailed, this,
-        [this](const QString& message, int method) {
-            m_render->setMethod(int(RenderSettings::Method::Direct));
-            const QString text = tr("The %1 preview failed and the viewport switched to Direct: %2")
-                                     .arg(RenderPanel::methodName(method), message);
+        [this](const QString& message, const QString& method) {
+            const QString fallback = QString::fromLatin1(Viewport::FALLBACK_METHOD);
+            m_render->setMethod(fallback);
+            const QString text = tr("The %1 preview failed and the viewport switched to %2: %3")
+                                     .arg(RenderPanel::methodTitle(method),
+                                          RenderPanel::methodTitle(fallback), message);
             m_lastError = text;
             statusBar()->showMessage(text, 15000);
             if (!m_useSettings)
@@ -233,8 +241,18 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
         restorePanelSettings(m_brush, s, QStringLiteral("brush"));
         // Before version 2 of the defaults every closed session saved the then-default method
         // (SSLPV, which hid paint), chosen or not: that saved choice is not kept.
-        if (s.value(QStringLiteral("render/defaultsVersion"), 1).toInt() < RENDER_DEFAULTS_VERSION)
+        const int defaultsVersion = s.value(QStringLiteral("render/defaultsVersion"), 1).toInt();
+        if (defaultsVersion < 2) {
             s.remove(QStringLiteral("render/renderMethod"));
+        } else if (defaultsVersion < 3) {
+            // Before version 3 the method was saved as its index in the selector, whose order
+            // was the app's own method enum; it is saved by registry name since.
+            bool isIndex = false;
+            const int index = s.value(QStringLiteral("render/renderMethod")).toInt(&isIndex);
+            if (isIndex && index >= 0 && index < int(std::size(PRE_REGISTRY_METHOD_ORDER)))
+                s.setValue(QStringLiteral("render/renderMethod"),
+                           QString::fromLatin1(PRE_REGISTRY_METHOD_ORDER[index]));
+        }
         restorePanelSettings(m_render, s, QStringLiteral("render"));
         if (auto* gizmos = findChild<QAction*>(QStringLiteral("actionLightGizmos")))
             gizmos->setChecked(s.value("view/lightGizmos", true).toBool());
@@ -249,8 +267,8 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
            "pans, wheel zooms, F frames the object."));
 }
 
-void MainWindow::setRenderMethod(int method) {
-    m_render->setMethod(method);
+bool MainWindow::setRenderMethod(const QString& method) {
+    return m_render->setMethod(method);
 }
 
 MainWindow::~MainWindow() {

@@ -41,8 +41,9 @@ public:
     LightPanel* lightPanel() { return m_lights; }
     RenderPanel* renderPanel() { return m_render; }
     ReferencePanel* referencePanel() { return m_reference; }
-    /// Selects the preview method (RenderSettings::Method) through the Render settings dock.
-    void setRenderMethod(int method);
+    /// Selects the preview method `method` (registry name) through the Render settings dock.
+    /// @return false (nothing changes) when it is not a preview method.
+    bool setRenderMethod(const QString& method);
 
     //! @{ \name File operations; each reports errors in a message box and returns false
     bool openFile(const QString& path);

@@ -251,16 +251,7 @@ void Viewport::setViewCursor(Qt::CursorShape shape) {
 }
 
 void Viewport::setRenderSettings(const RenderSettings& s) {
-    m_render = s;
-    m_render.steps = std::clamp(m_render.steps, 1, 512);
-    m_render.lightSteps = std::clamp(m_render.lightSteps, 1, 128);
-    m_render.sslpvGrid = m_render.sslpvGrid <= 16 ? 16 : m_render.sslpvGrid <= 32 ? 32 : 64;
-    m_render.sslpvSteps = std::clamp(m_render.sslpvSteps, 1, 512);
-    m_render.sslpvOrder = m_render.sslpvOrder == 2 ? 2 : 1;
-    m_render.dipoleSpp = std::clamp(m_render.dipoleSpp, 1, 4096);
-    m_render.dirpoleSpp = std::clamp(m_render.dirpoleSpp, 1, 4096);
-    if (!std::isfinite(m_render.combinedSplitRadius))
-        m_render.combinedSplitRadius = -1.f;  // the module's default split
+    m_render = s;  // the method's parameters are checked when its frame makes it
     m_render.overlayChannel = std::clamp(m_render.overlayChannel, 0, 2);
     m_render.overlayOpacity = std::isfinite(m_render.overlayOpacity)
                                   ? std::clamp(m_render.overlayOpacity, 0.f, 1.f)
@@ -1042,13 +1033,15 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
         // The dirty bricks taken above went to the failed provider: the retry re-synchronises
         // everything as for a new scene.
         const QString message = QString::fromUtf8(ex.what());
-        const RenderSettings::Method failed = f.settings.method;
+        const std::string failed = f.settings.method;
         m_stats.renderError = message;
         ++m_stats.renderErrors;
         bool drawn = false;
-        if (failed != RenderSettings::Method::Direct) {
-            m_render.method = RenderSettings::Method::Direct;
-            f.settings.method = RenderSettings::Method::Direct;
+        if (failed != FALLBACK_METHOD) {
+            m_render.method = FALLBACK_METHOD;
+            m_render.params = {};
+            f.settings.method = FALLBACK_METHOD;
+            f.settings.params = {};
             f.sceneReplaced = f.meshChanged = true;
             try {
                 m_preview.render(f);
@@ -1062,7 +1055,7 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
         m_sceneReplaced = !drawn;
         if (!drawn)
             clear();
-        Q_EMIT renderFailed(message, int(failed));
+        Q_EMIT renderFailed(message, QString::fromStdString(failed));
     }
     m_stats.preview = m_preview.stats();
     m_stats.uploadMs = m_stats.preview.uploadMs;

@@ -82,6 +82,8 @@ public:
     enum class Tool { Paint, Eyedropper };
     /// Radius within which a click picks a light handle, logical pixels.
     static constexpr double HANDLE_PICK_PX = 9.0;
+    /// The method a failing preview method falls back to: it needs no subsurface pass.
+    static constexpr const char* FALLBACK_METHOD = "direct";
 
     explicit Viewport(Document* doc, QWidget* parent = nullptr);
     ~Viewport() override;
@@ -163,9 +165,9 @@ Q_SIGNALS:
     /// object or outside the viewport.
     void hoverVoxel(const QString& text);
     void paintError(const QString& message);
-    /// A frame of preview method `method` (RenderSettings::Method) failed with `message`. The
-    /// frame was drawn with Direct instead, and renderSettings().method is now Direct.
-    void renderFailed(const QString& message, int method);
+    /// A frame of preview method `method` (registry name) failed with `message`. The frame was
+    /// drawn with FALLBACK_METHOD instead, and renderSettings().method is now that.
+    void renderFailed(const QString& message, const QString& method);
     /// The user picked light `index` by clicking its handle.
     void lightSelected(int index);
 

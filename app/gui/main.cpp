@@ -4,8 +4,7 @@
 ///
 ///     lucent [PROJECT|MESH|VDB] [--screenshot PATH] [--frames N] [--benchmark]
 ///            [--benchmark-json PATH] [--viewport WxH] [--window WxH]
-///            [--method direct|single|sslpv|dipole|better-dipole|dirpole|combined]
-///                (also the selector's long names: single-scattering, directional-dipole)
+///            [--method NAME]   (a registry name with a GL pass: `lucent-cli methods`)
 ///            [--paint-demo] [--reference SPP] [--raise DOCKS] [--no-settings]
 ///            [--swap-interval N] [--compose-experiment]
 /// --screenshot grabs the whole window after N rendered frames (default 3) and exits;
@@ -21,6 +20,7 @@
 #endif
 
 #include <lucent/core/Timer.h>
+#include <lucent/methods/Method.h>
 #include <lucent/scene/SceneFile.h>
 
 #include <QApplication>
@@ -48,25 +48,12 @@ namespace {
 using lucent::Timer;
 using lucent::app::MainWindow;
 
-/// Preview method from its command-line name (every entry of the Render dock's selector, short
-/// or long name). @return false for an unknown name or a method not compiled in.
-bool parseMethod(const QString& name, lucent::app::RenderSettings::Method& out) {
-    using M = lucent::app::RenderSettings::Method;
-    const std::pair<const char*, M> names[] = {{"direct", M::Direct},
-                                               {"single", M::SingleScattering},
-                                               {"single-scattering", M::SingleScattering},
-                                               {"sslpv", M::Sslpv},
-                                               {"dipole", M::Dipole},
-                                               {"better-dipole", M::BetterDipole},
-                                               {"dirpole", M::DirectionalDipole},
-                                               {"directional-dipole", M::DirectionalDipole},
-                                               {"combined", M::Combined}};
-    for (const auto& [n, m] : names)
-        if (name == QLatin1String(n) && lucent::app::PreviewRenderer::hasMethod(m)) {
-            out = m;
-            return true;
-        }
-    return false;
+/// The preview methods' registry names, comma-separated (for messages).
+QString previewMethodNames() {
+    QStringList names;
+    for (const lucent::methods::MethodInfo* info : lucent::app::PreviewRenderer::previewMethods())
+        names.push_back(QString::fromStdString(info->name));
+    return names.join(QStringLiteral(", "));
 }
 
 /// Median of a sample (robust to the odd slow frame on a shared machine).
@@ -165,7 +152,7 @@ struct ComposeHostGl {
         f.camera = scene->camera;
         f.camera.width = w;
         f.camera.height = h;
-        f.settings.method = lucent::app::RenderSettings::Method::Direct;
+        f.settings.method = "direct";
         f.settings.resolutionScale = 1.f;
         f.framebuffer = fbo;
         f.framebufferWidth = w;
@@ -243,7 +230,8 @@ std::pair<double, double> timeAppViewport(int frames) {
     lucent::app::Viewport* vp = win.viewport();
     vp->setFixedSize(640, 360);
     lucent::app::RenderSettings rs = vp->renderSettings();
-    rs.method = lucent::app::RenderSettings::Method::Direct;
+    rs.method = "direct";
+    rs.params = {};
     rs.resolutionScale = 1.f;
     vp->setRenderSettings(rs);
     win.resize(1400, 1100);
@@ -327,46 +315,44 @@ int runComposeExperiment() {
 /// Runs the latency harness on a shown window whose first frame has been rendered.
 void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath,
                   const QString& methodFilter) {
-    using Method = lucent::app::RenderSettings::Method;
     lucent::app::Viewport* vp = w.viewport();
     lucent::app::RenderSettings rs = vp->renderSettings();
     struct Row {
         const char* name;
-        Method method;
+        std::string method;  ///< registry name
         float scale;
         bool reuse = true;     ///< RenderSettings::reusePasses (false: every pass every frame)
         bool overlay = false;  ///< RenderSettings::volumeOverlay (σt, opacity 0.5)
         MethodTiming t;
     };
     // Stroke latency of the live methods at the viewport's full resolution and at the app's
-    // default half resolution (SSLPV at 32³, CPU solve; dipoles at their default samples per
-    // frame), plus the direct baseline; the
-    // "no reuse" rows re-run the G-buffer and the direct lighting every frame (as before pass
-    // reuse; shadow maps were already kept) for a same-run before/after.
+    // default half resolution (every method at its live defaults: SSLPV 32³ with the CPU
+    // solve, dipoles at 16 samples per frame), plus the direct baseline; the "no reuse" rows
+    // re-run the G-buffer and the direct lighting every frame (as before pass reuse; shadow
+    // maps were already kept) for a same-run before/after.
     std::vector<Row> rows = {
-        {"direct, full res (baseline)", Method::Direct, 1.f, true, false, {}},
-        {"direct, full res, no reuse", Method::Direct, 1.f, false, false, {}},
-        {"single-scatter, full res", Method::SingleScattering, 1.f, true, false, {}},
-        {"sslpv 32^3, full res, no reuse", Method::Sslpv, 1.f, false, false, {}},
-        {"sslpv 32^3, full res", Method::Sslpv, 1.f, true, false, {}},
-        {"dipole, full res, no reuse", Method::Dipole, 1.f, false, false, {}},
-        {"dipole, full res", Method::Dipole, 1.f, true, false, {}},
-        {"better dipole, full res", Method::BetterDipole, 1.f, true, false, {}},
-        {"sslpv 32^3, half res", Method::Sslpv, 0.5f, true, false, {}},
-        {"sslpv 32^3, half res + overlay", Method::Sslpv, 0.5f, true, true, {}},
-        {"dipole, half res", Method::Dipole, 0.5f, true, false, {}},
-        {"directional dipole, full res", Method::DirectionalDipole, 1.f, true, false, {}},
-        {"directional dipole, half res", Method::DirectionalDipole, 0.5f, true, false, {}},
-        {"combined, full res", Method::Combined, 1.f, true, false, {}},
-        {"combined, half res", Method::Combined, 0.5f, true, false, {}}};
-    Method only = Method::Direct;
-    if (!methodFilter.isEmpty() && parseMethod(methodFilter, only))  // baseline + that method
-        std::erase_if(rows,
-                      [&](const Row& r) { return r.method != Method::Direct && r.method != only; });
-    rs.sslpvGrid = 32;
-    rs.sslpvGlSolve = false;
+        {"direct, full res (baseline)", "direct", 1.f, true, false, {}},
+        {"direct, full res, no reuse", "direct", 1.f, false, false, {}},
+        {"single-scatter, full res", "single-scattering", 1.f, true, false, {}},
+        {"sslpv 32^3, full res, no reuse", "sslpv", 1.f, false, false, {}},
+        {"sslpv 32^3, full res", "sslpv", 1.f, true, false, {}},
+        {"dipole, full res, no reuse", "dipole", 1.f, false, false, {}},
+        {"dipole, full res", "dipole", 1.f, true, false, {}},
+        {"better dipole, full res", "better-dipole", 1.f, true, false, {}},
+        {"sslpv 32^3, half res", "sslpv", 0.5f, true, false, {}},
+        {"sslpv 32^3, half res + overlay", "sslpv", 0.5f, true, true, {}},
+        {"dipole, half res", "dipole", 0.5f, true, false, {}},
+        {"directional dipole, full res", "dirpole", 1.f, true, false, {}},
+        {"directional dipole, half res", "dirpole", 0.5f, true, false, {}},
+        {"combined, full res", "combined", 1.f, true, false, {}},
+        {"combined, half res", "combined", 0.5f, true, false, {}}};
+    if (!methodFilter.isEmpty()) {  // the baseline + that method
+        const std::string only = methodFilter.toStdString();
+        std::erase_if(rows, [&](const Row& r) { return r.method != "direct" && r.method != only; });
+    }
     for (Row& r : rows) {
         rs.method = r.method;
+        rs.params = {};  // the method's live defaults
         rs.resolutionScale = r.scale;
         rs.reusePasses = r.reuse;
         rs.volumeOverlay = r.overlay;
@@ -384,10 +370,7 @@ void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath,
                     r.t.strokeMs, r.t.strokePaintGlMs,
                     r.t.idleMs > 0 ? r.t.strokeMs / r.t.idleMs : 0.0,
                     base > 0 ? r.t.idleMs / base : 0.0);
-    std::printf(
-        "(single-scatter: %d view steps, %d shadow steps; sslpv: %d steps, order %d; "
-        "dipole: %d spp/frame)\n",
-        rs.steps, rs.lightSteps, rs.sslpvSteps, rs.sslpvOrder, rs.dipoleSpp);
+    std::printf("(every method at its live defaults: lucent-cli methods lists them)\n");
     // Where a stroke frame goes: renderer passes (GPU ms), the material update (CPU), and what
     // is outside paintGL (picking + stamping before, Qt's composition after).
     std::printf("\nstroke frame breakdown (medians, ms)\n%-36s", "method");
@@ -404,9 +387,9 @@ void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath,
             std::printf(" %10.2f", ms);
         }
         // The direct method updates no material: its upload column would be a stale value.
-        std::printf(" %10.2f %10.1f %12.1f %12.1f\n",
-                    r.method == Method::Direct ? 0.0 : r.t.uploadMs, r.t.strokeCpuMs,
-                    r.t.idleMs - r.t.idlePaintGlMs, r.t.strokeMs - r.t.strokePaintGlMs);
+        std::printf(" %10.2f %10.1f %12.1f %12.1f\n", r.method == "direct" ? 0.0 : r.t.uploadMs,
+                    r.t.strokeCpuMs, r.t.idleMs - r.t.idlePaintGlMs,
+                    r.t.strokeMs - r.t.strokePaintGlMs);
     }
     if (!jsonPath.isEmpty()) {
         QFile f(jsonPath);
@@ -489,8 +472,7 @@ int main(int argc, char** argv) {
         QStringLiteral("N"));
     QCommandLineOption method(
         QStringLiteral("method"),
-        QStringLiteral("Preview method: direct, single (single-scattering), sslpv, dipole, "
-                       "better-dipole, dirpole (directional-dipole) or combined."),
+        QStringLiteral("Preview method (registry name): %1.").arg(previewMethodNames()),
         QStringLiteral("M"));
     parser.addOptions({shot, frames, bench, benchJson, viewportSize, windowSize, noSettings,
                        paintDemo, raiseDock, method, reference, composeExperiment, swapInterval});
@@ -532,21 +514,10 @@ int main(int argc, char** argv) {
     if (!parser.positionalArguments().isEmpty() &&
         !window.openFile(parser.positionalArguments().first()))
         return scripted ? 1 : 0;
-    if (parser.isSet(method)) {
-        lucent::app::RenderSettings rs = window.viewport()->renderSettings();
-        if (!parseMethod(parser.value(method), rs.method)) {
-            std::fprintf(stderr,
-                         "lucent: --method expects direct, single (single-scattering), sslpv, "
-                         "dipole, better-dipole, dirpole (directional-dipole) or combined "
-                         "(got '%s'%s)\n",
-                         qPrintable(parser.value(method)),
-                         lucent::app::PreviewRenderer::hasMethod(
-                             lucent::app::RenderSettings::Method::Combined)
-                             ? ""
-                             : "; combined is not built in");
-            return 2;
-        }
-        window.setRenderMethod(int(rs.method));
+    if (parser.isSet(method) && !window.setRenderMethod(parser.value(method))) {
+        std::fprintf(stderr, "lucent: --method expects one of %s (got '%s')\n",
+                     qPrintable(previewMethodNames()), qPrintable(parser.value(method)));
+        return 2;
     }
     window.show();
     for (const QString& name : parser.value(raiseDock).split(QLatin1Char(','), Qt::SkipEmptyParts))

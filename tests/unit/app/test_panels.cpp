@@ -314,7 +314,7 @@ TEST(LightsDock, TypeAndConeEditsReachTheRenderer) {
     Viewport* vp = w->viewport();
     Document* doc = w->document();
     LightPanel* panel = w->lightPanel();
-    w->setRenderMethod(int(RenderSettings::Method::Direct));
+    ASSERT_TRUE(w->setRenderMethod(QStringLiteral("direct")));
     // Only the default scene's front light (L1; L0 lights the hidden back) stays, so its
     // edits show in full on the opaque surface of the Direct method.
     ASSERT_GE(doc->scene().lights.size(), 2u);
@@ -487,10 +487,13 @@ TEST(MainWindowPrefs, BrushRenderAndViewPreferencesAreRemembered) {
         child<QDoubleSpinBox>(w.brushPanel(), "brushRadius")->setValue(7.25);
         child<QComboBox>(w.brushPanel(), "brushFalloff")->setCurrentIndex(3);
         child<QDoubleSpinBox>(w.brushPanel(), "brushSigmaT1")->setValue(4.5);
-        child<QComboBox>(w.renderPanel(), "renderMethod")
-            ->setCurrentIndex(int(RenderSettings::Method::SingleScattering));
+        auto* method = child<QComboBox>(w.renderPanel(), "renderMethod");
+        method->setCurrentIndex(method->findData(QStringLiteral("single-scattering")));
         child<QDoubleSpinBox>(w.renderPanel(), "renderExposure")->setValue(-1.5);
-        child<QComboBox>(w.renderPanel(), "renderSslpvGrid")->setCurrentIndex(2);
+        child<QSpinBox>(w.renderPanel(), "param.sslpv.grid")->setValue(64);
+        child<QSpinBox>(w.renderPanel(), "param.single-scattering.steps")->setValue(12);
+        auto* mode = child<QComboBox>(w.renderPanel(), "param.sslpv.mode");
+        mode->setCurrentIndex(mode->findData(QStringLiteral("calibrated")));
         findAction(w, "actionLightGizmos")->setChecked(false);
         ASSERT_TRUE(w.close());
     }
@@ -502,9 +505,12 @@ TEST(MainWindowPrefs, BrushRenderAndViewPreferencesAreRemembered) {
         // ... and they reach the engine-side settings, not only the fields.
         EXPECT_FLOAT_EQ(w.viewport()->brush().engine.radius, 7.25f);
         EXPECT_EQ(w.viewport()->brush().engine.falloff, Falloff(3));
-        EXPECT_EQ(w.viewport()->renderSettings().method, RenderSettings::Method::SingleScattering);
+        EXPECT_EQ(w.viewport()->renderSettings().method, "single-scattering");
+        EXPECT_EQ(w.viewport()->renderSettings().params.toString(), "steps=12");
         EXPECT_FLOAT_EQ(w.viewport()->renderSettings().exposureStops, -1.5f);
-        EXPECT_EQ(w.viewport()->renderSettings().sslpvGrid, 64);
+        EXPECT_EQ(child<QSpinBox>(w.renderPanel(), "param.sslpv.grid")->value(), 64);
+        EXPECT_EQ(child<QComboBox>(w.renderPanel(), "param.sslpv.mode")->currentData(),
+                  QStringLiteral("calibrated"));
         EXPECT_FALSE(w.viewport()->lightGizmosVisible());
         ASSERT_TRUE(w.close());
     }
@@ -519,12 +525,30 @@ TEST(MainWindowPrefs, BrushRenderAndViewPreferencesAreRemembered) {
         // not taken as a choice (the new default shows paint); the other fields are.
         QSettings s;
         s.remove(QStringLiteral("render/defaultsVersion"));
-        s.setValue(QStringLiteral("render/renderMethod"), int(RenderSettings::Method::Sslpv));
+        s.setValue(QStringLiteral("render/renderMethod"), 2);  // SSLPV's index then
         s.sync();
         MainWindow w(/*restoreSettings=*/true);
         EXPECT_EQ(w.viewport()->renderSettings().method, RenderSettings{}.method);
         EXPECT_FLOAT_EQ(w.viewport()->renderSettings().exposureStops, -1.5f);
         ASSERT_TRUE(w.close());
+    }
+    {
+        // Preferences of a build before the method registry (defaults version 2) saved the
+        // selector's index in the order of the app's old method enum: it still maps.
+        QSettings s;
+        s.setValue(QStringLiteral("render/defaultsVersion"), 2);
+        s.setValue(QStringLiteral("render/renderMethod"), 5);  // the directional dipole then
+        s.sync();
+        MainWindow w(/*restoreSettings=*/true);
+        EXPECT_EQ(w.viewport()->renderSettings().method, "dirpole");
+        ASSERT_TRUE(w.close());
+    }
+    {
+        // Since then the method is saved by name.
+        MainWindow w(/*restoreSettings=*/true);
+        EXPECT_EQ(w.viewport()->renderSettings().method, "dirpole");
+        EXPECT_EQ(QSettings().value(QStringLiteral("render/renderMethod")).toString(),
+                  QStringLiteral("dirpole"));
     }
     QSettings().clear();
     qunsetenv(MainWindow::RECOVERY_ENV);
