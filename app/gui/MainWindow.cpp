@@ -11,21 +11,12 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
-#include <lucent/mesh/Voxelize.h>
+#include <lucent/scene/SceneEdit.h>
 #include <lucent/scene/SceneFile.h>
-#if LUCENT_APP_HAS_IO
 #include <lucent/io/MitsubaIO.h>
 #include <lucent/io/VdbIO.h>
-#endif
-#if LUCENT_APP_HAS_MESHIO
 #include <lucent/mesh/MeshIO.h>
-#endif
-#if LUCENT_APP_HAS_REFERENCE
 #include "ReferencePanel.h"
-#endif
-#if LUCENT_APP_HAS_MESHEDIT
-#include <lucent/mesh/MeshEdit.h>
-#endif
 
 #include <QAction>
 #include <QApplication>
@@ -112,57 +103,16 @@ void MainWindow::useGlSurfaceFormat() {
     QSurfaceFormat::setDefaultFormat(fmt);
 }
 
-bool MainWindow::hasVdbSupport() {
-    return LUCENT_APP_HAS_IO != 0;
-}
-bool MainWindow::hasMeshImport() {
-    return LUCENT_APP_HAS_MESHIO != 0;
-}
-
-bool MainWindow::hasMeshEdit() {
-    return LUCENT_APP_HAS_MESHEDIT != 0;
-}
-
 bool MainWindow::applyMeshEdit(MeshEditKind kind) {
     return applyMeshEdit(kind, MeshEditParams{});
 }
 
 bool MainWindow::applyMeshEdit(MeshEditKind kind, const MeshEditParams& params) {
-#if LUCENT_APP_HAS_MESHEDIT
     try {
-        if (!m_doc->hasObject() || m_doc->mesh()->isEmpty())
+        if (!m_doc->hasObject())
             LUCENT_THROW(ValueError, "the scene has no mesh to edit");
-        const TriangleMesh& mesh = *m_doc->mesh();
-        TriangleMesh edited;
-        switch (kind) {
-            case MeshEditKind::Decimate:
-                if (!(params.decimateFraction > 0.0 && params.decimateFraction < 1.0))
-                    LUCENT_THROW(ValueError, "decimate: the fraction of triangles kept (",
-                                 params.decimateFraction, ") must lie in (0, 1)");
-                edited = decimate(mesh, std::max<size_t>(4, size_t(params.decimateFraction *
-                                                                   double(mesh.triangleCount()))));
-                break;
-            case MeshEditKind::Subdivide:
-                edited = subdivideLoop(mesh, params.subdivideIterations);
-                break;
-            case MeshEditKind::Smooth:
-                edited = smoothLaplacian(mesh, params.smoothIterations);
-                break;
-            case MeshEditKind::FillHoles:
-                // Default: holes up to a tenth of the object's diagonal (mm).
-                edited = fillHoles(mesh, params.maxHoleMm > 0.0
-                                             ? float(params.maxHoleMm)
-                                             : 0.1f * glm::length(mesh.bounds().extent()));
-                break;
-        }
         Scene scene = m_doc->scene();
-        SceneObject& obj = scene.objects[0];
-        const GridSpec spec = obj.material->spec();
-        const Bounds3f grid = spec.bounds(), b = edited.bounds();
-        if (!grid.contains(b.lo) || !grid.contains(b.hi))
-            LUCENT_THROW(ValueError, "the edited mesh leaves the material grid");
-        obj.material->setInsideMask(voxelizeSolid(edited, spec));
-        obj.mesh = std::move(edited);
+        editObjectMesh(scene.objects[0], kind, params);      // the engine's edit + re-voxelise
         scene.camera.position = m_viewport->camera().eye();  // keep the current view
         scene.camera.target = m_viewport->camera().target;
         m_doc->setScene(std::move(scene), m_doc->filePath());
@@ -174,11 +124,6 @@ bool MainWindow::applyMeshEdit(MeshEditKind kind, const MeshEditParams& params) 
         reportError(tr("Mesh edit"), ex);
         return false;
     }
-#else
-    (void)kind;
-    (void)params;
-    return false;
-#endif
 }
 
 QString MainWindow::autosavePath() {
@@ -356,12 +301,10 @@ void MainWindow::createDocks() {
     // One tab group under the slice: Render settings, Lights, Statistics, Reference.
     tabifyDockWidget(render, lights);
     tabifyDockWidget(lights, stats);
-#if LUCENT_APP_HAS_REFERENCE
     m_reference = new ReferencePanel(m_doc, m_viewport);
     auto* reference =
         addDock(tr("Reference"), "dockReference", m_reference, Qt::RightDockWidgetArea);
     tabifyDockWidget(stats, reference);
-#endif
     render->raise();
     // Default proportions (a saved layout, restored later, overrides them); applied once the
     // window is laid out, since QMainWindow ignores resizeDocks before that.
@@ -434,33 +377,28 @@ void MainWindow::createActions() {
     a->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S));
     a->setObjectName(QStringLiteral("actionSaveAs"));
     file->addSeparator();
-    if (hasMeshImport()) {
-        a = file->addAction(tr("&Import Mesh…"), this, [this] {
-            const QString p =
-                QFileDialog::getOpenFileName(this, tr("Import mesh"), QString(),
-                                             tr("Meshes (*.obj *.ply *.off *.stl *.vtp *.vtk)"));
-            if (!p.isEmpty() && maybeSave())
-                importMesh(p, /*mmPerUnit=*/0.0);
-        });
-        a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_I));
-        a->setObjectName(QStringLiteral("actionImportMesh"));
-    }
-    if (hasVdbSupport()) {
-        file->addAction(tr("Import &VDB Material…"), this, [this] {
-            const QString p = QFileDialog::getOpenFileName(this, tr("Import VDB"), QString(),
-                                                           tr("OpenVDB (*.vdb)"));
-            if (!p.isEmpty())
-                importVdb(p);
-        });
-        a = file->addAction(tr("&Export VDB…"), this, [this] {
-            const QString p = QFileDialog::getSaveFileName(
-                this, tr("Export VDB"), QStringLiteral("material.vdb"), tr("OpenVDB (*.vdb)"));
-            if (!p.isEmpty() && askVdbExportChoice())
-                exportVdbTo(p);
-        });
-        a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_E));
-        a->setObjectName(QStringLiteral("actionExportVdb"));
-    }
+    a = file->addAction(tr("&Import Mesh…"), this, [this] {
+        const QString p = QFileDialog::getOpenFileName(
+            this, tr("Import mesh"), QString(), tr("Meshes (*.obj *.ply *.off *.stl *.vtp *.vtk)"));
+        if (!p.isEmpty() && maybeSave())
+            importMesh(p, /*mmPerUnit=*/0.0);
+    });
+    a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_I));
+    a->setObjectName(QStringLiteral("actionImportMesh"));
+    file->addAction(tr("Import &VDB Material…"), this, [this] {
+        const QString p =
+            QFileDialog::getOpenFileName(this, tr("Import VDB"), QString(), tr("OpenVDB (*.vdb)"));
+        if (!p.isEmpty())
+            importVdb(p);
+    });
+    a = file->addAction(tr("&Export VDB…"), this, [this] {
+        const QString p = QFileDialog::getSaveFileName(
+            this, tr("Export VDB"), QStringLiteral("material.vdb"), tr("OpenVDB (*.vdb)"));
+        if (!p.isEmpty() && askVdbExportChoice())
+            exportVdbTo(p);
+    });
+    a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_E));
+    a->setObjectName(QStringLiteral("actionExportVdb"));
     a = file->addAction(tr("Export &Render…"), this, [this] {
         const QString p =
             QFileDialog::getSaveFileName(this, tr("Export render"), QStringLiteral("render.png"),
@@ -475,53 +413,51 @@ void MainWindow::createActions() {
     a->setShortcut(QKeySequence::Quit);
     a->setObjectName(QStringLiteral("actionQuit"));
 
-    if (hasMeshEdit()) {
-        QMenu* meshMenu = menuBar()->addMenu(tr("&Mesh"));
-        // Each edit asks for its parameter, starting from the value used last.
-        meshMenu->addAction(tr("&Decimate…"), this, [this] {
-            bool ok = false;
-            const double percent =
-                QInputDialog::getDouble(this, tr("Decimate"), tr("Triangles to keep (%):"),
-                                        100.0 * m_meshEdit.decimateFraction, 1.0, 99.0, 0, &ok);
-            if (!ok)
-                return;
-            m_meshEdit.decimateFraction = percent / 100.0;
-            applyMeshEdit(MeshEditKind::Decimate, m_meshEdit);
-        });
-        // An iteration count, then the edit.
-        const auto iterationsEdit = [this](const QString& title, const QString& label, int& value,
-                                           int max, MeshEditKind kind) {
-            bool ok = false;
-            const int n = QInputDialog::getInt(this, title, label, value, 1, max, 1, &ok);
-            if (!ok)
-                return;
-            value = n;
-            applyMeshEdit(kind, m_meshEdit);
-        };
-        meshMenu->addAction(tr("&Subdivide (Loop)…"), this, [this, iterationsEdit] {
-            iterationsEdit(tr("Subdivide"), tr("Iterations (×4 triangles each):"),
-                           m_meshEdit.subdivideIterations, 5, MeshEditKind::Subdivide);
-        });
-        meshMenu->addAction(tr("S&mooth (Laplacian)…"), this, [this, iterationsEdit] {
-            iterationsEdit(tr("Smooth"), tr("Iterations:"), m_meshEdit.smoothIterations, 1000,
-                           MeshEditKind::Smooth);
-        });
-        meshMenu->addAction(tr("&Fill Holes…"), this, [this] {
-            const TriangleMesh* mesh = m_doc->mesh();
-            const double suggested = m_meshEdit.maxHoleMm > 0.0 ? m_meshEdit.maxHoleMm
-                                     : mesh && !mesh->isEmpty()
-                                         ? 0.1 * double(glm::length(mesh->bounds().extent()))
-                                         : 1.0;
-            bool ok = false;
-            const double mm = QInputDialog::getDouble(this, tr("Fill holes"),
-                                                      tr("Largest hole radius to close (mm):"),
-                                                      suggested, 0.001, 1e6, 3, &ok);
-            if (!ok)
-                return;
-            m_meshEdit.maxHoleMm = mm;
-            applyMeshEdit(MeshEditKind::FillHoles, m_meshEdit);
-        });
-    }
+    QMenu* meshMenu = menuBar()->addMenu(tr("&Mesh"));
+    // Each edit asks for its parameter, starting from the value used last.
+    meshMenu->addAction(tr("&Decimate…"), this, [this] {
+        bool ok = false;
+        const double percent =
+            QInputDialog::getDouble(this, tr("Decimate"), tr("Triangles to keep (%):"),
+                                    100.0 * m_meshEdit.decimateFraction, 1.0, 99.0, 0, &ok);
+        if (!ok)
+            return;
+        m_meshEdit.decimateFraction = percent / 100.0;
+        applyMeshEdit(MeshEditKind::Decimate, m_meshEdit);
+    });
+    // An iteration count, then the edit.
+    const auto iterationsEdit = [this](const QString& title, const QString& label, int& value,
+                                       int max, MeshEditKind kind) {
+        bool ok = false;
+        const int n = QInputDialog::getInt(this, title, label, value, 1, max, 1, &ok);
+        if (!ok)
+            return;
+        value = n;
+        applyMeshEdit(kind, m_meshEdit);
+    };
+    meshMenu->addAction(tr("&Subdivide (Loop)…"), this, [this, iterationsEdit] {
+        iterationsEdit(tr("Subdivide"), tr("Iterations (×4 triangles each):"),
+                       m_meshEdit.subdivideIterations, 5, MeshEditKind::Subdivide);
+    });
+    meshMenu->addAction(tr("S&mooth (Laplacian)…"), this, [this, iterationsEdit] {
+        iterationsEdit(tr("Smooth"), tr("Iterations:"), m_meshEdit.smoothIterations, 1000,
+                       MeshEditKind::Smooth);
+    });
+    meshMenu->addAction(tr("&Fill Holes…"), this, [this] {
+        const TriangleMesh* mesh = m_doc->mesh();
+        const double suggested = m_meshEdit.maxHoleMm > 0.0 ? m_meshEdit.maxHoleMm
+                                 : mesh && !mesh->isEmpty()
+                                     ? 0.1 * double(glm::length(mesh->bounds().extent()))
+                                     : 1.0;
+        bool ok = false;
+        const double mm = QInputDialog::getDouble(this, tr("Fill holes"),
+                                                  tr("Largest hole radius to close (mm):"),
+                                                  suggested, 0.001, 1e6, 3, &ok);
+        if (!ok)
+            return;
+        m_meshEdit.maxHoleMm = mm;
+        applyMeshEdit(MeshEditKind::FillHoles, m_meshEdit);
+    });
     QMenu* edit = menuBar()->addMenu(tr("&Edit"));
     QAction* undo = m_doc->undoStack()->createUndoAction(this, tr("&Undo"));
     undo->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Z));
@@ -902,7 +838,6 @@ bool MainWindow::askMeshUnits(const QString& path, double largestExtent,
 }
 
 bool MainWindow::importMesh(const QString& path, double mmPerUnit) {
-#if LUCENT_APP_HAS_MESHIO
     try {
         MeshReport report;
         SceneObject obj;
@@ -955,16 +890,9 @@ bool MainWindow::importMesh(const QString& path, double mmPerUnit) {
         reportError(tr("Import mesh"), ex);
         return false;
     }
-#else
-    (void)mmPerUnit;
-    QMessageBox::warning(this, tr("Import mesh"),
-                         tr("Mesh import is not available in this build."));
-    return false;
-#endif
 }
 
 bool MainWindow::importVdb(const QString& path) {
-#if LUCENT_APP_HAS_IO
     try {
         ImportedMaterial imported = lucent::importVdb(path.toStdString());
         Scene scene = m_doc->scene();
@@ -982,11 +910,6 @@ bool MainWindow::importVdb(const QString& path) {
         reportError(tr("Import VDB"), ex);
         return false;
     }
-#else
-    QMessageBox::warning(this, tr("Import VDB"),
-                         tr("OpenVDB support is not available in this build."));
-    return false;
-#endif
 }
 
 bool MainWindow::exportVdbTo(const QString& path, bool wait) {
@@ -994,7 +917,6 @@ bool MainWindow::exportVdbTo(const QString& path, bool wait) {
 }
 
 bool MainWindow::exportVdbTo(const QString& path, const VdbExportChoice& choice, bool wait) {
-#if LUCENT_APP_HAS_IO
     if (m_exporting || !m_doc->material())
         return false;
     m_exporting = true;
@@ -1057,12 +979,6 @@ bool MainWindow::exportVdbTo(const QString& path, const VdbExportChoice& choice,
         return *ok;
     }
     return true;
-#else
-    (void)path;
-    (void)choice;
-    (void)wait;
-    return false;
-#endif
 }
 
 bool MainWindow::askVdbExportChoice() {
@@ -1219,8 +1135,8 @@ void MainWindow::closeEvent(QCloseEvent* e) {
 
 bool MainWindow::canOpen(const QString& path) {
     const QString suffix = QFileInfo(path).suffix().toLower();
-    return suffix == QLatin1String("json") || (suffix == QLatin1String("vdb") && hasVdbSupport()) ||
-           (MESH_SUFFIXES.contains(suffix) && hasMeshImport());
+    return suffix == QLatin1String("json") || suffix == QLatin1String("vdb") ||
+           MESH_SUFFIXES.contains(suffix);
 }
 
 void MainWindow::dragEnterEvent(QDragEnterEvent* e) {

@@ -901,13 +901,11 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     form->addRow(tr("Exposure"), m_exposure);
     form->addRow(m_turntable);
     form->addRow(m_subsurfaceOnly);
-    if (Viewport::hasDeformation()) {
-        m_deform = new QCheckBox(tr("Deformation animation (twist; pauses painting)"));
-        m_deform->setObjectName(QStringLiteral("renderDeform"));
-        m_deform->setProperty(TRANSIENT, true);  // an animation, not a preference
-        form->addRow(m_deform);
-        connect(m_deform, &QCheckBox::toggled, this, [this] { apply(); });
-    }
+    m_deform = new QCheckBox(tr("Deformation animation (twist; pauses painting)"));
+    m_deform->setObjectName(QStringLiteral("renderDeform"));
+    m_deform->setProperty(TRANSIENT, true);  // an animation, not a preference
+    form->addRow(m_deform);
+    connect(m_deform, &QCheckBox::toggled, this, [this] { apply(); });
     m_bookmarks = new QComboBox;
     m_bookmarks->setObjectName(QStringLiteral("renderBookmarks"));
     m_bookmarks->setProperty(TRANSIENT, true);  // saved per project (MainWindow)
@@ -1061,7 +1059,7 @@ void RenderPanel::apply() {
     s.params = paramsOf(s.method);
     s.exposureStops = float(m_exposure->value());
     s.turntable = m_turntable->isChecked();
-    s.deform = m_deform && m_deform->isChecked();
+    s.deform = m_deform->isChecked();
     s.resolutionScale = m_scale->currentIndex() == 0   ? 1.f
                         : m_scale->currentIndex() == 1 ? 0.5f
                                                        : 0.25f;

@@ -9,9 +9,7 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Timer.h>
-#if LUCENT_APP_HAS_DEFORM
 #include <lucent/mesh/Deform.h>
-#endif
 
 #include <QCoreApplication>
 #include <QDropEvent>
@@ -216,10 +214,6 @@ Viewport::Viewport(Document* doc, QWidget* parent) : QWidget(parent), m_doc(doc)
     onSceneReplaced();
 }
 
-bool Viewport::hasDeformation() {
-    return LUCENT_APP_HAS_DEFORM != 0;
-}
-
 Viewport::~Viewport() {
     if (m_glReady && m_window->context()) {
         m_window->makeCurrent();
@@ -260,7 +254,7 @@ void Viewport::setRenderSettings(const RenderSettings& s) {
         m_turntable.start();
     if (!s.turntable)
         m_turntable.stop();
-    m_render.deform = s.deform && hasDeformation();
+    m_render.deform = s.deform;
     if (m_render.deform && !m_animation.isActive())
         m_animation.start();
     if (!m_render.deform && m_animation.isActive()) {
@@ -950,7 +944,6 @@ void Viewport::cleanupGL() {
 
 const TriangleMesh* Viewport::shownMesh() {
     const TriangleMesh* mesh = m_doc->mesh();
-#if LUCENT_APP_HAS_DEFORM
     if (mesh && m_render.deform && !mesh->isEmpty()) {
         // A twist about the vertical axis through the object's centre: ±0.6 rad over its
         // height, oscillating at 0.5 Hz (Deform.h: amount·sin(2π·rate·t)).
@@ -964,7 +957,6 @@ const TriangleMesh* Viewport::shownMesh() {
         m_posed = deform(*mesh, {twist}, float(m_clock.elapsed()) * 1e-3f);
         return &m_posed;
     }
-#endif
     return mesh;
 }
 

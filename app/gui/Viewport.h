@@ -105,8 +105,6 @@ public:
     [[nodiscard]] bool cameraShowsObject() const;
     /// Camera ray through widget position `pos` (logical pixels, origin top-left).
     void cameraRay(const QPointF& pos, Point3f& origin, Vector3f& direction) const;
-    /// True when the deformation animation is compiled in (mesh/Deform).
-    static bool hasDeformation();
     /// Mesh hit under widget position `pos`.
     [[nodiscard]] std::optional<PickHit> pickAt(const QPointF& pos) const;
     /// Paints a straight stroke from a to b (widget positions) as one undoable command, the

@@ -6,39 +6,28 @@
 ///            [--benchmark-json PATH] [--viewport WxH] [--window WxH]
 ///            [--method NAME]   (a registry name with a GL pass: `lucent-cli methods`)
 ///            [--paint-demo] [--reference SPP] [--raise DOCKS] [--no-settings]
-///            [--swap-interval N] [--compose-experiment]
+///            [--swap-interval N]
 /// --screenshot grabs the whole window after N rendered frames (default 3) and exits;
-/// --benchmark measures start-up to first frame, idle frame time and stroke-to-frame latency;
-/// --compose-experiment measures what Qt adds around paintGL for three ways to host GL and for
-/// the app's own viewport (a QOpenGLWindow in a window container, see Viewport.h).
+/// --benchmark measures start-up to first frame, idle frame time and stroke-to-frame latency
+/// (what Qt adds around paintGL is measured by tests/bench/bench_app_compose.cpp).
 
 #include "Document.h"
 #include "MainWindow.h"
 #include "Viewport.h"
-#if LUCENT_APP_HAS_REFERENCE
 #include "ReferencePanel.h"
-#endif
 
 #include <lucent/core/Timer.h>
 #include <lucent/methods/Method.h>
-#include <lucent/scene/SceneFile.h>
 
 #include <QApplication>
 #include <QEventLoop>
 #include <QCommandLineParser>
 #include <QDockWidget>
 #include <QFile>
-#include <QLabel>
-#include <QMainWindow>
-#include <QOpenGLContext>
-#include <QOpenGLFunctions>
-#include <QOpenGLWidget>
-#include <QOpenGLWindow>
 #include <QSurfaceFormat>
 #include <QTimer>
 
 #include <algorithm>
-#include <functional>
 #include <utility>
 #include <cstdio>
 #include <vector>
@@ -54,15 +43,6 @@ QString previewMethodNames() {
     for (const lucent::methods::MethodInfo* info : lucent::app::PreviewRenderer::previewMethods())
         names.push_back(QString::fromStdString(info->name));
     return names.join(QStringLiteral(", "));
-}
-
-/// Median of a sample (robust to the odd slow frame on a shared machine).
-double median(std::vector<double> v) {
-    if (v.empty())
-        return 0.0;
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 /// Idle frame and stroke-to-frame latency of the current preview method (medians, ms), with
@@ -115,201 +95,16 @@ MethodTiming timeMethod(lucent::app::Viewport* vp) {
             it->second.push_back(pass.gpuMs);
         }
     }
-    MethodTiming m{median(idle),
-                   median(latency),
-                   median(frameOnly),
-                   median(idlePaint),
-                   median(upload),
-                   median(strokeCpu),
+    MethodTiming m{lucent::medianMs(idle),
+                   lucent::medianMs(latency),
+                   lucent::medianMs(frameOnly),
+                   lucent::medianMs(idlePaint),
+                   lucent::medianMs(upload),
+                   lucent::medianMs(strokeCpu),
                    {}};
     for (const auto& [name, v] : passes)
-        m.strokePassGpuMs.push_back({name, median(v)});
+        m.strokePassGpuMs.push_back({name, lucent::medianMs(v)});
     return m;
-}
-
-// ---- Qt composition experiment (--compose-experiment) ----------------------------------------
-// The same PreviewRenderer frame (default scene, direct lighting, 640×360) drawn by three hosts,
-// to measure what Qt adds around paintGL: a QOpenGLWidget inside a large main window (the
-// app's arrangement), the same widget as a 640×360 top-level window, and a QOpenGLWindow
-// embedded with QWidget::createWindowContainer in the large window.
-
-/// Renderer state of one host (one GL context each).
-struct ComposeHostGl {
-    lucent::Scene* scene = nullptr;
-    lucent::app::PreviewRenderer preview;
-    bool first = true;
-    double paintMs = 0.0;
-    long long swaps = 0;
-
-    void paint(unsigned fbo, int w, int h) {
-        Timer t;
-        lucent::app::PreviewFrame f;
-        f.scene = scene;
-        f.volume = scene->objects[0].material.get();
-        f.shownMesh = &scene->objects[0].mesh;
-        f.sceneReplaced = first;
-        first = false;
-        f.camera = scene->camera;
-        f.camera.width = w;
-        f.camera.height = h;
-        f.settings.method = "direct";
-        f.settings.resolutionScale = 1.f;
-        f.framebuffer = fbo;
-        f.framebufferWidth = w;
-        f.framebufferHeight = h;
-        preview.render(f);
-        QOpenGLContext::currentContext()->functions()->glFinish();  // as Viewport::paintGL
-        paintMs = t.elapsedMs();
-    }
-};
-
-/// A GL host (QOpenGLWidget or QOpenGLWindow) drawing ComposeHostGl's frame.
-template <class Base>
-class ComposeHost : public Base {
-public:
-    explicit ComposeHost(ComposeHostGl* gl) : m_gl(gl) {
-        QObject::connect(this, &Base::frameSwapped, this, [this] { ++m_gl->swaps; });
-    }
-    ~ComposeHost() override {
-        this->makeCurrent();
-        m_gl->preview.destroy();
-        this->doneCurrent();
-    }
-
-protected:
-    void initializeGL() override { m_gl->preview.create(); }
-    void paintGL() override {
-        const qreal dpr = this->devicePixelRatioF();
-        m_gl->paint(this->defaultFramebufferObject(), int(this->width() * dpr),
-                    int(this->height() * dpr));
-    }
-
-private:
-    ComposeHostGl* m_gl;
-};
-using ComposeWidget = ComposeHost<QOpenGLWidget>;
-using ComposeWindow = ComposeHost<QOpenGLWindow>;
-
-/// update() → frameSwapped, `frames` times; @return medians (total, paintGL) in ms.
-std::pair<double, double> timeHost(ComposeHostGl& gl, const std::function<void()>& update,
-                                   int frames) {
-    std::vector<double> total, paint;
-    for (int i = 0; i < frames + 3; ++i) {  // 3 warm-up frames (first upload, shader variants)
-        const long long before = gl.swaps;
-        Timer t;
-        update();
-        while (gl.swaps == before)
-            QCoreApplication::processEvents(QEventLoop::AllEvents | QEventLoop::WaitForMoreEvents,
-                                            5);
-        if (i >= 3) {
-            total.push_back(t.elapsedMs());
-            paint.push_back(gl.paintMs);
-        }
-    }
-    return {median(total), median(paint)};
-}
-
-/// Shows `view` (640×360) in `win` resized to 1400×1100, about the app's main window, next to
-/// a label standing in for the docks.
-void showInLargeWindow(QMainWindow& win, QWidget* view) {
-    auto* central = new QWidget;
-    view->setParent(central);
-    view->setFixedSize(640, 360);
-    view->move(10, 10);
-    auto* label = new QLabel(QStringLiteral("docks stand-in"), central);
-    label->setGeometry(660, 10, 200, 30);
-    win.setCentralWidget(central);
-    win.resize(1400, 1100);
-    win.show();
-}
-
-/// The app's own viewport (MainWindow at 1400×1100, viewport 640×360, Direct): update() → frame
-/// done, `frames` times after 3 warm-up frames. @return medians (total, paintGL) in ms.
-std::pair<double, double> timeAppViewport(int frames) {
-    MainWindow win(/*restoreSettings=*/false);
-    lucent::app::Viewport* vp = win.viewport();
-    vp->setFixedSize(640, 360);
-    lucent::app::RenderSettings rs = vp->renderSettings();
-    rs.method = "direct";
-    rs.params = {};
-    rs.resolutionScale = 1.f;
-    vp->setRenderSettings(rs);
-    win.resize(1400, 1100);
-    win.show();
-    for (int i = 0; i < 20; ++i)
-        QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
-    std::vector<double> total, paint;
-    for (int i = 0; i < frames + 3; ++i) {
-        Timer t;
-        renderFrame(vp);  // returns after paintGL and the window's swap (same paint event)
-        if (i >= 3) {
-            total.push_back(t.elapsedMs());
-            paint.push_back(vp->stats().frameMs);
-        }
-    }
-    return {median(total), median(paint)};
-}
-
-/// Runs the hosts one after the other and prints frame, paintGL and Qt's share.
-int runComposeExperiment() {
-    lucent::Scene scene = lucent::makeDefaultScene();
-    const int frames = 20;
-    struct Result {
-        const char* name;
-        double totalMs, paintMs;
-    };
-    std::vector<Result> results;
-    const auto settle = [] {
-        for (int i = 0; i < 20; ++i)
-            QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
-    };
-    {  // 1. QOpenGLWidget in a 1400×1100 main window (about the app's size)
-        ComposeHostGl gl;
-        gl.scene = &scene;
-        QMainWindow win;
-        auto* w = new ComposeWidget(&gl);
-        showInLargeWindow(win, w);
-        settle();
-        const auto [t, p] = timeHost(
-            gl, [w] { w->update(); }, frames);
-        results.push_back({"QOpenGLWidget in 1400x1100 window", t, p});
-    }
-    {  // 2. the widget alone as a 640×360 top-level
-        ComposeHostGl gl;
-        gl.scene = &scene;
-        ComposeWidget w(&gl);
-        w.resize(640, 360);
-        w.show();
-        settle();
-        const auto [t, p] = timeHost(
-            gl, [&w] { w.update(); }, frames);
-        results.push_back({"QOpenGLWidget as 640x360 top-level", t, p});
-    }
-    {  // 3. QOpenGLWindow in a container in the 1400×1100 window
-        ComposeHostGl gl;
-        gl.scene = &scene;
-        QMainWindow win;
-        auto* glWindow = new ComposeWindow(&gl);
-        showInLargeWindow(win, QWidget::createWindowContainer(glWindow));
-        settle();
-        const auto [t, p] = timeHost(
-            gl, [glWindow] { glWindow->update(); }, frames);
-        results.push_back({"QOpenGLWindow in container, 1400x1100", t, p});
-    }
-    {  // 4. the app: MainWindow with its docks, the Viewport (QOpenGLWindow in a container)
-        const auto [t, p] = timeAppViewport(frames);
-        results.push_back({"app Viewport in MainWindow, 1400x1100", t, p});
-    }
-    const QSurfaceFormat f = QSurfaceFormat::defaultFormat();
-    std::printf(
-        "compose experiment: PreviewRenderer direct, 640x360, medians of %d frames; "
-        "swap interval %d, swap behaviour %d\n",
-        frames, f.swapInterval(), int(f.swapBehavior()));
-    std::printf("%-40s %10s %10s %12s\n", "host", "frame", "paintGL", "Qt's share");
-    for (const Result& r : results)
-        std::printf("%-40s %7.1f ms %7.1f ms %9.1f ms\n", r.name, r.totalMs, r.paintMs,
-                    r.totalMs - r.paintMs);
-    return 0;
 }
 
 /// Runs the latency harness on a shown window whose first frame has been rendered.
@@ -462,10 +257,6 @@ int main(int argc, char** argv) {
                                  QStringLiteral("Before the screenshot, run a reference render "
                                                 "of SPP samples per pixel in the Reference dock."),
                                  QStringLiteral("SPP"));
-    QCommandLineOption composeExperiment(
-        QStringLiteral("compose-experiment"),
-        QStringLiteral("Measure Qt's composition around paintGL for three GL hosts and the "
-                       "app's viewport, then exit."));
     QCommandLineOption swapInterval(
         QStringLiteral("swap-interval"),
         QStringLiteral("QSurfaceFormat swap interval (default: Qt's, 1); 0 disables vsync."),
@@ -475,16 +266,14 @@ int main(int argc, char** argv) {
         QStringLiteral("Preview method (registry name): %1.").arg(previewMethodNames()),
         QStringLiteral("M"));
     parser.addOptions({shot, frames, bench, benchJson, viewportSize, windowSize, noSettings,
-                       paintDemo, raiseDock, method, reference, composeExperiment, swapInterval});
+                       paintDemo, raiseDock, method, reference, swapInterval});
     parser.process(app);
     if (parser.isSet(swapInterval)) {
-        // Before any window exists, so every context (viewport and composition) gets it.
+        // Before any window exists, so that every context gets it.
         QSurfaceFormat f = QSurfaceFormat::defaultFormat();
         f.setSwapInterval(parser.value(swapInterval).toInt());
         QSurfaceFormat::setDefaultFormat(f);
     }
-    if (parser.isSet(composeExperiment))
-        return runComposeExperiment();
 
     const bool scripted = parser.isSet(shot) || parser.isSet(bench);
     MainWindow window(!scripted && !parser.isSet(noSettings));
@@ -526,12 +315,7 @@ int main(int argc, char** argv) {
     bool demoPainted = !parser.isSet(paintDemo);
     bool referenceStarted = !parser.isSet(reference);
     const auto referenceRunning = [&window] {
-#if LUCENT_APP_HAS_REFERENCE
         return window.referencePanel() && window.referencePanel()->isRunning();
-#else
-        (void)window;
-        return false;
-#endif
     };
 
     const int wantFrames = std::max(1, parser.value(frames).toInt());
@@ -576,14 +360,12 @@ int main(int argc, char** argv) {
             });
         } else if (!referenceStarted) {
             referenceStarted = true;
-#if LUCENT_APP_HAS_REFERENCE
             if (auto* ref = window.referencePanel()) {
                 ref->setParameters(200, std::max(3, parser.value(reference).toInt()));
                 QObject::connect(ref, &lucent::app::ReferencePanel::finished, window.viewport(),
                                  [&window] { window.viewport()->update(); });
                 ref->start();
             }
-#endif
         } else if (parser.isSet(shot) && st.frames >= wantFrames && !referenceRunning()) {
             done = true;
             QTimer::singleShot(100, &window, [&] {

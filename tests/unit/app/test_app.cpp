@@ -12,9 +12,7 @@
 #include "ImageView.h"
 #include "MainWindow.h"
 #include "Panels.h"
-#if LUCENT_APP_HAS_REFERENCE
 #include "ReferencePanel.h"
-#endif
 #include "SliceView.h"
 #include "Viewport.h"
 #include "KeepLibrariesLoaded.h"
@@ -23,9 +21,7 @@
 #include <lucent/core/Image.h>
 #include <lucent/scene/SceneFile.h>
 #include <lucent/gpu/Shader.h>
-#if LUCENT_APP_HAS_IO
 #include <lucent/io/VdbIO.h>
-#endif
 
 #include <QAction>
 #include <QApplication>
@@ -188,8 +184,6 @@ QString suzannePath() {
 
 /// Why the drop tests cannot run; empty when they can.
 std::string meshDropSkipReason() {
-    if (!MainWindow::hasMeshImport())
-        return "mesh import not built";
     if (!QFile::exists(suzannePath()))
         return "test mesh absent: " + suzannePath().toStdString();
     return {};
@@ -588,8 +582,6 @@ TEST(AppPaint, SliceViewShowsPaint) {
 }
 
 TEST(AppPaint, MeshEditKeepsPaint) {
-    if (!MainWindow::hasMeshEdit())
-        GTEST_SKIP() << "mesh edits not built";
     auto w = shownWindow();
     Viewport* vp = w->viewport();
     MaterialVolume* vol = w->document()->material();
@@ -616,8 +608,6 @@ TEST(AppPaint, MeshEditKeepsPaint) {
 }
 
 TEST(AppPaint, DeformationAnimationRendersAndPausesPainting) {
-    if (!Viewport::hasDeformation())
-        GTEST_SKIP() << "deformers not built";
     auto w = shownWindow();
     Viewport* vp = w->viewport();
     const QImage rest = vp->grabFramebuffer();
@@ -641,7 +631,6 @@ TEST(AppPaint, DeformationAnimationRendersAndPausesPainting) {
 }
 
 TEST(AppReference, ProgressiveRenderOffTheUiThread) {
-#if LUCENT_APP_HAS_REFERENCE
     auto w = shownWindow();
     ReferencePanel* ref = w->referencePanel();
     ASSERT_NE(ref, nullptr);
@@ -662,9 +651,6 @@ TEST(AppReference, ProgressiveRenderOffTheUiThread) {
         for (int x = 0; x < img.width(); ++x)
             lit += qGray(img.pixel(x, y)) > 8;
     EXPECT_GT(lit, 20);
-#else
-    GTEST_SKIP() << "reference module not built";
-#endif
 }
 
 // ---- Light gizmos ---------------------------------------------------------------------------
@@ -934,7 +920,6 @@ TEST(AppWindow, FitsA1366x768ScreenWithEveryDockReachable) {
 // Issue 17, item 2: the reference picture was scaled once when rendered and, as a QLabel
 // pixmap, could lock the dock's width. It now follows the dock.
 TEST(AppWindow, ReferencePictureFollowsTheDock) {
-#if LUCENT_APP_HAS_REFERENCE
     MainWindow w(/*restoreSettings=*/false);
     w.resize(1366, 708);
     w.show();
@@ -960,9 +945,6 @@ TEST(AppWindow, ReferencePictureFollowsTheDock) {
         const QImage shot = picture->grab().toImage();
         EXPECT_EQ(QColor(shot.pixel(r.center())), QColor(Qt::white));
     }
-#else
-    GTEST_SKIP() << "reference module not built";
-#endif
 }
 
 // Issue 17, item 9: spin boxes cut their text ("100.00 mn" for a 100 mm brush). Every number
@@ -1508,9 +1490,6 @@ TEST(AppFiles, SaveOpenRoundTrip) {
 }
 
 TEST(AppFiles, ExportVdbRoundTrip) {
-    if (!MainWindow::hasVdbSupport())
-        GTEST_SKIP() << "io module not built";
-#if LUCENT_APP_HAS_IO
     auto w = shownWindow();
     Viewport* vp = w->viewport();
     MaterialVolume* vol = w->document()->material();
@@ -1527,13 +1506,9 @@ TEST(AppFiles, ExportVdbRoundTrip) {
     MainWindow other(false);
     ASSERT_TRUE(other.openFile(path));
     EXPECT_EQ(snapshot(*other.document()->material()), snapshot(*vol));
-#endif
 }
 
 TEST(AppFiles, ExportVdbOfUntouchedDefaultScene) {
-    if (!MainWindow::hasVdbSupport())
-        GTEST_SKIP() << "io module not built";
-#if LUCENT_APP_HAS_IO
     MainWindow w(/*restoreSettings=*/false);
     const QString path = outputPath("app_default.vdb");
     QFile::remove(path);
@@ -1541,7 +1516,6 @@ TEST(AppFiles, ExportVdbOfUntouchedDefaultScene) {
     ASSERT_TRUE(QFile::exists(path));
     const ImportedMaterial m = importVdb(path.toStdString());
     EXPECT_EQ(snapshot(m.volume), snapshot(*w.document()->material()));
-#endif
 }
 
 TEST(AppFiles, ImportMeshByDragAndDrop) {
@@ -1596,8 +1570,6 @@ TEST(AppFiles, ProjectKeepsTheCameraAndItsMesh) {
     const std::string skip = meshDropSkipReason();
     if (!skip.empty())
         GTEST_SKIP() << skip;
-    if (!MainWindow::hasVdbSupport())
-        GTEST_SKIP() << "projects need the io module";
     auto w = shownWindow(1);
     Viewport* vp = w->viewport();
     ASSERT_TRUE(w->importMesh(suzannePath(), /*mmPerUnit=*/10.0)) << w->lastError().toStdString();

@@ -7,36 +7,14 @@
 #include <lucent/mesh/Procedural.h>
 #include <lucent/scene/SceneEdit.h>
 
+#include "scene/LightIrradiance.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 
 namespace lucent {
-namespace {
-
-/// Irradiance (W/mm², normal incidence) that `l` gives at point `x`, written independently of
-/// convertLight: point/spot I(ω)/d² (Light::intensityToward), sphere πL·sin²α with
-/// sin α = R/d, directional its own value.
-Rgb irradianceAt(const Light& l, const Point3f& x) {
-    if (l.type == Light::Type::Directional)
-        return l.intensity;
-    const Vector3f toX = x - l.position;
-    const float d = glm::length(toX);
-    if (l.type == Light::Type::Sphere) {
-        const float sinAlpha = l.radius / d;
-        return l.intensity * (PI * sinAlpha * sinAlpha);
-    }
-    return l.intensityToward(toX / d) / (d * d);
-}
-
-/// Relative difference of the largest channel.
-float relDiff(const Rgb& a, const Rgb& b) {
-    const Rgb d = glm::abs(a - b);
-    return std::max({d.r, d.g, d.b}) / std::max({std::abs(b.r), std::abs(b.g), std::abs(b.b)});
-}
-
-}  // namespace
 
 TEST(LightTypes, ConversionKeepsTheIrradianceAtTheTarget) {
     const Point3f target(1.f, 2.f, 3.f);
@@ -45,8 +23,8 @@ TEST(LightTypes, ConversionKeepsTheIrradianceAtTheTarget) {
     point.type = Light::Type::Point;
     point.position = target + Vector3f(0.f, 30.f, 40.f);  // d = 50 mm
     point.intensity = Rgb(2500.f, 1250.f, 500.f);         // E = 1, 0.5, 0.2 W/mm²
-    const Rgb e0 = irradianceAt(point, target);
-    ASSERT_LT(relDiff(e0, Rgb(1.f, 0.5f, 0.2f)), 1e-5f);
+    const Rgb e0 = test::irradianceAt(point, target);
+    ASSERT_LT(test::relDiff(e0, Rgb(1.f, 0.5f, 0.2f)), 1e-5f);
     const Light::Type types[] = {Light::Type::Point, Light::Type::Spot, Light::Type::Directional,
                                  Light::Type::Sphere};
     for (Light::Type a : types)
@@ -55,8 +33,9 @@ TEST(LightTypes, ConversionKeepsTheIrradianceAtTheTarget) {
             const Light lb = convertLight(la, b, target, objectRadius);
             EXPECT_EQ(lb.type, b);
             // float32 arithmetic on values of order 1e3: a few ulps.
-            EXPECT_LT(relDiff(irradianceAt(la, target), e0), 1e-5f) << int(a);
-            EXPECT_LT(relDiff(irradianceAt(lb, target), e0), 1e-5f) << int(a) << "→" << int(b);
+            EXPECT_LT(test::relDiff(test::irradianceAt(la, target), e0), 1e-5f) << int(a);
+            EXPECT_LT(test::relDiff(test::irradianceAt(lb, target), e0), 1e-5f)
+                << int(a) << "→" << int(b);
             if (b == Light::Type::Spot || b == Light::Type::Directional) {
                 // Aimed at the target: the light travels along the axis from it to the target.
                 const Point3f from = a == Light::Type::Directional
