@@ -13,7 +13,16 @@
 // reach the far tail. Point/spot lights: the flux crossing the disc plane (normal along the ray
 // to x′_o) is I(ω)cosθ_p/ρ_p² per unit plane area (inverse-square law), which the same
 // perspective G-buffer texel receives.
-// Seed 001 §4.3.1 (G-buffer shrink): the disc is centred at x′_o = x_o − ε_g(n_o − ω_l(ω_l·n_o)).
+// Seed 001 §4.3.1 (G-buffer shrink): the disc is centred at x′_o = x_o − ε_g(n_o − ω_l(ω_l·n_o)),
+// with ε_g at most one mean free path 1/σt′ (deeper than the dipole's real source, S_d of a
+// dense medium vanishes; DirectionalPipeline.cpp shrinkWithin).
+// Sub-texel sources: a sample's x_i is where the light ray through it crosses the tangent plane
+// of the light G-buffer texel it lands in, not the texel's stored centre. Where the profile is
+// narrower than a light texel (dense media, metre-sized objects) the centre is many diffusion
+// lengths from x_o and S_d read 0 (stability matrix, docs/benchmarks.md); on the plane the
+// error is second order in the texel size. (x_o's own plane for samples in x′_o's texel was
+// tried and rejected: S_d's real-source term is not bounded by the sampler's pdf as r → 0, and
+// the estimate blew up to 35× at σt′ = 10⁴ mm⁻¹.)
 // Progressive, per texel: the texel's accumulator holds Σ over its N samples of the one-sample
 // estimate and N (a); a frame adds k_t = min(u_k, u_target − N) samples n = N … N + k_t − 1 of a
 // per-texel rotated R2 sequence, so the sum after N samples does not depend on how they were
@@ -80,13 +89,14 @@ vec2 r2(uint n, uvec2 offset) {
 // C^f contribution of one light at x_o (W/(mm²·sr)).
 // Samples n = first … first + count − 1.
 vec3 gatherLight(int l, vec3 xo, vec3 no, Dirpole dd[3], Profile prof[3], int channels[3],
-                 int channelCount, uint first, uint count, uvec2 offset, uint texelSeed) {
+                 int channelCount, uint first, uint count, uvec2 offset, uint texelSeed,
+                 float shrink) {
     GpuLight light = lights[l];
     bool directional = int(light.positionType.w) == LUCENT_LIGHT_DIRECTIONAL;
     vec3 wl, unusedE;
     float unusedD;
     lightIncidence(light, xo, wl, unusedE, unusedD);  // ω_l: unit, toward the light
-    vec3 xs = xo - u_shrink * (no - wl * dot(wl, no));  // seed 001 §4.3.1
+    vec3 xs = xo - shrink * (no - wl * dot(wl, no));  // seed 001 §4.3.1
     // Disc plane through x′_o, perpendicular to the light ray (Duff et al. 2017 basis).
     vec3 pn = directional ? -wl : normalize(xs - light.positionType.xyz);
     float sgn = pn.z >= 0.0 ? 1.0 : -1.0;
@@ -119,6 +129,11 @@ vec3 gatherLight(int l, vec3 xo, vec3 no, Dirpole dd[3], Profile prof[3], int ch
         if (xiCover.w == 0.0) continue;
         vec3 xi = xiCover.xyz;
         vec3 ni = texelFetch(u_lightNormal, texel, 0).xyz;
+        // The ray through pp on a tangent plane (file comment); not at grazing incidence,
+        // where the plane would carry x_i far outside the texel.
+        vec3 rayDir = directional ? pn : normalize(pp - light.positionType.xyz);
+        float dn = dot(rayDir, ni);
+        if (dn < -0.25) xi = pp + (dot(xi - pp, ni) / dn) * rayDir;
         vec3 wi, E, wp, Ep;
         float dist;
         lightIncidence(light, xi, wi, E, dist);
@@ -179,9 +194,11 @@ void main() {
             uint texelSeed = pcgHash(uint(id.x) + pcgHash(uint(id.y) + pcgHash(uint(id.z) +
                                                                                pcgHash(u_seed))));
             uvec2 offset = uvec2(pcgHash(texelSeed), pcgHash(texelSeed + 1u));
+            float densest = max(sigT.r, max(sigT.g, sigT.b));
+            float shrink = densest > 0.0 ? min(u_shrink, 1.0 / densest) : u_shrink;
             for (int l = 0; l < u_lightCount; ++l)
                 C += gatherLight(l, xo, no, dd, prof, channels, channelCount, before, k, offset,
-                                 texelSeed);
+                                 texelSeed, shrink);
         }
         vec3 oldMean = before > 0u ? acc.rgb / float(before) : vec3(0.0);
         vec3 sum = acc.rgb + C;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 namespace lucent::cli {
@@ -130,6 +131,16 @@ std::optional<Rgb> Args::rgb(const std::string& name, float lo, float hi) const 
         LUCENT_THROW(ValueError, "--", name, ": expected R,G,B, got '", *v, "'");
     return Rgb(parseFloat(name, parts[0], lo, hi), parseFloat(name, parts[1], lo, hi),
                parseFloat(name, parts[2], lo, hi));
+}
+
+void printProgressBar(double fraction, const std::string& status) {
+    constexpr int WIDTH = 30;
+    const int filled = int(std::clamp(fraction, 0.0, 1.0) * WIDTH + 0.5);
+    std::string bar(size_t(WIDTH), '-');
+    for (int i = 0; i < filled; ++i)
+        bar[size_t(i)] = '#';
+    std::fprintf(stderr, "\r[%s] %s ", bar.c_str(), status.c_str());
+    std::fflush(stderr);
 }
 
 }  // namespace lucent::cli

@@ -46,6 +46,10 @@ private:
     std::vector<std::string> m_positional;
 };
 
+/// Draws a one-line progress bar on stderr ("\r[####------] status"), for the commands whose
+/// engine calls report progress (render, reference).
+void printProgressBar(double fraction, const std::string& status);
+
 /// A subcommand: `run` returns the process exit code; errors are thrown as lucent::Error.
 struct Command {
     const char* name;
@@ -56,6 +60,6 @@ struct Command {
 
 /// The subcommands, one per Command_<name>.cpp (CliMain.cpp lists them in this order).
 extern const Command exportCommand, infoCommand, renderCommand, methodsCommand, referenceCommand,
-    compareCommand, benchCommand, profileCommand, evaluateCommand;
+    compareCommand, benchCommand, profileCommand, evaluateCommand, planCommand;
 
 }  // namespace lucent::cli

@@ -15,8 +15,8 @@
 namespace lucent::cli {
 
 static std::vector<const Command*> commands() {
-    return {&exportCommand,  &infoCommand,  &renderCommand,  &methodsCommand, &referenceCommand,
-            &compareCommand, &benchCommand, &profileCommand, &evaluateCommand};
+    return {&exportCommand,  &infoCommand,  &renderCommand,  &methodsCommand,  &referenceCommand,
+            &compareCommand, &benchCommand, &profileCommand, &evaluateCommand, &planCommand};
 }
 
 static void printUsage(std::FILE* out) {

@@ -25,37 +25,20 @@ extern "C" void onInterrupt(int) {
     g_interrupted = true;
 }
 
-/// One-line terminal progress bar on stderr.
+/// The reference's progress as the CLI's progress bar.
 void printProgress(const ReferenceProgress& p) {
-    constexpr int WIDTH = 30;
     double frac = double(p.spp) / double(std::max(1, p.maxSpp));
     if (p.targetRse > 0.f && std::isfinite(p.rse) && p.rse > 0.f)
         // Error ∝ 1/√N: the fraction of the samples still needed is (rse/target)².
         frac = std::max(frac,
                         std::min(1.0, double(p.targetRse * p.targetRse) / double(p.rse * p.rse)));
-    const int filled = int(frac * WIDTH + 0.5);
-    char bar[WIDTH + 1];
-    for (int i = 0; i < WIDTH; ++i)
-        bar[i] = i < filled ? '#' : '-';
-    bar[WIDTH] = 0;
-    std::fprintf(stderr, "\r[%s] %6d spp  RSE %.4f", bar, p.spp, double(p.rse));
+    char status[128];
+    int n = std::snprintf(status, sizeof status, "%6d spp  RSE %.4f", p.spp, double(p.rse));
     if (p.targetRse > 0.f)
-        std::fprintf(stderr, " (target %.4f)", double(p.targetRse));
-    std::fprintf(stderr, "  %.1f s ", p.elapsedMs * 1e-3);
-    std::fflush(stderr);
-}
-
-BoundaryModel parseBoundary(const std::string& s) {
-    if (s == "matched")
-        return BoundaryModel::Matched;
-    if (s == "dielectric")
-        return BoundaryModel::Dielectric;
-    if (s == "straight")
-        return BoundaryModel::Straight;
-    LUCENT_THROW(ValueError,
-                 "--boundary: expected 'dielectric' (exact, the default), 'matched' "
-                 "(η = 1) or 'straight' (fast approximation, not ground truth), got '",
-                 s, "'");
+        n += std::snprintf(status + n, sizeof status - size_t(n), " (target %.4f)",
+                           double(p.targetRse));
+    std::snprintf(status + n, sizeof status - size_t(n), "  %.1f s", p.elapsedMs * 1e-3);
+    printProgressBar(frac, status);
 }
 
 int runReference(const std::vector<std::string>& argv) {
@@ -93,7 +76,7 @@ int runReference(const std::vector<std::string>& argv) {
         LUCENT_THROW(ValueError, "--seed: expected a non-negative integer, got '", seed, "'");
     }
     opt.threads = args.intOr("threads", 0, 0, 1024);
-    opt.boundary = parseBoundary(args.valueOr("boundary", "dielectric"));
+    opt.boundary = parseBoundaryModel(args.valueOr("boundary", "dielectric"));
     opt.subsurfaceOnly = args.has("subsurface-only");
     const std::string majorant = args.valueOr("majorant", "auto");
     if (majorant == "auto")

@@ -8,8 +8,10 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
+#include <lucent/gpu/GlContext.h>
 #include <lucent/methods/Registry.h>
 #include <lucent/methods/RenderImage.h>
+#include <lucent/planner/AutoMethod.h>
 #include <lucent/scene/SceneFile.h>
 
 #include <algorithm>
@@ -26,25 +28,18 @@ bool endsWith(const std::string& s, const std::string& suffix) {
            s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-/// One-line terminal progress bar on stderr.
-void printProgress(double fraction, const std::string& status) {
-    constexpr int WIDTH = 30;
-    const int filled = int(std::clamp(fraction, 0.0, 1.0) * WIDTH + 0.5);
-    std::string bar(size_t(WIDTH), '-');
-    for (int i = 0; i < filled; ++i)
-        bar[size_t(i)] = '#';
-    std::fprintf(stderr, "\r[%s] %s ", bar.c_str(), status.c_str());
-    std::fflush(stderr);
-}
-
 int runRender(const std::vector<std::string>& argv) {
-    // The method decides which --NAME VALUE options are its parameters.
-    const std::string methodName = Args::peek(argv, "method").value_or("direct");
-    const methods::MethodInfo& method = methods::find(methodName);
+    // The method decides which --NAME VALUE options are its parameters; Auto takes the
+    // planner's instead.
+    const std::string requested = Args::peek(argv, "method").value_or("direct");
+    const bool autoMethod = requested == "auto";
     std::vector<std::string> valueOptions = {"method",   "o",       "output",  "width", "height",
                                              "exposure", "tonemap", "backend", "param"};
-    for (const methods::ParamDescriptor& d : method.params)
-        valueOptions.push_back(d.name);
+    if (autoMethod)
+        valueOptions.insert(valueOptions.end(), {"budget-ms", "max-error", "models"});
+    else
+        for (const methods::ParamDescriptor& d : methods::find(requested).params)
+            valueOptions.push_back(d.name);
     const Args args(argv, valueOptions, {"subsurface-only", "cpu", "gl"});
     if (args.positional().size() != 1)
         LUCENT_THROW(ValueError, "expected exactly one SCENE.json (see --help)");
@@ -76,17 +71,41 @@ int runRender(const std::vector<std::string>& argv) {
         options.backend = methods::Backend::Gl;
     options.subsurfaceOnly = args.has("subsurface-only");
     options.log = [](const std::string& m) { std::fprintf(stderr, "render: %s\n", m.c_str()); };
-    options.progress = printProgress;
-    methods::ParamSet params = methods::ParamSet::fromAssignments(args.values("param"));
-    for (const methods::ParamDescriptor& d : method.params)
-        if (auto v = args.value(d.name))
-            params.set(d.name, *v);
+    options.progress = printProgressBar;
 
     Scene scene = loadScene(args.positional().front());
     for (const std::string& w : scene.warnings)
         std::fprintf(stderr, "lucent-cli render: warning: %s\n", w.c_str());
     scene.camera.width = args.intOr("width", scene.camera.width, 1, 16384);
     scene.camera.height = args.intOr("height", scene.camera.height, 1, 16384);
+
+    std::string methodName = requested;
+    methods::ParamSet params;
+    if (autoMethod) {
+        planner::Budget budget;
+        budget.frameMs = args.floatOr("budget-ms", 1000.f, 1e-3f, 1e9f);
+        budget.maxError = args.floatOr("max-error", 0.f, 0.f, 1e3f);
+        std::string glReason;
+        const bool gl = options.backend != methods::Backend::Cpu &&
+                        gpu::GlContext::isHeadlessAvailable(&glReason);
+        budget.directMs = 0;  // measured
+        const planner::Models models = args.has("models")
+                                           ? planner::loadModels(*args.value("models"))
+                                           : planner::defaultModels();
+        const planner::AutoChoice c =
+            planner::chooseOffline(scene, models, budget, gl, options.log);
+        std::fprintf(stderr, "render: auto: %s\n", c.plan.reason.c_str());
+        methodName = c.method;
+        params = c.params;
+        if (options.backend == methods::Backend::Auto)
+            options.backend = c.backend;
+    }
+    const methods::MethodInfo& method = methods::find(methodName);
+    params.merge(methods::ParamSet::fromAssignments(args.values("param")));
+    if (!autoMethod)
+        for (const methods::ParamDescriptor& d : method.params)
+            if (auto v = args.value(d.name))
+                params.set(d.name, *v);
     const methods::RenderResult r = methods::renderImage(scene, method.name, params, options);
     if (method.caps.cpu && r.backend == methods::Backend::Cpu && options.progress)
         std::fputc('\n', stderr);
@@ -117,6 +136,8 @@ const Command renderCommand{
     "                         [--NAME VALUE | --param NAME=VALUE ...]\n"
     "                         [--backend auto|gl|cpu | --gl | --cpu]\n"
     "                         [--width W] [--height H] [--subsurface-only]\n"
+    "       lucent-cli render SCENE.json --method auto [--budget-ms B | --max-error E]\n"
+    "                         [--models F] -o OUT ...\n"
     "                         [--exposure E] [--tonemap clamp|reinhard|aces]\n"
     "\n"
     "Renders the scene with a registered method (`lucent-cli methods` lists them and their\n"
@@ -124,7 +145,13 @@ const Command renderCommand{
     "needed); without one, a method with a CPU renderer falls back to it (said on stderr).\n"
     "\n"
     "  --method NAME      a method of `lucent-cli methods` (default direct);\n"
-    "                     `lucent-cli methods NAME` lists its parameters and defaults\n"
+    "                     `lucent-cli methods NAME` lists its parameters and defaults;\n"
+    "                     auto: the planner chooses method and setting from the scene's\n"
+    "                     features and its fitted cost and error models, and says why on\n"
+    "                     stderr (`lucent-cli plan SCENE` shows every candidate)\n"
+    "  --budget-ms B      auto: time the render may take (default 1000 ms)\n"
+    "  --max-error E      auto: the cheapest method predicted at or under block error E\n"
+    "  --models F         auto: a models file (default: the built-in ones)\n"
     "  --NAME VALUE       a parameter of the method, e.g. --spp 64 --seed 3; the same as\n"
     "  --param NAME=VALUE (repeatable)\n"
     "  --backend B        auto (default: the method's own choice, GL falling back to the CPU),\n"

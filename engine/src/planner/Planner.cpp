@@ -23,27 +23,58 @@ std::string format(const char* fmt, double a, double b = 0.0) {
     return buf;
 }
 
+/// "dirpole (3 settings), sslpv 32 skipped: why" for the candidates left out, one clause per
+/// reason (a method whose every setting fails the same way is named once).
+std::string skippedClauses(const std::vector<std::pair<const Candidate*, std::string>>& skipped) {
+    std::vector<std::string> reasons;
+    for (const auto& [c, why] : skipped)
+        if (std::find(reasons.begin(), reasons.end(), why) == reasons.end())
+            reasons.push_back(why);
+    std::string out;
+    for (const std::string& why : reasons) {
+        std::vector<std::pair<std::string, std::vector<const Candidate*>>> byMethod;
+        for (const auto& [c, w] : skipped) {
+            if (w != why)
+                continue;
+            auto it = std::find_if(byMethod.begin(), byMethod.end(),
+                                   [&](const auto& m) { return m.first == c->method; });
+            if (it == byMethod.end())
+                byMethod.push_back({c->method, {c}});
+            else
+                it->second.push_back(c);
+        }
+        std::string names;
+        for (const auto& [method, list] : byMethod) {
+            names += names.empty() ? "" : ", ";
+            names += list.size() == 1 ? nameOf(*list.front())
+                                      : method + " (" + std::to_string(list.size()) + " settings)";
+        }
+        out += "; " + names + " skipped: " + why;
+    }
+    return out;
+}
+
 }  // namespace
 
 Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& features,
           const Budget& budget, const Plan* previous) {
     LUCENT_CHECK(budget.directMs > 0 && std::isfinite(budget.directMs),
                  "plan: the Direct frame time must be > 0 ms, got ", budget.directMs);
-    LUCENT_CHECK(budget.frameMs > 0 && std::isfinite(budget.frameMs),
-                 "plan: the frame budget must be > 0 ms, got ", budget.frameMs);
+    // An infinite budget is allowed: no time limit (the most accurate candidate).
+    LUCENT_CHECK(budget.frameMs > 0, "plan: the frame budget must be > 0 ms, got ", budget.frameMs);
     LUCENT_CHECK(budget.hysteresis >= 0 && budget.hysteresis < 1,
                  "plan: hysteresis must be in [0, 1), got ", budget.hysteresis);
     const bool errorTarget = budget.maxError > 0;
 
     Plan p;
     p.sceneClass = classify(features);
-    std::string passedOver;
+    std::vector<std::pair<const Candidate*, std::string>> skipped;
     for (size_t i = 0; i < candidates.size(); ++i) {
         const Candidate& c = candidates[i];
         if (c.unusable) {
             const std::string why = c.unusable(features);
             if (!why.empty()) {
-                passedOver += "; " + nameOf(c) + " skipped: " + why;
+                skipped.emplace_back(&c, why);
                 continue;
             }
         }
@@ -58,7 +89,7 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
         p.options.push_back(o);
     }
     if (p.options.empty()) {
-        p.reason = "no method can render this scene" + passedOver;
+        p.reason = "no method can render this scene" + skippedClauses(skipped);
         return p;
     }
     // Fitting options first; among them the least error (time budget) or the least time
@@ -94,9 +125,13 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
     p.choice = p.chosen.index;
 
     const Candidate& chosen = candidates[p.choice];
+    const char* timeFormat = budget.directKnown ? "%.0f ms" : "%.1f× Direct";
     p.reason = nameOf(chosen) + ": " + describe(p.sceneClass, features.eta) + "; predicted " +
-               format("%.0f ms", p.chosen.ms) + format(" (budget %.0f ms)", budget.frameMs) +
-               format(", block error %.2f", p.chosen.error);
+               format(timeFormat, p.chosen.ms);
+    if (!errorTarget)
+        p.reason += std::isfinite(budget.frameMs) ? format(" (budget %.0f ms)", budget.frameMs)
+                                                  : std::string(" (no time budget)");
+    p.reason += format(", block error %.2f", p.chosen.error);
     if (errorTarget)
         p.reason += format(" (target %.2f)", budget.maxError);
     if (!p.chosen.fits)
@@ -109,12 +144,12 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
         if (o.index == p.choice)
             continue;
         const std::string why =
-            !o.fits ? (errorTarget ? format("error %.2f", o.error) : format("%.0f ms", o.ms))
-                    : (errorTarget ? format("%.0f ms", o.ms) : format("error %.2f", o.error));
+            !o.fits ? (errorTarget ? format("error %.2f", o.error) : format(timeFormat, o.ms))
+                    : (errorTarget ? format(timeFormat, o.ms) : format("error %.2f", o.error));
         p.reason += "; next: " + nameOf(candidates[o.index]) + " (" + why + ")";
         break;
     }
-    p.reason += passedOver;
+    p.reason += skippedClauses(skipped);
     return p;
 }
 

@@ -121,7 +121,8 @@ SceneFeatures analyzeScene(const Scene& scene) {
         const double halfFov = 0.5 * double(cam.fovYDeg) * PI_D / 180.0;
         radiusPx = std::tan(halfAngle) / std::tan(halfFov) * 0.5 * double(cam.height);
     }
-    f.pixelsCovered = std::min(PI_D * radiusPx * radiusPx, double(cam.width) * double(cam.height));
+    f.imagePixels = double(cam.width) * double(cam.height);
+    f.pixelsCovered = std::min(PI_D * radiusPx * radiusPx, f.imagePixels);
     return f;
 }
 

@@ -168,6 +168,17 @@ const char* boundaryModelName(BoundaryModel model) {
     return "?";
 }
 
+BoundaryModel parseBoundaryModel(const std::string& name) {
+    for (BoundaryModel m :
+         {BoundaryModel::Dielectric, BoundaryModel::Matched, BoundaryModel::Straight})
+        if (name == boundaryModelName(m))
+            return m;
+    LUCENT_THROW(ValueError,
+                 "boundary: expected 'dielectric' (exact, the default), 'matched' (η = 1) or "
+                 "'straight' (fast approximation, not ground truth), got '",
+                 name, "'");
+}
+
 VolumeScene::VolumeScene(const TriangleMesh& mesh, GridMedium medium, std::vector<Light> lights,
                          const Rgb& environment)
     : m_boundary(mesh),

@@ -327,6 +327,52 @@ elseif(CASE STREQUAL "methods")
         expect_contains(single "${single_ERR}" "OpenGL")
         message(STATUS "no headless GL here: single scattering not rendered")
     endif()
+elseif(CASE STREQUAL "auto")
+    # Issue 15: `plan` shows the scene's features, every candidate and the choice with its
+    # reason; `render --method auto` renders what the planner picks and says why; a budget or
+    # an error target changes the choice; bad models files and budgets are one-line errors.
+    run(plan plan ${SCENE} --direct-ms 10 --budget-ms 1e6 --width 32 --height 32)
+    expect_ok(plan)
+    expect_contains(plan "${plan_OUT}" "scene features" "mean free paths" "scene class:"
+        "<- chosen" "plan: " "render: lucent-cli render")
+    run(cpu plan ${SCENE} --cpu --width 32 --height 32)
+    expect_ok(cpu)
+    expect_contains(cpu "${cpu_ERR}" "no OpenGL")
+    expect_contains(cpu "${cpu_OUT}" "Direct (no time budget)")
+    # A tiny budget: nothing fits, the cheapest is taken and the reason says so.
+    run(tight plan ${SCENE} --direct-ms 10 --budget-ms 0.001 --width 32 --height 32)
+    expect_ok(tight)
+    expect_contains(tight "${tight_OUT}" "over budget")
+    run(target plan ${SCENE} --direct-ms 10 --max-error 1000 --width 32 --height 32)
+    expect_ok(target)
+    expect_contains(target "${target_OUT}" "(target 1000.00)")
+    run(bad_budget plan ${SCENE} --budget-ms -5)
+    expect_one_line_error(bad_budget "--budget-ms")
+    file(WRITE ${OUT}/bad_models.json "{\"format\": \"lucent-planner-models\", \"version\": 99}")
+    run(bad_models plan ${SCENE} --models ${OUT}/bad_models.json --direct-ms 10)
+    expect_one_line_error(bad_models "models version 99")
+    # The CPU render of the choice (no GL needed): the reason on stderr, the image written.
+    run(render render ${SCENE} --method auto --cpu --max-error 1000 --width 16 --height 16
+        -o ${OUT}/auto.exr)
+    expect_ok(render)
+    expect_contains(render "${render_ERR}" "render: auto: ")
+    expect_contains(render "${render_OUT}" "wrote")
+    # Fit round trip: a CSV of two cases → a models file `plan --models` accepts.
+    set(features "optical_size,albedo,sigma_t_variation,albedo_variation,mean_abs_g,eta,back_lit_fraction,curvature,thin_fraction,pixels_covered,image_pixels")
+    file(WRITE ${OUT}/suite.csv "case,method,setting,cost_ratio,block_rel_l1,${features}\n"
+        "a,dipole,8 spp,3,0.2,100,0.9,0,0,0,1.3,0,0.2,0.5,500,1024\n"
+        "b,dipole,8 spp,4,0.4,10,0.8,0,0,0,1.3,1,0.5,0.9,900,1024\n"
+        "a,direct,-,1,0.9,100,0.9,0,0,0,1.3,0,0.2,0.5,500,1024\n"
+        "b,direct,-,1,0.9,10,0.8,0,0,0,1.3,1,0.5,0.9,900,1024\n")
+    run(fit plan --fit ${OUT}/suite.csv -o ${OUT}/models.json)
+    expect_ok(fit)
+    expect_contains(fit "${fit_OUT}" "1 candidates from 2 rows")
+    run(fitted plan ${SCENE} --models ${OUT}/models.json --direct-ms 10 --width 32 --height 32)
+    expect_ok(fitted)
+    expect_contains(fitted "${fitted_OUT}" "dipole 8 spp")
+    run(check plan --check ${OUT}/suite.csv --models ${OUT}/models.json)
+    expect_ok(check)
+    expect_contains(check "${check_OUT}" "within 1.2x of the front at equal error: 2 of 2 cases")
 else()
     message(FATAL_ERROR "unknown CASE '${CASE}'")
 endif()

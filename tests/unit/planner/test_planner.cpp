@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 using namespace lucent;
 using namespace lucent::planner;
@@ -157,4 +158,30 @@ TEST(Planner, RejectsBadBudgetsAndModels) {
     EXPECT_THROW(plan(cands, frontLit(), budget(-1.0)), ValueError);
     const std::vector<Candidate> nan = {fixed("a", std::nan(""), 0.1)};
     EXPECT_THROW(plan(nan, frontLit(), budget(50.0)), ValueError);
+}
+
+TEST(Planner, NoTimeLimitAndCostsAsRatiosWithoutADirectFrame) {
+    // Without GL (no Direct frame to measure) Auto plans with an infinite budget and costs as
+    // ratios: the most accurate wins, and the reason does not print a made-up time.
+    const std::vector<Candidate> cands = {fixed("slow", 40.0, 0.10), fixed("fast", 2.0, 0.30)};
+    Budget b = budget(std::numeric_limits<double>::infinity(), 1.0);
+    b.directKnown = false;
+    const Plan p = plan(cands, frontLit(), b);
+    EXPECT_EQ(cands[p.choice].method, "slow");
+    EXPECT_NE(p.reason.find("predicted 40.0× Direct (no time budget)"), std::string::npos)
+        << p.reason;
+    EXPECT_NE(p.reason.find("next: fast s (error 0.30)"), std::string::npos) << p.reason;
+    EXPECT_THROW(plan(cands, frontLit(), budget(std::nan(""))), ValueError);
+}
+
+TEST(Planner, SkippedSettingsOfOneMethodAreNamedOnce) {
+    std::vector<Candidate> cands = {fixed("ok", 1.0, 0.2), fixed("dirpole", 1.0, 0.1, "no GL"),
+                                    fixed("dirpole", 2.0, 0.1, "no GL"),
+                                    fixed("sslpv", 1.0, 0.1, "no GL"),
+                                    fixed("sslpv", 1.0, 0.1, "other")};
+    const Plan p = plan(cands, frontLit(), budget(50.0));
+    EXPECT_NE(
+        p.reason.find("; dirpole (2 settings), sslpv s skipped: no GL; sslpv s skipped: other"),
+        std::string::npos)
+        << p.reason;
 }

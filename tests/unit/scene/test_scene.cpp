@@ -95,7 +95,10 @@ TEST(SceneFile, MinimalSceneLoads) {
 }
 
 TEST(SceneFile, ShippedExampleScenesLoad) {
-    for (const char* name : {"minimal.json", "backlit_thin_thick.json", "torus_uniform_sun.json"}) {
+    for (const char* name :
+         {"minimal.json", "backlit_thin_thick.json", "skin_sphere.json", "torus_uniform_sun.json",
+          "holdout/torus_wax_spot.json", "holdout/slab_apple_backlit.json",
+          "holdout/sphere_ketchup_grazing.json"}) {
         const std::string path = std::string(LUCENT_SCENES_DIR) + "/" + name;
         const Scene s = loadScene(path);
         ASSERT_EQ(s.objects.size(), 1u) << name;

@@ -37,8 +37,11 @@ struct Candidate {
 };
 
 struct Budget {
-    double frameMs = 50.0;  ///< time per frame the preview may take
+    double frameMs = 50.0;  ///< time per frame the preview may take (may be +∞: no limit)
     double directMs = 5.0;  ///< this machine's Direct render of the frame (> 0)
+    /// false when no Direct frame could be measured (no GL) and directMs is 1 as a stand-in:
+    /// the reason then gives costs as ratios to the Direct frame, not as times.
+    bool directKnown = true;
     /// If > 0: the cheapest candidate whose predicted error is at most this, instead of the
     /// most accurate within frameMs.
     double maxError = 0.0;
@@ -67,7 +70,8 @@ struct Plan {
 };
 
 /// Plans a frame. `previous` (may be null): the last plan, for hysteresis.
-/// @throw ValueError if budget.directMs ≤ 0 or frameMs ≤ 0, or a prediction is not finite.
+/// @throw ValueError if budget.directMs ≤ 0 or frameMs ≤ 0 (or NaN), or a prediction is not
+/// finite.
 Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& features,
           const Budget& budget, const Plan* previous = nullptr);
 

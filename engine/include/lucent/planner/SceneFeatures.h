@@ -43,6 +43,7 @@ struct SceneFeatures {
     /// an object about as small as the light's spread inside it.
     double curvature = 0.0;
     double pixelsCovered = 0.0;  ///< projected bounding sphere, pixels (clipped to the image)
+    double imagePixels = 0.0;    ///< camera width × height
     int insideVoxels = 0;
     int lights = 0;
 };

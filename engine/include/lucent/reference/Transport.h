@@ -23,6 +23,7 @@
 #include <lucent/scene/Scene.h>
 
 #include <cstdint>
+#include <string>
 #include <optional>
 #include <vector>
 
@@ -43,6 +44,8 @@ enum class BoundaryModel : uint8_t {
 
 /// The name used on the command line and in reports: "matched", "dielectric", "straight".
 const char* boundaryModelName(BoundaryModel model);
+/// The model called `name` (boundaryModelName's names). @throw ValueError naming the three.
+BoundaryModel parseBoundaryModel(const std::string& name);
 
 /// Parameters of the estimators.
 struct TransportOptions {

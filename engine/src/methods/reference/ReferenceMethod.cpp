@@ -17,14 +17,6 @@ namespace {
 
 using detail::num;
 
-BoundaryModel parseBoundary(const std::string& s) {
-    if (s == "matched")
-        return BoundaryModel::Matched;
-    if (s == "straight")
-        return BoundaryModel::Straight;
-    return BoundaryModel::Dielectric;
-}
-
 class ReferenceMethod final : public Method {
 public:
     using Method::Method;
@@ -34,7 +26,7 @@ public:
         opt.spp = params().getInt("spp");
         opt.seed = uint64_t(params().getInt("seed"));
         opt.threads = params().getInt("threads");
-        opt.boundary = parseBoundary(params().getChoice("boundary"));
+        opt.boundary = parseBoundaryModel(params().getChoice("boundary"));
         opt.subsurfaceOnly = request.subsurfaceOnly;
         if (request.progress) {
             const auto progress = request.progress;

@@ -1,0 +1,197 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief `lucent-cli plan SCENE.json`: what the Auto planner sees in a scene and what it
+/// chooses (lucent/planner/AutoMethod.h); `lucent-cli plan --fit suite.csv -o models.json`:
+/// fits the planner's cost and error models (lucent/planner/Models.h). Parsing and printing
+/// only.
+
+#include "CliArgs.h"
+
+#include <lucent/core/Error.h>
+#include <lucent/gpu/GlContext.h>
+#include <lucent/planner/AutoMethod.h>
+#include <lucent/scene/SceneFile.h>
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace lucent::cli {
+
+namespace {
+
+/// "50 ms", "0.1": numbers as a user typed them.
+std::string fmtMs(double v, bool ms = true) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, ms ? "%g ms" : "%g", v);
+    return buf;
+}
+
+void printFeatures(const planner::SceneFeatures& f) {
+    std::printf("scene features (object 0):\n");
+    std::printf("  size %.3g mm, %.3g mean free paths (mean sigma_t' %.4g /mm), albedo' %.4f\n",
+                f.sizeMm, f.opticalSize, f.meanSigmaT, f.albedo);
+    std::printf(
+        "  diffusion length %.3g mm, deepest voxel %.3g mm, thin fraction %.2f, "
+        "curvature %.3g\n",
+        f.diffusionLengthMm, f.maxDepthMm, f.thinFraction, f.curvature);
+    std::printf("  sigma_t' variation %.3f, albedo' spread %.3f, mean |g| %.2f, eta %.3g\n",
+                f.sigmaTVariation, f.albedoVariation, f.meanAbsG, f.eta);
+    std::printf("  %d light(s), back-lit fraction %.2f, %.0f of %.0f pixels covered\n", f.lights,
+                f.backLitFraction, f.pixelsCovered, f.imagePixels);
+}
+
+int runFit(const Args& args) {
+    const std::string out = args.value("o").value_or(args.valueOr("output", ""));
+    if (out.empty())
+        LUCENT_THROW(ValueError, "plan --fit: missing -o/--output models.json");
+    const double ridge = args.floatOr("ridge", 0.05f, 0.f, 100.f);
+    std::vector<planner::MeasuredRow> rows;
+    std::string source = "lucent-cli plan --fit";
+    for (const std::string& csv : args.values("fit")) {
+        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv);
+        rows.insert(rows.end(), r.begin(), r.end());
+        source += " " + csv;
+    }
+    // Ground truth and the unlit baseline are not previews to choose from.
+    std::erase_if(rows, [](const planner::MeasuredRow& r) {
+        return r.method == "reference" || r.method.rfind("reference:", 0) == 0 ||
+               r.method == "direct";
+    });
+    planner::Models models = planner::fitModels(rows, ridge);
+    models.source = args.valueOr("source", source);
+    planner::saveModels(models, out);
+    std::printf("%-22s %-20s %5s %14s %15s\n", "method", "setting", "cases", "cost log-RMS",
+                "error log-RMS");
+    for (const planner::CandidateModel& c : models.candidates)
+        std::printf("%-22s %-20s %5d %14.3f %15.3f\n", c.method.c_str(), c.setting.c_str(), c.cases,
+                    c.costLogRms, c.errorLogRms);
+    std::printf("wrote %s (%zu candidates from %zu rows; log-RMS: leave-one-out, ln units)\n",
+                out.c_str(), models.candidates.size(), rows.size());
+    return 0;
+}
+
+int runCheck(const Args& args) {
+    const planner::Models models =
+        args.has("models") ? planner::loadModels(*args.value("models")) : planner::defaultModels();
+    const double budgetRatio = args.floatOr("budget-ratio", 20.f, 1e-3f, 1e9f);
+    std::vector<planner::MeasuredRow> rows;
+    for (const std::string& csv : args.values("check")) {
+        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv);
+        rows.insert(rows.end(), r.begin(), r.end());
+    }
+    const std::vector<planner::FrontCheck> checks =
+        planner::checkAgainstFront(rows, models, budgetRatio);
+    if (checks.empty())
+        LUCENT_THROW(ValueError, "plan --check: no case has a measured candidate with a model");
+    std::printf(
+        "budget: %g x the Direct frame; times are measured cost ratios, errors measured\n"
+        "block rel. L1\n\n",
+        budgetRatio);
+    std::printf("%-28s %-36s %8s %7s  %-36s %6s  %s\n", "case", "Auto's choice", "cost", "error",
+                "cheapest at that error", "ratio", "best in budget");
+    int within = 0, best = 0;
+    for (const planner::FrontCheck& c : checks) {
+        within += c.timeRatio <= 1.2 ? 1 : 0;
+        best += c.choseBest ? 1 : 0;
+        std::printf("%-28s %-36s %8.2f %7.3f  %-36s %6.2f  %s%s\n", c.caseName.c_str(),
+                    c.chosen.c_str(), c.chosenCost, c.chosenError, c.cheapestAtError.c_str(),
+                    c.timeRatio, c.choseBest ? "= chosen" : c.bestInBudget.c_str(),
+                    c.choseBest
+                        ? ""
+                        : (" (error " + std::to_string(c.bestError).substr(0, 5) + ")").c_str());
+    }
+    std::printf(
+        "\nwithin 1.2x of the front at equal error: %d of %zu cases; the best point in the "
+        "budget: %d of %zu\n",
+        within, checks.size(), best, checks.size());
+    return 0;
+}
+
+int runPlan(const std::vector<std::string>& argv) {
+    const Args args(argv,
+                    {"budget-ms", "max-error", "direct-ms", "models", "width", "height", "fit", "o",
+                     "output", "ridge", "source", "check", "budget-ratio"},
+                    {"cpu"});
+    if (args.has("fit"))
+        return runFit(args);
+    if (args.has("check"))
+        return runCheck(args);
+    if (args.positional().size() != 1)
+        LUCENT_THROW(ValueError, "expected exactly one SCENE.json (see --help)");
+    Scene scene = loadScene(args.positional().front());
+    for (const std::string& w : scene.warnings)
+        std::fprintf(stderr, "lucent-cli plan: warning: %s\n", w.c_str());
+    scene.camera.width = args.intOr("width", scene.camera.width, 1, 16384);
+    scene.camera.height = args.intOr("height", scene.camera.height, 1, 16384);
+    const planner::Models models =
+        args.has("models") ? planner::loadModels(*args.value("models")) : planner::defaultModels();
+    std::string glReason;
+    const bool gl = !args.has("cpu") && gpu::GlContext::isHeadlessAvailable(&glReason);
+    planner::Budget budget;
+    budget.frameMs = args.floatOr("budget-ms", 1000.f, 1e-3f, 1e9f);
+    budget.maxError = args.floatOr("max-error", 0.f, 0.f, 1e3f);
+    budget.directMs = args.has("direct-ms") ? args.floatOr("direct-ms", 1.f, 1e-3f, 1e9f) : 0.0;
+    const planner::AutoChoice c = planner::chooseOffline(
+        scene, models, budget, gl,
+        [](const std::string& m) { std::fprintf(stderr, "plan: %s\n", m.c_str()); });
+    printFeatures(c.features);
+    std::printf("scene class: %s\n", planner::describe(c.plan.sceneClass, c.features.eta).c_str());
+    std::printf("Direct frame: %s; %s\n",
+                args.has("direct-ms") ? fmtMs(c.directMs).c_str()
+                : gl                  ? (fmtMs(c.directMs) + " (measured)").c_str()
+                                      : "none (no GL)",
+                budget.maxError > 0 ? ("error target " + fmtMs(budget.maxError, false)).c_str()
+                                    : ("budget " + fmtMs(budget.frameMs)).c_str());
+    if (!gl)
+        std::printf("no GL: %s\n", args.has("cpu") ? "--cpu" : glReason.c_str());
+    std::printf("\n%-22s %-20s %12s %12s %5s\n", "candidate", "setting", "predicted ms",
+                "block error", "fits");
+    for (const planner::Option& o : c.plan.options) {
+        const planner::CandidateModel& m = models.candidates[o.index];
+        std::printf("%-22s %-20s %12.1f %12.3f %5s%s\n", m.method.c_str(), m.setting.c_str(), o.ms,
+                    o.error, o.fits ? "yes" : "no", o.index == c.plan.choice ? "  <- chosen" : "");
+    }
+    std::printf("\nplan: %s\n", c.plan.reason.c_str());
+    std::printf("render: lucent-cli render %s --method %s%s", args.positional().front().c_str(),
+                c.method.c_str(),
+                c.backend == methods::Backend::Auto
+                    ? ""
+                    : (std::string(" --backend ") + methods::backendName(c.backend)).c_str());
+    for (const auto& [k, v] : c.params.items())
+        std::printf(" --param %s=%s", k.c_str(), v.c_str());
+    std::printf("\n");
+    return 0;
+}
+
+}  // namespace
+
+const Command planCommand{
+    "plan", "what the Auto planner sees in a scene and which method it picks; fits its models",
+    "usage: lucent-cli plan SCENE.json [--budget-ms B | --max-error E] [--direct-ms D]\n"
+    "                       [--models models.json] [--width W] [--height H] [--cpu]\n"
+    "       lucent-cli plan --fit suite.csv [--fit more.csv ...] -o models.json [--ridge R]\n"
+    "       lucent-cli plan --check suite.csv [--models F] [--budget-ratio R]\n"
+    "\n"
+    "Prints the scene's features and class, every candidate (a method at one quality level)\n"
+    "with its predicted time and 4x4-block error against the exact reference, the choice and\n"
+    "its one-line reason, and the `lucent-cli render` command that renders it\n"
+    "(`render --method auto` does both). docs/planner.md explains the models.\n"
+    "\n"
+    "  --budget-ms B     time the render may take (default 1000 ms; predicted as the model's\n"
+    "                    cost ratio times the Direct render of the same frame)\n"
+    "  --max-error E     instead: the cheapest candidate predicted at or under block error E\n"
+    "  --direct-ms D     this machine's Direct render of the frame (default: measured now)\n"
+    "  --models F        models file (default: the ones built in, resources/planner/models.json)\n"
+    "  --cpu             plan as if no OpenGL were available\n"
+    "  --fit CSV         fit the models on an evaluation CSV (`lucent-cli evaluate --suite`),\n"
+    "                    one model per method and setting measured on at least 2 cases\n"
+    "  --ridge R         regularisation of the fit (default 0.05)\n"
+    "  --check CSV       judge Auto on measured cases: per case its choice (from the models)\n"
+    "                    against the measured front: the time ratio to the cheapest candidate\n"
+    "                    at or under its measured error (goal <= 1.2) and whether it is the\n"
+    "                    measured best within the budget\n"
+    "  --budget-ratio R  the budget of --check as a multiple of the Direct frame (default 20)\n",
+    &runPlan};
+
+}  // namespace lucent::cli

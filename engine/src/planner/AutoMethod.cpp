@@ -1,0 +1,135 @@
+// SPDX-License-Identifier: MIT
+#include <lucent/core/Error.h>
+#include <lucent/methods/Registry.h>
+#include <lucent/planner/AutoMethod.h>
+
+#include <algorithm>
+#include <limits>
+
+namespace lucent::planner {
+
+namespace {
+
+const char* lightTypeName(Light::Type t) {
+    switch (t) {
+        case Light::Type::Point:
+            return "point";
+        case Light::Type::Spot:
+            return "spot";
+        case Light::Type::Directional:
+            return "directional";
+        case Light::Type::Sphere:
+            return "sphere";
+    }
+    return "unknown";
+}
+
+/// A candidate resolved against the registry, or why it cannot serve the scene.
+struct Resolved {
+    std::string method, variant;
+    methods::ParamSet params;
+    methods::Backend backend = methods::Backend::Auto;
+    std::string unusable;
+};
+
+Resolved resolve(const CandidateModel& model, const Scene& scene, bool glAvailable) {
+    Resolved r;
+    const size_t colon = model.method.find(':');
+    r.method = model.method.substr(0, colon);
+    r.variant = colon == std::string::npos ? "" : model.method.substr(colon + 1);
+    if (!methods::exists(r.method)) {
+        r.unusable = "not in this build's method registry";
+        return r;
+    }
+    const methods::MethodInfo& info = methods::find(r.method);
+    if (!r.variant.empty()) {
+        const auto v =
+            std::find_if(info.variants.begin(), info.variants.end(),
+                         [&](const methods::ParamPreset& p) { return p.name == r.variant; });
+        if (v == info.variants.end()) {
+            r.unusable = "the registry has no variant '" + r.variant + "'";
+            return r;
+        }
+        r.params = v->values;
+        r.backend = v->backend;
+    }
+    const auto q =
+        std::find_if(info.quality.begin(), info.quality.end(),
+                     [&](const methods::ParamPreset& p) { return p.name == model.setting; });
+    if (q == info.quality.end()) {
+        r.unusable = "the registry has no quality level '" + model.setting + "'";
+        return r;
+    }
+    r.params.merge(q->values);
+    methods::Backend used;
+    try {
+        used = methods::resolveBackend(info, r.backend, glAvailable, "no OpenGL 4.5 context");
+    } catch (const Error& e) {
+        r.unusable = e.what();
+        return r;
+    }
+    const methods::LightMask handled =
+        used == methods::Backend::Gl ? info.caps.glLights : info.caps.cpuLights;
+    for (const Light& l : scene.lights)
+        if (!(handled & methods::lightBit(l.type))) {
+            r.unusable = std::string("ignores the scene's ") + lightTypeName(l.type) + " light";
+            return r;
+        }
+    return r;
+}
+
+}  // namespace
+
+AutoChoice chooseMethod(const Scene& scene, const Models& models, const Budget& budget,
+                        bool glAvailable, const Plan* previous) {
+    AutoChoice choice;
+    choice.features = analyzeScene(scene);
+    choice.directMs = budget.directMs;
+    std::vector<Candidate> candidates = toCandidates(models);
+    std::vector<Resolved> resolved;
+    for (size_t i = 0; i < candidates.size(); ++i) {
+        resolved.push_back(resolve(models.candidates[i], scene, glAvailable));
+        const std::string why = resolved.back().unusable;
+        candidates[i].unusable = [why](const SceneFeatures&) { return why; };
+    }
+    choice.plan = plan(candidates, choice.features, budget, previous);
+    if (!choice.plan.valid)
+        LUCENT_THROW(ValueError, "Auto: no method can render this scene (", choice.plan.reason,
+                     ")");
+    const Resolved& r = resolved[choice.plan.choice];
+    choice.method = r.method;
+    choice.variant = r.variant;
+    choice.setting = models.candidates[choice.plan.choice].setting;
+    choice.params = r.params;
+    choice.backend = r.backend;
+    return choice;
+}
+
+AutoChoice chooseOffline(const Scene& scene, const Models& models, Budget budget, bool glAvailable,
+                         const methods::Log& log) {
+    if (budget.directMs <= 0) {
+        if (glAvailable) {
+            methods::RenderOptions o;
+            o.log = log;
+            budget.directMs = measureDirectMs(scene, o);
+        } else {
+            if (log && budget.maxError <= 0)
+                log("no OpenGL: no Direct frame to scale the cost models with, so the choice is "
+                    "by predicted error alone (give the Direct frame time to plan to a budget)");
+            budget.directMs = 1.0;  // costs stay ratios; only their order is used below
+            budget.directKnown = false;
+            if (budget.maxError <= 0)
+                budget.frameMs = std::numeric_limits<double>::infinity();
+        }
+    }
+    return chooseMethod(scene, models, budget, glAvailable);
+}
+
+double measureDirectMs(const Scene& scene, const methods::RenderOptions& options) {
+    methods::RenderOptions o = options;
+    o.subsurfaceOnly = false;
+    o.progress = nullptr;
+    return methods::renderImage(scene, "direct", {}, o).milliseconds;
+}
+
+}  // namespace lucent::planner

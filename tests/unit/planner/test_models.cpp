@@ -1,0 +1,345 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief The planner's cost and error models: the fit recovers known log-linear models, its
+/// leave-one-out error is honest, the evaluation CSV reader and the models file reject what
+/// they cannot use with a message, the shipped models match the method registry, and Auto
+/// resolves a choice to parameters the registry renders (and leaves out what cannot render).
+
+#include <lucent/core/Error.h>
+#include <lucent/methods/Registry.h>
+#include <lucent/planner/AutoMethod.h>
+#include <lucent/planner/Models.h>
+#include <lucent/scene/SceneFile.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+using namespace lucent;
+using namespace lucent::planner;
+
+namespace {
+
+/// Features spread over the ranges the terms are scaled for.
+SceneFeatures randomFeatures(std::mt19937& rng) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    SceneFeatures f;
+    f.opticalSize = std::pow(10.0, 3.0 * u(rng));
+    f.albedo = 0.5 + 0.5 * u(rng);
+    f.sigmaTVariation = u(rng);
+    f.albedoVariation = 0.3 * u(rng);
+    f.meanAbsG = 0.9 * u(rng);
+    f.eta = 1.0 + u(rng);
+    f.backLitFraction = u(rng);
+    f.curvature = 1.5 * u(rng);
+    f.thinFraction = u(rng);
+    f.imagePixels = 10000;
+    f.pixelsCovered = 10000 * u(rng);
+    f.lights = 1 + int(3 * u(rng));
+    return f;
+}
+
+/// Rows of one candidate from exact log-linear models.
+std::vector<MeasuredRow> exactRows(const std::vector<double>& cost,
+                                   const std::vector<double>& error, int n, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::vector<MeasuredRow> rows;
+    for (int i = 0; i < n; ++i) {
+        MeasuredRow r;
+        r.caseName = "case" + std::to_string(i);
+        r.method = "dipole";
+        r.setting = "8 spp";
+        r.features = randomFeatures(rng);
+        double lc = 0, le = 0;
+        const std::vector<double> tc = costTerms(r.features), te = errorTerms(r.features);
+        for (size_t k = 0; k < tc.size(); ++k)
+            lc += cost[k] * tc[k];
+        for (size_t k = 0; k < te.size(); ++k)
+            le += error[k] * te[k];
+        r.costRatio = std::exp(lc);
+        r.blockRelL1 = std::exp(le);
+        rows.push_back(r);
+    }
+    return rows;
+}
+
+const std::vector<double> COST = {1.5, 0.8, 0.3};
+const std::vector<double> ERROR = {-2.0, 0.5, 1.0, 0.7, -0.4, 0.6, 0.9, 1.2, -0.3, 0.2};
+
+std::string writeTemp(const std::string& name, const std::string& text) {
+    const std::string path = (std::filesystem::temp_directory_path() / name).string();
+    std::ofstream(path) << text;
+    return path;
+}
+
+}  // namespace
+
+TEST(PlannerModels, TermsMatchTheirNames) {
+    SceneFeatures f;
+    EXPECT_EQ(costTerms(f).size(), costTermNames().size());
+    EXPECT_EQ(errorTerms(f).size(), errorTermNames().size());
+    ASSERT_EQ(COST.size(), costTermNames().size());
+    ASSERT_EQ(ERROR.size(), errorTermNames().size());
+}
+
+TEST(PlannerModels, FitRecoversAnExactLogLinearModel) {
+    // 40 cases, 10 error terms, no noise, no ridge: least squares is exact (to rounding).
+    const Models m = fitModels(exactRows(COST, ERROR, 40, 1), 0.0);
+    ASSERT_EQ(m.candidates.size(), 1u);
+    const CandidateModel& c = m.candidates[0];
+    EXPECT_EQ(c.cases, 40);
+    for (size_t k = 0; k < COST.size(); ++k)
+        EXPECT_NEAR(c.cost[k], COST[k], 1e-8) << costTermNames()[k];
+    for (size_t k = 0; k < ERROR.size(); ++k)
+        EXPECT_NEAR(c.error[k], ERROR[k], 1e-7) << errorTermNames()[k];
+    EXPECT_LT(c.costLogRms, 1e-8);
+    EXPECT_LT(c.errorLogRms, 1e-7);
+    // Predictions on a scene it has not seen.
+    std::mt19937 rng(99);
+    const SceneFeatures f = randomFeatures(rng);
+    double le = 0;
+    for (size_t k = 0; k < ERROR.size(); ++k)
+        le += ERROR[k] * errorTerms(f)[k];
+    EXPECT_NEAR(predictError(c, f), std::exp(le), 1e-6 * std::exp(le));
+}
+
+TEST(PlannerModels, RidgeShrinksTowardTheMeanAndLeaveOneOutSeesNoise) {
+    // With 4 cases and 10 terms, an unregularised fit would interpolate noise; the ridge keeps
+    // the slope small and the leave-one-out RMS reports the noise instead of hiding it.
+    std::vector<MeasuredRow> rows = exactRows(COST, ERROR, 4, 2);
+    std::mt19937 rng(3);
+    std::normal_distribution<double> noise(0.0, 0.3);
+    for (MeasuredRow& r : rows)
+        r.blockRelL1 *= std::exp(noise(rng));
+    const Models strong = fitModels(rows, 10.0);
+    double slope = 0;
+    for (size_t k = 1; k < ERROR.size(); ++k)
+        slope += std::abs(strong.candidates[0].error[k]);
+    EXPECT_LT(slope, 0.1);  // λ = 10 against terms of order one: slopes ≈ 1/λ of the data's
+    EXPECT_GT(strong.candidates[0].errorLogRms, 0.05);  // the 0.3 noise (plus the model) shows
+}
+
+TEST(PlannerModels, CandidatesNeedTwoCasesAndUsableRows) {
+    std::vector<MeasuredRow> rows = exactRows(COST, ERROR, 1, 4);
+    EXPECT_THROW(fitModels(rows), ValueError);  // one case: no scene dependence to fit
+    rows = exactRows(COST, ERROR, 3, 5);
+    rows[0].costRatio = std::nan("");
+    rows[1].blockRelL1 = -1;
+    EXPECT_THROW(fitModels(rows), ValueError);  // one usable row left
+    rows = exactRows(COST, ERROR, 3, 6);
+    rows.push_back(rows[0]);
+    rows.back().method = "sslpv:paper";  // one case only: left out, the others fitted
+    const Models m = fitModels(rows);
+    ASSERT_EQ(m.candidates.size(), 1u);
+    EXPECT_EQ(m.candidates[0].method, "dipole");
+    EXPECT_THROW(fitModels(rows, -1.0), ValueError);
+}
+
+TEST(PlannerModels, ReadsEvaluationCsvByColumnName) {
+    // snake_case and camelCase feature columns, a quoted setting with a comma, time_ms with
+    // direct_ms in place of cost_ratio, columns in any order, extra columns ignored.
+    const std::string path = writeTemp(
+        "lucent_models_ok.csv",
+        "method,case,setting,time_ms,direct_ms,block_rel_l1,extra,optical_size,albedo,"
+        "sigma_t_variation,albedo_variation,meanAbsG,eta,back_lit_fraction,curvature,"
+        "thin_fraction,pixels_covered,image_pixels,lights\n"
+        "sslpv:paper,sphere,\"grid 16, 16 steps\",30,10,0.25,x,100,0.9,0,0,0.8,1.3,0.5,0.2,0.4,"
+        "500,1000,2\n");
+    const std::vector<MeasuredRow> rows = readMeasurements(path);
+    ASSERT_EQ(rows.size(), 1u);
+    EXPECT_EQ(rows[0].setting, "grid 16, 16 steps");
+    EXPECT_EQ(rows[0].caseName, "sphere");
+    EXPECT_DOUBLE_EQ(rows[0].costRatio, 3.0);
+    EXPECT_DOUBLE_EQ(rows[0].blockRelL1, 0.25);
+    EXPECT_DOUBLE_EQ(rows[0].features.opticalSize, 100);
+    EXPECT_DOUBLE_EQ(rows[0].features.meanAbsG, 0.8);
+    EXPECT_DOUBLE_EQ(rows[0].features.pixelsCovered, 500);
+    EXPECT_EQ(rows[0].features.lights, 2);
+}
+
+TEST(PlannerModels, CsvErrorsNameTheProblem) {
+    auto message = [](const std::string& text) {
+        try {
+            readMeasurements(writeTemp("lucent_models_bad.csv", text));
+        } catch (const Error& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_NE(message("").find("empty file"), std::string::npos);
+    EXPECT_NE(message("case,method,setting,cost_ratio\n").find("block_rel_l1"), std::string::npos);
+    EXPECT_NE(message("case,method,setting,cost_ratio,block_rel_l1\n").find("optical_size"),
+              std::string::npos);
+    const std::string header =
+        "case,method,setting,cost_ratio,block_rel_l1,opticalSize,albedo,sigmaTVariation,"
+        "albedoVariation,meanAbsG,eta,backLitFraction,curvature,thinFraction,pixelsCovered\n";
+    EXPECT_NE(message(header + "a,b,c,1\n").find(":2: 4 fields"), std::string::npos);
+    EXPECT_NE(message(header + "a,b,c,fast,0.1,1,1,0,0,0,1,0,0,0,1\n").find("'fast'"),
+              std::string::npos);
+    EXPECT_THROW(readMeasurements("/nonexistent/lucent.csv"), IoError);
+}
+
+TEST(PlannerModels, ModelsFileRoundTripsAndRefusesOthers) {
+    Models m = fitModels(exactRows(COST, ERROR, 20, 7), 0.05);
+    m.source = "test";
+    const Models back = parseModels(formatModels(m), "mem");
+    ASSERT_EQ(back.candidates.size(), 1u);
+    EXPECT_EQ(back.source, "test");
+    for (size_t k = 0; k < ERROR.size(); ++k)
+        EXPECT_NEAR(back.candidates[0].error[k], m.candidates[0].error[k], 1e-6);  // 6 decimals
+    const std::string text = formatModels(m);
+    auto fails = [](const std::string& t, const std::string& needle) {
+        try {
+            parseModels(t, "f.json");
+        } catch (const ValueError& e) {
+            return std::string(e.what()).find(needle) != std::string::npos;
+        }
+        return false;
+    };
+    EXPECT_TRUE(fails("{", "not valid JSON"));
+    EXPECT_TRUE(fails("{\"format\": \"x\"}", "not a planner models file"));
+    std::string v2 = text;
+    v2.replace(v2.find("\"version\": 1"), 12, "\"version\": 2");
+    EXPECT_TRUE(fails(v2, "models version 2"));
+    std::string terms = text;
+    terms.replace(terms.find("\"coverage\""), 10, "\"pixels\"");
+    EXPECT_TRUE(fails(terms, "terms differ"));
+    std::string nan = text;
+    const size_t cost = nan.find("\"cost\": [");
+    const size_t first = nan.find_first_of("-0123456789", cost + 9);
+    nan.replace(first, nan.find_first_of(",\n]", first) - first, "\"a\"");
+    EXPECT_TRUE(fails(nan, "not a finite number"));
+}
+
+TEST(PlannerModels, ShippedModelsMatchTheRegistry) {
+    // Every shipped candidate names a registered method, variant and quality level, so a
+    // renamed setting cannot silently drop out of Auto.
+    const Models& m = defaultModels();
+    ASSERT_FALSE(m.candidates.empty());
+    EXPECT_FALSE(m.source.empty());
+    for (const CandidateModel& c : m.candidates) {
+        const std::string name = c.method.substr(0, c.method.find(':'));
+        ASSERT_TRUE(methods::exists(name)) << c.method;
+        const methods::MethodInfo& info = methods::find(name);
+        if (c.method.find(':') != std::string::npos) {
+            const std::string variant = c.method.substr(c.method.find(':') + 1);
+            EXPECT_TRUE(std::any_of(info.variants.begin(), info.variants.end(), [&](const auto& p) {
+                return p.name == variant;
+            })) << c.method;
+        }
+        EXPECT_TRUE(std::any_of(info.quality.begin(), info.quality.end(),
+                                [&](const auto& p) { return p.name == c.setting; }))
+            << c.method << " " << c.setting;
+        EXPECT_GE(c.cases, 2) << c.method << " " << c.setting;
+    }
+}
+
+TEST(PlannerAuto, ChoiceResolvesToRegistryParametersAndSkipsWhatCannotRender) {
+    Scene scene = loadScene(std::string(LUCENT_SCENES_DIR) + "/minimal.json");
+    // Two synthetic candidates: dirpole (CPU: directional lights only) most accurate, dipole
+    // next; the scene's light becomes a point light, so CPU-only Auto must skip dirpole.
+    std::vector<MeasuredRow> rows = exactRows(COST, ERROR, 5, 8);
+    for (MeasuredRow& r : rows)
+        r.blockRelL1 *= 2.0;  // dipole twice dirpole's error everywhere
+    std::vector<MeasuredRow> dirpole = exactRows(COST, ERROR, 5, 8);
+    for (MeasuredRow& r : dirpole) {
+        r.method = "dirpole";
+        r.setting = "32 spp";
+    }
+    rows.insert(rows.end(), dirpole.begin(), dirpole.end());
+    // Same features, error × 2, an unpenalised intercept: the fits differ by ln 2 in it only.
+    const Models models = fitModels(rows, 0.05);
+    Budget budget;
+    budget.frameMs = 1e9;
+    budget.directMs = 1.0;
+
+    ASSERT_EQ(scene.lights.size(), 1u);
+    scene.lights[0].type = Light::Type::Directional;
+    AutoChoice c = chooseMethod(scene, models, budget, /*glAvailable=*/false);
+    EXPECT_EQ(c.method, "dirpole");
+    EXPECT_EQ(c.setting, "32 spp");
+    ASSERT_NE(c.params.find("spp"), nullptr);
+    EXPECT_EQ(*c.params.find("spp"), "32");
+
+    scene.lights[0].type = Light::Type::Point;
+    scene.lights[0].position = {0.f, 100.f, 100.f};
+    c = chooseMethod(scene, models, budget, /*glAvailable=*/false);
+    EXPECT_EQ(c.method, "dipole");
+    EXPECT_NE(c.plan.reason.find("ignores the scene's point light"), std::string::npos)
+        << c.plan.reason;
+    // With GL the directional dipole's GL pass handles point lights.
+    c = chooseMethod(scene, models, budget, /*glAvailable=*/true);
+    EXPECT_EQ(c.method, "dirpole");
+
+    // A models file naming what the registry lacks leaves that candidate out, with the reason.
+    Models stale = models;
+    stale.candidates[0].method = "photon-beams";
+    stale.candidates[1].setting = "3 spp";
+    stale.candidates.resize(2);
+    try {
+        chooseMethod(scene, stale, budget, true);
+        FAIL() << "no candidate should be usable";
+    } catch (const ValueError& e) {
+        EXPECT_NE(std::string(e.what()).find("not in this build's method registry"),
+                  std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("no quality level '3 spp'"), std::string::npos)
+            << e.what();
+    }
+}
+
+TEST(PlannerModels, FrontCheckJudgesTheChoiceByMeasurement) {
+    // Two candidates on two cases; the models predict "fast" as accurate as "slow" on case a,
+    // so Auto takes fast there. Measured: on a, fast is 0.30 and slow 0.10 at 10× the cost;
+    // on b the models are right.
+    auto row = [](const std::string& c, const std::string& m, double cost, double err,
+                  double opticalSize) {
+        MeasuredRow r;
+        r.caseName = c;
+        r.method = m;
+        r.setting = "s";
+        r.costRatio = cost;
+        r.blockRelL1 = err;
+        r.features.opticalSize = opticalSize;
+        r.features.albedo = 0.9;
+        r.features.eta = 1.3;
+        return r;
+    };
+    Models models;
+    CandidateModel fast, slow;
+    fast.method = "fast";
+    slow.method = "slow";
+    fast.setting = slow.setting = "s";
+    fast.cost = {std::log(1.0), 0, 0};
+    slow.cost = {std::log(10.0), 0, 0};
+    fast.error.assign(errorTermNames().size(), 0.0);
+    slow.error = fast.error;
+    fast.error[0] = std::log(0.1);
+    slow.error[0] = std::log(0.2);
+    models.candidates = {fast, slow};
+    const std::vector<MeasuredRow> rows = {
+        row("a", "fast", 1.0, 0.30, 10), row("a", "slow", 10.0, 0.10, 10),
+        row("b", "fast", 1.2, 0.05, 100), row("b", "slow", 9.0, 0.20, 100),
+        row("c", "other", 1.0, 0.01, 1)};  // no model: ignored
+    const std::vector<FrontCheck> checks = checkAgainstFront(rows, models, 20.0);
+    ASSERT_EQ(checks.size(), 2u);
+    EXPECT_EQ(checks[0].chosen, "fast s");
+    EXPECT_DOUBLE_EQ(checks[0].timeRatio, 1.0);  // fast is the cheapest at its own error
+    EXPECT_EQ(checks[0].bestInBudget, "slow s");
+    EXPECT_FALSE(checks[0].choseBest);
+    EXPECT_TRUE(checks[1].choseBest);
+    // A budget below both: the best in budget is the cheapest.
+    EXPECT_EQ(checkAgainstFront(rows, models, 0.5)[0].bestInBudget, "fast s");
+    // If Auto had to take slow at 0.30 measured error, fast (0.30) is as good for 1/10 the time.
+    std::vector<MeasuredRow> worse = rows;
+    worse[1].blockRelL1 = 0.30;
+    models.candidates[0].error[0] = std::log(0.5);  // now fast is predicted worse
+    const FrontCheck w = checkAgainstFront(worse, models, 20.0)[0];
+    EXPECT_EQ(w.chosen, "slow s");
+    EXPECT_EQ(w.cheapestAtError, "fast s");
+    EXPECT_DOUBLE_EQ(w.timeRatio, 10.0);
+    EXPECT_THROW(checkAgainstFront(rows, models, 0.0), ValueError);
+}
