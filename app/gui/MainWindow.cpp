@@ -72,8 +72,8 @@ namespace lucent::app {
 namespace {
 constexpr int MAX_RECENT = 8;
 /// Version of the Render settings defaults saved with the preferences (2: Dipole by default;
-/// 3: the method saved by registry name).
-constexpr int RENDER_DEFAULTS_VERSION = 3;
+/// 3: the method saved by registry name; 4: Auto by default).
+constexpr int RENDER_DEFAULTS_VERSION = 4;
 /// Registry names of the selector's entries before version 3 of the preferences, by index: what
 /// a saved index meant then (a migration table, not a list of methods to offer).
 constexpr const char* PRE_REGISTRY_METHOD_ORDER[] = {
@@ -144,6 +144,10 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
     m_hoverLabel = new QLabel;
     statusBar()->addPermanentWidget(m_hoverLabel);
     connect(m_viewport, &Viewport::hoverVoxel, m_hoverLabel, &QLabel::setText);
+    // Auto: why the planner chose the method it runs (until another message replaces it).
+    connect(m_viewport, &Viewport::autoPlanChanged, this, [this](const QString& reason) {
+        statusBar()->showMessage(tr("Auto: %1").arg(reason));
+    });
     connect(m_viewport, &Viewport::paintError, this, [this](const QString& m) {
         statusBar()->showMessage(tr("Cannot paint: %1").arg(m), 10000);
     });
@@ -198,6 +202,11 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
                 s.setValue(QStringLiteral("render/renderMethod"),
                            QString::fromLatin1(PRE_REGISTRY_METHOD_ORDER[index]));
         }
+        // Before version 4 every closed session saved the then-default Dipole, chosen or not:
+        // that is not taken as a choice over the new default, Auto. Other methods were chosen.
+        if (defaultsVersion >= 2 && defaultsVersion < 4 &&
+            s.value(QStringLiteral("render/renderMethod")).toString() == QLatin1String("dipole"))
+            s.remove(QStringLiteral("render/renderMethod"));
         restorePanelSettings(m_render, s, QStringLiteral("render"));
         if (auto* gizmos = findChild<QAction*>(QStringLiteral("actionLightGizmos")))
             gizmos->setChecked(s.value("view/lightGizmos", true).toBool());

@@ -851,6 +851,17 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     m_method->setObjectName(QStringLiteral("renderMethod"));
     m_method->setProperty(SAVED_BY_NAME, true);
     m_paramPages = new QStackedWidget;
+    // Auto first: the planner picks a registry method for the scene (no fields of its own).
+    m_method->addItem(tr("Auto"), QString::fromLatin1(AUTO_METHOD));
+    m_method->setItemData(0,
+                          tr("The planner chooses the method and its setting for the scene; the "
+                             "status bar says why (docs/planner.md)."),
+                          Qt::ToolTipRole);
+    {
+        auto* page = new QLabel(tr("The planner chooses; the status bar says why."));
+        page->setWordWrap(true);
+        m_paramPages->addWidget(page);
+    }
     for (const methods::MethodInfo* info : PreviewRenderer::previewMethods()) {
         m_method->addItem(QString::fromStdString(info->title), QString::fromStdString(info->name));
         m_method->setItemData(m_method->count() - 1,
@@ -1040,6 +1051,8 @@ methods::ParamSet RenderPanel::paramsOf(const std::string& method) const {
 }
 
 QString RenderPanel::methodTitle(const QString& name) {
+    if (name == QLatin1String(AUTO_METHOD))
+        return tr("Auto");
     const std::string n = name.toStdString();
     return methods::exists(n) ? QString::fromStdString(methods::find(n).title) : name;
 }
@@ -1146,6 +1159,9 @@ void StatsPanel::refresh() {
                  .arg(QString::fromStdString(p.name))
                  .arg(p.gpuMs, 0, 'f', 2)
                  .arg(p.cpuMs, 0, 'f', 2);
+    if (!s.preview.autoReason.empty())
+        t += tr("<b>Auto</b>: %1<br>")
+                 .arg(QString::fromStdString(s.preview.autoReason).toHtmlEscaped());
     if (!s.preview.method.empty()) {
         t += tr("<b>%1</b><br>")
                  .arg(RenderPanel::methodTitle(QString::fromStdString(s.preview.method)));

@@ -160,14 +160,15 @@ private:
     bool m_loading = false;
 };
 
-/// Preview method, its parameters and camera bookmarks. The method selector and each method's
-/// parameter fields are built from the engine's registry (methods::MethodInfo, ParamDescriptor):
-/// one page of fields per method, shown for the selected one.
+/// Preview method, its parameters and camera bookmarks. The method selector (Auto, then every
+/// registered method with a GL pass) and each method's parameter fields are built from the
+/// engine's registry (methods::MethodInfo, ParamDescriptor): one page of fields per method,
+/// shown for the selected one.
 class RenderPanel : public QWidget {
     Q_OBJECT
 public:
     RenderPanel(Document* doc, Viewport* viewport, QWidget* parent = nullptr);
-    /// Selects the preview method `name` (registry name) as the selector does.
+    /// Selects the preview method `name` (AUTO_METHOD or a registry name) as the selector does.
     /// @return false (nothing changes) when `name` is not a preview method.
     bool setMethod(const QString& name);
     /// The selected method's registry name.

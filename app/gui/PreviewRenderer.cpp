@@ -10,6 +10,7 @@
 #include <lucent/gpu/SceneRenderer.h>
 #include <lucent/gpu/Shader.h>
 #include <lucent/methods/Registry.h>
+#include <lucent/planner/AutoMethod.h>
 
 #include <epoxy/gl.h>
 
@@ -17,6 +18,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <chrono>
+#include <future>
 
 namespace lucent::app {
 
@@ -171,6 +174,42 @@ private:
     glm::vec2 m_range{0.f};
 };
 
+/// The shipped planner models (planner::defaultModels) of the candidates that were measured on
+/// the GL pass the preview runs: a candidate whose method and variant resolve to the CPU
+/// renderer with GL available (SSLPV prefers its CPU ray caster offline) predicts another
+/// renderer's cost and error, so the preview does not plan with it.
+const planner::Models& liveModels() {
+    static const planner::Models models = [] {
+        planner::Models m = planner::defaultModels();
+        std::erase_if(m.candidates, [](const planner::CandidateModel& c) {
+            const std::string name = c.method.substr(0, c.method.find(':'));
+            const std::string variant =
+                c.method.find(':') == std::string::npos ? "" : c.method.substr(name.size() + 1);
+            if (!methods::exists(name) || !methods::find(name).caps.gl)
+                return true;
+            const methods::MethodInfo& info = methods::find(name);
+            methods::Backend requested = methods::Backend::Auto;
+            for (const methods::ParamPreset& v : info.variants)
+                if (v.name == variant)
+                    requested = v.backend;
+            try {
+                return methods::resolveBackend(info, requested, /*glAvailable=*/true) !=
+                       methods::Backend::Gl;
+            } catch (const Error&) {
+                return true;
+            }
+        });
+        return m;
+    }();
+    return models;
+}
+
+/// Whether two cameras give the same frame.
+bool sameCamera(const Camera& a, const Camera& b) {
+    return a.position == b.position && a.target == b.target && a.up == b.up &&
+           a.fovYDeg == b.fovYDeg && a.width == b.width && a.height == b.height;
+}
+
 }  // namespace
 
 std::string PreviewStats::methodStat(const std::string& key) const {
@@ -199,6 +238,21 @@ struct PreviewRenderer::Impl {
     float surfaceEta = 0.f;   ///< η the surface was set with
     std::vector<float> lights;
     PreviewStats stats;
+    /// Auto: the last choice and what it was planned for.
+    struct AutoState {
+        bool valid = false;
+        planner::AutoChoice choice;
+        double directMs = 0.0;  ///< the Direct frame at directWidth × directHeight
+        /// The Direct frame being measured (worker thread), and for which size.
+        std::future<double> measuring;
+        int measuringWidth = 0, measuringHeight = 0;
+        int directWidth = 0, directHeight = 0;
+        bool stale = true;          ///< the scene changed since the last plan
+        Camera camera;              ///< the frame planned for
+        std::vector<float> lights;  ///< lightsKey of the frame planned for
+        float eta = 0.f;
+        Timer sincePlan;
+    } autoPlan;
 
     /// One frame (PreviewRenderer::render).
     void renderFrame(PreviewFrame& f);
@@ -207,6 +261,10 @@ struct PreviewRenderer::Impl {
     methods::Method& useMethod(const std::string& name, const methods::ParamSet& params);
     /// Frees the active method's GL objects and forgets it (the next frame makes it afresh).
     void dropMethod();
+    /// Auto: the planner's choice for frame `f` (re-planned when the scene changed, at most
+    /// every AUTO_REPLAN_MS), or nullptr while the Direct frame it needs is being measured.
+    /// @throw ValueError when no candidate can render the scene; the measurement's error.
+    const planner::AutoChoice* planAuto(const PreviewFrame& f, const std::vector<float>& lightKey);
 };
 
 PreviewRenderer::PreviewRenderer() : m(std::make_unique<Impl>()) {}
@@ -249,7 +307,11 @@ void PreviewRenderer::destroy() {
 }
 
 bool PreviewRenderer::wantsAnotherFrame() const {
-    return m->created && m->method && !m->method->converged();
+    return m->created && ((m->method && !m->method->converged()) || isPlanning());
+}
+
+bool PreviewRenderer::isPlanning() const {
+    return m->autoPlan.measuring.valid();
 }
 
 bool PreviewRenderer::isPreviewMethod(const std::string& name) {
@@ -318,6 +380,61 @@ methods::Method& PreviewRenderer::Impl::useMethod(const std::string& name,
     return *method;
 }
 
+const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f,
+                                                           const std::vector<float>& lightKey) {
+    // Re-plan at most twice a second: a stroke or an orbit changes the features a little every
+    // frame, and the hysteresis keeps the choice anyway unless the scene class changes.
+    constexpr double AUTO_REPLAN_MS = 500.0;
+    AutoState& a = autoPlan;
+    if (f.sceneReplaced) {  // another mesh: another Direct frame, and no choice to keep
+        a.directMs = 0.0;
+        a.valid = false;
+    }
+    if (f.sceneReplaced || !f.dirtyBricks.empty() || lightKey != a.lights ||
+        f.scene->eta != a.eta || !sameCamera(f.camera, a.camera))
+        a.stale = true;
+    const bool sized =
+        a.directMs > 0.0 && a.directWidth == f.camera.width && a.directHeight == f.camera.height;
+    if (sized && a.valid && (!a.stale || a.sincePlan.elapsedMs() < AUTO_REPLAN_MS) &&
+        !f.sceneReplaced)
+        return &a.choice;
+    Scene scene = *f.scene;  // the viewport's camera: the features and the Direct frame see it
+    scene.camera = f.camera;
+    if (!sized) {
+        // The models' unit: one Direct render of this frame through renderImage (context
+        // creation and programs included, seconds on a busy software GL). On its own headless
+        // context in a worker thread: the caller's context stays current and the viewport keeps
+        // drawing meanwhile (the Direct method reads no material, so painting cannot race it).
+        if (!a.measuring.valid() || a.measuringWidth != f.camera.width ||
+            a.measuringHeight != f.camera.height) {
+            Scene direct = scene;
+            a.measuring = std::async(std::launch::async,
+                                     [direct] { return planner::measureDirectMs(direct, {}); });
+            a.measuringWidth = f.camera.width;
+            a.measuringHeight = f.camera.height;
+        }
+        if (a.measuring.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
+            return a.valid ? &a.choice : nullptr;  // the last choice meanwhile, if any
+        a.directMs = a.measuring.get();            // rethrows the measurement's error
+        a.directWidth = a.measuringWidth;
+        a.directHeight = a.measuringHeight;
+    }
+    planner::Budget budget;  // the planner's live frame budget (50 ms) and hysteresis
+    budget.directMs = a.directMs;
+    // The previous plan of the same scene, for hysteresis (a new scene plans from scratch).
+    const planner::Plan previous = a.choice.plan;
+    const bool hasPrevious = a.valid && !f.sceneReplaced;
+    a.choice = planner::chooseMethod(scene, liveModels(), budget, /*glAvailable=*/true,
+                                     hasPrevious ? &previous : nullptr);
+    a.valid = true;
+    a.stale = false;
+    a.camera = f.camera;
+    a.lights = lightKey;
+    a.eta = f.scene->eta;
+    a.sincePlan.reset();
+    return &a.choice;
+}
+
 void PreviewRenderer::Impl::renderFrame(PreviewFrame& f) {
     Impl& r = *this;
     const RenderSettings& s = f.settings;
@@ -368,9 +485,27 @@ void PreviewRenderer::Impl::renderFrame(PreviewFrame& f) {
     MaterialVolume* vol = f.volume;
     const bool dirty = !f.dirtyBricks.empty();
     const bool canRender = haveMesh && vol;
-    const std::string name = canRender ? s.method : std::string("direct");
+    std::string name = canRender ? s.method : std::string("direct");
+    methods::ParamSet params = canRender ? s.params : methods::ParamSet();
+    r.stats.autoReason.clear();
+    r.stats.autoChoice.clear();
+    if (name == AUTO_METHOD) {
+        if (const planner::AutoChoice* choice = r.planAuto(f, key)) {
+            name = choice->method;
+            params = choice->params;
+            r.stats.autoReason = choice->plan.reason;
+            r.stats.autoChoice = choice->method +
+                                 (choice->variant.empty() ? "" : ":" + choice->variant) + " " +
+                                 choice->setting;
+        } else {  // the first plan waits for the Direct frame's measurement: Direct meanwhile
+            name = "direct";
+            params = {};
+        }
+    } else {
+        r.autoPlan.valid = false;  // Auto chosen again later: plan afresh
+    }
     const bool changedMethod = !r.method || r.method->info().name != name;
-    methods::Method& method = r.useMethod(name, canRender ? s.params : methods::ParamSet());
+    methods::Method& method = r.useMethod(name, params);
     int bricksUsed = 0;
     if (canRender) {
         methods::SceneInputs in;

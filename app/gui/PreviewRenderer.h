@@ -14,6 +14,15 @@
 /// while lights, camera and mesh are unchanged, so a stroke frame runs only the subsurface pass,
 /// a one-fetch shading pass and the tone map (RenderSettings::reusePasses).
 ///
+/// Auto (AUTO_METHOD): the planner chooses the method from the scene's features and predicted
+/// cost and error, over the candidates whose models were measured on the GL pass; the Direct
+/// frame its cost ratios scale with is measured once per render size (planner::measureDirectMs,
+/// on a headless context in a worker thread, so the caller's context stays current and frames
+/// keep coming: the last choice, or Direct before the first, until it is done). It
+/// re-plans when the scene changes (a new scene, paint, lights, η, camera), at most twice a
+/// second, with the planner's hysteresis: painting does not make the preview switch methods
+/// back and forth.
+///
 /// Material edits: the caller passes the volume's dirty bricks (MaterialVolume::takeDirtyBricks)
 /// once per frame; the active method consumes them incrementally (Method::materialChanged).
 /// Only the active method exists: choosing another one, or a new scene, makes a fresh instance
@@ -38,11 +47,16 @@ class ShaderLibrary;
 
 namespace lucent::app {
 
+/// The method selector's "Auto" entry: not a registry method; the Auto planner
+/// (lucent/planner/AutoMethod.h) chooses one for the scene and PreviewRenderer runs that.
+inline constexpr const char* AUTO_METHOD = "auto";
+
 /// Preview method and its parameters.
 struct RenderSettings {
-    /// Registry name of the method (lucent/methods/Registry.h; one with a GL pass). Dipole
-    /// shows paint at once (SSLPV Paper 32³ hid a dark stroke).
-    std::string method = "dipole";
+    /// AUTO_METHOD, or the registry name of a method with a GL pass (lucent/methods/Registry.h).
+    /// Auto by default: the planner picks a method that shows paint for the scene (SSLPV Paper
+    /// 32³, the default before issue 17, hid a dark stroke).
+    std::string method = AUTO_METHOD;
     /// The method's parameters (ParamDescriptor names); unset ones take their live defaults.
     methods::ParamSet params;
     float exposureStops = 2.f;  ///< log2 of the exposure multiplier (Reinhard tone curve)
@@ -73,7 +87,10 @@ struct PreviewStats {
         double gpuMs = 0.0, cpuMs = 0.0;
     };
     std::vector<Pass> passes;
-    std::string method;          ///< registry name of the method the last frame used
+    std::string method;  ///< registry name of the method the last frame used
+    /// With Auto: the planner's one-line reason for its choice (planner::Plan::reason), and
+    /// the choice ("dipole 32 spp"); empty otherwise.
+    std::string autoReason, autoChoice;
     methods::Stats methodStats;  ///< its Method::stats() (SSLPV timings, dipole progress)
     int bricksUploaded = 0;      ///< bricks consumed by the last material update
     double uploadMs = 0.0;       ///< CPU ms of the last material update
@@ -115,8 +132,12 @@ public:
 
     /// Renders one frame into frame.framebuffer (context current). @throw lucent::Error.
     void render(PreviewFrame& frame);
-    /// True while a progressive method still refines (another frame is useful when idle).
+    /// True while a progressive method still refines, or while Auto waits for its Direct frame
+    /// measurement (another frame is useful when idle).
     [[nodiscard]] bool wantsAnotherFrame() const;
+    /// True while Auto measures the Direct frame it plans with (frames then show the last
+    /// choice, or Direct before the first; poll, do not spin).
+    [[nodiscard]] bool isPlanning() const;
     [[nodiscard]] const PreviewStats& stats() const;
     /// The last frame's linear radiance at render resolution (camera width × height),
     /// W/(mm²·sr), before tone mapping and overlays, top row first (for EXR export). Reads the

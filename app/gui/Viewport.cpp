@@ -1049,7 +1049,10 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
             clear();
         Q_EMIT renderFailed(message, QString::fromStdString(failed));
     }
+    const std::string lastReason = m_stats.preview.autoReason;
     m_stats.preview = m_preview.stats();
+    if (m_stats.preview.autoReason != lastReason && !m_stats.preview.autoReason.empty())
+        Q_EMIT autoPlanChanged(QString::fromStdString(m_stats.preview.autoReason));
     m_stats.uploadMs = m_stats.preview.uploadMs;
     m_stats.bricksUploaded = m_stats.preview.bricksUploaded;
     // Finished here, so the frame time includes the (software) rasterisation.
@@ -1060,8 +1063,10 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
     m_stats.frameMs = timer.elapsedMs();
     ++m_stats.frames;
     // Progressive methods (dipoles) refine while the user is idle.
+    // While Auto measures its Direct frame (a worker thread), poll: spinning frames would take
+    // the cores the measurement needs.
     if (m_preview.wantsAnotherFrame())
-        QTimer::singleShot(0, this, [this] { update(); });
+        QTimer::singleShot(m_preview.isPlanning() ? 100 : 0, this, [this] { update(); });
     Q_EMIT frameRendered();
 }
 

@@ -166,6 +166,9 @@ Q_SIGNALS:
     /// A frame of preview method `method` (registry name) failed with `message`. The frame was
     /// drawn with FALLBACK_METHOD instead, and renderSettings().method is now that.
     void renderFailed(const QString& message, const QString& method);
+    /// With the Auto method: the planner's choice or its reason changed (planner::Plan::reason,
+    /// one line).
+    void autoPlanChanged(const QString& reason);
     /// The user picked light `index` by clicking its handle.
     void lightSelected(int index);
 

@@ -4,7 +4,7 @@
 ///
 ///     lucent [PROJECT|MESH|VDB] [--screenshot PATH] [--frames N] [--benchmark]
 ///            [--benchmark-json PATH] [--viewport WxH] [--window WxH]
-///            [--method NAME]   (a registry name with a GL pass: `lucent-cli methods`)
+///            [--method auto|NAME]   (NAME: a registry name with a GL pass, `lucent-cli methods`)
 ///            [--paint-demo] [--reference SPP] [--raise DOCKS] [--no-settings]
 ///            [--swap-interval N]
 /// --screenshot grabs the whole window after N rendered frames (default 3) and exits;
@@ -37,9 +37,10 @@ namespace {
 using lucent::Timer;
 using lucent::app::MainWindow;
 
-/// The preview methods' registry names, comma-separated (for messages).
+/// What --method takes, comma-separated (for messages): auto and the preview methods'
+/// registry names.
 QString previewMethodNames() {
-    QStringList names;
+    QStringList names{QString::fromLatin1(lucent::app::AUTO_METHOD)};
     for (const lucent::methods::MethodInfo* info : lucent::app::PreviewRenderer::previewMethods())
         names.push_back(QString::fromStdString(info->name));
     return names.join(QStringLiteral(", "));
@@ -263,7 +264,7 @@ int main(int argc, char** argv) {
         QStringLiteral("N"));
     QCommandLineOption method(
         QStringLiteral("method"),
-        QStringLiteral("Preview method (registry name): %1.").arg(previewMethodNames()),
+        QStringLiteral("Preview method: %1 (default auto).").arg(previewMethodNames()),
         QStringLiteral("M"));
     parser.addOptions({shot, frames, bench, benchJson, viewportSize, windowSize, noSettings,
                        paintDemo, raiseDock, method, reference, swapInterval});

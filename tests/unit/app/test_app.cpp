@@ -259,6 +259,13 @@ double darkStrokeContrast(const std::string& method, int frames) {
     vp->setFixedSize(640, 360);
     w->show();
     EXPECT_TRUE(QTest::qWaitForWindowExposed(w.get()));
+    // Auto shows Direct until its Direct frame is measured: judge the method it then runs.
+    EXPECT_TRUE(QTest::qWaitFor(
+        [&] {
+            renderOneFrame(vp);
+            return !vp->previewRenderer().isPlanning();
+        },
+        120000));
     for (int i = 0; i < frames; ++i)
         renderOneFrame(vp);
     const QImage before = vp->grabRender().convertToFormat(QImage::Format_RGB32);
@@ -1154,9 +1161,11 @@ TEST(AppRender, MethodSelectorAndFieldsComeFromTheRegistry) {
     auto* method = w->findChild<QComboBox*>(QStringLiteral("renderMethod"));
     ASSERT_NE(method, nullptr);
     const std::vector<const methods::MethodInfo*> previews = PreviewRenderer::previewMethods();
-    ASSERT_EQ(method->count(), int(previews.size()));
-    for (int i = 0; i < method->count(); ++i)
-        EXPECT_EQ(method->itemData(i).toString().toStdString(), previews[size_t(i)]->name);
+    // Auto first, then the registry's methods with a GL pass in the registry's order.
+    ASSERT_EQ(method->count(), int(previews.size()) + 1);
+    EXPECT_EQ(method->itemData(0).toString(), QString::fromLatin1(AUTO_METHOD));
+    for (size_t i = 0; i < previews.size(); ++i)
+        EXPECT_EQ(method->itemData(int(i) + 1).toString().toStdString(), previews[i]->name);
     EXPECT_EQ(method->findData(QStringLiteral("reference")), -1) << "reference has no GL pass";
     EXPECT_FALSE(w->setRenderMethod(QStringLiteral("reference")));
     EXPECT_FALSE(w->setRenderMethod(QStringLiteral("no-such-method")));
@@ -1196,6 +1205,32 @@ TEST(AppRender, MethodSelectorAndFieldsComeFromTheRegistry) {
         // The subsurface term changes the picture against the opaque direct shading.
         EXPECT_GT(meanAbsDiff(direct, img, img.rect()), 1.0);
     }
+}
+
+// Auto, the default: the viewport runs the planner's choice and the status bar says why.
+TEST(AppRender, AutoRunsAMethodAndTheStatusBarSaysWhy) {
+    auto w = shownWindow(1);
+    Viewport* vp = w->viewport();
+    ASSERT_EQ(vp->renderSettings().method, AUTO_METHOD);
+    // Direct until the planner's Direct frame is measured (a worker thread), then its choice.
+    EXPECT_TRUE(QTest::qWaitFor(
+        [&] {
+            renderOneFrame(vp);
+            return !vp->previewRenderer().isPlanning();
+        },
+        120000));
+    renderOneFrame(vp);
+    const ViewportStats& s = vp->stats();
+    EXPECT_TRUE(s.renderError.isEmpty()) << s.renderError.toStdString();
+    EXPECT_TRUE(PreviewRenderer::isPreviewMethod(s.preview.method)) << s.preview.method;
+    EXPECT_FALSE(s.preview.autoReason.empty());
+    // The status bar follows (queued: the viewport emits from inside its frame).
+    EXPECT_TRUE(QTest::qWaitFor(
+        [&] { return w->statusBar()->currentMessage().startsWith(QStringLiteral("Auto: ")); },
+        5000))
+        << w->statusBar()->currentMessage().toStdString();
+    EXPECT_TRUE(
+        w->statusBar()->currentMessage().contains(QString::fromStdString(s.preview.autoReason)));
 }
 
 TEST(AppRender, VolumeOverlayControlsReachTheRenderer) {

@@ -477,7 +477,23 @@ TEST(MainWindowPrefs, BrushRenderAndViewPreferencesAreRemembered) {
         ASSERT_TRUE(w.close());
     }
     {
-        // Since then the method is saved by name.
+        // Until Auto became the default (version 4) every session saved Dipole, the default
+        // then, at exit: not taken as a choice.
+        QSettings s;
+        s.setValue(QStringLiteral("render/defaultsVersion"), 3);
+        s.setValue(QStringLiteral("render/renderMethod"), QStringLiteral("dipole"));
+        s.sync();
+        MainWindow w(/*restoreSettings=*/true);
+        EXPECT_EQ(w.viewport()->renderSettings().method, AUTO_METHOD);
+    }
+    {
+        // Since then the method is saved by name (as the window two blocks up saved it).
+        QSettings s;
+        s.setValue(QStringLiteral("render/defaultsVersion"), 4);
+        s.setValue(QStringLiteral("render/renderMethod"), QStringLiteral("dirpole"));
+        s.sync();
+    }
+    {
         MainWindow w(/*restoreSettings=*/true);
         EXPECT_EQ(w.viewport()->renderSettings().method, "dirpole");
         EXPECT_EQ(QSettings().value(QStringLiteral("render/renderMethod")).toString(),

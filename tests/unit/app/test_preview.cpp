@@ -19,10 +19,12 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <thread>
 #include <vector>
 
 using namespace lucent;
@@ -236,6 +238,39 @@ TEST_F(PreviewFixture, OverlayFollowsPaintedBricksLikeAFullUpload) {
     const auto full = render(fresh, s, /*first=*/true);
     fresh.destroy();
     EXPECT_EQ(incremental, full);
+}
+
+// Auto (the default method): the planner chooses a registry method with a GL pass, says why,
+// and keeps its choice while nothing changes.
+TEST_F(PreviewFixture, AutoRunsThePlannersChoiceAndSaysWhy) {
+    RenderSettings s = directSettings();
+    s.method = AUTO_METHOD;
+    EXPECT_EQ(RenderSettings{}.method, AUTO_METHOD) << "Auto is the default";
+    render(preview, s, /*first=*/true);
+    // Direct while the planner's Direct frame is measured (a worker thread), then its choice.
+    EXPECT_TRUE(preview.isPlanning() || !preview.stats().autoReason.empty());
+    for (int i = 0; i < 6000 && preview.isPlanning(); ++i) {
+        if (preview.stats().autoReason.empty()) {
+            EXPECT_EQ(preview.stats().method, "direct");
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        render(preview, s);
+    }
+    ASSERT_FALSE(preview.isPlanning()) << "no plan within 2 minutes";
+    render(preview, s);
+    const PreviewStats first = preview.stats();
+    std::printf("Auto: %s\n", first.autoReason.c_str());
+    EXPECT_FALSE(first.autoReason.empty());
+    EXPECT_FALSE(first.autoChoice.empty());
+    EXPECT_TRUE(PreviewRenderer::isPreviewMethod(first.method)) << first.method;
+    EXPECT_EQ(first.autoChoice.rfind(first.method, 0), 0u) << first.autoChoice;
+    render(preview, s);
+    EXPECT_EQ(preview.stats().method, first.method);
+    EXPECT_EQ(preview.stats().autoReason, first.autoReason);
+    // Another method chosen by hand: no Auto reason.
+    s.method = "direct";
+    render(preview, s);
+    EXPECT_TRUE(preview.stats().autoReason.empty());
 }
 
 TEST_F(PreviewFixture, LinearImageToneMapsToTheDisplayedImage) {
