@@ -9,24 +9,13 @@
 #include <lucent/material/History.h>
 #include <lucent/material/Procedural.h>
 #include <lucent/scene/Scene.h>
+#include <lucent/scene/SceneEdit.h>
 
 #include <QObject>
 #include <QString>
 #include <QUndoStack>
 
 namespace lucent::app {
-
-/// `light` as a light of type `type` that gives the same irradiance (W/mm², at normal
-/// incidence) at `target` and keeps its place: a positioned light (point, spot, sphere) keeps
-/// its position and aims at `target`; a directional light keeps its direction and becomes a
-/// positioned light at distance 1.5·`objectRadius` from `target` (where its viewport handle
-/// is, Viewport::gizmoSphere). Irradiance at distance d: point/spot E = I/d² (inverse-square
-/// law); sphere E = L·πR²/d², from the irradiance integral E = ∫ L cosθ dω (pbrt, 4th ed.,
-/// Sec. 4.1) over the cap of half-angle α, sin α = R/d, that the sphere covers:
-/// 2πL ∫₀^α cosθ sinθ dθ = πL·sin²α; directional: E is its value. New spot cones open to the
-/// object's angular radius asin(objectRadius/d) (+5° outer); a new sphere gets radius
-/// min(0.1·objectRadius, 0.5·d). Same type: `light` unchanged.
-Light convertLight(const Light& light, Light::Type type, const Point3f& target, float objectRadius);
 
 /// Why `brush` cannot paint, in words for an artist (what to change), or an empty string when
 /// it can. The engine's checks (validateBrush) name its fields; this names what the Tools dock

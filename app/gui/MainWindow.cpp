@@ -11,21 +11,12 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
-#include <lucent/mesh/Voxelize.h>
+#include <lucent/scene/SceneEdit.h>
 #include <lucent/scene/SceneFile.h>
-#if LUCENT_APP_HAS_IO
 #include <lucent/io/MitsubaIO.h>
 #include <lucent/io/VdbIO.h>
-#endif
-#if LUCENT_APP_HAS_MESHIO
 #include <lucent/mesh/MeshIO.h>
-#endif
-#if LUCENT_APP_HAS_REFERENCE
 #include "ReferencePanel.h"
-#endif
-#if LUCENT_APP_HAS_MESHEDIT
-#include <lucent/mesh/MeshEdit.h>
-#endif
 
 #include <QAction>
 #include <QApplication>
@@ -63,6 +54,7 @@
 #include <QUrl>
 
 #include <algorithm>
+#include <iterator>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -79,8 +71,13 @@ namespace lucent::app {
 
 namespace {
 constexpr int MAX_RECENT = 8;
-/// Version of the Render settings defaults saved with the preferences (2: Dipole by default).
-constexpr int RENDER_DEFAULTS_VERSION = 2;
+/// Version of the Render settings defaults saved with the preferences (2: Dipole by default;
+/// 3: the method saved by registry name; 4: Auto by default).
+constexpr int RENDER_DEFAULTS_VERSION = 4;
+/// Registry names of the selector's entries before version 3 of the preferences, by index: what
+/// a saved index meant then (a migration table, not a list of methods to offer).
+constexpr const char* PRE_REGISTRY_METHOD_ORDER[] = {
+    "direct", "single-scattering", "sslpv", "dipole", "better-dipole", "dirpole", "combined"};
 constexpr int AUTOSAVE_INTERVAL_MS = 120 * 1000;
 /// Factor of one [ / ] step on the brush radius (eight steps ≈ ×6).
 constexpr double BRUSH_STEP = 1.25;
@@ -106,57 +103,16 @@ void MainWindow::useGlSurfaceFormat() {
     QSurfaceFormat::setDefaultFormat(fmt);
 }
 
-bool MainWindow::hasVdbSupport() {
-    return LUCENT_APP_HAS_IO != 0;
-}
-bool MainWindow::hasMeshImport() {
-    return LUCENT_APP_HAS_MESHIO != 0;
-}
-
-bool MainWindow::hasMeshEdit() {
-    return LUCENT_APP_HAS_MESHEDIT != 0;
-}
-
 bool MainWindow::applyMeshEdit(MeshEditKind kind) {
     return applyMeshEdit(kind, MeshEditParams{});
 }
 
 bool MainWindow::applyMeshEdit(MeshEditKind kind, const MeshEditParams& params) {
-#if LUCENT_APP_HAS_MESHEDIT
     try {
-        if (!m_doc->hasObject() || m_doc->mesh()->isEmpty())
+        if (!m_doc->hasObject())
             LUCENT_THROW(ValueError, "the scene has no mesh to edit");
-        const TriangleMesh& mesh = *m_doc->mesh();
-        TriangleMesh edited;
-        switch (kind) {
-            case MeshEditKind::Decimate:
-                if (!(params.decimateFraction > 0.0 && params.decimateFraction < 1.0))
-                    LUCENT_THROW(ValueError, "decimate: the fraction of triangles kept (",
-                                 params.decimateFraction, ") must lie in (0, 1)");
-                edited = decimate(mesh, std::max<size_t>(4, size_t(params.decimateFraction *
-                                                                   double(mesh.triangleCount()))));
-                break;
-            case MeshEditKind::Subdivide:
-                edited = subdivideLoop(mesh, params.subdivideIterations);
-                break;
-            case MeshEditKind::Smooth:
-                edited = smoothLaplacian(mesh, params.smoothIterations);
-                break;
-            case MeshEditKind::FillHoles:
-                // Default: holes up to a tenth of the object's diagonal (mm).
-                edited = fillHoles(mesh, params.maxHoleMm > 0.0
-                                             ? float(params.maxHoleMm)
-                                             : 0.1f * glm::length(mesh.bounds().extent()));
-                break;
-        }
         Scene scene = m_doc->scene();
-        SceneObject& obj = scene.objects[0];
-        const GridSpec spec = obj.material->spec();
-        const Bounds3f grid = spec.bounds(), b = edited.bounds();
-        if (!grid.contains(b.lo) || !grid.contains(b.hi))
-            LUCENT_THROW(ValueError, "the edited mesh leaves the material grid");
-        obj.material->setInsideMask(voxelizeSolid(edited, spec));
-        obj.mesh = std::move(edited);
+        editObjectMesh(scene.objects[0], kind, params);      // the engine's edit + re-voxelise
         scene.camera.position = m_viewport->camera().eye();  // keep the current view
         scene.camera.target = m_viewport->camera().target;
         m_doc->setScene(std::move(scene), m_doc->filePath());
@@ -168,11 +124,6 @@ bool MainWindow::applyMeshEdit(MeshEditKind kind, const MeshEditParams& params) 
         reportError(tr("Mesh edit"), ex);
         return false;
     }
-#else
-    (void)kind;
-    (void)params;
-    return false;
-#endif
 }
 
 QString MainWindow::autosavePath() {
@@ -193,6 +144,10 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
     m_hoverLabel = new QLabel;
     statusBar()->addPermanentWidget(m_hoverLabel);
     connect(m_viewport, &Viewport::hoverVoxel, m_hoverLabel, &QLabel::setText);
+    // Auto: why the planner chose the method it runs (until another message replaces it).
+    connect(m_viewport, &Viewport::autoPlanChanged, this, [this](const QString& reason) {
+        statusBar()->showMessage(tr("Auto: %1").arg(reason));
+    });
     connect(m_viewport, &Viewport::paintError, this, [this](const QString& m) {
         statusBar()->showMessage(tr("Cannot paint: %1").arg(m), 10000);
     });
@@ -200,10 +155,12 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
     // the user is told why (queued: the viewport emits it from inside its frame).
     connect(
         m_viewport, &Viewport::renderFailed, this,
-        [this](const QString& message, int method) {
-            m_render->setMethod(int(RenderSettings::Method::Direct));
-            const QString text = tr("The %1 preview failed and the viewport switched to Direct: %2")
-                                     .arg(RenderPanel::methodName(method), message);
+        [this](const QString& message, const QString& method) {
+            const QString fallback = QString::fromLatin1(Viewport::FALLBACK_METHOD);
+            m_render->setMethod(fallback);
+            const QString text = tr("The %1 preview failed and the viewport switched to %2: %3")
+                                     .arg(RenderPanel::methodTitle(method),
+                                          RenderPanel::methodTitle(fallback), message);
             m_lastError = text;
             statusBar()->showMessage(text, 15000);
             if (!m_useSettings)
@@ -233,7 +190,22 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
         restorePanelSettings(m_brush, s, QStringLiteral("brush"));
         // Before version 2 of the defaults every closed session saved the then-default method
         // (SSLPV, which hid paint), chosen or not: that saved choice is not kept.
-        if (s.value(QStringLiteral("render/defaultsVersion"), 1).toInt() < RENDER_DEFAULTS_VERSION)
+        const int defaultsVersion = s.value(QStringLiteral("render/defaultsVersion"), 1).toInt();
+        if (defaultsVersion < 2) {
+            s.remove(QStringLiteral("render/renderMethod"));
+        } else if (defaultsVersion < 3) {
+            // Before version 3 the method was saved as its index in the selector, whose order
+            // was the app's own method enum; it is saved by registry name since.
+            bool isIndex = false;
+            const int index = s.value(QStringLiteral("render/renderMethod")).toInt(&isIndex);
+            if (isIndex && index >= 0 && index < int(std::size(PRE_REGISTRY_METHOD_ORDER)))
+                s.setValue(QStringLiteral("render/renderMethod"),
+                           QString::fromLatin1(PRE_REGISTRY_METHOD_ORDER[index]));
+        }
+        // Before version 4 every closed session saved the then-default Dipole, chosen or not:
+        // that is not taken as a choice over the new default, Auto. Other methods were chosen.
+        if (defaultsVersion >= 2 && defaultsVersion < 4 &&
+            s.value(QStringLiteral("render/renderMethod")).toString() == QLatin1String("dipole"))
             s.remove(QStringLiteral("render/renderMethod"));
         restorePanelSettings(m_render, s, QStringLiteral("render"));
         if (auto* gizmos = findChild<QAction*>(QStringLiteral("actionLightGizmos")))
@@ -249,8 +221,8 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
            "pans, wheel zooms, F frames the object."));
 }
 
-void MainWindow::setRenderMethod(int method) {
-    m_render->setMethod(method);
+bool MainWindow::setRenderMethod(const QString& method) {
+    return m_render->setMethod(method);
 }
 
 MainWindow::~MainWindow() {
@@ -338,12 +310,10 @@ void MainWindow::createDocks() {
     // One tab group under the slice: Render settings, Lights, Statistics, Reference.
     tabifyDockWidget(render, lights);
     tabifyDockWidget(lights, stats);
-#if LUCENT_APP_HAS_REFERENCE
     m_reference = new ReferencePanel(m_doc, m_viewport);
     auto* reference =
         addDock(tr("Reference"), "dockReference", m_reference, Qt::RightDockWidgetArea);
     tabifyDockWidget(stats, reference);
-#endif
     render->raise();
     // Default proportions (a saved layout, restored later, overrides them); applied once the
     // window is laid out, since QMainWindow ignores resizeDocks before that.
@@ -416,33 +386,28 @@ void MainWindow::createActions() {
     a->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S));
     a->setObjectName(QStringLiteral("actionSaveAs"));
     file->addSeparator();
-    if (hasMeshImport()) {
-        a = file->addAction(tr("&Import Mesh…"), this, [this] {
-            const QString p =
-                QFileDialog::getOpenFileName(this, tr("Import mesh"), QString(),
-                                             tr("Meshes (*.obj *.ply *.off *.stl *.vtp *.vtk)"));
-            if (!p.isEmpty() && maybeSave())
-                importMesh(p, /*mmPerUnit=*/0.0);
-        });
-        a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_I));
-        a->setObjectName(QStringLiteral("actionImportMesh"));
-    }
-    if (hasVdbSupport()) {
-        file->addAction(tr("Import &VDB Material…"), this, [this] {
-            const QString p = QFileDialog::getOpenFileName(this, tr("Import VDB"), QString(),
-                                                           tr("OpenVDB (*.vdb)"));
-            if (!p.isEmpty())
-                importVdb(p);
-        });
-        a = file->addAction(tr("&Export VDB…"), this, [this] {
-            const QString p = QFileDialog::getSaveFileName(
-                this, tr("Export VDB"), QStringLiteral("material.vdb"), tr("OpenVDB (*.vdb)"));
-            if (!p.isEmpty() && askVdbExportChoice())
-                exportVdbTo(p);
-        });
-        a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_E));
-        a->setObjectName(QStringLiteral("actionExportVdb"));
-    }
+    a = file->addAction(tr("&Import Mesh…"), this, [this] {
+        const QString p = QFileDialog::getOpenFileName(
+            this, tr("Import mesh"), QString(), tr("Meshes (*.obj *.ply *.off *.stl *.vtp *.vtk)"));
+        if (!p.isEmpty() && maybeSave())
+            importMesh(p, /*mmPerUnit=*/0.0);
+    });
+    a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_I));
+    a->setObjectName(QStringLiteral("actionImportMesh"));
+    file->addAction(tr("Import &VDB Material…"), this, [this] {
+        const QString p =
+            QFileDialog::getOpenFileName(this, tr("Import VDB"), QString(), tr("OpenVDB (*.vdb)"));
+        if (!p.isEmpty())
+            importVdb(p);
+    });
+    a = file->addAction(tr("&Export VDB…"), this, [this] {
+        const QString p = QFileDialog::getSaveFileName(
+            this, tr("Export VDB"), QStringLiteral("material.vdb"), tr("OpenVDB (*.vdb)"));
+        if (!p.isEmpty() && askVdbExportChoice())
+            exportVdbTo(p);
+    });
+    a->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_E));
+    a->setObjectName(QStringLiteral("actionExportVdb"));
     a = file->addAction(tr("Export &Render…"), this, [this] {
         const QString p =
             QFileDialog::getSaveFileName(this, tr("Export render"), QStringLiteral("render.png"),
@@ -457,53 +422,51 @@ void MainWindow::createActions() {
     a->setShortcut(QKeySequence::Quit);
     a->setObjectName(QStringLiteral("actionQuit"));
 
-    if (hasMeshEdit()) {
-        QMenu* meshMenu = menuBar()->addMenu(tr("&Mesh"));
-        // Each edit asks for its parameter, starting from the value used last.
-        meshMenu->addAction(tr("&Decimate…"), this, [this] {
-            bool ok = false;
-            const double percent =
-                QInputDialog::getDouble(this, tr("Decimate"), tr("Triangles to keep (%):"),
-                                        100.0 * m_meshEdit.decimateFraction, 1.0, 99.0, 0, &ok);
-            if (!ok)
-                return;
-            m_meshEdit.decimateFraction = percent / 100.0;
-            applyMeshEdit(MeshEditKind::Decimate, m_meshEdit);
-        });
-        // An iteration count, then the edit.
-        const auto iterationsEdit = [this](const QString& title, const QString& label, int& value,
-                                           int max, MeshEditKind kind) {
-            bool ok = false;
-            const int n = QInputDialog::getInt(this, title, label, value, 1, max, 1, &ok);
-            if (!ok)
-                return;
-            value = n;
-            applyMeshEdit(kind, m_meshEdit);
-        };
-        meshMenu->addAction(tr("&Subdivide (Loop)…"), this, [this, iterationsEdit] {
-            iterationsEdit(tr("Subdivide"), tr("Iterations (×4 triangles each):"),
-                           m_meshEdit.subdivideIterations, 5, MeshEditKind::Subdivide);
-        });
-        meshMenu->addAction(tr("S&mooth (Laplacian)…"), this, [this, iterationsEdit] {
-            iterationsEdit(tr("Smooth"), tr("Iterations:"), m_meshEdit.smoothIterations, 1000,
-                           MeshEditKind::Smooth);
-        });
-        meshMenu->addAction(tr("&Fill Holes…"), this, [this] {
-            const TriangleMesh* mesh = m_doc->mesh();
-            const double suggested = m_meshEdit.maxHoleMm > 0.0 ? m_meshEdit.maxHoleMm
-                                     : mesh && !mesh->isEmpty()
-                                         ? 0.1 * double(glm::length(mesh->bounds().extent()))
-                                         : 1.0;
-            bool ok = false;
-            const double mm = QInputDialog::getDouble(this, tr("Fill holes"),
-                                                      tr("Largest hole radius to close (mm):"),
-                                                      suggested, 0.001, 1e6, 3, &ok);
-            if (!ok)
-                return;
-            m_meshEdit.maxHoleMm = mm;
-            applyMeshEdit(MeshEditKind::FillHoles, m_meshEdit);
-        });
-    }
+    QMenu* meshMenu = menuBar()->addMenu(tr("&Mesh"));
+    // Each edit asks for its parameter, starting from the value used last.
+    meshMenu->addAction(tr("&Decimate…"), this, [this] {
+        bool ok = false;
+        const double percent =
+            QInputDialog::getDouble(this, tr("Decimate"), tr("Triangles to keep (%):"),
+                                    100.0 * m_meshEdit.decimateFraction, 1.0, 99.0, 0, &ok);
+        if (!ok)
+            return;
+        m_meshEdit.decimateFraction = percent / 100.0;
+        applyMeshEdit(MeshEditKind::Decimate, m_meshEdit);
+    });
+    // An iteration count, then the edit.
+    const auto iterationsEdit = [this](const QString& title, const QString& label, int& value,
+                                       int max, MeshEditKind kind) {
+        bool ok = false;
+        const int n = QInputDialog::getInt(this, title, label, value, 1, max, 1, &ok);
+        if (!ok)
+            return;
+        value = n;
+        applyMeshEdit(kind, m_meshEdit);
+    };
+    meshMenu->addAction(tr("&Subdivide (Loop)…"), this, [this, iterationsEdit] {
+        iterationsEdit(tr("Subdivide"), tr("Iterations (×4 triangles each):"),
+                       m_meshEdit.subdivideIterations, 5, MeshEditKind::Subdivide);
+    });
+    meshMenu->addAction(tr("S&mooth (Laplacian)…"), this, [this, iterationsEdit] {
+        iterationsEdit(tr("Smooth"), tr("Iterations:"), m_meshEdit.smoothIterations, 1000,
+                       MeshEditKind::Smooth);
+    });
+    meshMenu->addAction(tr("&Fill Holes…"), this, [this] {
+        const TriangleMesh* mesh = m_doc->mesh();
+        const double suggested = m_meshEdit.maxHoleMm > 0.0 ? m_meshEdit.maxHoleMm
+                                 : mesh && !mesh->isEmpty()
+                                     ? 0.1 * double(glm::length(mesh->bounds().extent()))
+                                     : 1.0;
+        bool ok = false;
+        const double mm = QInputDialog::getDouble(this, tr("Fill holes"),
+                                                  tr("Largest hole radius to close (mm):"),
+                                                  suggested, 0.001, 1e6, 3, &ok);
+        if (!ok)
+            return;
+        m_meshEdit.maxHoleMm = mm;
+        applyMeshEdit(MeshEditKind::FillHoles, m_meshEdit);
+    });
     QMenu* edit = menuBar()->addMenu(tr("&Edit"));
     QAction* undo = m_doc->undoStack()->createUndoAction(this, tr("&Undo"));
     undo->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Z));
@@ -884,7 +847,6 @@ bool MainWindow::askMeshUnits(const QString& path, double largestExtent,
 }
 
 bool MainWindow::importMesh(const QString& path, double mmPerUnit) {
-#if LUCENT_APP_HAS_MESHIO
     try {
         MeshReport report;
         SceneObject obj;
@@ -937,16 +899,9 @@ bool MainWindow::importMesh(const QString& path, double mmPerUnit) {
         reportError(tr("Import mesh"), ex);
         return false;
     }
-#else
-    (void)mmPerUnit;
-    QMessageBox::warning(this, tr("Import mesh"),
-                         tr("Mesh import is not available in this build."));
-    return false;
-#endif
 }
 
 bool MainWindow::importVdb(const QString& path) {
-#if LUCENT_APP_HAS_IO
     try {
         ImportedMaterial imported = lucent::importVdb(path.toStdString());
         Scene scene = m_doc->scene();
@@ -964,11 +919,6 @@ bool MainWindow::importVdb(const QString& path) {
         reportError(tr("Import VDB"), ex);
         return false;
     }
-#else
-    QMessageBox::warning(this, tr("Import VDB"),
-                         tr("OpenVDB support is not available in this build."));
-    return false;
-#endif
 }
 
 bool MainWindow::exportVdbTo(const QString& path, bool wait) {
@@ -976,7 +926,6 @@ bool MainWindow::exportVdbTo(const QString& path, bool wait) {
 }
 
 bool MainWindow::exportVdbTo(const QString& path, const VdbExportChoice& choice, bool wait) {
-#if LUCENT_APP_HAS_IO
     if (m_exporting || !m_doc->material())
         return false;
     m_exporting = true;
@@ -1039,12 +988,6 @@ bool MainWindow::exportVdbTo(const QString& path, const VdbExportChoice& choice,
         return *ok;
     }
     return true;
-#else
-    (void)path;
-    (void)choice;
-    (void)wait;
-    return false;
-#endif
 }
 
 bool MainWindow::askVdbExportChoice() {
@@ -1201,8 +1144,8 @@ void MainWindow::closeEvent(QCloseEvent* e) {
 
 bool MainWindow::canOpen(const QString& path) {
     const QString suffix = QFileInfo(path).suffix().toLower();
-    return suffix == QLatin1String("json") || (suffix == QLatin1String("vdb") && hasVdbSupport()) ||
-           (MESH_SUFFIXES.contains(suffix) && hasMeshImport());
+    return suffix == QLatin1String("json") || suffix == QLatin1String("vdb") ||
+           MESH_SUFFIXES.contains(suffix);
 }
 
 void MainWindow::dragEnterEvent(QDragEnterEvent* e) {

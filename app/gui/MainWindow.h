@@ -4,6 +4,8 @@
 /// @brief The main window: viewport, docks, menus and shortcuts, file operations (projects,
 /// VDB export, render export), recent files, drag and drop, autosave and crash recovery.
 
+#include <lucent/scene/SceneEdit.h>
+
 #include <QMainWindow>
 #include <QStringList>
 #include <QTimer>
@@ -41,8 +43,9 @@ public:
     LightPanel* lightPanel() { return m_lights; }
     RenderPanel* renderPanel() { return m_render; }
     ReferencePanel* referencePanel() { return m_reference; }
-    /// Selects the preview method (RenderSettings::Method) through the Render settings dock.
-    void setRenderMethod(int method);
+    /// Selects the preview method `method` (registry name) through the Render settings dock.
+    /// @return false (nothing changes) when it is not a preview method.
+    bool setRenderMethod(const QString& method);
 
     //! @{ \name File operations; each reports errors in a message box and returns false
     bool openFile(const QString& path);
@@ -98,33 +101,22 @@ public:
     /// Message of the last failed operation (also shown to the user).
     [[nodiscard]] const QString& lastError() const { return m_lastError; }
 
-    /// Mesh edits of the Mesh menu (engine lucent/mesh/MeshEdit.h).
-    enum class MeshEditKind { Decimate, Subdivide, Smooth, FillHoles };
+    /// Mesh edits of the Mesh menu (the engine's, lucent/scene/SceneEdit.h).
+    using MeshEditKind = lucent::MeshEditKind;
     /// Parameters of the mesh edits (the Mesh menu asks for the one of its edit).
-    struct MeshEditParams {
-        double decimateFraction = 0.5;  ///< decimate: target triangles / current, in (0, 1)
-        int subdivideIterations = 1;    ///< Loop subdivision iterations, [1, 5] (×4 each)
-        int smoothIterations = 5;       ///< Laplacian smoothing iterations, [1, 1000]
-        /// fill holes: largest hole radius closed (mm); ≤ 0: a tenth of the object's diagonal
-        double maxHoleMm = -1.0;
-    };
-    /// Replaces the object's mesh by the edited one and re-voxelises it into the same grid, so
-    /// the paint inside is kept (voxels that become inside get the base material). Clears the
-    /// undo history. Reports errors (a parameter out of range names it) like the file
-    /// operations; the scene is unchanged then. @return false on failure.
+    using MeshEditParams = lucent::MeshEditParams;
+    /// Replaces the object's mesh by the edited one and re-voxelises it into the same grid
+    /// (lucent::editObjectMesh), so the paint inside is kept (voxels that become inside get the
+    /// base material). Clears the undo history. Reports errors (a parameter out of range names it)
+    /// like the file operations; the scene is unchanged then. @return false on failure.
     bool applyMeshEdit(MeshEditKind kind);
     bool applyMeshEdit(MeshEditKind kind, const MeshEditParams& params);
-    static bool hasMeshEdit();
 
     /// Makes OpenGL 4.5 core with a 24-bit depth buffer (what the viewport renders with) the
     /// default surface format. Call before the QApplication is created.
     static void useGlSurfaceFormat();
-    /// True when VDB export/import is compiled in (the io module is present).
-    static bool hasVdbSupport();
-    /// True when mesh import is compiled in (mesh/MeshIO).
-    static bool hasMeshImport();
     /// True when File ▸ Open (and a drop on the window) takes `path`: a project (.json), a
-    /// mesh when mesh import is compiled in, a .vdb when VDB support is.
+    /// mesh (MESH_SUFFIXES) or a .vdb material.
     static bool canOpen(const QString& path);
     /// Path of the autosave project (AppLocalDataLocation/autosave/autosave.json). Its presence
     /// at start-up means the last session did not exit cleanly (a clean exit removes it).

@@ -9,6 +9,7 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/material/Presets.h>
+#include <lucent/methods/Registry.h>
 
 #include <QCheckBox>
 #include <QColorDialog>
@@ -23,6 +24,7 @@
 #include <QPushButton>
 #include <QRadioButton>
 #include <QSpinBox>
+#include <QStackedWidget>
 #include <QStandardItemModel>
 #include <QStyle>
 #include <QStyleOptionSpinBox>
@@ -85,6 +87,9 @@ QWidget* row(std::initializer_list<QWidget*> widgets) {
 
 /// Dynamic property marking a named field that is not a preference (derived or a mode).
 constexpr const char* TRANSIENT = "lucentTransient";
+/// Property of a combo box whose preference is the current entry's item data (a name), not its
+/// index (savePanelSettings).
+constexpr const char* SAVED_BY_NAME = "lucentSavedByName";
 
 void reportError(QWidget* parent, const QString& what, const std::exception& ex) {
     QMessageBox::warning(parent, what, QString::fromUtf8(ex.what()));
@@ -447,7 +452,9 @@ void savePanelSettings(QWidget* panel, QSettings& settings, const QString& group
         else if (auto* i = qobject_cast<QSpinBox*>(w))
             settings.setValue(key, i->value());
         else if (auto* c = qobject_cast<QComboBox*>(w))
-            settings.setValue(key, c->currentIndex());
+            settings.setValue(key, c->property(SAVED_BY_NAME).toBool()
+                                       ? QVariant(c->currentData().toString())
+                                       : QVariant(c->currentIndex()));
         else if (auto* b = qobject_cast<QCheckBox*>(w))
             settings.setValue(key, b->isChecked());
     });
@@ -470,7 +477,9 @@ void restorePanelSettings(QWidget* panel, QSettings& settings, const QString& gr
             if (ok)
                 i->setValue(x);
         } else if (auto* c = qobject_cast<QComboBox*>(w)) {
-            const int x = v.toInt(&ok);
+            const int x =
+                c->property(SAVED_BY_NAME).toBool() ? c->findData(v.toString()) : v.toInt(&ok);
+            ok = ok || x >= 0;
             // Only enabled entries (a method this build lacks stays unselectable).
             const auto* model = qobject_cast<const QStandardItemModel*>(c->model());
             if (ok && x >= 0 && x < c->count() &&
@@ -836,80 +845,43 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     : QWidget(parent), m_viewport(viewport) {
     auto* form = new QFormLayout(this);
     const RenderSettings d;
+    // The selector: every registered method with a GL pass, by registry name (item data), and
+    // under it the selected method's parameter fields (one page per method).
     m_method = new QComboBox;
-    // Order = RenderSettings::Method.
     m_method->setObjectName(QStringLiteral("renderMethod"));
-    for (int i = 0; i <= int(RenderSettings::Method::Combined); ++i)
-        m_method->addItem(methodName(i));
-    // Methods this build lacks stay listed (indices = RenderSettings::Method) but disabled.
-    if (auto* model = qobject_cast<QStandardItemModel*>(m_method->model()))
-        for (int i = 0; i < m_method->count(); ++i)
-            if (!PreviewRenderer::hasMethod(RenderSettings::Method(i))) {
-                model->item(i)->setEnabled(false);
-                model->item(i)->setToolTip(tr("Not available in this build"));
-            }
-    m_method->setCurrentIndex(int(d.method));
+    m_method->setProperty(SAVED_BY_NAME, true);
+    m_paramPages = new QStackedWidget;
+    // Auto first: the planner picks a registry method for the scene (no fields of its own).
+    m_method->addItem(tr("Auto"), QString::fromLatin1(AUTO_METHOD));
+    m_method->setItemData(0,
+                          tr("The planner chooses the method and its setting for the scene; the "
+                             "status bar says why (docs/planner.md)."),
+                          Qt::ToolTipRole);
+    {
+        auto* page = new QLabel(tr("The planner chooses; the status bar says why."));
+        page->setWordWrap(true);
+        m_paramPages->addWidget(page);
+    }
+    for (const methods::MethodInfo* info : PreviewRenderer::previewMethods()) {
+        m_method->addItem(QString::fromStdString(info->title), QString::fromStdString(info->name));
+        m_method->setItemData(m_method->count() - 1,
+                              QString::fromStdString(info->summary + " (" + info->docs + ")"),
+                              Qt::ToolTipRole);
+        m_paramPages->addWidget(makeParamPage(*info));
+    }
+    m_method->setCurrentIndex(std::max(0, m_method->findData(QString::fromStdString(d.method))));
+    m_paramPages->setCurrentIndex(m_method->currentIndex());
     m_method->setToolTip(
         tr("Subsurface method added to the direct lighting of gpu::SceneRenderer."));
-    m_sslpvMode = new QComboBox;
-    m_sslpvMode->setObjectName(QStringLiteral("renderSslpvMode"));
-    m_sslpvMode->addItems({tr("Paper"), tr("Calibrated")});
-    m_sslpvMode->setCurrentIndex(d.sslpvCalibrated ? 1 : 0);
-    m_sslpvGrid = new QComboBox;
-    m_sslpvGrid->setObjectName(QStringLiteral("renderSslpvGrid"));
-    m_sslpvGrid->addItems({QStringLiteral("16³"), QStringLiteral("32³"), QStringLiteral("64³")});
-    m_sslpvGrid->setCurrentIndex(d.sslpvGrid <= 16 ? 0 : d.sslpvGrid <= 32 ? 1 : 2);
-    m_sslpvSteps = new QSpinBox;
-    m_sslpvSteps->setObjectName(QStringLiteral("renderSslpvSteps"));
-    m_sslpvSteps->setRange(1, 512);
-    m_sslpvSteps->setValue(d.sslpvSteps);
-    m_sslpvOrder = new QComboBox;
-    m_sslpvOrder->setObjectName(QStringLiteral("renderSslpvOrder"));
-    m_sslpvOrder->addItems({tr("1 (4 coefficients)"), tr("2 (9 coefficients)")});
-    m_sslpvOrder->setCurrentIndex(d.sslpvOrder == 2 ? 1 : 0);
-    m_sslpvSolve = new QComboBox;
-    m_sslpvSolve->setObjectName(QStringLiteral("renderSslpvSolve"));
-    m_sslpvSolve->addItems({tr("CPU"), tr("GPU (GL compute)")});
-    m_sslpvSolve->setCurrentIndex(d.sslpvGlSolve ? 1 : 0);
-    m_dipoleSpp = new QSpinBox;
-    m_dipoleSpp->setObjectName(QStringLiteral("renderDipoleSpp"));
-    m_dipoleSpp->setRange(1, 4096);
-    m_dipoleSpp->setValue(d.dipoleSpp);
-    m_dipoleSpp->setToolTip(
-        tr("Samples per pixel added each frame; refinement goes on while idle."));
-    m_dirpoleSpp = new QSpinBox;
-    m_dirpoleSpp->setObjectName(QStringLiteral("renderDirpoleSpp"));
-    m_dirpoleSpp->setRange(1, 4096);
-    m_dirpoleSpp->setValue(d.dirpoleSpp);
-    m_dirpoleSpp->setToolTip(
-        tr("Directional dipole: disc samples per texel added each frame; "
-           "refinement goes on while idle."));
-    m_splitRadius = spin(-1.0, 500.0, double(d.combinedSplitRadius), 2, tr(" mm"), 0.5);
-    m_splitRadius->setObjectName(QStringLiteral("renderSplitRadius"));
-    m_splitRadius->setSpecialValueText(tr("Auto (4 SSLPV cells)"));  // shown at −1
-    m_splitRadius->setToolTip(
-        tr("Combined: the dipole gathers light that entered within this "
-           "radius; SSLPV carries what travels further."));
     m_subsurfaceOnly = new QCheckBox(tr("Subsurface term only (debug)"));
     m_subsurfaceOnly->setObjectName(QStringLiteral("renderSubsurfaceOnly"));
-    m_steps = new QSpinBox;
-    m_steps->setRange(1, 512);
-    m_steps->setValue(d.steps);
-    m_lightSteps = new QSpinBox;
-    m_lightSteps->setRange(1, 128);
-    m_lightSteps->setValue(d.lightSteps);
     m_exposure = spin(-20.0, 20.0, double(d.exposureStops), 1, tr(" stops"), 0.5);
-    m_ambient = spin(0.0, 1e6, double(d.ambient), 4, tr(" W/mm²"), 0.001);
     m_turntable = new QCheckBox(tr("Turntable (30°/s)"));
     m_turntable->setObjectName(QStringLiteral("renderTurntable"));
     m_turntable->setProperty(TRANSIENT, true);  // an animation, not a preference
-    m_smooth = new QCheckBox(tr("Smooth voxels (trilinear, display only)"));
-    m_smooth->setObjectName(QStringLiteral("renderSmooth"));
-    m_steps->setObjectName(QStringLiteral("renderSteps"));
-    m_lightSteps->setObjectName(QStringLiteral("renderLightSteps"));
     m_exposure->setObjectName(QStringLiteral("renderExposure"));
-    m_ambient->setObjectName(QStringLiteral("renderAmbient"));
     form->addRow(tr("Method"), m_method);
+    form->addRow(m_paramPages);
     m_scale = new QComboBox;
     m_scale->setObjectName(QStringLiteral("renderScale"));
     m_scale->addItems({tr("Full"), tr("Half"), tr("Quarter")});
@@ -917,20 +889,6 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     m_scale->setToolTip(tr("Preview resolution; lower is faster on software OpenGL."));
     form->addRow(tr("Resolution"), m_scale);
     connect(m_scale, &QComboBox::currentIndexChanged, this, [this] { apply(); });
-    form->addRow(tr("SSLPV mode"), m_sslpvMode);
-    form->addRow(tr("SSLPV grid"), m_sslpvGrid);
-    form->addRow(tr("SSLPV steps"), m_sslpvSteps);
-    form->addRow(tr("SSLPV SH order"), m_sslpvOrder);
-    form->addRow(tr("SSLPV solve"), m_sslpvSolve);
-    form->addRow(tr("Dipole spp/frame"), m_dipoleSpp);
-    form->addRow(tr("Dirpole spp/frame"), m_dirpoleSpp);
-    form->addRow(tr("Split radius"), m_splitRadius);
-    for (QComboBox* c : {m_sslpvMode, m_sslpvGrid, m_sslpvOrder, m_sslpvSolve})
-        connect(c, &QComboBox::currentIndexChanged, this, [this] { apply(); });
-    connect(m_sslpvSteps, &QSpinBox::valueChanged, this, [this] { apply(); });
-    connect(m_dipoleSpp, &QSpinBox::valueChanged, this, [this] { apply(); });
-    connect(m_dirpoleSpp, &QSpinBox::valueChanged, this, [this] { apply(); });
-    connect(m_splitRadius, &QDoubleSpinBox::valueChanged, this, [this] { apply(); });
     connect(m_subsurfaceOnly, &QCheckBox::toggled, this, [this] { apply(); });
     // Volume overlay: the painted channel ray-marched over the viewport (seeing inside).
     m_overlay = new QCheckBox(tr("Volume overlay"));
@@ -951,20 +909,14 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     connect(m_overlay, &QCheckBox::toggled, this, [this] { apply(); });
     connect(m_overlayChannel, &QComboBox::currentIndexChanged, this, [this] { apply(); });
     connect(m_overlayOpacity, &QDoubleSpinBox::valueChanged, this, [this] { apply(); });
-    form->addRow(tr("View steps"), m_steps);
-    form->addRow(tr("Shadow steps"), m_lightSteps);
     form->addRow(tr("Exposure"), m_exposure);
-    form->addRow(tr("Ambient"), m_ambient);
     form->addRow(m_turntable);
-    form->addRow(m_smooth);
     form->addRow(m_subsurfaceOnly);
-    if (Viewport::hasDeformation()) {
-        m_deform = new QCheckBox(tr("Deformation animation (twist; pauses painting)"));
-        m_deform->setObjectName(QStringLiteral("renderDeform"));
-        m_deform->setProperty(TRANSIENT, true);  // an animation, not a preference
-        form->addRow(m_deform);
-        connect(m_deform, &QCheckBox::toggled, this, [this] { apply(); });
-    }
+    m_deform = new QCheckBox(tr("Deformation animation (twist; pauses painting)"));
+    m_deform->setObjectName(QStringLiteral("renderDeform"));
+    m_deform->setProperty(TRANSIENT, true);  // an animation, not a preference
+    form->addRow(m_deform);
+    connect(m_deform, &QCheckBox::toggled, this, [this] { apply(); });
     m_bookmarks = new QComboBox;
     m_bookmarks->setObjectName(QStringLiteral("renderBookmarks"));
     m_bookmarks->setProperty(TRANSIENT, true);  // saved per project (MainWindow)
@@ -977,12 +929,8 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     form->addRow(tr("Camera bookmarks"), m_bookmarks);
     form->addRow(row({save, go, remove}));
     connect(m_method, &QComboBox::currentIndexChanged, this, [this] { apply(); });
-    connect(m_steps, &QSpinBox::valueChanged, this, [this] { apply(); });
-    connect(m_lightSteps, &QSpinBox::valueChanged, this, [this] { apply(); });
     connect(m_exposure, &QDoubleSpinBox::valueChanged, this, [this] { apply(); });
-    connect(m_ambient, &QDoubleSpinBox::valueChanged, this, [this] { apply(); });
     connect(m_turntable, &QCheckBox::toggled, this, [this] { apply(); });
-    connect(m_smooth, &QCheckBox::toggled, this, [this] { apply(); });
     connect(save, &QPushButton::clicked, this, [this] {
         const OrbitCamera& c = m_viewport->camera();
         // Names stay unique after deletions: one past the highest number in use.
@@ -1018,71 +966,125 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     apply();
 }
 
-QString RenderPanel::methodName(int method) {
-    switch (RenderSettings::Method(method)) {
-        case RenderSettings::Method::Direct:
-            return tr("Direct (opaque surface)");
-        case RenderSettings::Method::SingleScattering:
-            return tr("Single scattering (ray-marched)");
-        case RenderSettings::Method::Sslpv:
-            return tr("SSLPV (live translucency)");
-        case RenderSettings::Method::Dipole:
-            return tr("Dipole (progressive)");
-        case RenderSettings::Method::BetterDipole:
-            return tr("Better dipole (progressive)");
-        case RenderSettings::Method::DirectionalDipole:
-            return tr("Directional dipole (progressive)");
-        case RenderSettings::Method::Combined:
-            return tr("Combined (dipole + SSLPV)");
+QWidget* RenderPanel::makeParamPage(const methods::MethodInfo& info) {
+    auto* page = new QWidget;
+    auto* form = new QFormLayout(page);
+    form->setContentsMargins(0, 0, 0, 0);
+    std::vector<ParamField>& fields = m_paramFields[info.name];
+    const QString method = QString::fromStdString(info.name);
+    for (const methods::ParamDescriptor& p : info.params) {
+        if (p.scope == methods::ParamScope::Offline)
+            continue;  // offline renders only (a progressive method's total sample count)
+        const std::string& value = p.defaultFor(methods::Backend::Gl, /*live=*/true);
+        QWidget* field = nullptr;
+        switch (p.type) {
+            case methods::ParamType::Bool: {
+                auto* c = new QCheckBox;
+                c->setChecked(value == "on");
+                connect(c, &QCheckBox::toggled, this, [this] { apply(); });
+                field = c;
+                break;
+            }
+            case methods::ParamType::Int: {
+                auto* i = new QSpinBox;
+                constexpr double INT_LIMIT = 2147483647.0;
+                i->setRange(int(std::max(p.min, -INT_LIMIT)), int(std::min(p.max, INT_LIMIT)));
+                i->setValue(std::stoi(value));
+                i->setKeyboardTracking(false);
+                connect(i, &QSpinBox::valueChanged, this, [this] { apply(); });
+                field = i;
+                break;
+            }
+            case methods::ParamType::Float: {
+                // 4 decimals: a hundredth of a micrometre for radii in mm, 1e-4 W/mm² for
+                // irradiance; the descriptor's range is the field's.
+                auto* f = spin(p.min, p.max, std::stod(value), 4, QString(), 0.1);
+                connect(f, &QDoubleSpinBox::valueChanged, this, [this] { apply(); });
+                field = f;
+                break;
+            }
+            case methods::ParamType::Choice: {
+                auto* c = new QComboBox;
+                for (const std::string& choice : p.choices)
+                    c->addItem(QString::fromStdString(choice), QString::fromStdString(choice));
+                c->setCurrentIndex(std::max(0, c->findData(QString::fromStdString(value))));
+                c->setProperty(SAVED_BY_NAME, true);
+                connect(c, &QComboBox::currentIndexChanged, this, [this] { apply(); });
+                field = c;
+                break;
+            }
+        }
+        field->setObjectName(paramFieldName(method, QString::fromStdString(p.name)));
+        field->setToolTip(QString::fromStdString(p.help + " " + p.rangeText()));
+        form->addRow(QString::fromStdString(p.name), field);
+        fields.push_back({p.name, value, field});
     }
-    return tr("method %1").arg(method);
+    if (fields.empty())
+        form->addRow(new QLabel(tr("No parameters.")));
+    return page;
+}
+
+methods::ParamSet RenderPanel::paramsOf(const std::string& method) const {
+    methods::ParamSet given;
+    const auto it = m_paramFields.find(method);
+    if (it == m_paramFields.end())
+        return given;
+    for (const ParamField& f : it->second) {
+        // Only what differs from the live default is given: a method may refuse a value that
+        // does not apply (SSLPV's attenuation in calibrated mode) only when it was given.
+        if (auto* d = qobject_cast<QDoubleSpinBox*>(f.widget)) {
+            if (d->value() != std::stod(f.defaultValue))  // as numbers: "0" is "0.0000"
+                given.set(f.name, d->value());
+            continue;
+        }
+        std::string value;
+        if (auto* c = qobject_cast<QCheckBox*>(f.widget))
+            value = c->isChecked() ? "on" : "off";
+        else if (auto* i = qobject_cast<QSpinBox*>(f.widget))
+            value = std::to_string(i->value());
+        else if (auto* c = qobject_cast<QComboBox*>(f.widget))
+            value = c->currentData().toString().toStdString();
+        if (value != f.defaultValue)
+            given.set(f.name, value);
+    }
+    return given;
+}
+
+QString RenderPanel::methodTitle(const QString& name) {
+    if (name == QLatin1String(AUTO_METHOD))
+        return tr("Auto");
+    const std::string n = name.toStdString();
+    return methods::exists(n) ? QString::fromStdString(methods::find(n).title) : name;
+}
+
+QString RenderPanel::paramFieldName(const QString& method, const QString& param) {
+    return QStringLiteral("param.%1.%2").arg(method, param);
+}
+
+QString RenderPanel::method() const {
+    return m_method->currentData().toString();
 }
 
 void RenderPanel::apply() {
     RenderSettings s;
-    s.method = RenderSettings::Method(m_method->currentIndex());
-    s.steps = m_steps->value();
-    s.lightSteps = m_lightSteps->value();
+    m_paramPages->setCurrentIndex(m_method->currentIndex());
+    s.method = method().toStdString();
+    s.params = paramsOf(s.method);
     s.exposureStops = float(m_exposure->value());
-    s.ambient = float(m_ambient->value());
     s.turntable = m_turntable->isChecked();
-    s.smoothVoxels = m_smooth->isChecked();
-    s.deform = m_deform && m_deform->isChecked();
+    s.deform = m_deform->isChecked();
     s.resolutionScale = m_scale->currentIndex() == 0   ? 1.f
                         : m_scale->currentIndex() == 1 ? 0.5f
                                                        : 0.25f;
-    s.sslpvCalibrated = m_sslpvMode->currentIndex() == 1;
-    s.sslpvGrid = 16 << m_sslpvGrid->currentIndex();
-    s.sslpvSteps = m_sslpvSteps->value();
-    s.sslpvOrder = m_sslpvOrder->currentIndex() + 1;
-    s.sslpvGlSolve = m_sslpvSolve->currentIndex() == 1;
-    s.dipoleSpp = m_dipoleSpp->value();
-    s.dirpoleSpp = m_dirpoleSpp->value();
-    // Below 0 the special value "Auto": the combined module's default split.
-    s.combinedSplitRadius = m_splitRadius->value() < 0.0 ? -1.f : float(m_splitRadius->value());
     s.subsurfaceOnly = m_subsurfaceOnly->isChecked();
     s.volumeOverlay = m_overlay->isChecked();
     s.overlayChannel = m_overlayChannel->currentIndex();
     s.overlayOpacity = float(m_overlayOpacity->value());
     m_overlayChannel->setEnabled(s.volumeOverlay);
     m_overlayOpacity->setEnabled(s.volumeOverlay);
-    using M = RenderSettings::Method;
-    const bool single = s.method == M::SingleScattering;
-    const bool combined = s.method == M::Combined;
-    const bool sslpv = s.method == M::Sslpv || combined;  // Combined: SSLPV beyond the split
-    m_steps->setEnabled(single);
-    m_lightSteps->setEnabled(single);
-    m_ambient->setEnabled(single);
-    m_smooth->setEnabled(single);
-    for (QWidget* w :
-         std::initializer_list<QWidget*>{m_sslpvGrid, m_sslpvSteps, m_sslpvOrder, m_sslpvSolve})
-        w->setEnabled(sslpv);
-    // Combined keeps its SSLPV part in Calibrated mode (PreviewRenderer, Method::Combined).
-    m_sslpvMode->setEnabled(s.method == M::Sslpv);
-    m_dipoleSpp->setEnabled(s.method == M::Dipole || s.method == M::BetterDipole || combined);
-    m_dirpoleSpp->setEnabled(s.method == M::DirectionalDipole);
-    m_splitRadius->setEnabled(combined);
-    m_subsurfaceOnly->setEnabled(s.method != M::Direct);
+    // Direct draws no subsurface term: an opaque surface (its MethodInfo has no GL subsurface
+    // pass to isolate).
+    m_subsurfaceOnly->setEnabled(s.method != Viewport::FALLBACK_METHOD);
     m_viewport->setRenderSettings(s);
 }
 
@@ -1115,8 +1117,12 @@ void RenderPanel::setBookmarks(const QStringList& bookmarks) {
     }
 }
 
-void RenderPanel::setMethod(int method) {
-    m_method->setCurrentIndex(method);
+bool RenderPanel::setMethod(const QString& name) {
+    const int index = m_method->findData(name);
+    if (index < 0)
+        return false;
+    m_method->setCurrentIndex(index);
+    return true;
 }
 
 // ---- StatsPanel -----------------------------------------------------------------------------
@@ -1153,9 +1159,17 @@ void StatsPanel::refresh() {
                  .arg(QString::fromStdString(p.name))
                  .arg(p.gpuMs, 0, 'f', 2)
                  .arg(p.cpuMs, 0, 'f', 2);
-    if (!s.preview.methodDetail.empty())
-        t +=
-            QString::fromStdString(s.preview.methodDetail).toHtmlEscaped() + QStringLiteral("<br>");
+    if (!s.preview.autoReason.empty())
+        t += tr("<b>Auto</b>: %1<br>")
+                 .arg(QString::fromStdString(s.preview.autoReason).toHtmlEscaped());
+    if (!s.preview.method.empty()) {
+        t += tr("<b>%1</b><br>")
+                 .arg(RenderPanel::methodTitle(QString::fromStdString(s.preview.method)));
+        for (const methods::Stat& stat : s.preview.methodStats)
+            t += QStringLiteral("&nbsp;&nbsp;%1: %2<br>")
+                     .arg(QString::fromStdString(stat.key).toHtmlEscaped(),
+                          QString::fromStdString(stat.value).toHtmlEscaped());
+    }
     if (const MaterialVolume* v = m_doc->material())
         t += tr("volume: %1^3 voxels of %2 mm<br>")
                  .arg(v->resolution())

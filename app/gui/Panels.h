@@ -6,12 +6,16 @@
 
 #include <lucent/material/Medium.h>
 #include <lucent/material/Procedural.h>
+#include <lucent/methods/Method.h>
 #include <lucent/scene/Scene.h>
 
 #include <QStringList>
 #include <QWidget>
 
 #include <array>
+#include <map>
+#include <string>
+#include <vector>
 
 class QCheckBox;
 class QColor;
@@ -24,6 +28,7 @@ class QPushButton;
 class QRadioButton;
 class QSettings;
 class QSpinBox;
+class QStackedWidget;
 
 namespace lucent::app {
 
@@ -89,7 +94,9 @@ private:
 };
 
 /// Preferences: saves the value of every named field of `panel` (spin boxes, combo boxes,
-/// check boxes; widgets with an objectName) under `group` of `settings`.
+/// check boxes; widgets with an objectName) under `group` of `settings`. A combo box whose
+/// entries carry names as item data (the method selector, choice parameters) is saved by that
+/// name, so that a reordered list still maps.
 void savePanelSettings(QWidget* panel, QSettings& settings, const QString& group);
 /// Restores what savePanelSettings wrote, through the widgets (so their signals apply the
 /// values); values out of a field's range are clamped by it, unknown entries are ignored.
@@ -153,15 +160,24 @@ private:
     bool m_loading = false;
 };
 
-/// Preview method and camera bookmarks.
+/// Preview method, its parameters and camera bookmarks. The method selector (Auto, then every
+/// registered method with a GL pass) and each method's parameter fields are built from the
+/// engine's registry (methods::MethodInfo, ParamDescriptor): one page of fields per method,
+/// shown for the selected one.
 class RenderPanel : public QWidget {
     Q_OBJECT
 public:
     RenderPanel(Document* doc, Viewport* viewport, QWidget* parent = nullptr);
-    /// Selects a preview method (index = RenderSettings::Method) as the combo box does.
-    void setMethod(int method);
-    /// The selector's name of `method` (RenderSettings::Method).
-    [[nodiscard]] static QString methodName(int method);
+    /// Selects the preview method `name` (AUTO_METHOD or a registry name) as the selector does.
+    /// @return false (nothing changes) when `name` is not a preview method.
+    bool setMethod(const QString& name);
+    /// The selected method's registry name.
+    [[nodiscard]] QString method() const;
+    /// The selector's label of method `name` (its MethodInfo::title; `name` if unknown).
+    [[nodiscard]] static QString methodTitle(const QString& name);
+    /// objectName of the field of parameter `param` of method `method` ("param.sslpv.grid"):
+    /// the key of its saved preference, and how tests find it.
+    [[nodiscard]] static QString paramFieldName(const QString& method, const QString& param);
     /// Camera bookmarks as text, one per entry: "name;target x;y;z (mm);distance (mm);yaw°;
     /// pitch°" (how MainWindow keeps them per project in QSettings).
     [[nodiscard]] QStringList bookmarks() const;
@@ -173,28 +189,26 @@ Q_SIGNALS:
     void bookmarksChanged();
 
 private:
+    /// One parameter field of a method's page.
+    struct ParamField {
+        std::string name;          ///< ParamDescriptor::name
+        std::string defaultValue;  ///< the live default (what the method takes when not given)
+        QWidget* widget;           ///< QCheckBox, QSpinBox, QDoubleSpinBox or QComboBox
+    };
     void apply();
+    /// A page of fields for `info`'s live parameters (ParamScope Both and Live).
+    QWidget* makeParamPage(const methods::MethodInfo& info);
+    /// The values of `method`'s fields that differ from its live defaults.
+    [[nodiscard]] methods::ParamSet paramsOf(const std::string& method) const;
     Viewport* m_viewport;
     QComboBox* m_method;
-    QSpinBox* m_steps;
-    QSpinBox* m_lightSteps;
+    QStackedWidget* m_paramPages;  ///< page i: the fields of the selector's entry i
+    std::map<std::string, std::vector<ParamField>> m_paramFields;  ///< by method name
     QDoubleSpinBox* m_exposure;
-    QDoubleSpinBox* m_ambient;
     QCheckBox* m_turntable;
-    QCheckBox* m_smooth;
     QComboBox* m_scale;
     QCheckBox* m_deform = nullptr;
     QComboBox* m_bookmarks;
-    // SSLPV
-    QComboBox* m_sslpvMode;
-    QComboBox* m_sslpvGrid;
-    QSpinBox* m_sslpvSteps;
-    QComboBox* m_sslpvOrder;
-    QComboBox* m_sslpvSolve;
-    // Dipoles, directional dipole, combined
-    QSpinBox* m_dipoleSpp;
-    QSpinBox* m_dirpoleSpp;
-    QDoubleSpinBox* m_splitRadius;
     QCheckBox* m_subsurfaceOnly;
     // Volume overlay
     QCheckBox* m_overlay;

@@ -2,25 +2,38 @@
 #pragma once
 /// @file
 /// @brief The viewport's rendering, outside the widget: gpu::SceneRenderer (direct lighting,
-/// shadow maps, tone map) with one subsurface provider per preview method (single scattering,
-/// SSLPV, dipole / better dipole, directional dipole, combined), the volume overlay and the
-/// brush-cursor overlay. Every shader comes from the engine's shader library
-/// (shaders/preview_*.{comp,frag}). Plain C++ and GL (epoxy): the Qt widget only hands it a
-/// current context, its framebuffer and the frame's inputs.
+/// shadow maps, tone map) with the subsurface pass of the chosen translucency method, the volume
+/// overlay and the brush-cursor overlay. The method is a lucent::methods::Method made through
+/// the engine's registry by name (methods::create(name, params, {Backend::Gl, live=true}); the
+/// lifecycle in lucent/methods/Method.h), so every method with a GL pass is a preview method and
+/// this file names none of them. Every shader comes from the engine's shader library. Plain C++
+/// and GL (epoxy): the Qt widget only hands it a current context, its framebuffer and the
+/// frame's inputs.
 ///
 /// Paint strokes: the renderer keeps the shadow maps, the G-buffer and the direct-lighting term
-/// while lights, camera and mesh are unchanged, so a stroke frame runs only the subsurface
-/// provider, a one-fetch shading pass and the tone map (RenderSettings::reusePasses).
+/// while lights, camera and mesh are unchanged, so a stroke frame runs only the subsurface pass,
+/// a one-fetch shading pass and the tone map (RenderSettings::reusePasses).
+///
+/// Auto (AUTO_METHOD): the planner chooses the method from the scene's features and predicted
+/// cost and error, over the candidates whose models were measured on the GL pass; the Direct
+/// frame its cost ratios scale with is measured once per render size (planner::measureDirectMs,
+/// on a headless context in a worker thread, so the caller's context stays current and frames
+/// keep coming: the last choice, or Direct before the first, until it is done). It
+/// re-plans when the scene changes (a new scene, paint, lights, η, camera), at most twice a
+/// second, with the planner's hysteresis: painting does not make the preview switch methods
+/// back and forth.
 ///
 /// Material edits: the caller passes the volume's dirty bricks (MaterialVolume::takeDirtyBricks)
-/// once per frame; the active method consumes them incrementally (SSLPV re-resamples and
-/// re-propagates only the coarse cells they overlap, the dipole and single-scatter passes
-/// re-upload only those bricks). Inactive methods are fully re-synchronised when selected.
+/// once per frame; the active method consumes them incrementally (Method::materialChanged).
+/// Only the active method exists: choosing another one, or a new scene, makes a fresh instance
+/// that synchronises everything.
 
 #include <lucent/core/Image.h>
 #include <lucent/core/Types.h>
 #include <lucent/material/MaterialVolume.h>
 #include <lucent/mesh/TriangleMesh.h>
+#include <lucent/methods/Method.h>
+#include <lucent/methods/Params.h>
 #include <lucent/scene/Scene.h>
 
 #include <memory>
@@ -34,29 +47,20 @@ class ShaderLibrary;
 
 namespace lucent::app {
 
+/// The method selector's "Auto" entry: not a registry method; the Auto planner
+/// (lucent/planner/AutoMethod.h) chooses one for the scene and PreviewRenderer runs that.
+inline constexpr const char* AUTO_METHOD = "auto";
+
 /// Preview method and its parameters.
 struct RenderSettings {
-    enum class Method {
-        Direct = 0,            ///< SceneRenderer direct lighting of an opaque grey surface
-        SingleScattering = 1,  ///< + ray-marched single scattering (preview_single_scatter.comp)
-        Sslpv = 2,             ///< + SSLPV (Børlum et al. 2011), SslpvSubsurfaceProvider
-        Dipole = 3,            ///< + image-space dipole (Jensen et al. 2001), progressive
-        BetterDipole = 4,      ///< + image-space better dipole (d'Eon 2012), progressive
-        /// + directional dipole (Frisvad et al. 2014), GPU pipeline, progressive
-        /// (dipole::DirpoleSubsurfaceProvider; needs a build with that provider)
-        DirectionalDipole = 5,
-        /// + windowed dipole and SSLPV beyond the split radius (combined::
-        /// CombinedSubsurfaceProvider; only in builds with the combined module)
-        Combined = 6,
-    } method = Method::Dipole;  ///< shows paint at once (SSLPV Paper 32³ hid a dark stroke)
-    int steps = 24;             ///< view-ray march steps (single scattering)
-    int lightSteps = 6;         ///< shadow-ray march steps per view step (single scattering)
+    /// AUTO_METHOD, or the registry name of a method with a GL pass (lucent/methods/Registry.h).
+    /// Auto by default: the planner picks a method that shows paint for the scene (SSLPV Paper
+    /// 32³, the default before issue 17, hid a dark stroke).
+    std::string method = AUTO_METHOD;
+    /// The method's parameters (ParamDescriptor names); unset ones take their live defaults.
+    methods::ParamSet params;
     float exposureStops = 2.f;  ///< log2 of the exposure multiplier (Reinhard tone curve)
-    float ambient = 0.f;        ///< uniform ambient irradiance, W/mm² (single scattering only)
     bool turntable = false;     ///< rotate the camera at 30°/s
-    /// Trilinear texture filtering of σ in the single-scattering pass (display only; the
-    /// engine's lookup rule is nearest).
-    bool smoothVoxels = false;
     /// Preview pixels per widget pixel per axis (1, ½, ¼); the image is upscaled bilinearly by
     /// the tone-map pass.
     float resolutionScale = 0.5f;
@@ -64,18 +68,6 @@ struct RenderSettings {
     /// is re-uploaded every frame; the subsurface passes look the material up at the posed
     /// surface (small twists only). Painting is paused while it runs.
     bool deform = false;
-    // SSLPV
-    bool sslpvCalibrated = false;  ///< SslpvMode::Calibrated instead of Paper
-    int sslpvGrid = 32;            ///< LPV cells per axis: 16, 32 or 64
-    int sslpvSteps = 32;           ///< propagation steps, [1, 512]
-    int sslpvOrder = 1;            ///< SH order 1 or 2
-    bool sslpvGlSolve = false;     ///< propagation on the GPU (SslpvBackend::Gl)
-    // Dipoles
-    int dipoleSpp = 16;   ///< samples per pixel and frame, [1, 4096]; refines while idle
-    int dirpoleSpp = 16;  ///< directional dipole: disc samples per texel and frame, [1, 4096]
-    /// Combined: split radius r_s in mm (dipole for r ≤ r_s, SSLPV beyond); < 0 picks the
-    /// module's default (4 SSLPV cells).
-    float combinedSplitRadius = -1.f;
     /// Show only the subsurface term (debug view; gpu::DirectSettings::subsurfaceOnly).
     bool subsurfaceOnly = false;
     /// Reuse the G-buffer and the direct-lighting term while their inputs are unchanged
@@ -95,11 +87,15 @@ struct PreviewStats {
         double gpuMs = 0.0, cpuMs = 0.0;
     };
     std::vector<Pass> passes;
-    std::string methodDetail;         ///< method-specific lines (SSLPV timings, dipole progress)
-    int bricksUploaded = 0;           ///< bricks consumed by the last material update
-    int sslpvIncrementalUpdates = 0;  ///< SSLPV updateMaterial calls that did work (dirty bricks)
-    int sslpvFullResamples = 0;       ///< SSLPV setMaterial calls
-    double uploadMs = 0.0;            ///< CPU ms of the last material update
+    std::string method;  ///< registry name of the method the last frame used
+    /// With Auto: the planner's one-line reason for its choice (planner::Plan::reason), and
+    /// the choice ("dipole 32 spp"); empty otherwise.
+    std::string autoReason, autoChoice;
+    methods::Stats methodStats;  ///< its Method::stats() (SSLPV timings, dipole progress)
+    int bricksUploaded = 0;      ///< bricks consumed by the last material update
+    double uploadMs = 0.0;       ///< CPU ms of the last material update
+    /// The method's stat `key` ("" when it has none).
+    [[nodiscard]] std::string methodStat(const std::string& key) const;
     /// Frames since create() that reused the shadow maps, the G-buffer and the direct-lighting
     /// term (gpu::DirectSettings::reuseUnchangedPasses; a paint stroke reuses all three).
     long long shadowsReused = 0, gbufferReused = 0, directReused = 0;
@@ -136,18 +132,24 @@ public:
 
     /// Renders one frame into frame.framebuffer (context current). @throw lucent::Error.
     void render(PreviewFrame& frame);
-    /// True while a progressive method still refines (another frame is useful when idle).
+    /// True while a progressive method still refines, or while Auto waits for its Direct frame
+    /// measurement (another frame is useful when idle).
     [[nodiscard]] bool wantsAnotherFrame() const;
+    /// True while Auto measures the Direct frame it plans with (frames then show the last
+    /// choice, or Direct before the first; poll, do not spin).
+    [[nodiscard]] bool isPlanning() const;
     [[nodiscard]] const PreviewStats& stats() const;
     /// The last frame's linear radiance at render resolution (camera width × height),
     /// W/(mm²·sr), before tone mapping and overlays, top row first (for EXR export). Reads the
     /// GPU back on demand (context current). @throw lucent::Error before the first frame.
     [[nodiscard]] ImageRgb linearImage() const;
-    /// Whether this build has `method` (DirectionalDipole and Combined depend on the modules).
-    [[nodiscard]] static bool hasMethod(RenderSettings::Method method);
-    /// The shaders every pass and provider is compiled from (embedded, or $LUCENT_SHADER_DIR).
+    /// Whether `name` is a preview method: a registered method with a GL pass.
+    [[nodiscard]] static bool isPreviewMethod(const std::string& name);
+    /// The preview methods' registry entries, in the registry's order (the method selector).
+    [[nodiscard]] static std::vector<const methods::MethodInfo*> previewMethods();
+    /// The shaders every pass and method is compiled from (embedded, or $LUCENT_SHADER_DIR).
     /// An in-memory file set here (ShaderLibrary::setFile) is used by the programs compiled
-    /// after it, e.g. a provider created when its method is next selected.
+    /// after it, e.g. a method's pass created when the method is next selected.
     [[nodiscard]] gpu::ShaderLibrary& shaderLibrary();
 
 private:

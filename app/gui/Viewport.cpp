@@ -9,9 +9,7 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Timer.h>
-#if LUCENT_APP_HAS_DEFORM
 #include <lucent/mesh/Deform.h>
-#endif
 
 #include <QCoreApplication>
 #include <QDropEvent>
@@ -216,10 +214,6 @@ Viewport::Viewport(Document* doc, QWidget* parent) : QWidget(parent), m_doc(doc)
     onSceneReplaced();
 }
 
-bool Viewport::hasDeformation() {
-    return LUCENT_APP_HAS_DEFORM != 0;
-}
-
 Viewport::~Viewport() {
     if (m_glReady && m_window->context()) {
         m_window->makeCurrent();
@@ -251,16 +245,7 @@ void Viewport::setViewCursor(Qt::CursorShape shape) {
 }
 
 void Viewport::setRenderSettings(const RenderSettings& s) {
-    m_render = s;
-    m_render.steps = std::clamp(m_render.steps, 1, 512);
-    m_render.lightSteps = std::clamp(m_render.lightSteps, 1, 128);
-    m_render.sslpvGrid = m_render.sslpvGrid <= 16 ? 16 : m_render.sslpvGrid <= 32 ? 32 : 64;
-    m_render.sslpvSteps = std::clamp(m_render.sslpvSteps, 1, 512);
-    m_render.sslpvOrder = m_render.sslpvOrder == 2 ? 2 : 1;
-    m_render.dipoleSpp = std::clamp(m_render.dipoleSpp, 1, 4096);
-    m_render.dirpoleSpp = std::clamp(m_render.dirpoleSpp, 1, 4096);
-    if (!std::isfinite(m_render.combinedSplitRadius))
-        m_render.combinedSplitRadius = -1.f;  // the module's default split
+    m_render = s;  // the method's parameters are checked when its frame makes it
     m_render.overlayChannel = std::clamp(m_render.overlayChannel, 0, 2);
     m_render.overlayOpacity = std::isfinite(m_render.overlayOpacity)
                                   ? std::clamp(m_render.overlayOpacity, 0.f, 1.f)
@@ -269,7 +254,7 @@ void Viewport::setRenderSettings(const RenderSettings& s) {
         m_turntable.start();
     if (!s.turntable)
         m_turntable.stop();
-    m_render.deform = s.deform && hasDeformation();
+    m_render.deform = s.deform;
     if (m_render.deform && !m_animation.isActive())
         m_animation.start();
     if (!m_render.deform && m_animation.isActive()) {
@@ -959,7 +944,6 @@ void Viewport::cleanupGL() {
 
 const TriangleMesh* Viewport::shownMesh() {
     const TriangleMesh* mesh = m_doc->mesh();
-#if LUCENT_APP_HAS_DEFORM
     if (mesh && m_render.deform && !mesh->isEmpty()) {
         // A twist about the vertical axis through the object's centre: ±0.6 rad over its
         // height, oscillating at 0.5 Hz (Deform.h: amount·sin(2π·rate·t)).
@@ -973,7 +957,6 @@ const TriangleMesh* Viewport::shownMesh() {
         m_posed = deform(*mesh, {twist}, float(m_clock.elapsed()) * 1e-3f);
         return &m_posed;
     }
-#endif
     return mesh;
 }
 
@@ -1042,13 +1025,15 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
         // The dirty bricks taken above went to the failed provider: the retry re-synchronises
         // everything as for a new scene.
         const QString message = QString::fromUtf8(ex.what());
-        const RenderSettings::Method failed = f.settings.method;
+        const std::string failed = f.settings.method;
         m_stats.renderError = message;
         ++m_stats.renderErrors;
         bool drawn = false;
-        if (failed != RenderSettings::Method::Direct) {
-            m_render.method = RenderSettings::Method::Direct;
-            f.settings.method = RenderSettings::Method::Direct;
+        if (failed != FALLBACK_METHOD) {
+            m_render.method = FALLBACK_METHOD;
+            m_render.params = {};
+            f.settings.method = FALLBACK_METHOD;
+            f.settings.params = {};
             f.sceneReplaced = f.meshChanged = true;
             try {
                 m_preview.render(f);
@@ -1062,9 +1047,12 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
         m_sceneReplaced = !drawn;
         if (!drawn)
             clear();
-        Q_EMIT renderFailed(message, int(failed));
+        Q_EMIT renderFailed(message, QString::fromStdString(failed));
     }
+    const std::string lastReason = m_stats.preview.autoReason;
     m_stats.preview = m_preview.stats();
+    if (m_stats.preview.autoReason != lastReason && !m_stats.preview.autoReason.empty())
+        Q_EMIT autoPlanChanged(QString::fromStdString(m_stats.preview.autoReason));
     m_stats.uploadMs = m_stats.preview.uploadMs;
     m_stats.bricksUploaded = m_stats.preview.bricksUploaded;
     // Finished here, so the frame time includes the (software) rasterisation.
@@ -1075,8 +1063,10 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
     m_stats.frameMs = timer.elapsedMs();
     ++m_stats.frames;
     // Progressive methods (dipoles) refine while the user is idle.
+    // While Auto measures its Direct frame (a worker thread), poll: spinning frames would take
+    // the cores the measurement needs.
     if (m_preview.wantsAnotherFrame())
-        QTimer::singleShot(0, this, [this] { update(); });
+        QTimer::singleShot(m_preview.isPlanning() ? 100 : 0, this, [this] { update(); });
     Q_EMIT frameRendered();
 }
 

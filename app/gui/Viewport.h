@@ -82,6 +82,8 @@ public:
     enum class Tool { Paint, Eyedropper };
     /// Radius within which a click picks a light handle, logical pixels.
     static constexpr double HANDLE_PICK_PX = 9.0;
+    /// The method a failing preview method falls back to: it needs no subsurface pass.
+    static constexpr const char* FALLBACK_METHOD = "direct";
 
     explicit Viewport(Document* doc, QWidget* parent = nullptr);
     ~Viewport() override;
@@ -103,8 +105,6 @@ public:
     [[nodiscard]] bool cameraShowsObject() const;
     /// Camera ray through widget position `pos` (logical pixels, origin top-left).
     void cameraRay(const QPointF& pos, Point3f& origin, Vector3f& direction) const;
-    /// True when the deformation animation is compiled in (mesh/Deform).
-    static bool hasDeformation();
     /// Mesh hit under widget position `pos`.
     [[nodiscard]] std::optional<PickHit> pickAt(const QPointF& pos) const;
     /// Paints a straight stroke from a to b (widget positions) as one undoable command, the
@@ -163,9 +163,12 @@ Q_SIGNALS:
     /// object or outside the viewport.
     void hoverVoxel(const QString& text);
     void paintError(const QString& message);
-    /// A frame of preview method `method` (RenderSettings::Method) failed with `message`. The
-    /// frame was drawn with Direct instead, and renderSettings().method is now Direct.
-    void renderFailed(const QString& message, int method);
+    /// A frame of preview method `method` (registry name) failed with `message`. The frame was
+    /// drawn with FALLBACK_METHOD instead, and renderSettings().method is now that.
+    void renderFailed(const QString& message, const QString& method);
+    /// With the Auto method: the planner's choice or its reason changed (planner::Plan::reason,
+    /// one line).
+    void autoPlanChanged(const QString& reason);
     /// The user picked light `index` by clicking its handle.
     void lightSelected(int index);
 

@@ -4,41 +4,30 @@
 ///
 ///     lucent [PROJECT|MESH|VDB] [--screenshot PATH] [--frames N] [--benchmark]
 ///            [--benchmark-json PATH] [--viewport WxH] [--window WxH]
-///            [--method direct|single|sslpv|dipole|better-dipole|dirpole|combined]
-///                (also the selector's long names: single-scattering, directional-dipole)
+///            [--method auto|NAME]   (NAME: a registry name with a GL pass, `lucent-cli methods`)
 ///            [--paint-demo] [--reference SPP] [--raise DOCKS] [--no-settings]
-///            [--swap-interval N] [--compose-experiment]
+///            [--swap-interval N]
 /// --screenshot grabs the whole window after N rendered frames (default 3) and exits;
-/// --benchmark measures start-up to first frame, idle frame time and stroke-to-frame latency;
-/// --compose-experiment measures what Qt adds around paintGL for three ways to host GL and for
-/// the app's own viewport (a QOpenGLWindow in a window container, see Viewport.h).
+/// --benchmark measures start-up to first frame, idle frame time and stroke-to-frame latency
+/// (what Qt adds around paintGL is measured by tests/bench/bench_app_compose.cpp).
 
 #include "Document.h"
 #include "MainWindow.h"
 #include "Viewport.h"
-#if LUCENT_APP_HAS_REFERENCE
 #include "ReferencePanel.h"
-#endif
 
 #include <lucent/core/Timer.h>
-#include <lucent/scene/SceneFile.h>
+#include <lucent/methods/Method.h>
 
 #include <QApplication>
 #include <QEventLoop>
 #include <QCommandLineParser>
 #include <QDockWidget>
 #include <QFile>
-#include <QLabel>
-#include <QMainWindow>
-#include <QOpenGLContext>
-#include <QOpenGLFunctions>
-#include <QOpenGLWidget>
-#include <QOpenGLWindow>
 #include <QSurfaceFormat>
 #include <QTimer>
 
 #include <algorithm>
-#include <functional>
 #include <utility>
 #include <cstdio>
 #include <vector>
@@ -48,34 +37,13 @@ namespace {
 using lucent::Timer;
 using lucent::app::MainWindow;
 
-/// Preview method from its command-line name (every entry of the Render dock's selector, short
-/// or long name). @return false for an unknown name or a method not compiled in.
-bool parseMethod(const QString& name, lucent::app::RenderSettings::Method& out) {
-    using M = lucent::app::RenderSettings::Method;
-    const std::pair<const char*, M> names[] = {{"direct", M::Direct},
-                                               {"single", M::SingleScattering},
-                                               {"single-scattering", M::SingleScattering},
-                                               {"sslpv", M::Sslpv},
-                                               {"dipole", M::Dipole},
-                                               {"better-dipole", M::BetterDipole},
-                                               {"dirpole", M::DirectionalDipole},
-                                               {"directional-dipole", M::DirectionalDipole},
-                                               {"combined", M::Combined}};
-    for (const auto& [n, m] : names)
-        if (name == QLatin1String(n) && lucent::app::PreviewRenderer::hasMethod(m)) {
-            out = m;
-            return true;
-        }
-    return false;
-}
-
-/// Median of a sample (robust to the odd slow frame on a shared machine).
-double median(std::vector<double> v) {
-    if (v.empty())
-        return 0.0;
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+/// What --method takes, comma-separated (for messages): auto and the preview methods'
+/// registry names.
+QString previewMethodNames() {
+    QStringList names{QString::fromLatin1(lucent::app::AUTO_METHOD)};
+    for (const lucent::methods::MethodInfo* info : lucent::app::PreviewRenderer::previewMethods())
+        names.push_back(QString::fromStdString(info->name));
+    return names.join(QStringLiteral(", "));
 }
 
 /// Idle frame and stroke-to-frame latency of the current preview method (medians, ms), with
@@ -128,245 +96,59 @@ MethodTiming timeMethod(lucent::app::Viewport* vp) {
             it->second.push_back(pass.gpuMs);
         }
     }
-    MethodTiming m{median(idle),
-                   median(latency),
-                   median(frameOnly),
-                   median(idlePaint),
-                   median(upload),
-                   median(strokeCpu),
+    MethodTiming m{lucent::medianMs(idle),
+                   lucent::medianMs(latency),
+                   lucent::medianMs(frameOnly),
+                   lucent::medianMs(idlePaint),
+                   lucent::medianMs(upload),
+                   lucent::medianMs(strokeCpu),
                    {}};
     for (const auto& [name, v] : passes)
-        m.strokePassGpuMs.push_back({name, median(v)});
+        m.strokePassGpuMs.push_back({name, lucent::medianMs(v)});
     return m;
-}
-
-// ---- Qt composition experiment (--compose-experiment) ----------------------------------------
-// The same PreviewRenderer frame (default scene, direct lighting, 640×360) drawn by three hosts,
-// to measure what Qt adds around paintGL: a QOpenGLWidget inside a large main window (the
-// app's arrangement), the same widget as a 640×360 top-level window, and a QOpenGLWindow
-// embedded with QWidget::createWindowContainer in the large window.
-
-/// Renderer state of one host (one GL context each).
-struct ComposeHostGl {
-    lucent::Scene* scene = nullptr;
-    lucent::app::PreviewRenderer preview;
-    bool first = true;
-    double paintMs = 0.0;
-    long long swaps = 0;
-
-    void paint(unsigned fbo, int w, int h) {
-        Timer t;
-        lucent::app::PreviewFrame f;
-        f.scene = scene;
-        f.volume = scene->objects[0].material.get();
-        f.shownMesh = &scene->objects[0].mesh;
-        f.sceneReplaced = first;
-        first = false;
-        f.camera = scene->camera;
-        f.camera.width = w;
-        f.camera.height = h;
-        f.settings.method = lucent::app::RenderSettings::Method::Direct;
-        f.settings.resolutionScale = 1.f;
-        f.framebuffer = fbo;
-        f.framebufferWidth = w;
-        f.framebufferHeight = h;
-        preview.render(f);
-        QOpenGLContext::currentContext()->functions()->glFinish();  // as Viewport::paintGL
-        paintMs = t.elapsedMs();
-    }
-};
-
-/// A GL host (QOpenGLWidget or QOpenGLWindow) drawing ComposeHostGl's frame.
-template <class Base>
-class ComposeHost : public Base {
-public:
-    explicit ComposeHost(ComposeHostGl* gl) : m_gl(gl) {
-        QObject::connect(this, &Base::frameSwapped, this, [this] { ++m_gl->swaps; });
-    }
-    ~ComposeHost() override {
-        this->makeCurrent();
-        m_gl->preview.destroy();
-        this->doneCurrent();
-    }
-
-protected:
-    void initializeGL() override { m_gl->preview.create(); }
-    void paintGL() override {
-        const qreal dpr = this->devicePixelRatioF();
-        m_gl->paint(this->defaultFramebufferObject(), int(this->width() * dpr),
-                    int(this->height() * dpr));
-    }
-
-private:
-    ComposeHostGl* m_gl;
-};
-using ComposeWidget = ComposeHost<QOpenGLWidget>;
-using ComposeWindow = ComposeHost<QOpenGLWindow>;
-
-/// update() → frameSwapped, `frames` times; @return medians (total, paintGL) in ms.
-std::pair<double, double> timeHost(ComposeHostGl& gl, const std::function<void()>& update,
-                                   int frames) {
-    std::vector<double> total, paint;
-    for (int i = 0; i < frames + 3; ++i) {  // 3 warm-up frames (first upload, shader variants)
-        const long long before = gl.swaps;
-        Timer t;
-        update();
-        while (gl.swaps == before)
-            QCoreApplication::processEvents(QEventLoop::AllEvents | QEventLoop::WaitForMoreEvents,
-                                            5);
-        if (i >= 3) {
-            total.push_back(t.elapsedMs());
-            paint.push_back(gl.paintMs);
-        }
-    }
-    return {median(total), median(paint)};
-}
-
-/// Shows `view` (640×360) in `win` resized to 1400×1100, about the app's main window, next to
-/// a label standing in for the docks.
-void showInLargeWindow(QMainWindow& win, QWidget* view) {
-    auto* central = new QWidget;
-    view->setParent(central);
-    view->setFixedSize(640, 360);
-    view->move(10, 10);
-    auto* label = new QLabel(QStringLiteral("docks stand-in"), central);
-    label->setGeometry(660, 10, 200, 30);
-    win.setCentralWidget(central);
-    win.resize(1400, 1100);
-    win.show();
-}
-
-/// The app's own viewport (MainWindow at 1400×1100, viewport 640×360, Direct): update() → frame
-/// done, `frames` times after 3 warm-up frames. @return medians (total, paintGL) in ms.
-std::pair<double, double> timeAppViewport(int frames) {
-    MainWindow win(/*restoreSettings=*/false);
-    lucent::app::Viewport* vp = win.viewport();
-    vp->setFixedSize(640, 360);
-    lucent::app::RenderSettings rs = vp->renderSettings();
-    rs.method = lucent::app::RenderSettings::Method::Direct;
-    rs.resolutionScale = 1.f;
-    vp->setRenderSettings(rs);
-    win.resize(1400, 1100);
-    win.show();
-    for (int i = 0; i < 20; ++i)
-        QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
-    std::vector<double> total, paint;
-    for (int i = 0; i < frames + 3; ++i) {
-        Timer t;
-        renderFrame(vp);  // returns after paintGL and the window's swap (same paint event)
-        if (i >= 3) {
-            total.push_back(t.elapsedMs());
-            paint.push_back(vp->stats().frameMs);
-        }
-    }
-    return {median(total), median(paint)};
-}
-
-/// Runs the hosts one after the other and prints frame, paintGL and Qt's share.
-int runComposeExperiment() {
-    lucent::Scene scene = lucent::makeDefaultScene();
-    const int frames = 20;
-    struct Result {
-        const char* name;
-        double totalMs, paintMs;
-    };
-    std::vector<Result> results;
-    const auto settle = [] {
-        for (int i = 0; i < 20; ++i)
-            QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
-    };
-    {  // 1. QOpenGLWidget in a 1400×1100 main window (about the app's size)
-        ComposeHostGl gl;
-        gl.scene = &scene;
-        QMainWindow win;
-        auto* w = new ComposeWidget(&gl);
-        showInLargeWindow(win, w);
-        settle();
-        const auto [t, p] = timeHost(
-            gl, [w] { w->update(); }, frames);
-        results.push_back({"QOpenGLWidget in 1400x1100 window", t, p});
-    }
-    {  // 2. the widget alone as a 640×360 top-level
-        ComposeHostGl gl;
-        gl.scene = &scene;
-        ComposeWidget w(&gl);
-        w.resize(640, 360);
-        w.show();
-        settle();
-        const auto [t, p] = timeHost(
-            gl, [&w] { w.update(); }, frames);
-        results.push_back({"QOpenGLWidget as 640x360 top-level", t, p});
-    }
-    {  // 3. QOpenGLWindow in a container in the 1400×1100 window
-        ComposeHostGl gl;
-        gl.scene = &scene;
-        QMainWindow win;
-        auto* glWindow = new ComposeWindow(&gl);
-        showInLargeWindow(win, QWidget::createWindowContainer(glWindow));
-        settle();
-        const auto [t, p] = timeHost(
-            gl, [glWindow] { glWindow->update(); }, frames);
-        results.push_back({"QOpenGLWindow in container, 1400x1100", t, p});
-    }
-    {  // 4. the app: MainWindow with its docks, the Viewport (QOpenGLWindow in a container)
-        const auto [t, p] = timeAppViewport(frames);
-        results.push_back({"app Viewport in MainWindow, 1400x1100", t, p});
-    }
-    const QSurfaceFormat f = QSurfaceFormat::defaultFormat();
-    std::printf(
-        "compose experiment: PreviewRenderer direct, 640x360, medians of %d frames; "
-        "swap interval %d, swap behaviour %d\n",
-        frames, f.swapInterval(), int(f.swapBehavior()));
-    std::printf("%-40s %10s %10s %12s\n", "host", "frame", "paintGL", "Qt's share");
-    for (const Result& r : results)
-        std::printf("%-40s %7.1f ms %7.1f ms %9.1f ms\n", r.name, r.totalMs, r.paintMs,
-                    r.totalMs - r.paintMs);
-    return 0;
 }
 
 /// Runs the latency harness on a shown window whose first frame has been rendered.
 void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath,
                   const QString& methodFilter) {
-    using Method = lucent::app::RenderSettings::Method;
     lucent::app::Viewport* vp = w.viewport();
     lucent::app::RenderSettings rs = vp->renderSettings();
     struct Row {
         const char* name;
-        Method method;
+        std::string method;  ///< registry name
         float scale;
         bool reuse = true;     ///< RenderSettings::reusePasses (false: every pass every frame)
         bool overlay = false;  ///< RenderSettings::volumeOverlay (σt, opacity 0.5)
         MethodTiming t;
     };
     // Stroke latency of the live methods at the viewport's full resolution and at the app's
-    // default half resolution (SSLPV at 32³, CPU solve; dipoles at their default samples per
-    // frame), plus the direct baseline; the
-    // "no reuse" rows re-run the G-buffer and the direct lighting every frame (as before pass
-    // reuse; shadow maps were already kept) for a same-run before/after.
+    // default half resolution (every method at its live defaults: SSLPV 32³ with the CPU
+    // solve, dipoles at 16 samples per frame), plus the direct baseline; the "no reuse" rows
+    // re-run the G-buffer and the direct lighting every frame (as before pass reuse; shadow
+    // maps were already kept) for a same-run before/after.
     std::vector<Row> rows = {
-        {"direct, full res (baseline)", Method::Direct, 1.f, true, false, {}},
-        {"direct, full res, no reuse", Method::Direct, 1.f, false, false, {}},
-        {"single-scatter, full res", Method::SingleScattering, 1.f, true, false, {}},
-        {"sslpv 32^3, full res, no reuse", Method::Sslpv, 1.f, false, false, {}},
-        {"sslpv 32^3, full res", Method::Sslpv, 1.f, true, false, {}},
-        {"dipole, full res, no reuse", Method::Dipole, 1.f, false, false, {}},
-        {"dipole, full res", Method::Dipole, 1.f, true, false, {}},
-        {"better dipole, full res", Method::BetterDipole, 1.f, true, false, {}},
-        {"sslpv 32^3, half res", Method::Sslpv, 0.5f, true, false, {}},
-        {"sslpv 32^3, half res + overlay", Method::Sslpv, 0.5f, true, true, {}},
-        {"dipole, half res", Method::Dipole, 0.5f, true, false, {}},
-        {"directional dipole, full res", Method::DirectionalDipole, 1.f, true, false, {}},
-        {"directional dipole, half res", Method::DirectionalDipole, 0.5f, true, false, {}},
-        {"combined, full res", Method::Combined, 1.f, true, false, {}},
-        {"combined, half res", Method::Combined, 0.5f, true, false, {}}};
-    Method only = Method::Direct;
-    if (!methodFilter.isEmpty() && parseMethod(methodFilter, only))  // baseline + that method
-        std::erase_if(rows,
-                      [&](const Row& r) { return r.method != Method::Direct && r.method != only; });
-    rs.sslpvGrid = 32;
-    rs.sslpvGlSolve = false;
+        {"direct, full res (baseline)", "direct", 1.f, true, false, {}},
+        {"direct, full res, no reuse", "direct", 1.f, false, false, {}},
+        {"single-scatter, full res", "single-scattering", 1.f, true, false, {}},
+        {"sslpv 32^3, full res, no reuse", "sslpv", 1.f, false, false, {}},
+        {"sslpv 32^3, full res", "sslpv", 1.f, true, false, {}},
+        {"dipole, full res, no reuse", "dipole", 1.f, false, false, {}},
+        {"dipole, full res", "dipole", 1.f, true, false, {}},
+        {"better dipole, full res", "better-dipole", 1.f, true, false, {}},
+        {"sslpv 32^3, half res", "sslpv", 0.5f, true, false, {}},
+        {"sslpv 32^3, half res + overlay", "sslpv", 0.5f, true, true, {}},
+        {"dipole, half res", "dipole", 0.5f, true, false, {}},
+        {"directional dipole, full res", "dirpole", 1.f, true, false, {}},
+        {"directional dipole, half res", "dirpole", 0.5f, true, false, {}},
+        {"combined, full res", "combined", 1.f, true, false, {}},
+        {"combined, half res", "combined", 0.5f, true, false, {}}};
+    if (!methodFilter.isEmpty()) {  // the baseline + that method
+        const std::string only = methodFilter.toStdString();
+        std::erase_if(rows, [&](const Row& r) { return r.method != "direct" && r.method != only; });
+    }
     for (Row& r : rows) {
         rs.method = r.method;
+        rs.params = {};  // the method's live defaults
         rs.resolutionScale = r.scale;
         rs.reusePasses = r.reuse;
         rs.volumeOverlay = r.overlay;
@@ -384,10 +166,7 @@ void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath,
                     r.t.strokeMs, r.t.strokePaintGlMs,
                     r.t.idleMs > 0 ? r.t.strokeMs / r.t.idleMs : 0.0,
                     base > 0 ? r.t.idleMs / base : 0.0);
-    std::printf(
-        "(single-scatter: %d view steps, %d shadow steps; sslpv: %d steps, order %d; "
-        "dipole: %d spp/frame)\n",
-        rs.steps, rs.lightSteps, rs.sslpvSteps, rs.sslpvOrder, rs.dipoleSpp);
+    std::printf("(every method at its live defaults: lucent-cli methods lists them)\n");
     // Where a stroke frame goes: renderer passes (GPU ms), the material update (CPU), and what
     // is outside paintGL (picking + stamping before, Qt's composition after).
     std::printf("\nstroke frame breakdown (medians, ms)\n%-36s", "method");
@@ -404,9 +183,9 @@ void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath,
             std::printf(" %10.2f", ms);
         }
         // The direct method updates no material: its upload column would be a stale value.
-        std::printf(" %10.2f %10.1f %12.1f %12.1f\n",
-                    r.method == Method::Direct ? 0.0 : r.t.uploadMs, r.t.strokeCpuMs,
-                    r.t.idleMs - r.t.idlePaintGlMs, r.t.strokeMs - r.t.strokePaintGlMs);
+        std::printf(" %10.2f %10.1f %12.1f %12.1f\n", r.method == "direct" ? 0.0 : r.t.uploadMs,
+                    r.t.strokeCpuMs, r.t.idleMs - r.t.idlePaintGlMs,
+                    r.t.strokeMs - r.t.strokePaintGlMs);
     }
     if (!jsonPath.isEmpty()) {
         QFile f(jsonPath);
@@ -479,30 +258,23 @@ int main(int argc, char** argv) {
                                  QStringLiteral("Before the screenshot, run a reference render "
                                                 "of SPP samples per pixel in the Reference dock."),
                                  QStringLiteral("SPP"));
-    QCommandLineOption composeExperiment(
-        QStringLiteral("compose-experiment"),
-        QStringLiteral("Measure Qt's composition around paintGL for three GL hosts and the "
-                       "app's viewport, then exit."));
     QCommandLineOption swapInterval(
         QStringLiteral("swap-interval"),
         QStringLiteral("QSurfaceFormat swap interval (default: Qt's, 1); 0 disables vsync."),
         QStringLiteral("N"));
     QCommandLineOption method(
         QStringLiteral("method"),
-        QStringLiteral("Preview method: direct, single (single-scattering), sslpv, dipole, "
-                       "better-dipole, dirpole (directional-dipole) or combined."),
+        QStringLiteral("Preview method: %1 (default auto).").arg(previewMethodNames()),
         QStringLiteral("M"));
     parser.addOptions({shot, frames, bench, benchJson, viewportSize, windowSize, noSettings,
-                       paintDemo, raiseDock, method, reference, composeExperiment, swapInterval});
+                       paintDemo, raiseDock, method, reference, swapInterval});
     parser.process(app);
     if (parser.isSet(swapInterval)) {
-        // Before any window exists, so every context (viewport and composition) gets it.
+        // Before any window exists, so that every context gets it.
         QSurfaceFormat f = QSurfaceFormat::defaultFormat();
         f.setSwapInterval(parser.value(swapInterval).toInt());
         QSurfaceFormat::setDefaultFormat(f);
     }
-    if (parser.isSet(composeExperiment))
-        return runComposeExperiment();
 
     const bool scripted = parser.isSet(shot) || parser.isSet(bench);
     MainWindow window(!scripted && !parser.isSet(noSettings));
@@ -532,21 +304,10 @@ int main(int argc, char** argv) {
     if (!parser.positionalArguments().isEmpty() &&
         !window.openFile(parser.positionalArguments().first()))
         return scripted ? 1 : 0;
-    if (parser.isSet(method)) {
-        lucent::app::RenderSettings rs = window.viewport()->renderSettings();
-        if (!parseMethod(parser.value(method), rs.method)) {
-            std::fprintf(stderr,
-                         "lucent: --method expects direct, single (single-scattering), sslpv, "
-                         "dipole, better-dipole, dirpole (directional-dipole) or combined "
-                         "(got '%s'%s)\n",
-                         qPrintable(parser.value(method)),
-                         lucent::app::PreviewRenderer::hasMethod(
-                             lucent::app::RenderSettings::Method::Combined)
-                             ? ""
-                             : "; combined is not built in");
-            return 2;
-        }
-        window.setRenderMethod(int(rs.method));
+    if (parser.isSet(method) && !window.setRenderMethod(parser.value(method))) {
+        std::fprintf(stderr, "lucent: --method expects one of %s (got '%s')\n",
+                     qPrintable(previewMethodNames()), qPrintable(parser.value(method)));
+        return 2;
     }
     window.show();
     for (const QString& name : parser.value(raiseDock).split(QLatin1Char(','), Qt::SkipEmptyParts))
@@ -555,12 +316,7 @@ int main(int argc, char** argv) {
     bool demoPainted = !parser.isSet(paintDemo);
     bool referenceStarted = !parser.isSet(reference);
     const auto referenceRunning = [&window] {
-#if LUCENT_APP_HAS_REFERENCE
         return window.referencePanel() && window.referencePanel()->isRunning();
-#else
-        (void)window;
-        return false;
-#endif
     };
 
     const int wantFrames = std::max(1, parser.value(frames).toInt());
@@ -605,14 +361,12 @@ int main(int argc, char** argv) {
             });
         } else if (!referenceStarted) {
             referenceStarted = true;
-#if LUCENT_APP_HAS_REFERENCE
             if (auto* ref = window.referencePanel()) {
                 ref->setParameters(200, std::max(3, parser.value(reference).toInt()));
                 QObject::connect(ref, &lucent::app::ReferencePanel::finished, window.viewport(),
                                  [&window] { window.viewport()->update(); });
                 ref->start();
             }
-#endif
         } else if (parser.isSet(shot) && st.frames >= wantFrames && !referenceRunning()) {
             done = true;
             QTimer::singleShot(100, &window, [&] {

@@ -19,10 +19,12 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <thread>
 #include <vector>
 
 using namespace lucent;
@@ -107,7 +109,7 @@ struct PreviewFixture : ::testing::Test {
 
 RenderSettings directSettings() {
     RenderSettings s;
-    s.method = RenderSettings::Method::Direct;
+    s.method = "direct";
     s.resolutionScale = 1.f;
     return s;
 }
@@ -238,9 +240,42 @@ TEST_F(PreviewFixture, OverlayFollowsPaintedBricksLikeAFullUpload) {
     EXPECT_EQ(incremental, full);
 }
 
+// Auto (the default method): the planner chooses a registry method with a GL pass, says why,
+// and keeps its choice while nothing changes.
+TEST_F(PreviewFixture, AutoRunsThePlannersChoiceAndSaysWhy) {
+    RenderSettings s = directSettings();
+    s.method = AUTO_METHOD;
+    EXPECT_EQ(RenderSettings{}.method, AUTO_METHOD) << "Auto is the default";
+    render(preview, s, /*first=*/true);
+    // Direct while the planner's Direct frame is measured (a worker thread), then its choice.
+    EXPECT_TRUE(preview.isPlanning() || !preview.stats().autoReason.empty());
+    for (int i = 0; i < 6000 && preview.isPlanning(); ++i) {
+        if (preview.stats().autoReason.empty()) {
+            EXPECT_EQ(preview.stats().method, "direct");
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        render(preview, s);
+    }
+    ASSERT_FALSE(preview.isPlanning()) << "no plan within 2 minutes";
+    render(preview, s);
+    const PreviewStats first = preview.stats();
+    std::printf("Auto: %s\n", first.autoReason.c_str());
+    EXPECT_FALSE(first.autoReason.empty());
+    EXPECT_FALSE(first.autoChoice.empty());
+    EXPECT_TRUE(PreviewRenderer::isPreviewMethod(first.method)) << first.method;
+    EXPECT_EQ(first.autoChoice.rfind(first.method, 0), 0u) << first.autoChoice;
+    render(preview, s);
+    EXPECT_EQ(preview.stats().method, first.method);
+    EXPECT_EQ(preview.stats().autoReason, first.autoReason);
+    // Another method chosen by hand: no Auto reason.
+    s.method = "direct";
+    render(preview, s);
+    EXPECT_TRUE(preview.stats().autoReason.empty());
+}
+
 TEST_F(PreviewFixture, LinearImageToneMapsToTheDisplayedImage) {
     RenderSettings s = directSettings();
-    s.method = RenderSettings::Method::SingleScattering;
+    s.method = "single-scattering";
     s.exposureStops = 1.5f;
     const auto shown = render(preview, s, /*first=*/true);
     const ImageRgb linear = preview.linearImage();
@@ -265,9 +300,8 @@ TEST_F(PreviewFixture, LinearImageToneMapsToTheDisplayedImage) {
 
 TEST_F(PreviewFixture, StrokeFrameReusesPassesAndMatchesFullRender) {
     RenderSettings s = directSettings();
-    s.method = RenderSettings::Method::SingleScattering;
-    s.steps = 8;
-    s.lightSteps = 2;
+    s.method = "single-scattering";
+    s.params = methods::ParamSet::fromAssignments({"steps=8", "light-steps=2"});
     render(preview, s, /*first=*/true);
     const auto unpainted = render(preview, s);
     const PreviewStats before = preview.stats();
@@ -295,24 +329,21 @@ TEST_F(PreviewFixture, StrokeFrameReusesPassesAndMatchesFullRender) {
 }
 
 TEST_F(PreviewFixture, DirectionalDipoleAndCombinedRenderTranslucency) {
-    using Method = RenderSettings::Method;
-    ASSERT_TRUE(PreviewRenderer::hasMethod(Method::DirectionalDipole));
+    ASSERT_TRUE(PreviewRenderer::isPreviewMethod("dirpole"));
+    ASSERT_TRUE(PreviewRenderer::isPreviewMethod("combined"));
     const ImageRgb shape = [&] {
         render(preview, directSettings(), /*first=*/true);
         return preview.linearImage();
     }();
     const std::vector<uint8_t> covered = coverage(shape);
-    for (Method method : {Method::DirectionalDipole, Method::Combined}) {
-        if (!PreviewRenderer::hasMethod(method)) {
-            std::printf("Combined is not in this build (no combined module): skipped\n");
-            continue;
-        }
+    for (const std::string method : {"dirpole", "combined"}) {
         RenderSettings s = directSettings();
         s.method = method;
-        s.subsurfaceOnly = true;  // the provider's term alone
-        s.dirpoleSpp = 4;         // a few samples suffice to see light inside the object
-        s.dipoleSpp = 4;
-        s.sslpvGrid = 16;
+        s.subsurfaceOnly = true;  // the method's term alone
+        // A few samples suffice to see light inside the object; combined's SSLPV part at 16³.
+        s.params = methods::ParamSet::fromAssignments({"spp-frame=4"});
+        if (method == "combined")
+            s.params.set("grid", 16);
         render(preview, s);
         const ImageRgb sss = preview.linearImage();
         int lit = 0, coveredCount = 0;
@@ -328,10 +359,11 @@ TEST_F(PreviewFixture, DirectionalDipoleAndCombinedRenderTranslucency) {
                 ++coveredCount;
                 lit += v.r + v.g + v.b > 0.f;
             }
-        std::printf("method %d: %d of %d object pixels lit; %s\n", int(method), lit, coveredCount,
-                    preview.stats().methodDetail.c_str());
+        std::printf("method %s: %d of %d object pixels lit; frames %s\n", method.c_str(), lit,
+                    coveredCount, preview.stats().methodStat("frames").c_str());
         // The back-lit default object glows through: most of its pixels get some radiance.
-        EXPECT_GT(lit, coveredCount / 2) << "method " << int(method);
-        EXPECT_FALSE(preview.stats().methodDetail.empty());
+        EXPECT_GT(lit, coveredCount / 2) << "method " << method;
+        EXPECT_EQ(preview.stats().method, method);
+        EXPECT_FALSE(preview.stats().methodStats.empty());
     }
 }

@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief Wall-clock stopwatch for CPU pass timings (milliseconds).
+/// @brief Wall-clock stopwatch for CPU pass timings (milliseconds), and the median of repeated
+/// timings.
 
+#include <algorithm>
 #include <chrono>
+#include <vector>
 
 namespace lucent {
 
@@ -20,5 +23,15 @@ public:
 private:
     std::chrono::steady_clock::time_point m_start;
 };
+
+/// Median of repeated timings (robust to the odd slow run on a shared machine): the middle
+/// value, or the mean of the two middle values for an even count; 0 for none.
+inline double medianMs(std::vector<double> samples) {
+    if (samples.empty())
+        return 0.0;
+    std::sort(samples.begin(), samples.end());
+    const size_t n = samples.size();
+    return n % 2 ? samples[n / 2] : 0.5 * (samples[n / 2 - 1] + samples[n / 2]);
+}
 
 }  // namespace lucent

@@ -123,6 +123,8 @@ private:
         s.sslpv.render.solver.maxSteps = p.getInt("steps");
         s.sslpv.render.solver.order = p.getInt("sh");
         if (backend() == Backend::Gl) {
+            s.sslpv.backend =
+                p.getChoice("propagation") == "gl" ? SslpvBackend::Gl : SslpvBackend::Cpu;
             s.dipole.samplesPerFrame = p.getInt("spp-frame");
             if (!isLive())
                 m_spp = p.getInt("spp");
@@ -150,7 +152,12 @@ private:
                              s.dipole.maxFrames != o.dipole.maxFrames ||
                              s.sslpv.render.gridResolution != o.sslpv.render.gridResolution ||
                              s.sslpv.render.solver.maxSteps != o.sslpv.render.solver.maxSteps ||
-                             s.sslpv.render.solver.order != o.sslpv.render.solver.order;
+                             s.sslpv.render.solver.order != o.sslpv.render.solver.order ||
+                             s.sslpv.backend != o.sslpv.backend;
+        // A new SSLPV grid drops the SSLPV part's material (SslpvProvider::setOptions): the
+        // next setScene hands it the volume again.
+        if (m_settingsSet && s.sslpv.render.gridResolution != o.sslpv.render.gridResolution)
+            m_materialSet = false;
         if (changed)
             m_provider->setSettings(s);
         m_settingsSet = true;
@@ -196,6 +203,14 @@ MethodEntry combinedMethod() {
         {"grid", ParamType::Int, "SSLPV cells per axis (calibrated mode)", 4, 256, {}, "32"},
         {"steps", ParamType::Int, "SSLPV propagation steps", 0, 4096, {}, "32"},
         {"sh", ParamType::Int, "SSLPV spherical-harmonics order", 1, 2, {}, "1"},
+        {"propagation",
+         ParamType::Choice,
+         "GL backend: where the SSLPV part's propagation steps run (cpu: SslpvSolver; gl: "
+         "compute shaders)",
+         0,
+         0,
+         {"cpu", "gl"},
+         "cpu"},
         {"seed", ParamType::Int, "the dipole part's sample sequence", 0, 1 << 30, {}, "1"},
         {"spp",
          ParamType::Int,

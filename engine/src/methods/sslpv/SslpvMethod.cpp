@@ -133,6 +133,10 @@ private:
         if (backend() == Backend::Gl)
             o.backend = p.getChoice("propagation") == "gl" ? SslpvBackend::Gl : SslpvBackend::Cpu;
         const bool recreate = m_provider && o.backend != m_options.backend;
+        // A new grid drops the provider's material (SslpvProvider::setOptions): the next
+        // setScene hands it the volume again (a live instance's grid changes at run time).
+        if (o.render.gridResolution != m_options.render.gridResolution)
+            m_materialSet = false;
         m_options = o;
         if (recreate) {  // a new provider, fully re-synchronised at the next setScene
             const gpu::ShaderLibrary* library = m_library;
