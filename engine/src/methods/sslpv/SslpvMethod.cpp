@@ -176,21 +176,29 @@ MethodEntry sslpvMethod() {
     i.caps.preferred = Backend::Cpu;  // offline: the CPU ray-cast image with its own direct term
     i.params = {
         {"grid", ParamType::Int, "LPV cells per axis", 4, 256, {}, "32"},
+        // Live: a fixed 32 steps (the pre-convergence default), because the stop rule is
+        // global: paint that absorbs in one place ends the propagation sooner everywhere, and
+        // the far side of the object dimmed with each stroke (test
+        // AppPaint.StrokeChangesSslpvPixelsNearTheStroke). Offline: to convergence.
         {"steps",
          ParamType::Int,
          "maximum propagation steps; fewer once converged (see stop; live preview: at most 512)",
          0,
          4096,
          {},
-         "1024"},
+         "1024",
+         "",
+         "32"},
         {"stop",
          ParamType::Float,
          "stop propagating once the flux still in flight is below this fraction of the injected "
-         "flux (0: always run all steps)",
+         "flux (0: always run all steps; live preview default 0)",
          0,
          1,
          {},
-         "0.01"},
+         "0.01",
+         "",
+         "0"},
         {"sh",
          ParamType::Int,
          "spherical-harmonics order: 1 (4 coefficients) or 2 (9)",
