@@ -525,12 +525,12 @@ std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
     auto label = [](const std::string& method, const std::string& setting) {
         return method + " " + setting;
     };
+    const std::vector<Candidate> all = toCandidates(models);
     std::vector<FrontCheck> out;
     for (const std::string& name : cases) {
         // The case's measured candidates that have a model, in the models' order.
         std::vector<const MeasuredRow*> measured;
         std::vector<Candidate> candidates;
-        std::vector<Candidate> all = toCandidates(models);
         for (size_t i = 0; i < models.candidates.size(); ++i) {
             const CandidateModel& m = models.candidates[i];
             const auto row = std::find_if(rows.begin(), rows.end(), [&](const MeasuredRow& r) {
