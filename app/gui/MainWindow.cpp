@@ -147,6 +147,7 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
     // Auto: why the planner chose the method it runs (until another message replaces it).
     connect(m_viewport, &Viewport::autoPlanChanged, this, [this](const QString& reason) {
         statusBar()->showMessage(tr("Auto: %1").arg(reason));
+        m_render->setAutoPlan(reason);
     });
     connect(m_viewport, &Viewport::paintError, this, [this](const QString& m) {
         statusBar()->showMessage(tr("Cannot paint: %1").arg(m), 10000);

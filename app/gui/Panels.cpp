@@ -857,11 +857,11 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
                           tr("The planner chooses the method and its setting for the scene; the "
                              "status bar says why (docs/planner.md)."),
                           Qt::ToolTipRole);
-    {
-        auto* page = new QLabel(tr("The planner chooses; the status bar says why."));
-        page->setWordWrap(true);
-        m_paramPages->addWidget(page);
-    }
+    m_autoPlan = new QLabel(tr("The planner chooses the method for the scene."));
+    m_autoPlan->setObjectName(QStringLiteral("renderAutoPlan"));
+    m_autoPlan->setWordWrap(true);
+    m_autoPlan->setTextInteractionFlags(Qt::TextSelectableByMouse);
+    m_paramPages->addWidget(m_autoPlan);
     for (const methods::MethodInfo* info : PreviewRenderer::previewMethods()) {
         m_method->addItem(QString::fromStdString(info->title), QString::fromStdString(info->name));
         m_method->setItemData(m_method->count() - 1,
@@ -869,8 +869,17 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
                               Qt::ToolTipRole);
         m_paramPages->addWidget(makeParamPage(*info));
     }
+    // The stack takes the height of the shown page only (a QStackedWidget's own hint is its
+    // largest page's: the SSLPV fields left a tall gap under Auto's one line).
+    connect(m_paramPages, &QStackedWidget::currentChanged, this, [this](int shown) {
+        for (int i = 0; i < m_paramPages->count(); ++i)
+            m_paramPages->widget(i)->setSizePolicy(
+                QSizePolicy::Preferred, i == shown ? QSizePolicy::Preferred : QSizePolicy::Ignored);
+        m_paramPages->adjustSize();
+    });
     m_method->setCurrentIndex(std::max(0, m_method->findData(QString::fromStdString(d.method))));
     m_paramPages->setCurrentIndex(m_method->currentIndex());
+    Q_EMIT m_paramPages->currentChanged(m_paramPages->currentIndex());
     m_method->setToolTip(
         tr("Subsurface method added to the direct lighting of gpu::SceneRenderer."));
     m_subsurfaceOnly = new QCheckBox(tr("Subsurface term only (debug)"));
@@ -1059,6 +1068,11 @@ QString RenderPanel::methodTitle(const QString& name) {
 
 QString RenderPanel::paramFieldName(const QString& method, const QString& param) {
     return QStringLiteral("param.%1.%2").arg(method, param);
+}
+
+void RenderPanel::setAutoPlan(const QString& reason) {
+    m_autoPlan->setText(reason.isEmpty() ? tr("The planner chooses the method for the scene.")
+                                         : tr("Running: %1").arg(reason));
 }
 
 QString RenderPanel::method() const {

@@ -178,6 +178,8 @@ public:
     /// objectName of the field of parameter `param` of method `method` ("param.sslpv.grid"):
     /// the key of its saved preference, and how tests find it.
     [[nodiscard]] static QString paramFieldName(const QString& method, const QString& param);
+    /// Auto's page shows the planner's reason for its choice (PreviewStats::autoReason).
+    void setAutoPlan(const QString& reason);
     /// Camera bookmarks as text, one per entry: "name;target x;y;z (mm);distance (mm);yaw°;
     /// pitch°" (how MainWindow keeps them per project in QSettings).
     [[nodiscard]] QStringList bookmarks() const;
@@ -203,6 +205,7 @@ private:
     Viewport* m_viewport;
     QComboBox* m_method;
     QStackedWidget* m_paramPages;  ///< page i: the fields of the selector's entry i
+    QLabel* m_autoPlan;            ///< Auto's page: the plan's reason
     std::map<std::string, std::vector<ParamField>> m_paramFields;  ///< by method name
     QDoubleSpinBox* m_exposure;
     QCheckBox* m_turntable;

@@ -11,6 +11,7 @@
 #include <lucent/gpu/Shader.h>
 #include <lucent/methods/Registry.h>
 #include <lucent/planner/AutoMethod.h>
+#include <lucent/planner/LiveCosts.h>
 
 #include <epoxy/gl.h>
 
@@ -18,8 +19,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <chrono>
-#include <future>
 
 namespace lucent::app {
 
@@ -178,29 +177,11 @@ private:
 /// the GL pass the preview runs: a candidate whose method and variant resolve to the CPU
 /// renderer with GL available (SSLPV prefers its CPU ray caster offline) predicts another
 /// renderer's cost and error, so the preview does not plan with it.
+/// The live preview's candidates: the shipped live costs (stroke → frame, measured by the app's
+/// latency harness) with the shipped error models (planner/LiveCosts.h).
 const planner::Models& liveModels() {
-    static const planner::Models models = [] {
-        planner::Models m = planner::defaultModels();
-        std::erase_if(m.candidates, [](const planner::CandidateModel& c) {
-            const std::string name = c.method.substr(0, c.method.find(':'));
-            const std::string variant =
-                c.method.find(':') == std::string::npos ? "" : c.method.substr(name.size() + 1);
-            if (!methods::exists(name) || !methods::find(name).caps.gl)
-                return true;
-            const methods::MethodInfo& info = methods::find(name);
-            methods::Backend requested = methods::Backend::Auto;
-            for (const methods::ParamPreset& v : info.variants)
-                if (v.name == variant)
-                    requested = v.backend;
-            try {
-                return methods::resolveBackend(info, requested, /*glAvailable=*/true) !=
-                       methods::Backend::Gl;
-            } catch (const Error&) {
-                return true;
-            }
-        });
-        return m;
-    }();
+    static const planner::Models models =
+        planner::liveModels(planner::defaultModels(), planner::defaultLiveCosts());
     return models;
 }
 
@@ -242,11 +223,13 @@ struct PreviewRenderer::Impl {
     struct AutoState {
         bool valid = false;
         planner::AutoChoice choice;
-        double directMs = 0.0;  ///< the Direct frame at directWidth × directHeight
-        /// The Direct frame being measured (worker thread), and for which size.
-        std::future<double> measuring;
-        int measuringWidth = 0, measuringHeight = 0;
+        double directMs = 0.0;  ///< the Direct frame's render at directWidth × directHeight
         int directWidth = 0, directHeight = 0;
+        /// Render times of the Direct frames shown while measuring (the first after a change
+        /// builds shadow maps and G-buffer and is not counted), and for which size.
+        std::vector<double> directSamples;
+        int samplesWidth = 0, samplesHeight = 0;
+        bool measuring = false;     ///< this frame renders Direct to time it
         bool stale = true;          ///< the scene changed since the last plan
         Camera camera;              ///< the frame planned for
         std::vector<float> lights;  ///< lightsKey of the frame planned for
@@ -262,8 +245,9 @@ struct PreviewRenderer::Impl {
     /// Frees the active method's GL objects and forgets it (the next frame makes it afresh).
     void dropMethod();
     /// Auto: the planner's choice for frame `f` (re-planned when the scene changed, at most
-    /// every AUTO_REPLAN_MS), or nullptr while the Direct frame it needs is being measured.
-    /// @throw ValueError when no candidate can render the scene; the measurement's error.
+    /// every AUTO_REPLAN_MS), or nullptr while the Direct frame it needs is being measured
+    /// (the frame then renders Direct and renderFrame times it).
+    /// @throw ValueError when no candidate can render the scene.
     const planner::AutoChoice* planAuto(const PreviewFrame& f, const std::vector<float>& lightKey);
 };
 
@@ -311,7 +295,7 @@ bool PreviewRenderer::wantsAnotherFrame() const {
 }
 
 bool PreviewRenderer::isPlanning() const {
-    return m->autoPlan.measuring.valid();
+    return m->autoPlan.measuring;
 }
 
 bool PreviewRenderer::isPreviewMethod(const std::string& name) {
@@ -386,8 +370,15 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
     // frame, and the hysteresis keeps the choice anyway unless the scene class changes.
     constexpr double AUTO_REPLAN_MS = 500.0;
     AutoState& a = autoPlan;
+    // Direct frames of this size timed before a plan: its render time is the unit of the live
+    // costs (planner/LiveCosts.h), measured here on the viewport's own context and passes, as
+    // the app's latency harness measures it. Three frames: the median of a few is steady on a
+    // busy machine; the first is not counted (it builds shadow maps and the G-buffer).
+    constexpr size_t DIRECT_SAMPLES = 3;
+    a.measuring = false;
     if (f.sceneReplaced) {  // another mesh: another Direct frame, and no choice to keep
         a.directMs = 0.0;
+        a.directSamples.clear();
         a.valid = false;
     }
     if (f.sceneReplaced || !f.dirtyBricks.empty() || lightKey != a.lights ||
@@ -398,34 +389,32 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
     if (sized && a.valid && (!a.stale || a.sincePlan.elapsedMs() < AUTO_REPLAN_MS) &&
         !f.sceneReplaced)
         return &a.choice;
-    Scene scene = *f.scene;  // the viewport's camera: the features and the Direct frame see it
-    scene.camera = f.camera;
     if (!sized) {
-        // The models' unit: one Direct render of this frame through renderImage (context
-        // creation and programs included, seconds on a busy software GL). On its own headless
-        // context in a worker thread: the caller's context stays current and the viewport keeps
-        // drawing meanwhile (the Direct method reads no material, so painting cannot race it).
-        if (!a.measuring.valid() || a.measuringWidth != f.camera.width ||
-            a.measuringHeight != f.camera.height) {
-            Scene direct = scene;
-            a.measuring = std::async(std::launch::async,
-                                     [direct] { return planner::measureDirectMs(direct, {}); });
-            a.measuringWidth = f.camera.width;
-            a.measuringHeight = f.camera.height;
+        if (a.samplesWidth != f.camera.width || a.samplesHeight != f.camera.height) {
+            a.directSamples.clear();
+            a.samplesWidth = f.camera.width;
+            a.samplesHeight = f.camera.height;
         }
-        if (a.measuring.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
-            return a.valid ? &a.choice : nullptr;  // the last choice meanwhile, if any
-        a.directMs = a.measuring.get();            // rethrows the measurement's error
-        a.directWidth = a.measuringWidth;
-        a.directHeight = a.measuringHeight;
+        if (a.directSamples.size() < DIRECT_SAMPLES + 1) {
+            a.measuring = true;  // renderFrame renders Direct and appends its time
+            return nullptr;
+        }
+        std::vector<double> timed(a.directSamples.begin() + 1, a.directSamples.end());
+        std::sort(timed.begin(), timed.end());
+        a.directMs = timed[timed.size() / 2];
+        a.directWidth = a.samplesWidth;
+        a.directHeight = a.samplesHeight;
+        a.directSamples.clear();
     }
+    Scene scene = *f.scene;  // the viewport's camera: the features see it
+    scene.camera = f.camera;
     planner::Budget budget;  // the planner's live frame budget (50 ms) and hysteresis
     budget.directMs = a.directMs;
     // The previous plan of the same scene, for hysteresis (a new scene plans from scratch).
     const planner::Plan previous = a.choice.plan;
     const bool hasPrevious = a.valid && !f.sceneReplaced;
     a.choice = planner::chooseMethod(scene, liveModels(), budget, /*glAvailable=*/true,
-                                     hasPrevious ? &previous : nullptr);
+                                     hasPrevious ? &previous : nullptr, methods::Backend::Gl);
     a.valid = true;
     a.stale = false;
     a.camera = f.camera;
@@ -436,6 +425,7 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
 }
 
 void PreviewRenderer::Impl::renderFrame(PreviewFrame& f) {
+    Timer frameTimer;  // Auto's Direct frame measurement
     Impl& r = *this;
     const RenderSettings& s = f.settings;
     gpu::SceneRenderer& sr = r.renderer;
@@ -497,12 +487,13 @@ void PreviewRenderer::Impl::renderFrame(PreviewFrame& f) {
             r.stats.autoChoice = choice->method +
                                  (choice->variant.empty() ? "" : ":" + choice->variant) + " " +
                                  choice->setting;
-        } else {  // the first plan waits for the Direct frame's measurement: Direct meanwhile
+        } else {  // the plan waits for the Direct frame's measurement: Direct meanwhile
             name = "direct";
             params = {};
         }
     } else {
         r.autoPlan.valid = false;  // Auto chosen again later: plan afresh
+        r.autoPlan.measuring = false;
     }
     const bool changedMethod = !r.method || r.method->info().name != name;
     methods::Method& method = r.useMethod(name, params);
@@ -542,6 +533,10 @@ void PreviewRenderer::Impl::renderFrame(PreviewFrame& f) {
     sr.setSubsurfaceProvider(method.subsurfacePass());
     sr.renderToFramebuffer(f.framebuffer, f.framebufferWidth, f.framebufferHeight);
     sr.setSubsurfaceProvider(nullptr);
+    if (r.autoPlan.measuring && name == "direct") {
+        glFinish();  // the frame's whole (software) rasterisation, as the harness times it
+        r.autoPlan.directSamples.push_back(frameTimer.elapsedMs());
+    }
     const gpu::PassReuseCounters& reuse = sr.reuseCounters();
     r.stats.shadowsReused = reuse.shadowsReused;
     r.stats.gbufferReused = reuse.gbufferReused;

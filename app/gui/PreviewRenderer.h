@@ -14,14 +14,13 @@
 /// while lights, camera and mesh are unchanged, so a stroke frame runs only the subsurface pass,
 /// a one-fetch shading pass and the tone map (RenderSettings::reusePasses).
 ///
-/// Auto (AUTO_METHOD): the planner chooses the method from the scene's features and predicted
-/// cost and error, over the candidates whose models were measured on the GL pass; the Direct
-/// frame its cost ratios scale with is measured once per render size (planner::measureDirectMs,
-/// on a headless context in a worker thread, so the caller's context stays current and frames
-/// keep coming: the last choice, or Direct before the first, until it is done). It
-/// re-plans when the scene changes (a new scene, paint, lights, η, camera), at most twice a
-/// second, with the planner's hysteresis: painting does not make the preview switch methods
-/// back and forth.
+/// Auto (AUTO_METHOD): the planner chooses the method from the scene's features, the shipped
+/// error models and the live preview's measured stroke → frame costs (planner/LiveCosts.h).
+/// The unit of those costs, the render of a Direct frame, is timed here on the viewport's own
+/// passes: once per scene and render size, the preview shows Direct for four frames and
+/// plans with the median of the last three. It re-plans when the scene changes (a new scene,
+/// paint, lights, η, camera), at most twice a second, with the planner's hysteresis: painting
+/// does not make the preview switch methods back and forth.
 ///
 /// Material edits: the caller passes the volume's dirty bricks (MaterialVolume::takeDirtyBricks)
 /// once per frame; the active method consumes them incrementally (Method::materialChanged).
@@ -135,8 +134,8 @@ public:
     /// True while a progressive method still refines, or while Auto waits for its Direct frame
     /// measurement (another frame is useful when idle).
     [[nodiscard]] bool wantsAnotherFrame() const;
-    /// True while Auto measures the Direct frame it plans with (frames then show the last
-    /// choice, or Direct before the first; poll, do not spin).
+    /// True while Auto times the Direct frames it plans with (the frames then show Direct; the
+    /// next frames finish the measurement).
     [[nodiscard]] bool isPlanning() const;
     [[nodiscard]] const PreviewStats& stats() const;
     /// The last frame's linear radiance at render resolution (camera width × height),

@@ -1062,11 +1062,10 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
     countGlErrors();
     m_stats.frameMs = timer.elapsedMs();
     ++m_stats.frames;
-    // Progressive methods (dipoles) refine while the user is idle.
-    // While Auto measures its Direct frame (a worker thread), poll: spinning frames would take
-    // the cores the measurement needs.
+    // Progressive methods (dipoles) refine while the user is idle, and Auto times a few Direct
+    // frames before its first plan.
     if (m_preview.wantsAnotherFrame())
-        QTimer::singleShot(m_preview.isPlanning() ? 100 : 0, this, [this] { update(); });
+        QTimer::singleShot(0, this, [this] { update(); });
     Q_EMIT frameRendered();
 }
 

@@ -3,25 +3,30 @@
 /// @brief Entry point of the `lucent` app.
 ///
 ///     lucent [PROJECT|MESH|VDB] [--screenshot PATH] [--frames N] [--benchmark]
-///            [--benchmark-json PATH] [--viewport WxH] [--window WxH]
+///            [--benchmark-json PATH] [--live-costs PATH] [--viewport WxH] [--window WxH]
 ///            [--method auto|NAME]   (NAME: a registry name with a GL pass, `lucent-cli methods`)
 ///            [--paint-demo] [--reference SPP] [--raise DOCKS] [--no-settings]
 ///            [--swap-interval N]
 /// --screenshot grabs the whole window after N rendered frames (default 3) and exits;
 /// --benchmark measures start-up to first frame, idle frame time and stroke-to-frame latency
-/// (what Qt adds around paintGL is measured by tests/bench/bench_app_compose.cpp).
+/// (what Qt adds around paintGL is measured by tests/bench/bench_app_compose.cpp); with
+/// --live-costs it measures the live costs Auto plans with instead (planner/LiveCosts.h).
 
 #include "Document.h"
 #include "MainWindow.h"
 #include "Viewport.h"
 #include "ReferencePanel.h"
 
+#include <lucent/core/FileIO.h>
 #include <lucent/core/Timer.h>
 #include <lucent/methods/Method.h>
+#include <lucent/planner/AutoMethod.h>
+#include <lucent/planner/LiveCosts.h>
 
 #include <QApplication>
 #include <QEventLoop>
 #include <QCommandLineParser>
+#include <QDateTime>
 #include <QDockWidget>
 #include <QFile>
 #include <QSurfaceFormat>
@@ -205,6 +210,70 @@ void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath,
     }
 }
 
+/// Measures the live costs Auto plans with (planner/LiveCosts.h): for every candidate of the
+/// shipped table, at the app's default render settings, the stroke → frame median over the
+/// render time of a Direct stroke frame (its paintGL, median). Each candidate's ratio is taken
+/// against a Direct timing made just before it, and the median of three rounds is kept: on a
+/// shared machine the load drifts within a run, and a pair measured together sees the same
+/// load. Prints them and writes them to `path` in the table's format.
+/// @throw lucent::Error when the file cannot be written.
+void measureLiveCosts(MainWindow& w, const QString& path) {
+    constexpr int ROUNDS = 3;
+    lucent::app::Viewport* vp = w.viewport();
+    const lucent::app::RenderSettings defaults;  // half resolution, passes reused
+    const auto timed = [&](const std::string& method, const lucent::methods::ParamSet& params) {
+        lucent::app::RenderSettings rs = defaults;
+        rs.method = method;
+        rs.params = params;
+        vp->setRenderSettings(rs);
+        return timeMethod(vp);
+    };
+    const auto median = [](std::vector<double> v) {
+        std::sort(v.begin(), v.end());
+        return v[v.size() / 2];
+    };
+    const std::vector<lucent::planner::LiveCost>& entries =
+        lucent::planner::defaultLiveCosts().entries;
+    std::vector<std::vector<double>> ratios(entries.size()), strokeMs(entries.size());
+    std::vector<double> unitMs;
+    for (int round = 0; round < ROUNDS; ++round)
+        for (size_t i = 0; i < entries.size(); ++i) {
+            const double unit = timed("direct", {}).strokePaintGlMs;
+            const lucent::planner::CandidateRun run =
+                lucent::planner::resolveCandidate(entries[i].method, entries[i].setting);
+            const MethodTiming t = timed(run.method, run.params);
+            unitMs.push_back(unit);
+            ratios[i].push_back(t.strokeMs / unit);
+            strokeMs[i].push_back(t.strokeMs);
+        }
+    std::printf("viewport %dx%d, renderer %s; Direct frame render %.1f ms (median of %zu)\n",
+                vp->width(), vp->height(), qPrintable(vp->stats().glRenderer), median(unitMs),
+                unitMs.size());
+    std::printf("%-28s %-10s %14s %13s %20s\n", "candidate", "setting", "stroke->frame",
+                "stroke_ratio", "ratios (rounds)");
+    lucent::planner::LiveCosts measured;
+    for (size_t i = 0; i < entries.size(); ++i) {
+        lucent::planner::LiveCost m = entries[i];
+        m.strokeRatio = median(ratios[i]);
+        measured.entries.push_back(m);
+        std::printf("%-28s %-10s %11.1f ms %13.2f      ", m.method.c_str(), m.setting.c_str(),
+                    median(strokeMs[i]), m.strokeRatio);
+        for (double r : ratios[i])
+            std::printf(" %.2f", r);
+        std::printf("\n");
+    }
+    measured.source = "lucent --benchmark --live-costs (app default render settings, viewport " +
+                      std::to_string(vp->width()) + "x" + std::to_string(vp->height()) + ", " +
+                      vp->stats().glRenderer.toStdString() + ", median of " +
+                      std::to_string(ROUNDS) + " rounds, " +
+                      QDateTime::currentDateTimeUtc()
+                          .toString(QStringLiteral("yyyy-MM-dd hh:mm 'UTC'"))
+                          .toStdString() +
+                      ")";
+    lucent::writeFileAtomically(path.toStdString(), lucent::planner::formatLiveCosts(measured));
+    std::printf("written %s\n", qPrintable(path));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -238,6 +307,11 @@ int main(int argc, char** argv) {
     QCommandLineOption benchJson(QStringLiteral("benchmark-json"),
                                  QStringLiteral("Also write the results to PATH."),
                                  QStringLiteral("PATH"));
+    QCommandLineOption liveCosts(
+        QStringLiteral("live-costs"),
+        QStringLiteral("With --benchmark: measure the live costs Auto plans with instead, and "
+                       "write them to PATH (resources/planner/live_costs.json)."),
+        QStringLiteral("PATH"));
     QCommandLineOption viewportSize(QStringLiteral("viewport"),
                                     QStringLiteral("Viewport size WxH (e.g. 640x360)."),
                                     QStringLiteral("WxH"));
@@ -266,8 +340,8 @@ int main(int argc, char** argv) {
         QStringLiteral("method"),
         QStringLiteral("Preview method: %1 (default auto).").arg(previewMethodNames()),
         QStringLiteral("M"));
-    parser.addOptions({shot, frames, bench, benchJson, viewportSize, windowSize, noSettings,
-                       paintDemo, raiseDock, method, reference, swapInterval});
+    parser.addOptions({shot, frames, bench, benchJson, liveCosts, viewportSize, windowSize,
+                       noSettings, paintDemo, raiseDock, method, reference, swapInterval});
     parser.process(app);
     if (parser.isSet(swapInterval)) {
         // Before any window exists, so that every context gets it.
@@ -336,8 +410,18 @@ int main(int argc, char** argv) {
             done = true;
             const double startupMs = startup.elapsedMs();
             QTimer::singleShot(0, &window, [&, startupMs] {
-                runBenchmark(window, startupMs, parser.value(benchJson),
-                             parser.isSet(method) ? parser.value(method) : QString());
+                if (parser.isSet(liveCosts)) {
+                    try {
+                        measureLiveCosts(window, parser.value(liveCosts));
+                    } catch (const std::exception& e) {
+                        std::fprintf(stderr, "lucent: %s\n", e.what());
+                        QApplication::exit(2);
+                        return;
+                    }
+                } else {
+                    runBenchmark(window, startupMs, parser.value(benchJson),
+                                 parser.isSet(method) ? parser.value(method) : QString());
+                }
                 QApplication::exit(window.viewport()->stats().glErrors == 0 ? 0 : 3);
             });
         } else if (!demoPainted) {

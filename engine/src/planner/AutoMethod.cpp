@@ -25,42 +25,50 @@ const char* lightTypeName(Light::Type t) {
 }
 
 /// A candidate resolved against the registry, or why it cannot serve the scene.
-struct Resolved {
-    std::string method, variant;
-    methods::ParamSet params;
-    methods::Backend backend = methods::Backend::Auto;
+struct Resolved : CandidateRun {
     std::string unusable;
 };
 
-Resolved resolve(const CandidateModel& model, const Scene& scene, bool glAvailable) {
-    Resolved r;
-    const size_t colon = model.method.find(':');
-    r.method = model.method.substr(0, colon);
-    r.variant = colon == std::string::npos ? "" : model.method.substr(colon + 1);
-    if (!methods::exists(r.method)) {
-        r.unusable = "not in this build's method registry";
-        return r;
-    }
+/// The registry's method, variant and quality level of a candidate ("" or why not).
+std::string resolveInRegistry(const std::string& method, const std::string& setting,
+                              CandidateRun& r) {
+    const size_t colon = method.find(':');
+    r.method = method.substr(0, colon);
+    r.variant = colon == std::string::npos ? "" : method.substr(colon + 1);
+    if (!methods::exists(r.method))
+        return "not in this build's method registry";
     const methods::MethodInfo& info = methods::find(r.method);
     if (!r.variant.empty()) {
         const auto v =
             std::find_if(info.variants.begin(), info.variants.end(),
                          [&](const methods::ParamPreset& p) { return p.name == r.variant; });
-        if (v == info.variants.end()) {
-            r.unusable = "the registry has no variant '" + r.variant + "'";
-            return r;
-        }
+        if (v == info.variants.end())
+            return "the registry has no variant '" + r.variant + "'";
         r.params = v->values;
         r.backend = v->backend;
     }
-    const auto q =
-        std::find_if(info.quality.begin(), info.quality.end(),
-                     [&](const methods::ParamPreset& p) { return p.name == model.setting; });
-    if (q == info.quality.end()) {
-        r.unusable = "the registry has no quality level '" + model.setting + "'";
-        return r;
-    }
+    const auto q = std::find_if(info.quality.begin(), info.quality.end(),
+                                [&](const methods::ParamPreset& p) { return p.name == setting; });
+    if (q == info.quality.end())
+        return "the registry has no quality level '" + setting + "'";
     r.params.merge(q->values);
+    return {};
+}
+
+Resolved resolve(const CandidateModel& model, const Scene& scene, bool glAvailable,
+                 methods::Backend required) {
+    Resolved r;
+    r.unusable = resolveInRegistry(model.method, model.setting, r);
+    if (!r.unusable.empty())
+        return r;
+    if (required != methods::Backend::Auto) {
+        if (r.backend != methods::Backend::Auto && r.backend != required) {
+            r.unusable = "the variant runs on another backend than the one required";
+            return r;
+        }
+        r.backend = required;
+    }
+    const methods::MethodInfo& info = methods::find(r.method);
     methods::Backend used;
     try {
         used = methods::resolveBackend(info, r.backend, glAvailable, "no OpenGL 4.5 context");
@@ -81,14 +89,14 @@ Resolved resolve(const CandidateModel& model, const Scene& scene, bool glAvailab
 }  // namespace
 
 AutoChoice chooseMethod(const Scene& scene, const Models& models, const Budget& budget,
-                        bool glAvailable, const Plan* previous) {
+                        bool glAvailable, const Plan* previous, methods::Backend backend) {
     AutoChoice choice;
     choice.features = analyzeScene(scene);
     choice.directMs = budget.directMs;
     std::vector<Candidate> candidates = toCandidates(models);
     std::vector<Resolved> resolved;
     for (size_t i = 0; i < candidates.size(); ++i) {
-        resolved.push_back(resolve(models.candidates[i], scene, glAvailable));
+        resolved.push_back(resolve(models.candidates[i], scene, glAvailable, backend));
         const std::string why = resolved.back().unusable;
         candidates[i].unusable = [why](const SceneFeatures&) { return why; };
     }
@@ -123,6 +131,14 @@ AutoChoice chooseOffline(const Scene& scene, const Models& models, Budget budget
         }
     }
     return chooseMethod(scene, models, budget, glAvailable);
+}
+
+CandidateRun resolveCandidate(const std::string& method, const std::string& setting) {
+    CandidateRun r;
+    const std::string why = resolveInRegistry(method, setting, r);
+    if (!why.empty())
+        LUCENT_THROW(ValueError, "candidate '", method, " ", setting, "': ", why);
+    return r;
 }
 
 double measureDirectMs(const Scene& scene, const methods::RenderOptions& options) {

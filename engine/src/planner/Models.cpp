@@ -4,6 +4,7 @@
 #include <lucent/planner/Models.h>
 
 #include "ModelData.h"
+#include "PlannerJson.h"
 
 #include <nlohmann/json.hpp>
 
@@ -427,20 +428,10 @@ std::vector<double> coefficients(const nlohmann::json& j, const char* key,
 }  // namespace
 
 Models parseModels(const std::string& text, const std::string& origin) {
-    nlohmann::json j;
+    const nlohmann::json j =
+        detail::parseVersionedJson(text, origin, FORMAT, "planner models", Models::VERSION,
+                                   " (refit them: docs/planner.md, \"Models\")");
     try {
-        j = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::exception& e) {
-        LUCENT_THROW(ValueError, origin, ": not valid JSON (", e.what(), ")");
-    }
-    try {
-        if (!j.is_object() || j.value("format", "") != FORMAT)
-            LUCENT_THROW(ValueError, origin, ": not a planner models file (\"format\": \"", FORMAT,
-                         "\" expected)");
-        if (j.value("version", 0) != Models::VERSION)
-            LUCENT_THROW(ValueError, origin, ": models version ", j.value("version", 0),
-                         ", this build reads version ", Models::VERSION,
-                         " (refit them: docs/planner.md, \"Models\")");
         if (j.value("cost_terms", std::vector<std::string>{}) != costTermNames() ||
             j.value("error_terms", std::vector<std::string>{}) != errorTermNames())
             LUCENT_THROW(

@@ -29,6 +29,7 @@
 #include <QCheckBox>
 #include <QComboBox>
 #include <QDoubleSpinBox>
+#include <QLabel>
 #include <QMessageBox>
 #include <QPointingDevice>
 #include <QPushButton>
@@ -1218,7 +1219,7 @@ TEST(AppRender, AutoRunsAMethodAndTheStatusBarSaysWhy) {
     auto w = shownWindow(1);
     Viewport* vp = w->viewport();
     ASSERT_EQ(vp->renderSettings().method, AUTO_METHOD);
-    // Direct until the planner's Direct frame is measured (a worker thread), then its choice.
+    // Direct while the planner times a Direct frame of this size (four frames), then its choice.
     EXPECT_TRUE(QTest::qWaitFor(
         [&] {
             renderOneFrame(vp);
@@ -1237,6 +1238,13 @@ TEST(AppRender, AutoRunsAMethodAndTheStatusBarSaysWhy) {
         << w->statusBar()->currentMessage().toStdString();
     EXPECT_TRUE(
         w->statusBar()->currentMessage().contains(QString::fromStdString(s.preview.autoReason)));
+    // So does Auto's page of the Render dock, which takes only its own height (the stack of
+    // method pages used to keep the tallest page's).
+    auto* page = w->findChild<QLabel*>(QStringLiteral("renderAutoPlan"));
+    ASSERT_TRUE(page);
+    EXPECT_TRUE(page->text().contains(QString::fromStdString(s.preview.autoReason)));
+    EXPECT_LT(page->parentWidget()->height(), 3 * page->sizeHint().height())
+        << "the method pages' stack is " << page->parentWidget()->height() << " px high";
 }
 
 TEST(AppRender, VolumeOverlayControlsReachTheRenderer) {

@@ -215,7 +215,7 @@ TEST(PlannerModels, ModelsFileRoundTripsAndRefusesOthers) {
     EXPECT_TRUE(fails("{\"format\": \"x\"}", "not a planner models file"));
     std::string v2 = text;
     v2.replace(v2.find("\"version\": 1"), 12, "\"version\": 2");
-    EXPECT_TRUE(fails(v2, "models version 2"));
+    EXPECT_TRUE(fails(v2, "planner models version 2"));
     std::string terms = text;
     terms.replace(terms.find("\"coverage\""), 10, "\"pixels\"");
     EXPECT_TRUE(fails(terms, "terms differ"));

@@ -21,6 +21,17 @@
 
 namespace lucent::planner {
 
+/// A candidate of the models ("sslpv:paper", "grid 32") as the registry runs it.
+struct CandidateRun {
+    std::string method;        ///< registry name, e.g. "sslpv"
+    std::string variant;       ///< evaluation variant ("" for the method as is)
+    methods::ParamSet params;  ///< the variant's values, then the quality level's
+    methods::Backend backend = methods::Backend::Auto;  ///< the variant's
+};
+
+/// @throw ValueError if the registry has no such method, variant or quality level.
+CandidateRun resolveCandidate(const std::string& method, const std::string& setting);
+
 struct AutoChoice {
     std::string method;        ///< registry name, e.g. "dirpole"
     std::string variant;       ///< evaluation variant ("" for the method as is)
@@ -34,10 +45,13 @@ struct AutoChoice {
 
 /// Plans `scene` with `models` (the scene's features are measured here).
 /// @param glAvailable whether GL methods can run (a headless context or the app's viewport).
+/// @param backend Auto: each candidate's variant decides (offline); Gl or Cpu: every candidate
+///        runs there (the live preview: Gl), and one whose variant needs the other is left out.
 /// @throw ValueError if the scene cannot be analysed (no object with a material) or no
 ///        candidate can render it (the message lists why each was left out).
 AutoChoice chooseMethod(const Scene& scene, const Models& models, const Budget& budget,
-                        bool glAvailable, const Plan* previous = nullptr);
+                        bool glAvailable, const Plan* previous = nullptr,
+                        methods::Backend backend = methods::Backend::Auto);
 
 /// chooseMethod for an offline render (the CLI's `plan` and `render --method auto`): when
 /// budget.directMs ≤ 0 it is measured (measureDirectMs). Without GL there is no Direct frame to

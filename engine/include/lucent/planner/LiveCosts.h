@@ -1,0 +1,56 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief What a live preview frame costs: per method at one setting, the stroke → frame time
+/// of the app's viewport as a ratio to the render of a Direct frame of the same viewport,
+/// measured by the app's latency harness (`lucent --benchmark --live-costs PATH`) and shipped
+/// as data (resources/planner/live_costs.json, embedded).
+///
+///     Models live = liveModels(defaultModels(), defaultLiveCosts());
+///     AutoChoice c = chooseMethod(scene, live, {.frameMs = 50, .directMs = directRenderMs},
+///                                 true, nullptr, methods::Backend::Gl);
+///
+/// Why a second cost table: the fitted cost models (Models.h) predict an offline render to
+/// convergence through methods::renderImage (context creation, every sample), while the live
+/// preview keeps its GL objects and its passes between frames and spreads a progressive
+/// method's samples over idle frames. What an artist waits for after a stroke is the first
+/// frame, and that frame's cost differs by an order of magnitude from the offline render's.
+/// The error of a live candidate is the offline error model of the setting it converges to:
+/// the preview refines until then.
+
+#include <lucent/planner/Models.h>
+
+#include <string>
+#include <vector>
+
+namespace lucent::planner {
+
+/// One live candidate.
+struct LiveCost {
+    std::string method;   ///< registry name[:variant], as in Models ("sslpv:paper")
+    std::string setting;  ///< quality level the preview converges to ("128 spp", "grid 32")
+    /// Stroke → frame (median) / the Direct frame's render time (median), measured in one run.
+    double strokeRatio = 0.0;
+};
+
+struct LiveCosts {
+    static constexpr int VERSION = 1;
+    std::string source;  ///< the command, viewport size, machine and date of the measurement
+    std::vector<LiveCost> entries;
+};
+
+/// JSON (docs/planner.md, "Live costs"). @throw ValueError naming `origin` for malformed JSON,
+/// another version, a missing field or a ratio that is not a finite number > 0.
+LiveCosts parseLiveCosts(const std::string& json, const std::string& origin);
+std::string formatLiveCosts(const LiveCosts& costs);
+
+/// The live costs shipped with this build (resources/planner/live_costs.json, embedded).
+const LiveCosts& defaultLiveCosts();
+
+/// The live preview's models: one candidate per entry of `live` that `offline` has an error
+/// model for, with that error model and a constant cost of the entry's strokeRatio. Entries
+/// without an offline model are left out (say which through `missing`, if given).
+Models liveModels(const Models& offline, const LiveCosts& live,
+                  std::vector<std::string>* missing = nullptr);
+
+}  // namespace lucent::planner
