@@ -229,10 +229,11 @@ struct PreviewRenderer::Impl {
         /// builds shadow maps and G-buffer and is not counted), and for which size.
         std::vector<double> directSamples;
         int samplesWidth = 0, samplesHeight = 0;
-        bool measuring = false;     ///< this frame renders Direct to time it
-        bool stale = true;          ///< the scene changed since the last plan
-        Camera camera;              ///< the frame planned for
-        std::vector<float> lights;  ///< lightsKey of the frame planned for
+        double pinnedDirectMs = 0.0;  ///< > 0: plan with this, time nothing
+        bool measuring = false;       ///< this frame renders Direct to time it
+        bool stale = true;            ///< the scene changed since the last plan
+        Camera camera;                ///< the frame planned for
+        std::vector<float> lights;    ///< lightsKey of the frame planned for
         float eta = 0.f;
         Timer sincePlan;
     } autoPlan;
@@ -296,6 +297,13 @@ bool PreviewRenderer::wantsAnotherFrame() const {
 
 bool PreviewRenderer::isPlanning() const {
     return m->autoPlan.measuring;
+}
+
+void PreviewRenderer::pinAutoDirectMs(double ms) {
+    LUCENT_CHECK(ms >= 0 && std::isfinite(ms), "pinAutoDirectMs: ", ms, " ms");
+    m->autoPlan.pinnedDirectMs = ms;
+    m->autoPlan.directMs = 0.0;  // plan again with it
+    m->autoPlan.valid = false;
 }
 
 bool PreviewRenderer::isPreviewMethod(const std::string& name) {
@@ -372,8 +380,9 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
     AutoState& a = autoPlan;
     // Direct frames of this size timed before a plan: its render time is the unit of the live
     // costs (planner/LiveCosts.h), measured here on the viewport's own context and passes, as
-    // the app's latency harness measures it. Three frames: the median of a few is steady on a
-    // busy machine; the first is not counted (it builds shadow maps and the G-buffer).
+    // the app's latency harness measures it. The fastest of three frames (load only ever adds
+    // time, and the app's own start-up work is still running at its first frames); the first
+    // frame is not counted (it builds shadow maps and the G-buffer).
     constexpr size_t DIRECT_SAMPLES = 3;
     a.measuring = false;
     if (f.sceneReplaced) {  // another mesh: another Direct frame, and no choice to keep
@@ -389,7 +398,11 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
     if (sized && a.valid && (!a.stale || a.sincePlan.elapsedMs() < AUTO_REPLAN_MS) &&
         !f.sceneReplaced)
         return &a.choice;
-    if (!sized) {
+    if (!sized && a.pinnedDirectMs > 0) {
+        a.directMs = a.pinnedDirectMs;
+        a.directWidth = f.camera.width;
+        a.directHeight = f.camera.height;
+    } else if (!sized) {
         if (a.samplesWidth != f.camera.width || a.samplesHeight != f.camera.height) {
             a.directSamples.clear();
             a.samplesWidth = f.camera.width;
@@ -399,9 +412,7 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
             a.measuring = true;  // renderFrame renders Direct and appends its time
             return nullptr;
         }
-        std::vector<double> timed(a.directSamples.begin() + 1, a.directSamples.end());
-        std::sort(timed.begin(), timed.end());
-        a.directMs = timed[timed.size() / 2];
+        a.directMs = *std::min_element(a.directSamples.begin() + 1, a.directSamples.end());
         a.directWidth = a.samplesWidth;
         a.directHeight = a.samplesHeight;
         a.directSamples.clear();

@@ -18,7 +18,7 @@
 /// error models and the live preview's measured stroke → frame costs (planner/LiveCosts.h).
 /// The unit of those costs, the render of a Direct frame, is timed here on the viewport's own
 /// passes: once per scene and render size, the preview shows Direct for four frames and
-/// plans with the median of the last three. It re-plans when the scene changes (a new scene,
+/// plans with the fastest of the last three. It re-plans when the scene changes (a new scene,
 /// paint, lights, η, camera), at most twice a second, with the planner's hysteresis: painting
 /// does not make the preview switch methods back and forth.
 ///
@@ -137,6 +137,9 @@ public:
     /// True while Auto times the Direct frames it plans with (the frames then show Direct; the
     /// next frames finish the measurement).
     [[nodiscard]] bool isPlanning() const;
+    /// Auto plans with `ms` as its Direct frame instead of timing one (> 0; 0 times again):
+    /// a choice that does not depend on the machine's load, for tests and benchmarks.
+    void pinAutoDirectMs(double ms);
     [[nodiscard]] const PreviewStats& stats() const;
     /// The last frame's linear radiance at render resolution (camera width × height),
     /// W/(mm²·sr), before tone mapping and overlays, top row first (for EXR export). Reads the

@@ -8,9 +8,14 @@
 #include "ImageView.h"
 #include "Viewport.h"
 
+#include <lucent/bench/ErrorMap.h>
+#include <lucent/bench/ErrorMetrics.h>
+#include <lucent/core/Error.h>
 #include <lucent/reference/PathTracer.h>
 
+#include <QComboBox>
 #include <QFormLayout>
+#include <QPainter>
 #include <QCoreApplication>
 #include <QLabel>
 #include <QPointer>
@@ -43,6 +48,40 @@ QImage toDisplay(const ImageRgb& img, float exposure) {
     return out;
 }
 
+/// The heat-map's range: ±50 % relative block error at full colour (beyond it, saturated).
+constexpr float ERROR_MAP_RANGE = 0.5f;
+
+/// Diverging colour of a signed relative error: blue too dark, white right, red too bright
+/// (an eye reads the sign from the hue and the size from the saturation).
+QRgb errorColour(float e) {
+    if (std::isnan(e))
+        return qRgb(40, 42, 48);  // no object pixel: the viewport's background
+    const float t = std::clamp(e / ERROR_MAP_RANGE, -1.f, 1.f);
+    const float keep = 1.f - std::abs(t);  // the other two channels fade from white
+    const int c = int(255.f * keep + 0.5f);
+    return t >= 0.f ? qRgb(255, c, c) : qRgb(c, c, 255);
+}
+
+QImage errorMapImage(const bench::BlockErrorMap& map) {
+    QImage out(map.width, map.height, QImage::Format_RGB32);
+    for (int y = 0; y < map.height; ++y)
+        for (int x = 0; x < map.width; ++x)
+            out.setPixel(x, y, errorColour(map.at(x, y)));
+    return out;
+}
+
+/// The legend under the heat-map: the colour ramp with its ends named.
+QPixmap legendPixmap(int width) {
+    QPixmap pm(width, 14);
+    QPainter p(&pm);
+    for (int x = 0; x < width; ++x) {
+        const float e = ERROR_MAP_RANGE * (2.f * (x + 0.5f) / float(width) - 1.f);
+        p.setPen(QColor::fromRgb(errorColour(e)));
+        p.drawLine(x, 0, x, 13);
+    }
+    return pm;
+}
+
 }  // namespace
 
 ReferencePanel::ReferencePanel(Document* doc, Viewport* viewport, QWidget* parent)
@@ -71,10 +110,60 @@ ReferencePanel::ReferencePanel(Document* doc, Viewport* viewport, QWidget* paren
     layout->addWidget(m_info);
     // Drawn at the dock's size whenever the dock changes (not scaled once per pass), and
     // never wider than the dock lets it be.
+    m_view = new QComboBox;
+    m_view->setObjectName(QStringLiteral("referenceView"));
+    m_view->addItems({tr("Reference"), tr("Preview at the reference's size"),
+                      tr("Error map (preview vs reference)")});
+    m_view->setToolTip(
+        tr("The error map colours each 4×4-pixel block by the preview's relative "
+           "error against the reference: red too bright, blue too dark."));
+    layout->addWidget(m_view);
+    m_accuracy = new QLabel(tr("Render a reference to see how accurate the preview is."));
+    m_accuracy->setObjectName(QStringLiteral("referenceAccuracy"));
+    m_accuracy->setWordWrap(true);
+    m_accuracy->setTextInteractionFlags(Qt::TextSelectableByMouse);
+    layout->addWidget(m_accuracy);
+    // Drawn at the dock's size whenever the dock changes (not scaled once per pass), and
+    // never wider than the dock lets it be. The error map's blocks stay sharp.
     m_picture = new ImageView(Qt::SmoothTransformation);
     m_picture->setObjectName(QStringLiteral("referencePicture"));
     m_picture->setMinimumSize(96, 72);
     layout->addWidget(m_picture, 1);
+    m_legend = new QLabel;
+    m_legend->setObjectName(QStringLiteral("referenceLegend"));
+    m_legend->setText(
+        tr("<table width='100%'><tr><td>−50 % (too dark)</td><td align='center'>0</td>"
+           "<td align='right'>+50 % (too bright)</td></tr></table>"));
+    auto* ramp = new QLabel;
+    ramp->setPixmap(legendPixmap(240));
+    ramp->setScaledContents(true);
+    ramp->setMaximumHeight(14);
+    auto* legendBox = new QWidget;
+    auto* legendLayout = new QVBoxLayout(legendBox);
+    legendLayout->setContentsMargins(0, 0, 0, 0);
+    legendLayout->setSpacing(0);
+    legendLayout->addWidget(ramp);
+    legendLayout->addWidget(m_legend);
+    legendBox->setVisible(false);
+    layout->addWidget(legendBox);
+    connect(m_view, &QComboBox::currentIndexChanged, this, [this, legendBox](int index) {
+        legendBox->setVisible(index == int(View::ErrorMap));
+        if (index != int(View::Reference))
+            compareWithPreview();
+        refreshPicture();
+    });
+    // A converging preview changes its error: compare again, at most once a second, while the
+    // preview or the error map is shown. Queued: the viewport emits from inside its paintGL,
+    // where reading its image back (another makeCurrent/doneCurrent) would pull the context
+    // from under the window's own paint.
+    connect(
+        m_viewport, &Viewport::frameRendered, this,
+        [this] {
+            if (m_view->currentIndex() != int(View::Reference) && !m_refMean.isEmpty() &&
+                m_sinceCompare.elapsedMs() > 1000.0)
+                compareWithPreview();
+        },
+        Qt::QueuedConnection);
     connect(m_startStop, &QPushButton::clicked, this, [this] {
         if (isRunning())
             stop();
@@ -93,7 +182,83 @@ ReferencePanel::~ReferencePanel() {
 
 void ReferencePanel::showImage(const QImage& img) {
     m_image = img;
-    m_picture->setImage(img);
+    refreshPicture();
+}
+
+void ReferencePanel::setView(View view) {
+    m_view->setCurrentIndex(int(view));
+}
+
+void ReferencePanel::refreshPicture() {
+    switch (View(m_view->currentIndex())) {
+        case View::Reference:
+            m_picture->setImage(m_image);
+            break;
+        case View::Preview:
+            m_picture->setImage(m_previewImage);
+            break;
+        case View::ErrorMap:
+            // Nearest: a block is one colour, its edges are the 4-pixel grid.
+            m_picture->setImage(m_errorImage.isNull()
+                                    ? QImage()
+                                    : m_errorImage.scaled(m_errorImage.size() * 4,
+                                                          Qt::IgnoreAspectRatio,
+                                                          Qt::FastTransformation));
+            break;
+    }
+}
+
+bool ReferencePanel::compareWithPreview() {
+    m_sinceCompare.reset();
+    if (m_refMean.isEmpty()) {
+        m_accuracy->setText(tr("Render a reference to see how accurate the preview is."));
+        return false;
+    }
+    const OrbitCamera& cam = m_viewport->camera();
+    const glm::vec3 eye = cam.eye();
+    const float now[7] = {eye.x,        eye.y,        eye.z,      cam.target.x,
+                          cam.target.y, cam.target.z, cam.fovYDeg};
+    if (!std::equal(std::begin(now), std::end(now), std::begin(m_refCamera))) {
+        m_accuracy->setText(
+            tr("The view changed since the reference started: render it again "
+               "to compare."));
+        return false;
+    }
+    try {
+        const ImageRgb preview =
+            bench::resampleArea(m_viewport->linearImage(), m_refMean.width(), m_refMean.height());
+        // The object's pixels: the reference's coverage when it is done, else those it has
+        // lit so far (its background is black).
+        std::vector<uint8_t> mask;
+        if (!m_refCoverage.isEmpty()) {
+            mask = maskFromImage(m_refCoverage);
+        } else {
+            mask.resize(m_refMean.pixels().size());
+            for (size_t i = 0; i < mask.size(); ++i)
+                mask[i] = luminance(m_refMean.pixels()[i]) > 0.f;
+        }
+        const ErrorReport r = compareImages(
+            preview, m_refMean, m_refVariance.isEmpty() ? nullptr : &m_refVariance, nullptr, &mask);
+        const BlockError& b = r.blocks[ErrorReport::LUMINANCE];
+        m_blockRelL1 = b.relL1;
+        m_meanRatio = r.channels[ErrorReport::LUMINANCE].meanRatio;
+        m_errorImage = errorMapImage(bench::blockErrorMap(preview, m_refMean, &mask));
+        m_previewImage = toDisplay(preview, m_exposure);
+        const QString method = QString::fromStdString(m_viewport->stats().preview.method);
+        QString text = tr("%1 against the reference: block error %2 %, mean ratio %3")
+                           .arg(method)
+                           .arg(100.0 * b.relL1, 0, 'f', 1)
+                           .arg(m_meanRatio, 0, 'f', 3);
+        text += r.hasNoiseFloor
+                    ? tr(" (the reference's own noise: %1 %)").arg(100.0 * b.relL1Floor, 0, 'f', 1)
+                    : tr(" (the reference is still refining)");
+        m_accuracy->setText(text);
+    } catch (const Error& e) {
+        m_accuracy->setText(tr("No comparison: %1").arg(QString::fromUtf8(e.what())));
+        return false;
+    }
+    refreshPicture();
+    return true;
 }
 
 void ReferencePanel::start() {
@@ -113,6 +278,13 @@ void ReferencePanel::start() {
     scene.camera.height = std::max(16, int(std::lround(m_width->value() * aspect)));
     const float exposure = std::exp2(m_viewport->renderSettings().exposureStops);
     const int spp = m_spp->value();
+    const glm::vec3 eye = cam.eye();
+    const float started[7] = {eye.x,        eye.y,        eye.z,      cam.target.x,
+                              cam.target.y, cam.target.z, cam.fovYDeg};
+    std::copy(std::begin(started), std::end(started), std::begin(m_refCamera));
+    m_exposure = exposure;
+    m_refMean = m_refVariance = m_refCoverage = ImageRgb();
+    m_previewImage = m_errorImage = QImage();
 
     m_cancel = std::make_shared<std::atomic<bool>>(false);
     auto cancel = m_cancel;
@@ -140,9 +312,13 @@ void ReferencePanel::start() {
             };
             opt.preview = [self, exposure](const ImageRgb& mean) {
                 QImage img = toDisplay(mean, exposure);
-                QMetaObject::invokeMethod(QCoreApplication::instance(), [self, img] {
-                    if (self)
-                        self->showImage(img);
+                QMetaObject::invokeMethod(QCoreApplication::instance(), [self, img, mean] {
+                    if (!self)
+                        return;
+                    self->m_refMean = mean;
+                    self->showImage(img);
+                    if (self->m_view->currentIndex() != int(View::Reference))
+                        self->compareWithPreview();
                 });
             };
             try {
@@ -158,8 +334,13 @@ void ReferencePanel::start() {
         if (!error->isEmpty()) {
             m_info->setText(tr("Reference failed: %1").arg(*error));
         } else {
-            if (!result->mean.isEmpty())
+            if (!result->mean.isEmpty()) {
+                m_refMean = result->mean;
+                m_refVariance = result->variance;
+                m_refCoverage = result->coverage;
                 showImage(toDisplay(result->mean, exposure));
+                compareWithPreview();
+            }
             m_info->setText(tr("%1 spp in %2 s, RSE %3%4")
                                 .arg(result->spp)
                                 .arg(result->seconds, 0, 'f', 1)

@@ -3,7 +3,14 @@
 /// @file
 /// @brief The "Reference" dock: the engine's progressive Monte Carlo path tracer
 /// (lucent/reference/PathTracer.h) on a worker thread, rendering the current view of a frozen
-/// copy of the scene, with the running mean shown after every pass.
+/// copy of the scene, with the running mean shown after every pass; and the preview's
+/// accuracy against it: the preview at the reference's size, a heat-map of the signed 4×4-block
+/// relative error (lucent/bench/ErrorMap.h) with its legend, and the block relative L1 and
+/// mean ratio beside the reference's noise floor (lucent/bench/ErrorMetrics.h), updated as the
+/// reference refines and as the preview converges.
+
+#include <lucent/core/Image.h>
+#include <lucent/core/Timer.h>
 
 #include <QImage>
 #include <QWidget>
@@ -11,6 +18,7 @@
 #include <atomic>
 #include <memory>
 
+class QComboBox;
 class QLabel;
 class QProgressBar;
 class QPushButton;
@@ -39,11 +47,24 @@ public:
     /// Latest progressive image (display sRGB after the viewport's exposure).
     [[nodiscard]] const QImage& image() const { return m_image; }
 
+    /// What the picture shows.
+    enum class View { Reference = 0, Preview = 1, ErrorMap = 2 };
+    void setView(View view);
+    /// Compares the viewport's current preview with the reference (at the reference's size and
+    /// over its object pixels); the accuracy line says the result, or why there is none (no
+    /// reference yet, the view changed since it started). @return whether it compared.
+    bool compareWithPreview();
+    /// The last comparison's luminance block relative L1 and mean ratio (0 before one).
+    [[nodiscard]] double blockRelL1() const { return m_blockRelL1; }
+    [[nodiscard]] double meanRatio() const { return m_meanRatio; }
+
 Q_SIGNALS:
     void finished();
 
 private:
     void showImage(const QImage& img);
+    /// The picture for the chosen view.
+    void refreshPicture();
     Document* m_doc;
     Viewport* m_viewport;
     QSpinBox* m_width;
@@ -51,8 +72,19 @@ private:
     QPushButton* m_startStop;
     QProgressBar* m_progress;
     QLabel* m_info;
+    QComboBox* m_view;
+    QLabel* m_accuracy;
+    QLabel* m_legend;
     ImageView* m_picture;
-    QImage m_image;
+    QImage m_image;         ///< the reference, display
+    QImage m_previewImage;  ///< the preview at the reference's size, display
+    QImage m_errorImage;    ///< the block error heat-map
+    ImageRgb m_refMean, m_refVariance, m_refCoverage;  ///< linear; variance and coverage at the end
+    /// The camera the reference was started with: eye, target (mm), vertical field of view (°).
+    float m_refCamera[7] = {};
+    float m_exposure = 1.f;
+    double m_blockRelL1 = 0.0, m_meanRatio = 0.0;
+    Timer m_sinceCompare;
     QThread* m_thread = nullptr;
     std::shared_ptr<std::atomic<bool>> m_cancel;
 };

@@ -5,7 +5,8 @@
 ///     lucent [PROJECT|MESH|VDB] [--screenshot PATH] [--frames N] [--benchmark]
 ///            [--benchmark-json PATH] [--live-costs PATH] [--viewport WxH] [--window WxH]
 ///            [--method auto|NAME]   (NAME: a registry name with a GL pass, `lucent-cli methods`)
-///            [--paint-demo] [--reference SPP] [--raise DOCKS] [--no-settings]
+///            [--paint-demo] [--reference SPP] [--reference-view reference|preview|error]
+///            [--raise DOCKS] [--no-settings]
 ///            [--swap-interval N]
 /// --screenshot grabs the whole window after N rendered frames (default 3) and exits;
 /// --benchmark measures start-up to first frame, idle frame time and stroke-to-frame latency
@@ -252,6 +253,7 @@ void measureLiveCosts(MainWindow& w, const QString& path) {
     std::printf("%-28s %-10s %14s %13s %20s\n", "candidate", "setting", "stroke->frame",
                 "stroke_ratio", "ratios (rounds)");
     lucent::planner::LiveCosts measured;
+    measured.directMs = median(unitMs);
     for (size_t i = 0; i < entries.size(); ++i) {
         lucent::planner::LiveCost m = entries[i];
         m.strokeRatio = median(ratios[i]);
@@ -332,6 +334,10 @@ int main(int argc, char** argv) {
                                  QStringLiteral("Before the screenshot, run a reference render "
                                                 "of SPP samples per pixel in the Reference dock."),
                                  QStringLiteral("SPP"));
+    QCommandLineOption referenceView(
+        QStringLiteral("reference-view"),
+        QStringLiteral("What the Reference dock shows: reference (default), preview or error."),
+        QStringLiteral("VIEW"));
     QCommandLineOption swapInterval(
         QStringLiteral("swap-interval"),
         QStringLiteral("QSurfaceFormat swap interval (default: Qt's, 1); 0 disables vsync."),
@@ -341,7 +347,8 @@ int main(int argc, char** argv) {
         QStringLiteral("Preview method: %1 (default auto).").arg(previewMethodNames()),
         QStringLiteral("M"));
     parser.addOptions({shot, frames, bench, benchJson, liveCosts, viewportSize, windowSize,
-                       noSettings, paintDemo, raiseDock, method, reference, swapInterval});
+                       noSettings, paintDemo, raiseDock, method, reference, referenceView,
+                       swapInterval});
     parser.process(app);
     if (parser.isSet(swapInterval)) {
         // Before any window exists, so that every context gets it.
@@ -447,6 +454,11 @@ int main(int argc, char** argv) {
             referenceStarted = true;
             if (auto* ref = window.referencePanel()) {
                 ref->setParameters(200, std::max(3, parser.value(reference).toInt()));
+                const QString view = parser.value(referenceView);
+                using View = lucent::app::ReferencePanel::View;
+                ref->setView(view == QStringLiteral("error")     ? View::ErrorMap
+                             : view == QStringLiteral("preview") ? View::Preview
+                                                                 : View::Reference);
                 QObject::connect(ref, &lucent::app::ReferencePanel::finished, window.viewport(),
                                  [&window] { window.viewport()->update(); });
                 ref->start();

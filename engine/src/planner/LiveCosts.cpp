@@ -27,6 +27,9 @@ LiveCosts parseLiveCosts(const std::string& text, const std::string& origin) {
             LUCENT_THROW(ValueError, origin, ": 'entries' must be a non-empty array");
         LiveCosts c;
         c.source = j.value("source", "");
+        c.directMs = j.value("direct_ms", 0.0);
+        if (!(c.directMs >= 0) || !std::isfinite(c.directMs))
+            LUCENT_THROW(ValueError, origin, ": direct_ms must be a finite number ≥ 0");
         for (const nlohmann::json& e : j["entries"]) {
             LiveCost l;
             l.method = e.value("method", "");
@@ -53,6 +56,7 @@ std::string formatLiveCosts(const LiveCosts& costs) {
     j["format"] = FORMAT;
     j["version"] = LiveCosts::VERSION;
     j["source"] = costs.source;
+    j["direct_ms"] = std::round(costs.directMs * 100) / 100;
     nlohmann::ordered_json list = nlohmann::ordered_json::array();
     for (const LiveCost& l : costs.entries) {
         nlohmann::ordered_json o;

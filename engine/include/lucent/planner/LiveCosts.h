@@ -36,6 +36,9 @@ struct LiveCost {
 struct LiveCosts {
     static constexpr int VERSION = 1;
     std::string source;  ///< the command, viewport size, machine and date of the measurement
+    /// The unit as the harness measured it (ms; 0 when not recorded): the Direct frame's render
+    /// on the measuring machine. Tests pin Auto to it for a choice that does not depend on load.
+    double directMs = 0.0;
     std::vector<LiveCost> entries;
 };
 
