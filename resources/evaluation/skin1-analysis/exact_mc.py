@@ -16,6 +16,7 @@ At eta = 1 the half-space value has a closed form, Chandrasekhar's A(mu0) = 1 - 
   python3 exact_mc.py check                 # MC half-space vs the H-function closed form, eta 1
   python3 exact_mc.py table [ETA]           # skin1 / jade / marble: half-space vs 10 mm sphere
   python3 exact_mc.py oblique [ETA]         # skin1 half-space totals vs incidence mu0
+  python3 exact_mc.py slab [ETA]            # skin1: a 5 mm slab vs the half-space, mu0 = 0.76
 """
 import sys
 
@@ -54,8 +55,10 @@ def roulette(rng, w, *arrays):
     return (w[keep],) + tuple(a[keep] for a in arrays)
 
 
-def half_space(albedo, eta, mu0=1.0, n=200000, seed=1):
-    """Exitance per unit entering flux; depth z > 0, sigma_t = 1 (the answer is scale-free)."""
+def half_space(albedo, eta, mu0=1.0, n=200000, seed=1, thickness=np.inf):
+    """Exitance through the lit face per unit entering flux; depth z > 0, sigma_t = 1 (lengths
+    in mean free paths). A finite `thickness` makes it a laterally infinite slab whose back face
+    is the same smooth dielectric (light leaving there is lost to the lit side)."""
     rng = np.random.default_rng(seed)
     sin_t = np.sqrt(1 - mu0 * mu0) / eta
     z = np.zeros(n)
@@ -64,6 +67,12 @@ def half_space(albedo, eta, mu0=1.0, n=200000, seed=1):
     escaped = 0.0
     while len(w):
         z_new = z - np.log(rng.random(len(w))) * dz
+        back = np.nonzero(z_new > thickness)[0]
+        if len(back):  # the back face: leave (lost) or reflect back in, then step afresh
+            stay = rng.random(len(back)) < fresnel_leaving(dz[back], eta)
+            w[back[~stay]] = 0
+            z_new[back] = thickness
+            dz[back] *= -1
         out = z_new < 0
         idx = np.nonzero(out)[0]
         reflect = rng.random(len(idx)) < fresnel_leaving(-dz[idx], eta)
@@ -73,6 +82,8 @@ def half_space(albedo, eta, mu0=1.0, n=200000, seed=1):
         z_new[idx[reflect]] = 0.0  # mirrored at the boundary; a fresh step is exact (memoryless)
         dz[idx[reflect]] *= -1
         inside = np.nonzero(~out)[0]
+        if len(back):
+            inside = np.setdiff1d(inside, back)
         w[inside] *= albedo
         dz[inside] = 2 * rng.random(len(inside)) - 1
         w, z, dz = roulette(rng, w[keep], z_new[keep], dz[keep])
@@ -139,6 +150,12 @@ def main():
         for a in [0.9585, 0.8381, 0.6779]:
             exact = 1 - h_function(a, 1.0) * np.sqrt(1 - a)
             print("albedo %.4f  H-function %.4f  Monte Carlo %.4f" % (a, exact, half_space(a, 1.0)))
+    elif cmd == "slab":  # the suite's 5 mm skin1 slab, its light at mu0 = 0.76, vs half-space
+        sa, ss = MATERIALS["skin1"]
+        for c, (a, s) in enumerate(zip(sa, ss)):
+            slab = half_space(s / (s + a), eta, 0.76, thickness=5.0 * (a + s))
+            half = half_space(s / (s + a), eta, 0.76)
+            print("%s  5 mm slab %.4f  half-space %.4f  (x%.3f)" % ("RGB"[c], slab, half, slab / half))
     elif cmd == "oblique":
         sa, ss = MATERIALS["skin1"]
         for mu0 in [1.0, 0.9, 0.75, 0.5, 0.3, 0.15, 0.05]:
