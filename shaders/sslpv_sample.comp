@@ -35,7 +35,7 @@ uniform float u_exitScale; // SslpvSolver::exitScale()
 uniform float u_Y00;       // 1/(2√π)
 uniform float u_K1;        // √(3/(4π))
 
-// Exact unpolarised Fresnel reflectance (Born & Wolf §1.5), as lucent::dielectricReflectance.
+// Exact unpolarised Fresnel reflectance (Born & Wolf §1.5), as lucent::sslpv::dielectricReflectance.
 float dielectricReflectance(float cosThetaI, float eta) {
     cosThetaI = clamp(cosThetaI, 0.0, 1.0);
     if (!(eta > 0.0)) return 1.0;

@@ -61,14 +61,14 @@ int runBench(const std::vector<std::string>& argv) {
     if (args.has("fp16") && !gl)
         LUCENT_THROW(ValueError, "--fp16 needs --gl");
     const ThreadLimit limit(threads);
-    const SslpvBenchScene scene = parseSslpvBenchScene(args.valueOr("scene", "cube"));
+    const sslpv::SslpvBenchScene scene = sslpv::parseSslpvBenchScene(args.valueOr("scene", "cube"));
 
-    SslpvBenchSetup setup = makeSslpvBenchSetup(scene, n, het);
-    SslpvSolver solver({.order = order,
-                        .maxSteps = steps,
-                        .skipAccumulateSteps = 0,
-                        .removeExitant = setup.sinks,
-                        .skipEmptySlices = !args.has("dense")});
+    sslpv::SslpvBenchSetup setup = sslpv::makeSslpvBenchSetup(scene, n, het);
+    sslpv::SslpvSolver solver({.order = order,
+                               .maxSteps = steps,
+                               .skipAccumulateSteps = 0,
+                               .removeExitant = setup.sinks,
+                               .skipEmptySlices = !args.has("dense")});
     solver.setMaterial(setup.material, setup.eta);
     solver.setInjectionSamples(std::move(setup.texels));
 
@@ -91,8 +91,8 @@ int runBench(const std::vector<std::string>& argv) {
     // Bandwidth floor, same run, same threads: the least traffic one dense step can have
     // without the stencil (SslpvBench.h: stream the source planes into the destination and
     // add them into the accumulation planes, plus the factor planes when heterogeneous).
-    const double floorMs = sslpvBandwidthFloorMs(n, order, het, steps, repeats);
-    const SslpvStats& st = solver.stats();
+    const double floorMs = sslpv::sslpvBandwidthFloorMs(n, order, het, steps, repeats);
+    const sslpv::SslpvStats& st = solver.stats();
     double activeMean = 0.0;
     for (int a : st.activeBricksPerStep)
         activeMean += a;
@@ -106,8 +106,8 @@ int runBench(const std::vector<std::string>& argv) {
         if (!gpu::GlContext::isHeadlessAvailable(&reason))
             LUCENT_THROW(GpuError, "--gl: no headless OpenGL 4.5 context: ", reason);
         auto ctx = gpu::GlContext::createHeadless();
-        SslpvGlPropagator prop(args.has("fp16") ? SslpvGlStorage::Float16
-                                                : SslpvGlStorage::Float32);
+        sslpv::SslpvGlPropagator prop(args.has("fp16") ? sslpv::SslpvGlStorage::Float16
+                                                       : sslpv::SslpvGlStorage::Float32);
         const int glRepeats = std::max(3, std::min(repeats, 10));  // llvmpipe is slow
         prop.propagate(solver);                                    // warm-up (shader JIT)
         // Steady state: persistent buffers, nothing changed to upload, no read-back; then the
@@ -151,7 +151,7 @@ int runBench(const std::vector<std::string>& argv) {
             "\"ratio_to_floor\": %.3f, \"gl_gpu_ms\": %.4f, \"gl_total_ms\": %.4f, "
             "\"gl_readback_ms\": %.4f, "
             "\"paper_ms_gtx580_32_8_het\": %.2f}\n",
-            sslpvBenchSceneName(scene), n, steps, order, het ? "true" : "false",
+            sslpv::sslpvBenchSceneName(scene), n, steps, order, het ? "true" : "false",
             args.has("dense") ? "true" : "false", threads, repeats, st.brickCount, activeMean,
             cellsPerStep, msSolve, cpuPerSolve, msSteps, msPerStep, floorPerStep,
             msPerStep / floorPerStep, glGpuMs, glCpuMs, glReadbackMs, paperMs);
@@ -159,11 +159,12 @@ int runBench(const std::vector<std::string>& argv) {
         std::printf(
             "SSLPV CPU propagation: scene %s, %d^3 cells, %d steps, SH order %d, %s, %s, %d "
             "thread(s)\n",
-            sslpvBenchSceneName(scene), n, steps, order, het ? "heterogeneous" : "homogeneous",
-            args.has("dense") ? "dense" : "active bricks", threads);
+            sslpv::sslpvBenchSceneName(scene), n, steps, order,
+            het ? "heterogeneous" : "homogeneous", args.has("dense") ? "dense" : "active bricks",
+            threads);
         std::printf("  bricks (%dx%dx%d cells) per step: %.1f of %d active, %.0f cells computed\n",
-                    SSLPV_BRICK_X, SSLPV_BRICK_Y, SSLPV_BRICK_Z, activeMean, st.brickCount,
-                    cellsPerStep);
+                    sslpv::SSLPV_BRICK_X, sslpv::SSLPV_BRICK_Y, sslpv::SSLPV_BRICK_Z, activeMean,
+                    st.brickCount, cellsPerStep);
         std::printf("  median over %d solves after warm-up\n", repeats);
         std::printf("  solve (factors + propagation): %.3f ms wall, %.3f ms CPU (all threads)\n",
                     msSolve, cpuPerSolve);
@@ -191,7 +192,8 @@ struct FitCase {
 /// integrated over the top face per unit incident flux, Σ_i L_o(x_i)·Δx² / Φ (mm²·sr⁻¹ /mm²:
 /// sr⁻¹), at normal view without Fresnel T(ω_o) and without the gain (raw 1/η² only): by
 /// superposition it equals L_o/E of a laterally infinite slab under uniform irradiance E.
-double slabResponse(const FitCase& fc, int n, const SslpvOptions& base, float eta, int* stepsUsed) {
+double slabResponse(const FitCase& fc, int n, const sslpv::SslpvOptions& base, float eta,
+                    int* stepsUsed) {
     const float h = fc.cellMfp;  // σt = 1 mm⁻¹
     CoarseMaterial m;
     m.spec.resolution = n;
@@ -210,7 +212,7 @@ double slabResponse(const FitCase& fc, int n, const SslpvOptions& base, float et
                 m.insideFraction[m.spec.linearIndex({x, y, z})] = 1.f;
     m.homogeneous = true;
     const float zTop = float(n - 1) * h;
-    std::vector<SslpvInjectionSample> texels;
+    std::vector<sslpv::SslpvInjectionSample> texels;
     const int lo = n / 2 - 4;
     double phi = 0.0;
     for (int j = 0; j < 16; ++j)
@@ -220,10 +222,10 @@ double slabResponse(const FitCase& fc, int n, const SslpvOptions& base, float et
                  Normal3f(0, 0, 1), Vector3f(0, 0, -1), Rgb(1.f)});
             phi += 1.0;
         }
-    SslpvSolver solver(base);
+    sslpv::SslpvSolver solver(base);
     solver.setMaterial(m, eta);
     solver.setInjectionSamples(std::move(texels));
-    const SslpvStats& st = solver.solve();
+    const sslpv::SslpvStats& st = solver.solve();
     if (stepsUsed)
         *stepsUsed = st.stepsUsed;
     const float gain = base.calibration.gain[base.order - 1];
@@ -258,7 +260,7 @@ struct FitResult {
     std::vector<int> steps;
 };
 
-FitResult evaluateFit(const std::vector<FitCase>& cases, int n, const SslpvOptions& base,
+FitResult evaluateFit(const std::vector<FitCase>& cases, int n, const sslpv::SslpvOptions& base,
                       float eta) {
     FitResult r;
     double sumLog = 0.0;
@@ -290,13 +292,13 @@ int runFit(const Args& args) {
     for (float c : cells)
         for (float a : albedos)
             cases.push_back({a, c});
-    SslpvOptions base{.order = order,
-                      .maxSteps = 4096,
-                      .skipAccumulateSteps = 2,
-                      .removeExitant = true,
-                      .stopEpsilon = 1e-4f,
-                      .mode = SslpvMode::Calibrated};
-    base.calibration = defaultSslpvCalibration();
+    sslpv::SslpvOptions base{.order = order,
+                             .maxSteps = 4096,
+                             .skipAccumulateSteps = 2,
+                             .removeExitant = true,
+                             .stopEpsilon = 1e-4f,
+                             .mode = sslpv::SslpvMode::Calibrated};
+    base.calibration = sslpv::defaultSslpvCalibration();
     base.calibration.gain[0] = base.calibration.gain[1] = 1.f;  // fitted below
     const bool search = args.has("search");
     if (args.value("linear"))
@@ -311,11 +313,11 @@ int runFit(const Args& args) {
         base.calibration.perStepTransport = args.floatOr("per-step-transport", 0.f, 0.f, 100.f);
     // Which weight --search fits (the others stay as given).
     const std::string param = args.valueOr("fit", "transport");
-    float SslpvCalibration::*fitted = &SslpvCalibration::transport;
+    float sslpv::SslpvCalibration::*fitted = &sslpv::SslpvCalibration::transport;
     if (param == "linear")
-        fitted = &SslpvCalibration::linear;
+        fitted = &sslpv::SslpvCalibration::linear;
     else if (param == "diffusion")
-        fitted = &SslpvCalibration::diffusion;
+        fitted = &sslpv::SslpvCalibration::diffusion;
     else if (param != "transport")
         LUCENT_THROW(ValueError, "--fit: '", param, "' is not linear, transport or diffusion");
 
@@ -334,8 +336,8 @@ int runFit(const Args& args) {
             int steps = 0;
             for (int it = 0; it < args.intOr("iterations", 10, 1, 40); ++it) {
                 const double mid = 0.5 * (lo + hi);
-                SslpvOptions o = base;
-                o.calibration = SslpvCalibration{};
+                sslpv::SslpvOptions o = base;
+                o.calibration = sslpv::SslpvCalibration{};
                 o.calibration.linear =
                     float(std::exp(mid) / ((1.0 - fc.albedo) * double(fc.cellMfp)));
                 const double resp = gain * slabResponse(fc, n, o, eta, &steps);
@@ -355,7 +357,7 @@ int runFit(const Args& args) {
         double a = std::log(0.02), b = std::log(5.0);
         const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
         auto f = [&](double x) {
-            SslpvOptions o = base;
+            sslpv::SslpvOptions o = base;
             o.calibration.*fitted = float(std::exp(x));
             const double v = evaluateFit(cases, n, o, eta).rmsLog;
             std::printf("# search: %s %.5f -> rms log %.5f\n", param.c_str(), std::exp(x), v);

@@ -48,11 +48,11 @@ int runCompare(const std::vector<std::string>& argv) {
         if (img.width() != ref.width() || img.height() != ref.height())
             LUCENT_THROW(ValueError, "--mask ", *m, ": ", img.width(), "×", img.height(),
                          " but the reference is ", ref.width(), "×", ref.height());
-        mask = maskFromImage(img);
+        mask = bench::maskFromImage(img);
         maskFrom = *m;
     } else if (auto cov = tryLayer(refPath, "coverage");
                cov && cov->width() == ref.width() && cov->height() == ref.height()) {
-        mask = maskFromImage(*cov);
+        mask = bench::maskFromImage(*cov);
         maskFrom = refPath + " (coverage layer)";
     } else {
         // No coverage information: pixels where either image is not black.
@@ -62,15 +62,15 @@ int runCompare(const std::vector<std::string>& argv) {
                 mask[i] = (luminance(ref.pixels()[i]) != 0.f || luminance(test.pixels()[i]) != 0.f);
         maskFrom = "non-black pixels";
     }
-    const ErrorReport r =
-        compareImages(test, ref, refVar ? &*refVar : nullptr, testVar ? &*testVar : nullptr, &mask);
+    const bench::ErrorReport r = bench::compareImages(test, ref, refVar ? &*refVar : nullptr,
+                                                      testVar ? &*testVar : nullptr, &mask);
     std::printf("test: %s\nreference: %s\nmask: %s\nnoise floor from: %s\n", testPath.c_str(),
                 refPath.c_str(), maskFrom.c_str(),
                 refVar && testVar ? "variance layers of both images"
                 : refVar          ? "the reference's variance layer"
                 : testVar         ? "the test image's variance layer"
                                   : "none (no variance layer)");
-    std::fputs(formatReport(r).c_str(), stdout);
+    std::fputs(bench::formatReport(r).c_str(), stdout);
     return 0;
 }
 

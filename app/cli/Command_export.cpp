@@ -119,10 +119,10 @@ int runExport(const std::vector<std::string>& argv) {
                      " (is it closed, and not too thin?)");
 
     if (out) {
-        VdbExportOptions options;
+        io::VdbExportOptions options;
         options.materialName = preset.name;
         options.rendererGrids = !args.has("no-renderer-grids");
-        exportVdb(volume, *out, options);
+        io::exportVdb(volume, *out, options);
 
         std::error_code ec;
         const auto bytes = std::filesystem::file_size(*out, ec);
@@ -133,11 +133,11 @@ int runExport(const std::vector<std::string>& argv) {
     }
     if (mitsuba) {
         Timer mitsubaTimer;
-        MitsubaExportOptions options;
+        io::MitsubaExportOptions options;
         options.materialName = preset.name;
         options.rgbSigmaT = !args.has("mitsuba-grey-sigma-t");
         options.hgMeanG = !args.has("mitsuba-isotropic");
-        const MitsubaExportResult r = exportMitsubaVol(volume, *mitsuba, options);
+        const io::MitsubaExportResult r = io::exportMitsubaVol(volume, *mitsuba, options);
         std::printf(
             "wrote %s, %s, %s: Mitsuba 3 medium '%s', preset %s on %s, %d^3 voxels of "
             "%.4g mm, %s sigma_t, phase %s g = %.4g, %.0f ms\n",

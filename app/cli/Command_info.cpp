@@ -19,10 +19,10 @@ int runInfo(const std::vector<std::string>& argv) {
     if (args.positional().size() != 1)
         LUCENT_THROW(ValueError, "expected exactly one FILE.vdb (see --help)");
     const std::string& path = args.positional().front();
-    const VdbFileSummary summary = summarizeVdb(path);
-    std::fputs(formatVdbSummary(summary).c_str(), stdout);
+    const io::VdbFileSummary summary = io::summarizeVdb(path);
+    std::fputs(io::formatVdbSummary(summary).c_str(), stdout);
     if (args.has("validate")) {
-        const ImportedMaterial m = importVdb(path);
+        const io::ImportedMaterial m = io::importVdb(path);
         size_t inside = 0;
         for (uint8_t v : m.volume.insideMask())
             inside += v != 0;

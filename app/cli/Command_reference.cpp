@@ -26,7 +26,7 @@ extern "C" void onInterrupt(int) {
 }
 
 /// The reference's progress as the CLI's progress bar.
-void printProgress(const ReferenceProgress& p) {
+void printProgress(const reference::ReferenceProgress& p) {
     double frac = double(p.spp) / double(std::max(1, p.maxSpp));
     if (p.targetRse > 0.f && std::isfinite(p.rse) && p.rse > 0.f)
         // Error ∝ 1/√N: the fraction of the samples still needed is (rse/target)².
@@ -63,7 +63,7 @@ int runReference(const std::vector<std::string>& argv) {
     if (!args.has("spp") && !args.has("rse"))
         LUCENT_THROW(ValueError, "give --spp N or --rse R (or both: R with N as the cap)");
 
-    ReferenceOptions opt;
+    reference::ReferenceOptions opt;
     opt.targetRse = args.floatOr("rse", 0.f, 1e-5f, 1.f);
     opt.spp = args.intOr("spp", args.has("rse") ? 1 << 16 : 64, 3, 1 << 24);
     const std::string seed = args.valueOr("seed", "1");
@@ -76,15 +76,15 @@ int runReference(const std::vector<std::string>& argv) {
         LUCENT_THROW(ValueError, "--seed: expected a non-negative integer, got '", seed, "'");
     }
     opt.threads = args.intOr("threads", 0, 0, 1024);
-    opt.boundary = parseBoundaryModel(args.valueOr("boundary", "dielectric"));
+    opt.boundary = reference::parseBoundaryModel(args.valueOr("boundary", "dielectric"));
     opt.subsurfaceOnly = args.has("subsurface-only");
     const std::string majorant = args.valueOr("majorant", "auto");
     if (majorant == "auto")
-        opt.majorant = MajorantMode::Auto;
+        opt.majorant = reference::MajorantMode::Auto;
     else if (majorant == "bricks")
-        opt.majorant = MajorantMode::Bricks;
+        opt.majorant = reference::MajorantMode::Bricks;
     else if (majorant == "global")
-        opt.majorant = MajorantMode::Global;
+        opt.majorant = reference::MajorantMode::Global;
     else
         LUCENT_THROW(ValueError, "--majorant: expected auto, bricks or global, got '", majorant,
                      "'");
@@ -102,9 +102,9 @@ int runReference(const std::vector<std::string>& argv) {
     scene.camera.width = args.intOr("width", scene.camera.width, 1, 16384);
     scene.camera.height = args.intOr("height", scene.camera.height, 1, 16384);
     auto previous = std::signal(SIGINT, onInterrupt);
-    ReferenceImage img;
+    reference::ReferenceImage img;
     try {
-        img = renderReference(scene, opt);
+        img = reference::renderReference(scene, opt);
     } catch (...) {
         std::signal(SIGINT, previous);
         throw;
@@ -114,7 +114,7 @@ int runReference(const std::vector<std::string>& argv) {
         std::fputc('\n', stderr);
     if (img.spp == 0)
         LUCENT_THROW(Cancelled, "interrupted before the first pass finished");
-    writeReferenceExr(img, out);
+    reference::writeReferenceExr(img, out);
     std::printf("%s: %dx%d, %d spp, RSE %.4f, %.2f s, %.3g paths/s%s\n", out.c_str(),
                 img.mean.width(), img.mean.height(), img.spp, double(img.rse), img.seconds,
                 img.seconds > 0 ? double(img.paths) / img.seconds : 0.0,

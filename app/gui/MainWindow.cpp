@@ -904,7 +904,7 @@ bool MainWindow::importMesh(const QString& path, double mmPerUnit) {
 
 bool MainWindow::importVdb(const QString& path) {
     try {
-        ImportedMaterial imported = lucent::importVdb(path.toStdString());
+        io::ImportedMaterial imported = lucent::io::importVdb(path.toStdString());
         Scene scene = m_doc->scene();
         if (scene.objects.empty())
             LUCENT_THROW(ValueError, "no object to receive the material");
@@ -938,10 +938,10 @@ bool MainWindow::exportVdbTo(const QString& path, const VdbExportChoice& choice,
     const QFileInfo info(path);
     const std::string mitsubaPrefix =
         (info.path() + QStringLiteral("/") + info.completeBaseName()).toStdString();
-    VdbExportOptions vdbOptions;
+    io::VdbExportOptions vdbOptions;
     vdbOptions.rendererGrids = choice.rendererGrids;
     vdbOptions.materialName = choice.materialName.toStdString();
-    MitsubaExportOptions mitsubaOptions;
+    io::MitsubaExportOptions mitsubaOptions;
     mitsubaOptions.materialName = vdbOptions.materialName;
     const bool mitsuba = choice.mitsubaVol;
     // One step per file: the VDB, then the Mitsuba grids σt, albedo and the medium XML (one
@@ -951,10 +951,10 @@ bool MainWindow::exportVdbTo(const QString& path, const VdbExportChoice& choice,
     QThread* worker = QThread::create(
         [copy, error, done, target, vdbOptions, mitsuba, mitsubaPrefix, mitsubaOptions] {
             try {
-                exportVdb(*copy, target, vdbOptions);
+                io::exportVdb(*copy, target, vdbOptions);
                 done->store(1);
                 if (mitsuba) {
-                    exportMitsubaVol(*copy, mitsubaPrefix, mitsubaOptions);
+                    io::exportMitsubaVol(*copy, mitsubaPrefix, mitsubaOptions);
                     done->store(4);
                 }
             } catch (const std::exception& ex) {

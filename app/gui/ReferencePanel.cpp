@@ -289,15 +289,15 @@ void ReferencePanel::start() {
     m_cancel = std::make_shared<std::atomic<bool>>(false);
     auto cancel = m_cancel;
     auto error = std::make_shared<QString>();
-    auto result = std::make_shared<ReferenceImage>();
+    auto result = std::make_shared<reference::ReferenceImage>();
     QPointer<ReferencePanel> self(this);
     m_thread =
         QThread::create([scene = std::move(scene), spp, exposure, cancel, error, result, self] {
-            ReferenceOptions opt;
+            reference::ReferenceOptions opt;
             opt.spp = spp;
             opt.cancel = cancel.get();
             opt.threads = std::max(1, QThread::idealThreadCount() - 1);  // keep a core for the UI
-            opt.progress = [self](const ReferenceProgress& p) {
+            opt.progress = [self](const reference::ReferenceProgress& p) {
                 QMetaObject::invokeMethod(QCoreApplication::instance(), [self, p] {
                     if (!self)
                         return;
@@ -322,7 +322,7 @@ void ReferencePanel::start() {
                 });
             };
             try {
-                *result = renderReference(scene, opt);
+                *result = reference::renderReference(scene, opt);
             } catch (const std::exception& ex) {
                 *error = QString::fromUtf8(ex.what());
             }

@@ -230,10 +230,10 @@ int referenceError(float eta) {
     Scene ref = s;
     ref.camera.orthoHeight = 0.8f;
     ref.camera.width = ref.camera.height = 8;
-    ReferenceOptions opt;
+    reference::ReferenceOptions opt;
     opt.spp = 3 * 2048;
     opt.subsurfaceOnly = true;
-    const ReferenceImage pt = renderReference(ref, opt);
+    const reference::ReferenceImage pt = reference::renderReference(ref, opt);
     Rgb ptMean(0.f), ptVar(0.f);
     for (int y = 0; y < 8; ++y)
         for (int x = 0; x < 8; ++x) {

@@ -15,6 +15,7 @@
 #include <fstream>
 
 using namespace lucent;
+using namespace lucent::io;
 
 namespace {
 

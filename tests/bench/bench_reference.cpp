@@ -29,6 +29,7 @@
 #include <string>
 
 using namespace lucent;
+using namespace lucent::reference;
 
 namespace {
 

@@ -14,6 +14,7 @@
 #include <string>
 
 using namespace lucent;
+using namespace lucent::sslpv;
 
 namespace {
 

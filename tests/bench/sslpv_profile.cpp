@@ -25,6 +25,7 @@
 #include <vector>
 
 using namespace lucent;
+using namespace lucent::sslpv;
 
 namespace {
 
@@ -70,16 +71,16 @@ Profile exactProfile(float albedo, int walks) {
     s.sigma_s = Rgb(albedo);
     s.g = Rgb(0.f);
     const GridSpec spec = GridSpec::around(box.bounds(), 32);
-    GridMedium medium = GridMedium::uniform(spec, toMedium(s), {});
-    const VolumeScene scene(box, std::move(medium), {});
-    TransportOptions opt;
-    opt.boundary = BoundaryModel::Dielectric;
+    reference::GridMedium medium = reference::GridMedium::uniform(spec, toMedium(s), {});
+    const reference::VolumeScene scene(box, std::move(medium), {});
+    reference::TransportOptions opt;
+    opt.boundary = reference::BoundaryModel::Dielectric;
     opt.eta = g_eta;
     Profile p;
     for (int i = 0; i < walks; ++i) {
         Pcg32 rng(uint64_t(i) * 2654435761u + 17u);
-        const WalkResult w =
-            walkMedium(scene, Point3f(0.f, 0.f, 15.f - 1e-4f), Vector3f(0, 0, -1), 1, rng, opt);
+        const reference::WalkResult w = reference::walkMedium(
+            scene, Point3f(0.f, 0.f, 15.f - 1e-4f), Vector3f(0, 0, -1), 1, rng, opt);
         if (w.escaped && w.position.z > 15.f - 1e-3f)
             addAt(p, std::hypot(double(w.position.x), double(w.position.y)), double(w.weight));
     }

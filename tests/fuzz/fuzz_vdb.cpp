@@ -18,12 +18,12 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const std::string path = lucent::fuzz::writeInput("input.vdb", data, size);
     try {
-        const lucent::VdbFileSummary summary = lucent::summarizeVdb(path);
-        (void)lucent::formatVdbSummary(summary);
+        const lucent::io::VdbFileSummary summary = lucent::io::summarizeVdb(path);
+        (void)lucent::io::formatVdbSummary(summary);
     } catch (const lucent::Error&) {
     }
     try {
-        const lucent::ImportedMaterial material = lucent::importVdb(path);
+        const lucent::io::ImportedMaterial material = lucent::io::importVdb(path);
         (void)material;
     } catch (const lucent::Error&) {
     }

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <cstdio>
 
-namespace lucent {
+namespace lucent::bench {
 
 namespace {
 constexpr double LUMA[3] = {0.2126, 0.7152, 0.0722};       // Rec. 709, as luminance() in Types.h
@@ -221,4 +221,4 @@ std::string formatReport(const ErrorReport& report) {
     return s;
 }
 
-}  // namespace lucent
+}  // namespace lucent::bench

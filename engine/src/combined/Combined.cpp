@@ -81,7 +81,7 @@ Rgb SslpvSurfaceKernel::integral(float R) const {
 }
 
 std::vector<Rgb> sslpvHalfSpaceResponse(const MaterialSample& material, float eta,
-                                        const SslpvOptions& options, float cellSize, int n,
+                                        const sslpv::SslpvOptions& options, float cellSize, int n,
                                         int half) {
     LUCENT_CHECK(std::isfinite(cellSize) && cellSize > 0.f,
                  "combined kernel: cell size must be finite and > 0 mm");
@@ -111,13 +111,13 @@ std::vector<Rgb> sslpvHalfSpaceResponse(const MaterialSample& material, float et
     const int c0 = n / 2;
     const float zTop = float(n - 1) * cellSize;
     // 2×2 texels of ¼ W each at normal incidence into the top cell (c0, c0), as the RSM would.
-    std::vector<SslpvInjectionSample> texels;
+    std::vector<sslpv::SslpvInjectionSample> texels;
     for (int j = 0; j < 2; ++j)
         for (int i = 0; i < 2; ++i)
             texels.push_back({Point3f((float(c0) + 0.25f + 0.5f * float(i)) * cellSize,
                                       (float(c0) + 0.25f + 0.5f * float(j)) * cellSize, zTop),
                               Normal3f(0.f, 0.f, 1.f), Vector3f(0.f, 0.f, -1.f), Rgb(0.25f)});
-    SslpvSolver solver(options);
+    sslpv::SslpvSolver solver(options);
     solver.setMaterial(m, eta);
     solver.setInjectionSamples(std::move(texels));
     solver.solve();
@@ -134,7 +134,7 @@ std::vector<Rgb> sslpvHalfSpaceResponse(const MaterialSample& material, float et
 }
 
 SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, float eta,
-                                             const SslpvOptions& options, float cellSize,
+                                             const sslpv::SslpvOptions& options, float cellSize,
                                              float radius) {
     LUCENT_CHECK(std::isfinite(cellSize) && cellSize > 0.f,
                  "combined kernel: cell size must be finite and > 0 mm");
@@ -159,7 +159,7 @@ SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, flo
             ++ringCells[size_t(b)];
         }
     // Per unit *transmitted* irradiance (the dipole's E): divide by T(0); R-units: × π.
-    const double t0 = 1.0 - double(dielectricReflectance(1.f, eta));
+    const double t0 = 1.0 - double(sslpv::dielectricReflectance(1.f, eta));
     SslpvSurfaceKernel k;
     k.cellSize = cellSize;
     double inner = 0.0;
@@ -321,9 +321,9 @@ float sslpvCellSize(const MaterialVolume& volume, int gridResolution) {
     return s.voxelSize * float(s.resolution) / float(gridResolution);
 }
 
-SslpvRenderOptions CombinedSettings::defaultSslpvOptions() {
-    SslpvRenderOptions o;
-    o.solver.mode = SslpvMode::Calibrated;
+sslpv::SslpvRenderOptions CombinedSettings::defaultSslpvOptions() {
+    sslpv::SslpvRenderOptions o;
+    o.solver.mode = sslpv::SslpvMode::Calibrated;
     o.direct = false;
     o.subsurface = true;
     return o;
@@ -352,11 +352,11 @@ CombinedResult renderCombined(const Scene& scene, const CombinedSettings& settin
         out.dipole = dipole::renderImageSpaceDipole(scene, gs, lv).radiance;
     }
     if (out.plan.sslpvOn) {
-        SslpvRenderOptions so = settings.sslpv;
+        sslpv::SslpvRenderOptions so = settings.sslpv;
         so.subsurface = true;
         so.direct = false;
         so.solver.skipAccumulateSteps = out.plan.skipSteps;
-        out.sslpv = renderSslpv(scene, so);
+        out.sslpv = sslpv::renderSslpv(scene, so);
     }
     if (out.plan.mode == SplitMode::Kernel && out.plan.dipoleOn) {
         const SslpvSurfaceKernel kernel =

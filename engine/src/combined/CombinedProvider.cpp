@@ -20,8 +20,8 @@ namespace lucent::combined {
 
 struct CombinedSubsurfaceProvider::Impl {
     CombinedProviderSettings settings;
-    SslpvSubsurfaceProvider sslpv{
-        SslpvProviderOptions{.render = CombinedSettings::defaultSslpvOptions()}};
+    sslpv::SslpvSubsurfaceProvider sslpv{
+        sslpv::SslpvProviderOptions{.render = CombinedSettings::defaultSslpvOptions()}};
     dipole::DipoleSubsurfaceProvider dipole;
     gpu::GlProgram addProgram;
     gpu::GlProgram localProgram;  ///< combined_add.comp LOCAL_ESTIMATE: L̂, f
@@ -110,14 +110,14 @@ const CombinedProviderSettings& CombinedSubsurfaceProvider::settings() const {
 
 void CombinedSubsurfaceProvider::applySplit() {
     const CombinedProviderSettings& s = m->settings;
-    const SslpvOptions& so = s.sslpv.render.solver;
+    const sslpv::SslpvOptions& so = s.sslpv.render.solver;
     // Before a material is attached Δx is unknown: plan with a unit cell (replanned later).
     LUCENT_CHECK(s.localSamples >= 1 && s.localSamples <= 4096,
                  "CombinedProviderSettings.localSamples must be in [1, 4096] (got ", s.localSamples,
                  ")");
     const SplitPlan plan = planSplit(s.splitRadius, m->cellSize > 0.f ? m->cellSize : 1.f,
                                      so.skipAccumulateSteps, so.maxSteps, s.mode);
-    SslpvProviderOptions lo = s.sslpv;
+    sslpv::SslpvProviderOptions lo = s.sslpv;
     lo.render.solver.skipAccumulateSteps = plan.skipSteps;
     lo.meshId = s.meshId;
     dipole::ProviderSettings dp = s.dipole;
@@ -335,7 +335,7 @@ std::vector<gpu::PassTiming> CombinedSubsurfaceProvider::passTimes() const {
     return m->profiler.latest();
 }
 
-const SslpvSubsurfaceProvider& CombinedSubsurfaceProvider::sslpvProvider() const {
+const sslpv::SslpvSubsurfaceProvider& CombinedSubsurfaceProvider::sslpvProvider() const {
     return m->sslpv;
 }
 

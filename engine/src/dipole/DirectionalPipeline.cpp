@@ -36,7 +36,7 @@ struct DirectionalDipoleRenderer::Impl {
     Scene scene;
     DirectionalSettings settings;
     SurfaceBuffers buffers;
-    std::unique_ptr<MeshBoundary> boundary;
+    std::unique_ptr<reference::MeshBoundary> boundary;
     std::vector<glm::dvec3> sum;  // per pixel, Σ over passes
     int passes = 0;
     float sceneRadius = 1.f;
@@ -61,7 +61,7 @@ DirectionalDipoleRenderer::DirectionalDipoleRenderer(const Scene& scene,
     m_impl->scene = scene;
     m_impl->settings = s;
     m_impl->buffers = buildSurfaceBuffers(scene);
-    m_impl->boundary = std::make_unique<MeshBoundary>(scene.objects[0].mesh);
+    m_impl->boundary = std::make_unique<reference::MeshBoundary>(scene.objects[0].mesh);
     m_impl->sum.assign(m_impl->buffers.position.size(), glm::dvec3(0.0));
     const Bounds3f b = m_impl->boundary->bounds();
     m_impl->sceneCenter = b.center();

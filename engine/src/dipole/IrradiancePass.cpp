@@ -82,8 +82,8 @@ MaterialSample materialInside(const MaterialVolume& volume, const Point3f& p, co
 namespace {
 
 /// The irradiance pass proper for an arbitrary view `cam` (the scene camera or a light's).
-SurfaceBuffers renderView(const Scene& scene, const SceneObject& obj, const MeshBoundary& boundary,
-                          const Camera& cam) {
+SurfaceBuffers renderView(const Scene& scene, const SceneObject& obj,
+                          const reference::MeshBoundary& boundary, const Camera& cam) {
     const MaterialVolume& volume = *obj.material;
 
     SurfaceBuffers buf;
@@ -184,7 +184,7 @@ SurfaceBuffers buildSurfaceBuffers(const Scene& scene, int objectIndex) {
     const Camera& cam = scene.camera;
     LUCENT_CHECK(cam.width >= 1 && cam.height >= 1,
                  "buildSurfaceBuffers: camera size must be positive");
-    const MeshBoundary boundary(obj.mesh);
+    const reference::MeshBoundary boundary(obj.mesh);
     return renderView(scene, obj, boundary, cam);
 }
 
@@ -195,7 +195,7 @@ SurfaceBuffers buildLightViewBuffers(const Scene& scene, int lightIndex, int res
                  "buildLightViewBuffers: scene has no light ", lightIndex);
     LUCENT_CHECK(resolution >= 16 && resolution <= 4096,
                  "buildLightViewBuffers: resolution must be in [16, 4096] (got ", resolution, ")");
-    const MeshBoundary boundary(obj.mesh);
+    const reference::MeshBoundary boundary(obj.mesh);
     const Camera cam =
         lightViewCamera(scene.lights[size_t(lightIndex)], boundary.bounds(), resolution);
     return renderView(scene, obj, boundary, cam);
@@ -210,7 +210,7 @@ ImageSpaceViews buildImageSpaceViews(const Scene& scene, const GatherSettings& s
     const SceneObject& obj = checkedObject(scene, objectIndex, "buildImageSpaceViews");
     LUCENT_CHECK(scene.camera.width >= 1 && scene.camera.height >= 1,
                  "buildImageSpaceViews: camera size must be positive");
-    const MeshBoundary boundary(obj.mesh);
+    const reference::MeshBoundary boundary(obj.mesh);
     ImageSpaceViews views;
     views.camera = renderView(scene, obj, boundary, scene.camera);
     for (int l = 0; l < int(scene.lights.size()); ++l) {

@@ -229,7 +229,7 @@ CachedReference referenceFor(const Scene& scene, const std::string& name, const 
     std::ostringstream key;
     key << "case=" << name << " scene-fnv1a=" << hex(hashScene(scene)) << " width=" << w
         << " height=" << h << " spp=" << options.spp << " seed=" << REFERENCE_SEED
-        << " boundary=dielectric estimator=" << REFERENCE_ESTIMATOR_VERSION
+        << " boundary=dielectric estimator=" << reference::REFERENCE_ESTIMATOR_VERSION
         << " subsurface-only=" << options.subsurfaceOnly << "\n";
     CachedReference ref;
     ref.path = exr.string();
@@ -248,12 +248,12 @@ CachedReference referenceFor(const Scene& scene, const std::string& name, const 
         }
     }
     if (!loaded) {
-        ReferenceOptions opt;
+        reference::ReferenceOptions opt;
         opt.spp = options.spp;
         opt.seed = REFERENCE_SEED;
         opt.subsurfaceOnly = options.subsurfaceOnly;
-        const ReferenceImage img = renderReference(scene, opt);
-        writeReferenceExr(img, exr.string());
+        const reference::ReferenceImage img = reference::renderReference(scene, opt);
+        reference::writeReferenceExr(img, exr.string());
         writeFileAtomically(keyFile.string(), key.str());
         ref.mean = img.mean;
         ref.variance = img.variance;
@@ -261,10 +261,11 @@ CachedReference referenceFor(const Scene& scene, const std::string& name, const 
         ref.spp = img.spp;
         ref.seconds = img.seconds;
     }
-    ref.mask = maskFromImage(ref.coverage);
+    ref.mask = bench::maskFromImage(ref.coverage);
     // The floors: the reference against itself with its own variance.
-    const ErrorReport self = compareImages(ref.mean, ref.mean, &ref.variance, nullptr, &ref.mask);
-    const int lum = ErrorReport::LUMINANCE;
+    const bench::ErrorReport self =
+        bench::compareImages(ref.mean, ref.mean, &ref.variance, nullptr, &ref.mask);
+    const int lum = bench::ErrorReport::LUMINANCE;
     ref.blockRelL1Floor = self.blocks[lum].relL1Floor;
     ref.blockRelRmseFloor = self.blocks[lum].relRmseFloor;
     ref.pixelRelRmseFloor = self.channels[lum].relRmseFloor;
@@ -282,7 +283,8 @@ bool Metrics::meetsGoal() const {
 
 Metrics scoreImage(const ImageRgb& test, const CachedReference& reference) {
     Metrics m;
-    m.report = compareImages(test, reference.mean, &reference.variance, nullptr, &reference.mask);
+    m.report =
+        bench::compareImages(test, reference.mean, &reference.variance, nullptr, &reference.mask);
     return m;
 }
 

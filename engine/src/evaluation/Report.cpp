@@ -93,7 +93,7 @@ struct Field {
 
 std::vector<Field> fields(const Result& r) {
     const Metrics& m = r.metrics;
-    const BlockError& lum = m.report.blocks[Metrics::LUM];
+    const bench::BlockError& lum = m.report.blocks[Metrics::LUM];
     std::vector<Field> f = {
         {"case", r.caseName, true},
         {"group", r.group, true},
@@ -441,8 +441,8 @@ std::vector<Result> parseResultsCsv(const std::string& text, const std::string& 
         r.cpuMsMedian = number("cpu_ms");
         r.directCpuMs = number("direct_cpu_ms");
         r.cpuCostRatio = number("cpu_cost_ratio");
-        ErrorReport& rep = r.metrics.report;
-        BlockError& lum = rep.blocks[Metrics::LUM];
+        bench::ErrorReport& rep = r.metrics.report;
+        bench::BlockError& lum = rep.blocks[Metrics::LUM];
         lum.relL1Net = number("block_rel_l1");
         lum.relL1 = number("block_rel_l1_raw");
         lum.relRmseNet = number("block_rel_rmse");

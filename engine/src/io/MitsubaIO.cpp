@@ -25,7 +25,7 @@
 #define LUCENT_VERSION "unknown"
 #endif
 
-namespace lucent {
+namespace lucent::io {
 
 namespace {
 
@@ -287,4 +287,4 @@ MitsubaExportResult exportMitsubaVol(const MaterialVolume& volume, const std::st
     return result;
 }
 
-}  // namespace lucent
+}  // namespace lucent::io

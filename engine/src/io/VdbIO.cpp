@@ -29,7 +29,7 @@
 #define LUCENT_VERSION "unknown"
 #endif
 
-namespace lucent {
+namespace lucent::io {
 
 namespace {
 
@@ -176,9 +176,9 @@ Rgb requireFiniteRgb(const vdb::MetaMap& meta, const std::string& path, const ch
     return v;
 }
 
-vdb::Vec3SGrid::Ptr requireVec3Grid(vdb::io::File& file, const io_detail::VdbLayout& layout,
+vdb::Vec3SGrid::Ptr requireVec3Grid(vdb::io::File& file, const detail::VdbLayout& layout,
                                     const std::string& path, const char* name) {
-    const io_detail::VdbGridEntry* entry = layout.findGrid(name);
+    const detail::VdbGridEntry* entry = layout.findGrid(name);
     if (!file.hasGrid(name) || !entry)
         LUCENT_THROW(IoError, "VDB file '", path, "': missing grid '", name, "'");
     if (!entry->checked)  // a type the preflight walk does not know: never read
@@ -192,7 +192,7 @@ vdb::Vec3SGrid::Ptr requireVec3Grid(vdb::io::File& file, const io_detail::VdbLay
     return grid;
 }
 
-ImportedMaterial importOpen(vdb::io::File& file, const io_detail::VdbLayout& layout,
+ImportedMaterial importOpen(vdb::io::File& file, const detail::VdbLayout& layout,
                             const std::string& path) {
     const vdb::MetaMap::Ptr metaPtr = file.getMetadata();
     const vdb::MetaMap& meta = *metaPtr;
@@ -311,15 +311,15 @@ ImportedMaterial importOpen(vdb::io::File& file, const io_detail::VdbLayout& lay
 /// Writes "<uuid>:<FNV-1a 64 of the bytes after the file metadata>" into the placeholder of
 /// metadata `lucent_checksum` of an in-memory file.
 void stampChecksum(std::string& bytes, const std::string& path) {
-    const io_detail::ByteReader reader = [&](uint64_t pos, void* dst, size_t n) {
+    const detail::ByteReader reader = [&](uint64_t pos, void* dst, size_t n) {
         std::memcpy(dst, bytes.data() + pos, n);
     };
-    const io_detail::VdbLayout layout = io_detail::parseVdbLayout(reader, bytes.size(), path);
+    const detail::VdbLayout layout = detail::parseVdbLayout(reader, bytes.size(), path);
     for (const auto& e : layout.meta)
-        if (e.name == io_detail::CHECKSUM_META && e.valueSize == io_detail::CHECKSUM_TEXT_SIZE) {
+        if (e.name == detail::CHECKSUM_META && e.valueSize == detail::CHECKSUM_TEXT_SIZE) {
             const uint64_t hash =
-                io_detail::fnv1a64(bytes.data() + layout.metaEnd, bytes.size() - layout.metaEnd);
-            const std::string text = layout.uuid + ":" + io_detail::hex64(hash);
+                detail::fnv1a64(bytes.data() + layout.metaEnd, bytes.size() - layout.metaEnd);
+            const std::string text = layout.uuid + ":" + detail::hex64(hash);
             std::memcpy(bytes.data() + e.valueOffset, text.data(), text.size());
             return;
         }
@@ -330,23 +330,23 @@ void stampChecksum(std::string& bytes, const std::string& path) {
 /// (VdbLayout.h: every size OpenVDB will trust is checked against the file) and, for a file
 /// written by exportVdb and not rewritten since (same header UUID), verifies the checksum:
 /// truncated, corrupt and garbage files are rejected here, before OpenVDB reads them.
-io_detail::VdbLayout preflight(const std::string& path) {
+detail::VdbLayout preflight(const std::string& path) {
     const uint64_t size = checkInputFile(path, "VDB file");
     std::ifstream in(path, std::ios::binary);
     if (!in)
         LUCENT_THROW(IoError, "cannot open VDB file '", path, "' for reading");
-    const io_detail::ByteReader reader = [&](uint64_t pos, void* dst, size_t n) {
+    const detail::ByteReader reader = [&](uint64_t pos, void* dst, size_t n) {
         in.seekg(std::streamoff(pos));
         in.read(static_cast<char*>(dst), std::streamsize(n));
         if (!in || size_t(in.gcount()) != n)
             LUCENT_THROW(IoError, "cannot read VDB file '", path, "' at byte ", pos,
                          " (changed while reading?)");
     };
-    io_detail::VdbLayout layout = io_detail::parseVdbLayout(reader, size, path);
+    detail::VdbLayout layout = detail::parseVdbLayout(reader, size, path);
     for (const auto& e : layout.meta) {
-        if (e.name != io_detail::CHECKSUM_META || e.valueSize != io_detail::CHECKSUM_TEXT_SIZE)
+        if (e.name != detail::CHECKSUM_META || e.valueSize != detail::CHECKSUM_TEXT_SIZE)
             continue;
-        std::string text(io_detail::CHECKSUM_TEXT_SIZE, '\0');
+        std::string text(detail::CHECKSUM_TEXT_SIZE, '\0');
         reader(e.valueOffset, text.data(), text.size());
         if (text.compare(0, 36, layout.uuid) != 0)
             break;  // rewritten by another tool: no check
@@ -355,10 +355,10 @@ io_detail::VdbLayout preflight(const std::string& path) {
         for (uint64_t pos = layout.metaEnd; pos < size;) {
             const size_t n = size_t(std::min<uint64_t>(chunk.size(), size - pos));
             reader(pos, chunk.data(), n);
-            hash = io_detail::fnv1a64(chunk.data(), n, hash);
+            hash = detail::fnv1a64(chunk.data(), n, hash);
             pos += n;
         }
-        if (text.substr(37) != io_detail::hex64(hash))
+        if (text.substr(37) != detail::hex64(hash))
             LUCENT_THROW(IoError, "VDB file '", path,
                          "' is corrupt or truncated (checksum mismatch)");
         break;
@@ -370,7 +370,7 @@ io_detail::VdbLayout preflight(const std::string& path) {
 /// after preflight. Any OpenVDB/std failure becomes an IoError naming the file.
 template <typename Fn>
 auto withOpenFile(const std::string& path, const char* what, Fn fn) {
-    const io_detail::VdbLayout layout = preflight(path);
+    const detail::VdbLayout layout = preflight(path);
     initializeOnce();
     try {
         vdb::io::File file(path);
@@ -560,8 +560,8 @@ std::string encodeVdb(const MaterialVolume& volume, const VdbExportOptions& opti
 
     // Serialise in memory, then stamp the integrity checksum into its fixed-size placeholder
     // (same length, so no offset moves) and write the bytes atomically.
-    meta.insertMeta(io_detail::CHECKSUM_META,
-                    vdb::StringMetadata(std::string(io_detail::CHECKSUM_TEXT_SIZE, '0')));
+    meta.insertMeta(detail::CHECKSUM_META,
+                    vdb::StringMetadata(std::string(detail::CHECKSUM_TEXT_SIZE, '0')));
     std::string bytes;
     try {
         std::ostringstream buffer(std::ios::binary);
@@ -584,14 +584,13 @@ void exportVdb(const MaterialVolume& volume, const std::string& path,
 }
 
 ImportedMaterial importVdb(const std::string& path) {
-    return withOpenFile(path, "import",
-                        [&](vdb::io::File& file, const io_detail::VdbLayout& layout) {
-                            return importOpen(file, layout, path);
-                        });
+    return withOpenFile(path, "import", [&](vdb::io::File& file, const detail::VdbLayout& layout) {
+        return importOpen(file, layout, path);
+    });
 }
 
 VdbFileSummary summarizeVdb(const std::string& path) {
-    return withOpenFile(path, "read", [&](vdb::io::File& file, const io_detail::VdbLayout& layout) {
+    return withOpenFile(path, "read", [&](vdb::io::File& file, const detail::VdbLayout& layout) {
         VdbFileSummary s;
         s.path = path;
         std::error_code ec;
@@ -600,7 +599,7 @@ VdbFileSummary summarizeVdb(const std::string& path) {
         s.metadata = metaText(*file.getMetadata());
         // Grid by grid in file order; a grid the preflight walk could not check (point data,
         // point index) is listed by name and type and never handed to OpenVDB.
-        for (const io_detail::VdbGridEntry& entry : layout.grids) {
+        for (const detail::VdbGridEntry& entry : layout.grids) {
             if (!entry.checked) {
                 VdbGridSummary g;
                 g.name = entry.uniqueName.substr(0, entry.uniqueName.find('\x1e'));
@@ -619,4 +618,4 @@ VdbFileSummary summarizeVdb(const std::string& path) {
     });
 }
 
-}  // namespace lucent
+}  // namespace lucent::io

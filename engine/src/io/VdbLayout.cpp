@@ -18,7 +18,7 @@
 #include <limits>
 #include <memory>
 
-namespace lucent::io_detail {
+namespace lucent::io::detail {
 
 namespace {
 
@@ -705,4 +705,4 @@ std::string hex64(uint64_t v) {
     return buf;
 }
 
-}  // namespace lucent::io_detail
+}  // namespace lucent::io::detail

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-namespace lucent::io_detail {
+namespace lucent::io::detail {
 
 /// Reads `n` bytes at absolute offset `pos` into `dst` (the caller has checked the range).
 using ByteReader = std::function<void(uint64_t pos, void* dst, size_t n)>;
@@ -76,4 +76,4 @@ uint64_t fnv1a64(const void* data, size_t n, uint64_t hash = 0xcbf29ce484222325U
 /// Hex text of a 64-bit value, 16 digits.
 std::string hex64(uint64_t v);
 
-}  // namespace lucent::io_detail
+}  // namespace lucent::io::detail

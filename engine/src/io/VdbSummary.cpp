@@ -7,7 +7,7 @@
 #include <iomanip>
 #include <sstream>
 
-namespace lucent {
+namespace lucent::io {
 
 namespace {
 void printVector(std::ostream& os, const std::vector<double>& v) {
@@ -74,4 +74,4 @@ std::string formatVdbSummary(const VdbFileSummary& s) {
     return os.str();
 }
 
-}  // namespace lucent
+}  // namespace lucent::io

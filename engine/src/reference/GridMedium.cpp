@@ -5,7 +5,7 @@
 #include <lucent/core/Error.h>
 #include <lucent/reference/GridMedium.h>
 
-namespace lucent {
+namespace lucent::reference {
 
 GridMedium::GridMedium(const GridSpec& spec, const std::vector<MediumCoefficients>& voxels,
                        const Options& options)
@@ -104,4 +104,4 @@ void GridMedium::buildMajorants(MajorantMode mode) {
             }
 }
 
-}  // namespace lucent
+}  // namespace lucent::reference

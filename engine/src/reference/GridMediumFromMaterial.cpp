@@ -4,7 +4,7 @@
 
 #include <lucent/reference/GridMedium.h>
 
-namespace lucent {
+namespace lucent::reference {
 
 GridMedium GridMedium::fromMaterial(const MaterialVolume& volume, const Options& options) {
     const GridSpec& spec = volume.spec();
@@ -21,4 +21,4 @@ GridMedium GridMedium::fromMaterial(const MaterialVolume& volume, const Options&
     return GridMedium(spec, voxels, options);
 }
 
-}  // namespace lucent
+}  // namespace lucent::reference

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <limits>
 
-namespace lucent {
+namespace lucent::reference {
 
 struct MeshBoundary::Impl {
     explicit Impl(const TriangleMesh& mesh) : caster(mesh, BvhQuality::High) {}
@@ -42,4 +42,4 @@ bool MeshBoundary::occluded(const Point3f& o, const Vector3f& d, float tMin, flo
     return m_impl->caster.occluded(o, d, tMin, tFar);
 }
 
-}  // namespace lucent
+}  // namespace lucent::reference

@@ -16,7 +16,7 @@
 #include <xmmintrin.h>
 #endif
 
-namespace lucent {
+namespace lucent::reference {
 
 namespace {
 
@@ -263,4 +263,4 @@ void writeReferenceExr(const ReferenceImage& image, const std::string& path) {
                    path);
 }
 
-}  // namespace lucent
+}  // namespace lucent::reference

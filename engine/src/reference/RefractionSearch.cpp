@@ -15,7 +15,7 @@
 #include <optional>
 #include <unordered_map>
 
-namespace lucent {
+namespace lucent::reference {
 
 namespace {
 
@@ -660,4 +660,4 @@ void RefractionSearch::sample(const Vector3f& source, bool isDirection, const Po
         });
 }
 
-}  // namespace lucent
+}  // namespace lucent::reference

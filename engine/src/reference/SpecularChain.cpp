@@ -16,7 +16,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace lucent {
+namespace lucent::reference {
 
 namespace {
 
@@ -301,4 +301,4 @@ std::optional<SpecularChain> SpecularChainTracer::connect(const Point3f& x,
     return std::nullopt;
 }
 
-}  // namespace lucent
+}  // namespace lucent::reference

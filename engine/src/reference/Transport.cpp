@@ -22,7 +22,7 @@
 #include <lucent/reference/SpecularChain.h>
 #include <lucent/reference/Transport.h>
 
-namespace lucent {
+namespace lucent::reference {
 
 namespace {
 
@@ -1065,4 +1065,4 @@ Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector
     return tracePath(scene, o, d, path, rng, options, stats);
 }
 
-}  // namespace lucent
+}  // namespace lucent::reference

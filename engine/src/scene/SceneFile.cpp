@@ -388,7 +388,7 @@ SceneObject buildObject(const MeshSource& meshSrc, const MaterialSource& matSrc,
     obj.materialSource = matSrc;
     obj.mesh = buildMesh(meshSrc, warnings);
     if (!matSrc.vdbFile.empty()) {
-        ImportedMaterial imported = importVdb(matSrc.vdbFile);
+        io::ImportedMaterial imported = io::importVdb(matSrc.vdbFile);
         if (resolutionGiven && imported.volume.resolution() != matSrc.resolution)
             valueError("resolution", "is " + std::to_string(matSrc.resolution) +
                                          " but the VDB material '" + matSrc.vdbFile + "' has " +
@@ -665,7 +665,7 @@ void saveProject(const Scene& scene, const std::string& path) {
     // read-only folder) replaces nothing.
     AtomicFile vdbFile(vdbPath.string());
     AtomicFile jsonFile(path);
-    vdbFile.sink().write(encodeVdb(*scene.objects.front().material));
+    vdbFile.sink().write(io::encodeVdb(*scene.objects.front().material));
     jsonFile.sink().write(text);
     vdbFile.finish();
     jsonFile.finish();

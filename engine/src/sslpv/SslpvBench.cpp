@@ -13,7 +13,7 @@
 #include <cmath>
 #include <cstring>
 
-namespace lucent {
+namespace lucent::sslpv {
 
 SslpvBenchScene parseSslpvBenchScene(const std::string& name) {
     for (SslpvBenchScene s : {SslpvBenchScene::Cube, SslpvBenchScene::Sphere,
@@ -146,4 +146,4 @@ double sslpvBandwidthFloorMs(int n, int order, bool heterogeneous, int steps, in
     return ms[ms.size() / 2];
 }
 
-}  // namespace lucent
+}  // namespace lucent::sslpv

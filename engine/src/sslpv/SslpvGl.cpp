@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-namespace lucent {
+namespace lucent::sslpv {
 
 uint16_t floatToHalf(float value) {
     uint32_t x;
@@ -434,4 +434,4 @@ void SslpvGlPropagator::propagate(const SslpvSolver& solver) {
     s.accStale = s.exitStale = true;
 }
 
-}  // namespace lucent
+}  // namespace lucent::sslpv

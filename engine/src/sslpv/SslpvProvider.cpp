@@ -17,7 +17,7 @@
 #include <cmath>
 #include <optional>
 
-namespace lucent {
+namespace lucent::sslpv {
 
 namespace {
 
@@ -432,4 +432,4 @@ const SslpvProviderStats& SslpvSubsurfaceProvider::stats() const {
     return m->stats;
 }
 
-}  // namespace lucent
+}  // namespace lucent::sslpv

@@ -14,7 +14,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace lucent {
+namespace lucent::sslpv {
 namespace {
 
 /// Orthonormal basis (right, up) of the plane perpendicular to `forward`.
@@ -331,4 +331,4 @@ ImageRgb renderSslpv(const Scene& scene, const SslpvRenderOptions& options,
     return img;
 }
 
-}  // namespace lucent
+}  // namespace lucent::sslpv

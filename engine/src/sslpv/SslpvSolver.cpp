@@ -12,7 +12,7 @@
 #include <cmath>
 #include <cstring>
 
-namespace lucent {
+namespace lucent::sslpv {
 namespace {
 
 constexpr double TWO_SQRT_PI = 3.544907701811032;  // ∫ y00 dω = 2√π: flux of c00 = 1
@@ -1150,4 +1150,4 @@ Rgb SslpvSolver::radiance(const Point3f& p, const Normal3f& n) const {
     return L;
 }
 
-}  // namespace lucent
+}  // namespace lucent::sslpv

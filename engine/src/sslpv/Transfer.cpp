@@ -11,7 +11,7 @@
 #include <mutex>
 #include <vector>
 
-namespace lucent {
+namespace lucent::sslpv {
 namespace {
 
 /// Real orthonormal SH up to band 2 in double precision (same basis and order as shEvaluate).
@@ -171,4 +171,4 @@ float rsmTexelSolidAngle(float tanHalfFov, float aspect, int nx, int ny, float c
     return area * cosTheta / (r * r);
 }
 
-}  // namespace lucent
+}  // namespace lucent::sslpv

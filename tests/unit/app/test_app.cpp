@@ -1573,7 +1573,7 @@ TEST(AppFiles, ExportVdbRoundTrip) {
     const QString path = outputPath("app_export.vdb");
     QFile::remove(path);
     ASSERT_TRUE(w->exportVdbTo(path, /*wait=*/true));
-    const ImportedMaterial m = importVdb(path.toStdString());
+    const io::ImportedMaterial m = io::importVdb(path.toStdString());
     EXPECT_EQ(m.volume.spec(), vol->spec());
     EXPECT_EQ(snapshot(m.volume), snapshot(*vol)) << "VDB export must be bit-exact";
     // Import through the UI path as well (drag-and-drop / File ▸ Import VDB).
@@ -1588,7 +1588,7 @@ TEST(AppFiles, ExportVdbOfUntouchedDefaultScene) {
     QFile::remove(path);
     ASSERT_TRUE(w.exportVdbTo(path, /*wait=*/true)) << w.lastError().toStdString();
     ASSERT_TRUE(QFile::exists(path));
-    const ImportedMaterial m = importVdb(path.toStdString());
+    const io::ImportedMaterial m = io::importVdb(path.toStdString());
     EXPECT_EQ(snapshot(m.volume), snapshot(*w.document()->material()));
 }
 

@@ -285,7 +285,7 @@ TEST(ExportVdb, NativeOrRendererReadyGridsAndMitsubaFiles) {
     const QString dir = QStringLiteral(LUCENT_TEST_OUTPUT_DIR);
     const auto gridNames = [](const QString& path) {
         std::set<std::string> names;
-        for (const VdbGridSummary& g : summarizeVdb(path.toStdString()).grids)
+        for (const io::VdbGridSummary& g : io::summarizeVdb(path.toStdString()).grids)
             names.insert(g.name);
         return names;
     };
@@ -296,7 +296,7 @@ TEST(ExportVdb, NativeOrRendererReadyGridsAndMitsubaFiles) {
     ASSERT_TRUE(w.exportVdbTo(nativePath, native, /*wait=*/true)) << w.lastError().toStdString();
     EXPECT_EQ(gridNames(nativePath), (std::set<std::string>{"sigma_t", "sigma_s", "g"}));
     EXPECT_EQ(w.lastExportSteps(), 1);
-    EXPECT_EQ(importVdb(nativePath.toStdString()).metadata.materialName, "native test");
+    EXPECT_EQ(io::importVdb(nativePath.toStdString()).metadata.materialName, "native test");
 
     MainWindow::VdbExportChoice ready;
     ready.rendererGrids = true;
@@ -313,7 +313,7 @@ TEST(ExportVdb, NativeOrRendererReadyGridsAndMitsubaFiles) {
          {"/panels_ready_sigma_t.vol", "/panels_ready_albedo.vol", "/panels_ready_medium.xml"})
         EXPECT_TRUE(QFile::exists(dir + QString::fromLatin1(f))) << f;
     // Both files hold the painted volume bit-exactly.
-    EXPECT_EQ(importVdb(readyPath.toStdString()).volume.denseComponent(0),
+    EXPECT_EQ(io::importVdb(readyPath.toStdString()).volume.denseComponent(0),
               w.document()->material()->denseComponent(0));
 }
 

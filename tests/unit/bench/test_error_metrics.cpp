@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 using namespace lucent;
+using namespace lucent::bench;
 
 TEST(ErrorMetrics, HandComputedValues) {
     // Reference R = 1, 3 on two pixels; test R = 2, 3: RMSE = √(1/2), mean ref 2,

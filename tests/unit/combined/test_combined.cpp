@@ -132,7 +132,7 @@ std::vector<double> slabKernel(float albedo, int skip, int n, int half) {
     MaterialSample ms;
     ms.sigma_t = Rgb(1.f);
     ms.sigma_s = Rgb(albedo);
-    SslpvOptions o = CombinedSettings::defaultSslpvOptions().solver;
+    sslpv::SslpvOptions o = CombinedSettings::defaultSslpvOptions().solver;
     o.skipAccumulateSteps = skip;
     o.maxSteps = 400;
     o.stopEpsilon = 1e-5f;
@@ -174,7 +174,7 @@ TEST(CombinedSplit, ThickSlabStepsSplitDropsNothingFarAndDoubleCountsTheOverlap)
         MaterialSample ms;
         ms.sigma_t = Rgb(1.f);
         ms.sigma_s = Rgb(albedo);
-        SslpvOptions ko = CombinedSettings::defaultSslpvOptions().solver;
+        sslpv::SslpvOptions ko = CombinedSettings::defaultSslpvOptions().solver;
         ko.maxSteps = 400;
         ko.stopEpsilon = 1e-5f;
         // r = 12 mm: a 39³ half-space with half = 18, the same as the kernels of this test.
@@ -250,7 +250,7 @@ TEST(CombinedCpu, ZeroSplitEqualsSslpvAlone) {
         const CombinedResult r = renderCombined(s, cs);
         EXPECT_FALSE(r.plan.dipoleOn);
         EXPECT_EQ(r.plan.skipSteps, cs.sslpv.solver.skipAccumulateSteps);
-        const ImageRgb alone = renderSslpv(s, cs.sslpv);
+        const ImageRgb alone = sslpv::renderSslpv(s, cs.sslpv);
         expectImagesEqual(r.radiance, alone, 0.f, "r_s = 0 vs sslpv");
     }
 }
@@ -268,9 +268,9 @@ TEST(CombinedCpu, IntermediateStepsSplitIsTheSumOfBothWindowedParts) {
     cameraOnly.enabled = false;
     expectImagesEqual(r.dipole, dipole::renderImageSpaceDipole(s, gs, cameraOnly).radiance, 0.f,
                       "dipole part");
-    SslpvRenderOptions so = cs.sslpv;
+    sslpv::SslpvRenderOptions so = cs.sslpv;
     so.solver.skipAccumulateSteps = r.plan.skipSteps;
-    expectImagesEqual(r.sslpv, renderSslpv(s, so), 0.f, "sslpv part");
+    expectImagesEqual(r.sslpv, sslpv::renderSslpv(s, so), 0.f, "sslpv part");
     // Each part is at most its method alone (a window and a skip only remove light).
     const ImageRgb dAll = renderCombined(s, smallSettings(INF_F, SplitMode::Steps)).radiance;
     const ImageRgb lAll = renderCombined(s, smallSettings(0.f, SplitMode::Steps)).radiance;
@@ -295,7 +295,7 @@ TEST(CombinedCpu, KernelSplitIsSslpvPlusDipoleMinusItsLocalPart) {
     const CombinedResult r = renderCombined(s, cs);
     ASSERT_TRUE(r.plan.dipoleOn && r.plan.sslpvOn);
     EXPECT_EQ(r.plan.skipSteps, cs.sslpv.solver.skipAccumulateSteps);
-    expectImagesEqual(r.sslpv, renderSslpv(s, cs.sslpv), 0.f, "sslpv part (unchanged)");
+    expectImagesEqual(r.sslpv, sslpv::renderSslpv(s, cs.sslpv), 0.f, "sslpv part (unchanged)");
     const SslpvSurfaceKernel k =
         computeSslpvSurfaceKernel(meanInsideMaterial(*s.objects[0].material), s.eta,
                                   cs.sslpv.solver, r.plan.cellSize, r.plan.splitRadius);
@@ -462,12 +462,12 @@ TEST(CombinedCpu, BacklitThinThickCloserToReferenceThanDipoleAlone) {
     Scene s = loadScene(path);
     s.camera.width = 48;
     s.camera.height = 36;
-    ReferenceOptions ro;
+    reference::ReferenceOptions ro;
     ro.spp = 96;
     ro.subsurfaceOnly = true;
     ro.seed = 7;
-    const ReferenceImage ref = renderReference(s, ro);
-    const std::vector<uint8_t> mask = maskFromImage(ref.coverage);
+    const reference::ReferenceImage ref = reference::renderReference(s, ro);
+    const std::vector<uint8_t> mask = bench::maskFromImage(ref.coverage);
 
     // SSLPV at grid 64 (64 steps): at grid 32 its thick part is too dark (docs/methods/
     // combined.md); the dipole part without light views (the default: no double count).
@@ -482,10 +482,12 @@ TEST(CombinedCpu, BacklitThinThickCloserToReferenceThanDipoleAlone) {
     dOnly.mode = SplitMode::Steps;  // r_s = ∞: the dipole alone
     dOnly.dipoleLightViews = true;  // the dipole method's default: camera + light views
     const ImageRgb dip = renderCombined(s, dOnly).radiance;
-    const ErrorReport ec = compareImages(comb.radiance, ref.mean, &ref.variance, nullptr, &mask);
-    const ErrorReport ed = compareImages(dip, ref.mean, &ref.variance, nullptr, &mask);
-    const ChannelError& c = ec.channels[3];
-    const ChannelError& d = ed.channels[3];
+    const bench::ErrorReport ec =
+        bench::compareImages(comb.radiance, ref.mean, &ref.variance, nullptr, &mask);
+    const bench::ErrorReport ed =
+        bench::compareImages(dip, ref.mean, &ref.variance, nullptr, &mask);
+    const bench::ChannelError& c = ec.channels[3];
+    const bench::ChannelError& d = ed.channels[3];
     std::printf(
         "back-lit thin-thick 48x36, ref %d spp (rel. RMSE floor %.3f): rel. RMSE "
         "combined %.3f, dipole %.3f\n",
@@ -616,7 +618,7 @@ TEST_F(CombinedGl, OutputIsSumOfPartsAndMatchesCpuFormulasOnItsGBuffer) {
                                                 ps.localSamples, ps.dipole.seed);
     const ImageRgb cpuFrac = localSslpvFraction(buf, provider.kernel(), plan.splitRadius,
                                                 ps.localSamples, ps.dipole.seed);
-    const SslpvSolver& solver = provider.sslpvProvider().solver();
+    const sslpv::SslpvSolver& solver = provider.sslpvProvider().solver();
     double sumCpu = 0.0, sumGl = 0.0, sumD = 0.0, sumS = 0.0, sumL = 0.0;
     std::vector<double> rel;
     for (int y = 0; y < h; ++y)

@@ -37,7 +37,7 @@ CachedReference twoBlockReference(float variance) {
             ref.variance.at(x, y) = Rgb(variance);
             ref.coverage.at(x, y) = Rgb(1.f);
         }
-    ref.mask = maskFromImage(ref.coverage);
+    ref.mask = bench::maskFromImage(ref.coverage);
     return ref;
 }
 

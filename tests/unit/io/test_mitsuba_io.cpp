@@ -20,6 +20,7 @@
 #include <sstream>
 
 using namespace lucent;
+using namespace lucent::io;
 using namespace lucent::test;
 
 namespace {

@@ -13,6 +13,7 @@
 #include <sys/resource.h>
 
 using namespace lucent;
+using namespace lucent::io;
 using namespace lucent::test;
 
 namespace {

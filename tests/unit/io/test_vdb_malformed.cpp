@@ -17,6 +17,7 @@
 #include <limits>
 
 using namespace lucent;
+using namespace lucent::io;
 using namespace lucent::test;
 
 namespace {

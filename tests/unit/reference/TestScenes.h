@@ -39,9 +39,9 @@ inline TriangleMesh boxMesh(const Point3f& lo, const Point3f& hi) {
 }
 
 /// Grid of `res`³ voxels of size h starting at `origin`, value from `f(i, j, k)`.
-inline GridMedium gridFrom(const Point3f& origin, float h, int res,
-                           const std::function<MediumCoefficients(int, int, int)>& f,
-                           const GridMedium::Options& options) {
+inline reference::GridMedium gridFrom(const Point3f& origin, float h, int res,
+                                      const std::function<MediumCoefficients(int, int, int)>& f,
+                                      const reference::GridMedium::Options& options) {
     GridSpec spec;
     spec.origin = origin;
     spec.voxelSize = h;
@@ -51,7 +51,7 @@ inline GridMedium gridFrom(const Point3f& origin, float h, int res,
         for (int j = 0; j < res; ++j)
             for (int i = 0; i < res; ++i)
                 v[spec.linearIndex({i, j, k})] = f(i, j, k);
-    return GridMedium(spec, v, options);
+    return reference::GridMedium(spec, v, options);
 }
 
 /// Coefficients with the same σt, σs, g in all three channels.
@@ -85,8 +85,9 @@ struct MeanSe {
 /// sampled uniformly in the cone around the object's bounding sphere (radius `radius` about
 /// `centre`, probe outside it), pdf = 1/(2π(1 − cos θmax)); fluence = E[L / pdf] (radiance
 /// from outside the cone is zero: the lights here are points or directional).
-inline MeanSe fluenceAt(const VolumeScene& scene, const Point3f& probe, const Point3f& centre,
-                        float radius, int n, uint64_t seed, const TransportOptions& to) {
+inline MeanSe fluenceAt(const reference::VolumeScene& scene, const Point3f& probe,
+                        const Point3f& centre, float radius, int n, uint64_t seed,
+                        const reference::TransportOptions& to) {
     Pcg32 rng(seed);
     MeanSe f;
     const Vector3f axis = centre - probe;
@@ -99,7 +100,7 @@ inline MeanSe fluenceAt(const VolumeScene& scene, const Point3f& probe, const Po
         const float sinT = std::sqrt(std::max(0.f, 1.f - cosT * cosT));
         const float phi = 2.f * PI * rng.uniform();
         const Vector3f d = frame.toWorld({sinT * std::cos(phi), sinT * std::sin(phi), cosT});
-        f.add(invPdf * estimateRadiance(scene, probe, glm::normalize(d), 0, rng, to));
+        f.add(invPdf * reference::estimateRadiance(scene, probe, glm::normalize(d), 0, rng, to));
     }
     return f;
 }

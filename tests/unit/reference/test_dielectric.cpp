@@ -19,6 +19,7 @@
 #include <sstream>
 
 using namespace lucent;
+using namespace lucent::reference;
 using namespace lucent::test;
 namespace fwd = lucent::test::forward;
 

@@ -18,6 +18,7 @@
 #include <optional>
 
 using namespace lucent;
+using namespace lucent::reference;
 using namespace lucent::test;
 
 namespace {

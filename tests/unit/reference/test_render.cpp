@@ -13,6 +13,7 @@
 #include <filesystem>
 
 using namespace lucent;
+using namespace lucent::reference;
 using namespace lucent::test;
 
 namespace {
@@ -82,12 +83,12 @@ TEST(ReferenceRender, VarianceLayerPredictsTheErrorBetweenRenders) {
         const ReferenceImage a = renderReference(scene, o);
         o.seed = 200 + uint64_t(spp);
         const ReferenceImage b = renderReference(scene, o);
-        const std::vector<uint8_t> mask = maskFromImage(a.coverage);
-        return compareImages(a.mean, b.mean, &b.variance, &a.variance, &mask);
+        const std::vector<uint8_t> mask = bench::maskFromImage(a.coverage);
+        return bench::compareImages(a.mean, b.mean, &b.variance, &a.variance, &mask);
     };
-    const ErrorReport n = pair(12), n4 = pair(48);
-    const ChannelError& l = n.channels[ErrorReport::LUMINANCE];
-    const ChannelError& l4 = n4.channels[ErrorReport::LUMINANCE];
+    const bench::ErrorReport n = pair(12), n4 = pair(48);
+    const bench::ChannelError& l = n.channels[bench::ErrorReport::LUMINANCE];
+    const bench::ChannelError& l4 = n4.channels[bench::ErrorReport::LUMINANCE];
     ASSERT_GT(l.meanReference, 0.0);
     EXPECT_GT(l.rmse / l.rmseFloor, 1 / 1.5);
     EXPECT_LT(l.rmse / l.rmseFloor, 1.5);
@@ -166,8 +167,9 @@ TEST(ReferenceRender, SpectralMisAgreesWithPerChannelTracking) {
     o.spectralMis = false;
     o.seed = 9;
     const ReferenceImage b = renderReference(scene, o);
-    const std::vector<uint8_t> mask = maskFromImage(a.coverage);
-    const ErrorReport r = compareImages(a.mean, b.mean, &b.variance, &a.variance, &mask);
+    const std::vector<uint8_t> mask = bench::maskFromImage(a.coverage);
+    const bench::ErrorReport r =
+        bench::compareImages(a.mean, b.mean, &b.variance, &a.variance, &mask);
     for (int c = 0; c < 4; ++c) {
         EXPECT_GT(r.channels[size_t(c)].rmse / r.channels[size_t(c)].rmseFloor, 1 / 1.5) << c;
         EXPECT_LT(r.channels[size_t(c)].rmse / r.channels[size_t(c)].rmseFloor, 1.5) << c;

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 using namespace lucent;
+using namespace lucent::reference;
 using namespace lucent::test;
 
 TEST(SpecularChain, SingleRefractionGainMatchesTheClosedForm) {

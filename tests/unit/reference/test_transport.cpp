@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 using namespace lucent;
+using namespace lucent::reference;
 using namespace lucent::test;
 
 namespace {

@@ -44,14 +44,14 @@ inline CoarseMaterial centredMaterial(int n, float h, float sigma_t = 0.f, float
 /// Texels of an orthographic RSM of a directional light travelling along `dir` onto the ball
 /// of radius 0.35·N·h at the grid's centre: `texels`² texels over its disc, texel area a (mm²)
 /// times irradiance E (W/mm²) gives Φ_p (§3.1, directional case).
-inline std::vector<SslpvInjectionSample> ballTexels(const CoarseMaterial& m, Vector3f dir, Rgb E,
-                                                    int texels = 48) {
+inline std::vector<sslpv::SslpvInjectionSample> ballTexels(const CoarseMaterial& m, Vector3f dir,
+                                                           Rgb E, int texels = 48) {
     dir = glm::normalize(dir);
     const float radius = 0.35f * m.spec.resolution * m.spec.voxelSize;
     const Vector3f a = std::abs(dir.x) < 0.9f ? Vector3f(1, 0, 0) : Vector3f(0, 1, 0);
     const Vector3f u = glm::normalize(glm::cross(dir, a)), v = glm::cross(dir, u);
     const float pitch = 2.f * radius / texels;
-    std::vector<SslpvInjectionSample> out;
+    std::vector<sslpv::SslpvInjectionSample> out;
     for (int j = 0; j < texels; ++j)
         for (int i = 0; i < texels; ++i) {
             const float s = (i + 0.5f) * pitch - radius, t = (j + 0.5f) * pitch - radius;

@@ -19,6 +19,7 @@
 #include <string>
 
 using namespace lucent;
+using namespace lucent::sslpv;
 
 namespace {
 

@@ -16,6 +16,7 @@
 #include <cmath>
 
 using namespace lucent;
+using namespace lucent::sslpv;
 
 namespace {
 

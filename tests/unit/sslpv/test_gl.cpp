@@ -15,6 +15,7 @@
 #include <cstdio>
 
 using namespace lucent;
+using namespace lucent::sslpv;
 
 namespace {
 

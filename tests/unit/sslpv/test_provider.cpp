@@ -21,6 +21,7 @@
 #include <cstdio>
 
 using namespace lucent;
+using namespace lucent::sslpv;
 
 namespace {
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 using namespace lucent;
+using namespace lucent::sslpv;
 
 namespace {
 

@@ -12,6 +12,7 @@
 #include <cmath>
 
 using namespace lucent;
+using namespace lucent::sslpv;
 
 namespace {
 

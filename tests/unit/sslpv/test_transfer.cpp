@@ -9,6 +9,7 @@
 #include <cmath>
 
 using namespace lucent;
+using namespace lucent::sslpv;
 
 // The paper prints the ±x matrix to 3 decimals (§4); rounding gives ±5e-4. The 24-node
 // Gauss–Legendre rule on a smooth integrand is accurate to ~1e-10, float storage to 1e-7.

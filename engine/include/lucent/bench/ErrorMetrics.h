@@ -39,7 +39,7 @@
 #include <string>
 #include <vector>
 
-namespace lucent {
+namespace lucent::bench {
 
 /// One channel's (or luminance's) errors and noise floors.
 struct ChannelError {
@@ -91,4 +91,4 @@ std::vector<uint8_t> maskFromImage(const ImageRgb& coverage);
 /// beside the errors).
 std::string formatReport(const ErrorReport& report);
 
-}  // namespace lucent
+}  // namespace lucent::bench

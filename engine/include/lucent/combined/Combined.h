@@ -102,14 +102,14 @@ struct SslpvSurfaceKernel {
 /// laterally infinite slab under uniform normal irradiance E. @param n grid cells per axis,
 /// [8, 128]; @param half ≤ (n − 3)/2. @throw ValueError for invalid arguments.
 std::vector<Rgb> sslpvHalfSpaceResponse(const MaterialSample& material, float eta,
-                                        const SslpvOptions& options, float cellSize, int n,
+                                        const sslpv::SslpvOptions& options, float cellSize, int n,
                                         int half);
 
 /// Solves the half-space for `material` (reduced σt, σs′, g, mm⁻¹) with `options` (mode,
 /// order, steps, skip, attenuation as the renderer uses them) at cell size Δx and index η,
 /// covering radii up to `radius` (mm). @throw ValueError for an invalid material, Δx ≤ 0.
 SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, float eta,
-                                             const SslpvOptions& options, float cellSize,
+                                             const sslpv::SslpvOptions& options, float cellSize,
                                              float radius);
 
 /// Mean reduced material over the inside voxels of `volume` (the kernel's material for
@@ -158,10 +158,10 @@ struct CombinedSettings {
     dipole::GatherSettings dipole;
     /// SSLPV (grid, steps, order, mode; calibrated by default as in the CLI). The subsurface
     /// term alone is used; skipAccumulateSteps is k₀ and is raised to k by the split.
-    SslpvRenderOptions sslpv = defaultSslpvOptions();
+    sslpv::SslpvRenderOptions sslpv = defaultSslpvOptions();
 
     /// Calibrated mode (the CLI's SSLPV default), subsurface term only.
-    static SslpvRenderOptions defaultSslpvOptions();
+    static sslpv::SslpvRenderOptions defaultSslpvOptions();
 };
 
 /// The combined image and its two parts (all subsurface radiance, W/(mm²·sr)).

@@ -53,15 +53,15 @@ struct CombinedProviderSettings {
     /// the dipole would be counted twice (docs/methods/combined.md).
     dipole::ProviderSettings dipole = cameraOnlyDipole();
     /// SSLPV provider options (grid, steps, mode); skipAccumulateSteps is k₀, raised to k.
-    SslpvProviderOptions sslpv{.render = CombinedSettings::defaultSslpvOptions()};
+    sslpv::SslpvProviderOptions sslpv{.render = CombinedSettings::defaultSslpvOptions()};
 };
 
 /// Progressive state of both parts.
 struct CombinedProviderStats {
-    dipole::ProviderStats dipole;  ///< accumulation of the dipole part
-    SslpvProviderStats sslpv;      ///< solves/uploads of the SSLPV part
-    SplitPlan plan;                ///< the split in use (valid once a material is set)
-    int frames = 0;                ///< renderSubsurface calls
+    dipole::ProviderStats dipole;     ///< accumulation of the dipole part
+    sslpv::SslpvProviderStats sslpv;  ///< solves/uploads of the SSLPV part
+    SplitPlan plan;                   ///< the split in use (valid once a material is set)
+    int frames = 0;                   ///< renderSubsurface calls
     /// the dipole part converged (SSLPV is deterministic) and the kernel is up to date (a
     /// stroke's kernel update runs at the frame after the stroke's)
     bool converged = false;
@@ -116,7 +116,7 @@ public:
     /// frame whose timer queries are available (context current: may wait for the last frame).
     [[nodiscard]] std::vector<gpu::PassTiming> passTimes() const;
     //! @{ \name The parts (for tests, timings and the statistics panel)
-    [[nodiscard]] const SslpvSubsurfaceProvider& sslpvProvider() const;
+    [[nodiscard]] const sslpv::SslpvSubsurfaceProvider& sslpvProvider() const;
     [[nodiscard]] const dipole::DipoleSubsurfaceProvider& dipoleProvider() const;
     /// Kernel split: SSLPV's local kernel of the last frame (mean inside material).
     [[nodiscard]] const SslpvSurfaceKernel& kernel() const;

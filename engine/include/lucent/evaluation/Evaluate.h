@@ -97,9 +97,10 @@ CachedReference referenceFor(const Scene& scene, const std::string& name, const 
 
 /// One render scored against a reference.
 struct Metrics {
-    ErrorReport report;  ///< per channel R, G, B and luminance (index ErrorReport::LUMINANCE)
+    bench::ErrorReport
+        report;  ///< per channel R, G, B and luminance (index ErrorReport::LUMINANCE)
 
-    static constexpr int LUM = ErrorReport::LUMINANCE;
+    static constexpr int LUM = bench::ErrorReport::LUMINANCE;
     /// Block relative L1 of channel c, reference noise removed in quadrature.
     [[nodiscard]] double blockRelL1(int c = LUM) const { return report.blocks[c].relL1Net; }
     [[nodiscard]] double blockRelRmse(int c = LUM) const { return report.blocks[c].relRmseNet; }

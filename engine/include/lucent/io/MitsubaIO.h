@@ -20,7 +20,7 @@
 
 #include <string>
 
-namespace lucent {
+namespace lucent::io {
 
 /// Version of the `.vol` format written (Mitsuba 3 reads only version 3).
 inline constexpr int MITSUBA_VOL_VERSION = 3;
@@ -64,4 +64,4 @@ struct MitsubaExportResult {
 MitsubaExportResult exportMitsubaVol(const MaterialVolume& volume, const std::string& prefix,
                                      const MitsubaExportOptions& options = {});
 
-}  // namespace lucent
+}  // namespace lucent::io

@@ -28,7 +28,7 @@
 #include <string>
 #include <vector>
 
-namespace lucent {
+namespace lucent::io {
 
 /// Version of the Lucent layout inside the VDB file (metadata `lucent_format_version`).
 inline constexpr int VDB_FORMAT_VERSION = 1;
@@ -120,4 +120,4 @@ VdbFileSummary summarizeVdb(const std::string& path);
 /// Human-readable multi-line text of a summary (what `lucent-cli info` prints).
 std::string formatVdbSummary(const VdbFileSummary& summary);
 
-}  // namespace lucent
+}  // namespace lucent::io

@@ -22,7 +22,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace lucent {
+namespace lucent::reference {
 
 /// How the free-flight sampler bounds σt.
 enum class MajorantMode : uint8_t {
@@ -196,4 +196,4 @@ void GridMedium::forEachMajorantSegment(const Point3f& o, const Vector3f& d, flo
     }
 }
 
-}  // namespace lucent
+}  // namespace lucent::reference

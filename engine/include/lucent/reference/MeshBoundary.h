@@ -13,7 +13,7 @@
 #include <memory>
 #include <optional>
 
-namespace lucent {
+namespace lucent::reference {
 
 /// A ray's first surface crossing.
 struct SurfaceHit {
@@ -53,4 +53,4 @@ private:
     Bounds3f m_bounds;
 };
 
-}  // namespace lucent
+}  // namespace lucent::reference

@@ -19,7 +19,7 @@
 #include <functional>
 #include <string>
 
-namespace lucent {
+namespace lucent::reference {
 
 /// Version of the reference estimator: part of every cached reference's key, so a cache made
 /// by an older estimator is never reused. 2: exact refracted next-event estimation at the
@@ -81,4 +81,4 @@ ReferenceImage renderReference(const Scene& scene, const ReferenceOptions& optio
 /// @throw IoError naming the path.
 void writeReferenceExr(const ReferenceImage& image, const std::string& path);
 
-}  // namespace lucent
+}  // namespace lucent::reference

@@ -29,7 +29,7 @@
 #include <type_traits>
 #include <vector>
 
-namespace lucent {
+namespace lucent::reference {
 
 /// One light path source → p (refraction into the object) → x, on the plane of one face.
 struct Refraction {
@@ -142,4 +142,4 @@ private:
     std::unique_ptr<Impl> m_impl;
 };
 
-}  // namespace lucent
+}  // namespace lucent::reference

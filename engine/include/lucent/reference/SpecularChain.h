@@ -24,7 +24,7 @@
 #include <cstdint>
 #include <optional>
 
-namespace lucent {
+namespace lucent::reference {
 
 /// One chain, from the inside point x outwards to the light (the reverse of the light's way).
 struct SpecularChain {
@@ -95,4 +95,4 @@ private:
     float m_eta;
 };
 
-}  // namespace lucent
+}  // namespace lucent::reference

@@ -27,7 +27,7 @@
 #include <optional>
 #include <vector>
 
-namespace lucent {
+namespace lucent::reference {
 
 /// How light crosses the object's surface.
 enum class BoundaryModel : uint8_t {
@@ -151,4 +151,4 @@ Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector
 /// `eta` = η_transmitted / η_incident. Returns 1 for total internal reflection.
 float fresnelDielectric(float cosI, float eta);
 
-}  // namespace lucent
+}  // namespace lucent::reference

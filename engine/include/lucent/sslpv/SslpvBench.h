@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-namespace lucent {
+namespace lucent::sslpv {
 
 /// Benchmark scenes on an N³ grid of 1 mm cells.
 enum class SslpvBenchScene {
@@ -53,4 +53,4 @@ SslpvBenchSetup makeSslpvBenchSetup(SslpvBenchScene scene, int n, bool heterogen
 /// @throw ValueError for n, order, steps or repeats out of range.
 double sslpvBandwidthFloorMs(int n, int order, bool heterogeneous, int steps, int repeats);
 
-}  // namespace lucent
+}  // namespace lucent::sslpv

@@ -26,7 +26,7 @@
 #include <cstdint>
 #include <memory>
 
-namespace lucent {
+namespace lucent::sslpv {
 
 /// Storage precision of the GPU grids (factors and masks are always fp32).
 enum class SslpvGlStorage { Float32, Float16 };
@@ -80,4 +80,4 @@ private:
 uint16_t floatToHalf(float value);
 float halfToFloat(uint16_t bits);
 
-}  // namespace lucent
+}  // namespace lucent::sslpv

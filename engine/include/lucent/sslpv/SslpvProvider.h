@@ -38,7 +38,7 @@
 #include <memory>
 #include <vector>
 
-namespace lucent {
+namespace lucent::sslpv {
 
 /// Where the propagation steps run.
 enum class SslpvBackend {
@@ -155,4 +155,4 @@ private:
     std::unique_ptr<Impl> m;
 };
 
-}  // namespace lucent
+}  // namespace lucent::sslpv

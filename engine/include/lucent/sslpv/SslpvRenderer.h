@@ -23,8 +23,10 @@
 #include <vector>
 
 namespace lucent {
-
 class RayCaster;
+}
+
+namespace lucent::sslpv {
 
 /// Renderer settings. Injection texels come from one reflective shadow map per light (§3.1):
 /// point and spot lights outside the mesh's bounding sphere use one perspective map aimed at
@@ -109,4 +111,4 @@ std::vector<float> meshInsideFractions(const TriangleMesh& mesh, const GridSpec&
 ImageRgb renderSslpv(const Scene& scene, const SslpvRenderOptions& options = {},
                      SslpvRenderTimings* timings = nullptr, SslpvStats* stats = nullptr);
 
-}  // namespace lucent
+}  // namespace lucent::sslpv

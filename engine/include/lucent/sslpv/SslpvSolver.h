@@ -23,7 +23,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace lucent {
+namespace lucent::sslpv {
 
 /// Dense SH grid, structure of arrays: one plane per (channel, coefficient), each a
 /// (N+2)³ array with a one-cell zero border (x fastest) so the propagation stencil needs no
@@ -272,4 +272,4 @@ private:
     SslpvStats m_stats;
 };
 
-}  // namespace lucent
+}  // namespace lucent::sslpv

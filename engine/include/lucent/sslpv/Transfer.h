@@ -14,7 +14,7 @@
 
 #include <array>
 
-namespace lucent {
+namespace lucent::sslpv {
 
 /// Maximum SH coefficient count supported by the solver (order 2 → 9).
 inline constexpr int SSLPV_MAX_COEFFS = 9;
@@ -72,4 +72,4 @@ Vector3f refractInto(const Vector3f& wi, const Normal3f& n, float eta);
 float rsmTexelSolidAngle(float tanHalfFov, float aspect, int nx, int ny, float cosTheta,
                          float nearPlane = 1.f);
 
-}  // namespace lucent
+}  // namespace lucent::sslpv

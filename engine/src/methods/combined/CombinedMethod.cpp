@@ -123,8 +123,8 @@ private:
         s.sslpv.render.solver.maxSteps = p.getInt("steps");
         s.sslpv.render.solver.order = p.getInt("sh");
         if (backend() == Backend::Gl) {
-            s.sslpv.backend =
-                p.getChoice("propagation") == "gl" ? SslpvBackend::Gl : SslpvBackend::Cpu;
+            s.sslpv.backend = p.getChoice("propagation") == "gl" ? sslpv::SslpvBackend::Gl
+                                                                 : sslpv::SslpvBackend::Cpu;
             s.dipole.samplesPerFrame = p.getInt("spp-frame");
             if (!isLive())
                 m_spp = p.getInt("spp");

@@ -22,21 +22,21 @@ public:
     using Method::Method;
 
     ImageRgb renderCpu(const Scene& scene, const CpuRequest& request) override {
-        ReferenceOptions opt;
+        reference::ReferenceOptions opt;
         opt.spp = params().getInt("spp");
         opt.seed = uint64_t(params().getInt("seed"));
         opt.threads = params().getInt("threads");
-        opt.boundary = parseBoundaryModel(params().getChoice("boundary"));
+        opt.boundary = reference::parseBoundaryModel(params().getChoice("boundary"));
         opt.subsurfaceOnly = request.subsurfaceOnly;
         if (request.progress) {
             const auto progress = request.progress;
-            opt.progress = [progress](const ReferenceProgress& p) {
+            opt.progress = [progress](const reference::ReferenceProgress& p) {
                 double frac = double(p.spp) / double(std::max(1, p.maxSpp));
                 progress(frac, std::to_string(p.spp) + " spp  RSE " + num(p.rse, "%.4f") + "  " +
                                    num(p.elapsedMs * 1e-3, "%.1f") + " s");
             };
         }
-        const ReferenceImage img = renderReference(scene, opt);
+        const reference::ReferenceImage img = reference::renderReference(scene, opt);
         m_stats = {{"spp", std::to_string(img.spp)},
                    {"RSE", num(img.rse, "%.4f")},
                    {"seconds", num(img.seconds, "%.2f")},

@@ -64,11 +64,11 @@ public:
 
     /// The CPU renderer (SslpvRenderer) of the whole scene.
     ImageRgb renderCpu(const Scene& scene, const CpuRequest& request) override {
-        SslpvRenderOptions opt = m_options.render;
+        sslpv::SslpvRenderOptions opt = m_options.render;
         opt.direct = !request.subsurfaceOnly;
-        SslpvRenderTimings t;
-        SslpvStats st;
-        ImageRgb image = renderSslpv(scene, opt, &t, &st);
+        sslpv::SslpvRenderTimings t;
+        sslpv::SslpvStats st;
+        ImageRgb image = sslpv::renderSslpv(scene, opt, &t, &st);
         m_cpuStats = {
             {"mode", params().getChoice("mode")},         {"steps", std::to_string(st.stepsUsed)},
             {"injected W (green)", num(st.injected.y)},   {"exitant W (green)", num(st.exitant.y)},
@@ -83,10 +83,10 @@ public:
             return m_cpuStats;
         if (!m_provider)
             return {};
-        const SslpvProviderTimings& t = m_provider->timings();
-        const SslpvProviderStats& st = m_provider->stats();
+        const sslpv::SslpvProviderTimings& t = m_provider->timings();
+        const sslpv::SslpvProviderStats& st = m_provider->stats();
         return {{"grid", std::to_string(m_options.render.gridResolution)},
-                {"propagation", m_options.backend == SslpvBackend::Gl ? "GL" : "CPU"},
+                {"propagation", m_options.backend == sslpv::SslpvBackend::Gl ? "GL" : "CPU"},
                 {"steps", std::to_string(m_provider->solver().stats().stepsUsed)},
                 {"injected W (green)", num(m_provider->solver().stats().injected.y)},
                 {"resample ms", num(t.resampleMs, "%.2f")},
@@ -104,7 +104,7 @@ public:
 
 private:
     void applyParams(const Params& p) override {
-        SslpvProviderOptions o;
+        sslpv::SslpvProviderOptions o;
         o.render.gridResolution = p.getInt("grid");
         o.render.solver.maxSteps = p.getInt("steps");
         if (isLive())  // the app's range (each step re-propagates on a stroke)
@@ -121,17 +121,18 @@ private:
         // paper's literal extinction is 5–50× too dark).
         const std::string& mode = p.getChoice("mode");
         if (mode == "calibrated") {
-            o.render.solver.mode = SslpvMode::Calibrated;
+            o.render.solver.mode = sslpv::SslpvMode::Calibrated;
             LUCENT_CHECK(!p.isGiven("attenuation"),
                          "sslpv: attenuation applies to mode paper only");
         } else {
-            o.render.solver.mode = SslpvMode::Paper;
+            o.render.solver.mode = sslpv::SslpvMode::Paper;
             o.render.solver.attenuation = p.getChoice("attenuation") == "extinction"
-                                              ? SslpvAttenuation::Extinction
-                                              : SslpvAttenuation::Absorption;
+                                              ? sslpv::SslpvAttenuation::Extinction
+                                              : sslpv::SslpvAttenuation::Absorption;
         }
         if (backend() == Backend::Gl)
-            o.backend = p.getChoice("propagation") == "gl" ? SslpvBackend::Gl : SslpvBackend::Cpu;
+            o.backend = p.getChoice("propagation") == "gl" ? sslpv::SslpvBackend::Gl
+                                                           : sslpv::SslpvBackend::Cpu;
         const bool recreate = m_provider && o.backend != m_options.backend;
         // A new grid drops the provider's material (SslpvProvider::setOptions): the next
         // setScene hands it the volume again (a live instance's grid changes at run time).
@@ -148,14 +149,14 @@ private:
     }
 
     void makeProvider() {
-        m_provider = std::make_unique<SslpvSubsurfaceProvider>(m_options);
+        m_provider = std::make_unique<sslpv::SslpvSubsurfaceProvider>(m_options);
         m_provider->create(*m_library);
         m_meshSet = m_lightsSet = m_materialSet = false;
     }
 
-    SslpvProviderOptions m_options;
+    sslpv::SslpvProviderOptions m_options;
     const gpu::ShaderLibrary* m_library = nullptr;
-    std::unique_ptr<SslpvSubsurfaceProvider> m_provider;
+    std::unique_ptr<sslpv::SslpvSubsurfaceProvider> m_provider;
     SceneInputs m_scene;
     float m_eta = 0.f;
     bool m_meshSet = false, m_lightsSet = false, m_materialSet = false;
