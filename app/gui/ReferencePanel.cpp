@@ -231,17 +231,17 @@ bool ReferencePanel::compareWithPreview() {
         // lit so far (its background is black).
         std::vector<uint8_t> mask;
         if (!m_refCoverage.isEmpty()) {
-            mask = maskFromImage(m_refCoverage);
+            mask = bench::maskFromImage(m_refCoverage);
         } else {
             mask.resize(m_refMean.pixels().size());
             for (size_t i = 0; i < mask.size(); ++i)
                 mask[i] = luminance(m_refMean.pixels()[i]) > 0.f;
         }
-        const ErrorReport r = compareImages(
+        const bench::ErrorReport r = bench::compareImages(
             preview, m_refMean, m_refVariance.isEmpty() ? nullptr : &m_refVariance, nullptr, &mask);
-        const BlockError& b = r.blocks[ErrorReport::LUMINANCE];
+        const bench::BlockError& b = r.blocks[bench::ErrorReport::LUMINANCE];
         m_blockRelL1 = b.relL1;
-        m_meanRatio = r.channels[ErrorReport::LUMINANCE].meanRatio;
+        m_meanRatio = r.channels[bench::ErrorReport::LUMINANCE].meanRatio;
         m_errorImage = errorMapImage(bench::blockErrorMap(preview, m_refMean, &mask));
         m_previewImage = toDisplay(preview, m_exposure);
         const QString method = QString::fromStdString(m_viewport->stats().preview.method);
