@@ -50,8 +50,15 @@ struct AppBrush {
 class HistoryCommand : public QUndoCommand {
 public:
     /// @param undoFn / redoFn call History::undo / History::redo on the document's volume.
-    HistoryCommand(const QString& text, std::function<void()> undoFn, std::function<void()> redoFn)
-        : QUndoCommand(text), m_undo(std::move(undoFn)), m_redo(std::move(redoFn)) {}
+    /// @param isPaint true for a step the engine's History holds (stroke, fill); false for
+    ///        steps kept by value in the functions (lights, η).
+    HistoryCommand(const QString& text, std::function<void()> undoFn, std::function<void()> redoFn,
+                   bool isPaint = false)
+        : QUndoCommand(text),
+          m_undo(std::move(undoFn)),
+          m_redo(std::move(redoFn)),
+          m_isPaint(isPaint) {}
+    [[nodiscard]] bool isPaint() const { return m_isPaint; }
     void undo() override { m_undo(); }
     void redo() override {
         if (m_applied) {  // QUndoStack::push calls redo(); the edit is already in the volume
@@ -63,6 +70,7 @@ public:
 
 private:
     std::function<void()> m_undo, m_redo;
+    bool m_isPaint;
     bool m_applied = true;
 };
 

@@ -15,6 +15,8 @@ namespace lucent::app {
 Document::Document(QObject* parent) : QObject(parent) {
     connect(&m_undo, &QUndoStack::cleanChanged, this,
             [this](bool) { Q_EMIT modifiedChanged(isModified()); });
+    connect(&m_undo, &QUndoStack::indexChanged, this,
+            [this](int) { Q_EMIT undoAvailabilityChanged(canUndo()); });
 }
 
 Document::~Document() {
@@ -29,9 +31,11 @@ void Document::setScene(Scene scene, const QString& path) {
     m_history.clear();
     m_undo.clear();
     m_undo.setClean();
+    m_undoFloor = 0;
     m_extraChanges = false;
     Q_EMIT sceneReplaced();
     Q_EMIT modifiedChanged(false);
+    Q_EMIT undoAvailabilityChanged(canUndo());
 }
 
 void Document::newDefault() {
@@ -48,9 +52,14 @@ void Document::open(const QString& path) {
 void Document::save(const QString& path) {
     saveProject(m_scene, path.toStdString());
     m_path = path;
-    m_undo.setClean();
     m_extraChanges = false;
-    Q_EMIT modifiedChanged(false);
+    // Mid-stroke (a shortcut while the pen is down) the file holds part of a stroke: neither
+    // the step before it nor the one it will push equals the file, so no step is clean.
+    if (m_history.isStrokeOpen())
+        m_undo.resetClean();
+    else
+        m_undo.setClean();
+    Q_EMIT modifiedChanged(isModified());
 }
 
 void Document::saveCopy(const QString& path) const {
@@ -183,7 +192,41 @@ void Document::pushHistoryStep(const QString& label) {
             if (MaterialVolume* v = material())
                 m_history.redo(*v);
             Q_EMIT materialEdited();
-        }));
+        },
+        /*isPaint=*/true));
+    followHistoryBudget();
+}
+
+void Document::followHistoryBudget() {
+    // The History keeps the newest undoCount() strokes; below the stack's index, the paint
+    // steps beyond that count lost theirs. Undo stops above the newest of them (and the light
+    // steps older than it go out of reach too, as the oldest states of a limited history do).
+    size_t kept = m_history.undoCount();
+    int floor = 0;
+    for (int i = m_undo.index() - 1; i >= 0; --i) {
+        const auto* step = dynamic_cast<const HistoryCommand*>(m_undo.command(i));
+        if (!step || !step->isPaint())
+            continue;
+        if (kept == 0) {
+            floor = i + 1;
+            break;
+        }
+        --kept;
+    }
+    if (floor > m_undoFloor) {
+        m_undoFloor = floor;
+        Q_EMIT undoAvailabilityChanged(canUndo());
+    }
+}
+
+void Document::undo() {
+    if (canUndo())
+        m_undo.undo();
+}
+
+void Document::setHistoryBudget(size_t bytes) {
+    m_history.setBudgetBytes(bytes);
+    followHistoryBudget();
 }
 
 void Document::beginStroke(const BrushSettings& brush) {

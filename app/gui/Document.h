@@ -35,7 +35,10 @@ public:
     /// Loads a project / scene JSON. @throw lucent::Error naming the file; the current scene
     /// is kept on failure.
     void open(const QString& path);
-    /// Saves a project (scene JSON + sidecar VDB, both atomic). @throw lucent::Error.
+    /// Saves a project (scene JSON + sidecar VDB, both atomic). The undo stack is kept; its
+    /// current step becomes the clean one (undoing past it marks the project modified, coming
+    /// back marks it saved). Saved in the middle of a stroke, the file holds the stroke so far,
+    /// which no undo step reaches: the project stays modified. @throw lucent::Error.
     void save(const QString& path);
     /// Saves a copy (autosave) without changing the path or the modified state.
     void saveCopy(const QString& path) const;
@@ -61,6 +64,16 @@ public:
     }
     QUndoStack* undoStack() { return &m_undo; }
     [[nodiscard]] const History& history() const { return m_history; }
+    /// Whether Edit ▸ Undo can go one step back. Not QUndoStack::canUndo: when the History's
+    /// memory budget dropped its oldest strokes, the steps at and below the newest dropped one
+    /// are out of reach (undoing them would change nothing, and a clean step among them would
+    /// claim the volume is as saved when it is not).
+    [[nodiscard]] bool canUndo() const { return m_undo.index() > m_undoFloor; }
+    /// Undoes one step when canUndo(). What Edit ▸ Undo calls.
+    void undo();
+    /// Sets the History's memory cap (History::setBudgetBytes); strokes over it are dropped,
+    /// oldest first, and so are the undo steps before them. @throw ValueError.
+    void setHistoryBudget(size_t bytes);
 
     //! @{ \name Undoable material edits (engine Brush.h / Procedural.h operations)
     /// Opens a stroke. @throw ValueError for invalid brush settings.
@@ -106,15 +119,21 @@ Q_SIGNALS:
     void materialEdited();  ///< voxels changed; the volume's dirty bricks say which
     void sceneEdited();     ///< lights / η / camera changed
     void modifiedChanged(bool modified);
+    /// canUndo() may have changed.
+    void undoAvailabilityChanged(bool canUndo);
 
 private:
     void pushHistoryStep(const QString& label);
+    /// Raises m_undoFloor above the paint steps whose strokes the History dropped.
+    void followHistoryBudget();
 
     Scene m_scene;
     QString m_path;
     History m_history;
     BrushSettings m_strokeBrush;
     QUndoStack m_undo;
+    /// QUndoStack index below which nothing can be undone (steps of dropped strokes).
+    int m_undoFloor = 0;
     bool m_extraChanges = false;
 };
 

@@ -469,14 +469,22 @@ void MainWindow::createActions() {
         applyMeshEdit(MeshEditKind::FillHoles, m_meshEdit);
     });
     QMenu* edit = menuBar()->addMenu(tr("&Edit"));
-    QAction* undo = m_doc->undoStack()->createUndoAction(this, tr("&Undo"));
+    // Not QUndoStack::createUndoAction: undo stops where the History's budget dropped strokes
+    // (Document::canUndo).
+    QAction* undo = edit->addAction(tr("&Undo"), m_doc, &Document::undo);
+    const auto updateUndo = [this, undo] {
+        undo->setEnabled(m_doc->canUndo());
+        const QString step = m_doc->undoStack()->undoText();
+        undo->setText(m_doc->canUndo() && !step.isEmpty() ? tr("&Undo %1").arg(step) : tr("&Undo"));
+    };
+    connect(m_doc, &Document::undoAvailabilityChanged, undo, updateUndo);
+    updateUndo();
     undo->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Z));
     undo->setObjectName(QStringLiteral("actionUndo"));
     QAction* redo = m_doc->undoStack()->createRedoAction(this, tr("&Redo"));
     redo->setShortcuts(
         {QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence(Qt::CTRL | Qt::Key_Y)});
     redo->setObjectName(QStringLiteral("actionRedo"));
-    edit->addAction(undo);
     edit->addAction(redo);
 
     // Brush shortcuts as in painting tools: [ and ] resize, B paints, I picks.

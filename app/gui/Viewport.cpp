@@ -400,7 +400,9 @@ void Viewport::finishDragStroke() {
 
 int Viewport::strokeBetween(const QPointF& a, const QPointF& b) {
     const int samples = 16;
-    const size_t before = m_doc->history().undoCount();
+    // Counted on the undo stack: the History's count stays put once its budget drops a stroke
+    // for each new one.
+    const int before = m_doc->undoStack()->index();
     for (int i = 0; i <= samples; ++i) {
         const QPointF p = a + (b - a) * (double(i) / samples);
         const auto hit = pickAt(p);
@@ -412,7 +414,7 @@ int Viewport::strokeBetween(const QPointF& a, const QPointF& b) {
             beginStroke(*hit);
     }
     finishDragStroke();
-    return int(m_doc->history().undoCount() - before);
+    return m_doc->undoStack()->index() - before;
 }
 
 void Viewport::updateHover(const QPointF& pos) {

@@ -7,11 +7,13 @@
 ///            [--method auto|NAME]   (NAME: a registry name with a GL pass, `lucent-cli methods`)
 ///            [--paint-demo] [--reference SPP] [--reference-view reference|preview|error]
 ///            [--raise DOCKS] [--no-settings]
-///            [--swap-interval N]
+///            [--swap-interval N] [--crash-test-script]
 /// --screenshot grabs the whole window after N rendered frames (default 3) and exits;
 /// --benchmark measures start-up to first frame, idle frame time and stroke-to-frame latency
 /// (what Qt adds around paintGL is measured by tests/bench/bench_app_compose.cpp); with
 /// --live-costs it measures the live costs Auto plans with instead (planner/LiveCosts.h).
+/// --crash-test-script (test-only) paints, autosaves and saves the opened project until killed
+/// (tests/unit/app/test_crash.cpp).
 
 #include "Document.h"
 #include "MainWindow.h"
@@ -34,6 +36,7 @@
 #include <QTimer>
 
 #include <algorithm>
+#include <memory>
 #include <utility>
 #include <cstdio>
 #include <vector>
@@ -276,6 +279,83 @@ void measureLiveCosts(MainWindow& w, const QString& path) {
     std::printf("written %s\n", qPrintable(path));
 }
 
+/// --crash-test-script, for tests/unit/app/test_crash.cpp: paints scripted strokes into the
+/// opened project until the process is killed. A stroke is STAMPS stamps along +x, one per
+/// 10 ms timer tick, so the event loop renders the live preview in between as during a drag;
+/// after every second stroke the app autosaves, after every third it saves onto the project.
+/// Each step goes to stdout at once, with the content hash (MaterialVolume::contentHash) of
+/// the volume written, so that a test killing the app with SIGKILL knows what each file must
+/// hold: "opened H", "autosave-path P", "stroke N open|closed", "autosave end N H",
+/// "save begin N H", "save end N".
+void startCrashTestScript(MainWindow& window) {
+    using namespace lucent;
+    app::Document* doc = window.document();
+    const MaterialVolume* vol = doc->material();
+    const auto say = [](const QString& line) {
+        std::printf("%s\n", qPrintable(line));
+        std::fflush(stdout);
+    };
+    const auto hashText = [](const MaterialVolume& v) {
+        return QString::number(qulonglong(v.contentHash()), 16);
+    };
+    say(QStringLiteral("autosave-path %1").arg(MainWindow::autosavePath()));
+    say(QStringLiteral("opened %1").arg(hashText(*vol)));
+    // Where strokes start: every 97th inside voxel (a deterministic spread over the object).
+    auto starts = std::make_shared<std::vector<Coord>>();
+    const GridSpec spec = vol->spec();
+    size_t inside = 0;
+    for (int z = 0; z < spec.resolution; ++z)
+        for (int y = 0; y < spec.resolution; ++y)
+            for (int x = 0; x < spec.resolution; ++x)
+                if (vol->isInside({x, y, z}) && inside++ % 97 == 0)
+                    starts->push_back({x, y, z});
+    if (starts->empty()) {
+        say(QStringLiteral("error the object has no inside voxels"));
+        QApplication::exit(1);
+        return;
+    }
+    constexpr int STAMPS = 12;
+    // Strokes differ from one launch to the next (a relaunch on the saved project paints new
+    // values over it): the first stroke's number comes from the opened material.
+    auto stroke = std::make_shared<int>(int(vol->contentHash() % 1000u));
+    auto stamp = std::make_shared<int>(0);
+    auto* timer = new QTimer(&window);
+    timer->setInterval(10);
+    QObject::connect(timer, &QTimer::timeout, &window, [=, &window] {
+        const int n = *stroke;
+        if (*stamp == 0) {
+            BrushSettings b;
+            b.radius = 3.f * spec.voxelSize;
+            b.falloff = Falloff::Constant;
+            b.strength = 1.f;
+            b.mode = BrushMode::Set;
+            b.channels = ALL_CHANNELS;
+            b.value = {Rgb(1.f + float(n % 7)), Rgb(0.5f), Rgb(0.1f * float(n % 3))};
+            doc->beginStroke(b);
+            say(QStringLiteral("stroke %1 open").arg(n));
+        }
+        const Coord start = (*starts)[size_t(n) * 7919u % starts->size()];
+        doc->strokeStamp(spec.cellCenter(start) + Vector3f(float(*stamp) * spec.voxelSize, 0, 0));
+        if (++*stamp < STAMPS)
+            return;
+        *stamp = 0;
+        doc->endStroke(QStringLiteral("scripted stroke"));
+        say(QStringLiteral("stroke %1 closed").arg(n));
+        if (n % 2 == 1 && doc->isModified()) {  // autosave writes only unsaved changes
+            window.autosaveNow();
+            say(QStringLiteral("autosave end %1 %2").arg(n).arg(hashText(*doc->material())));
+        }
+        if (n % 3 == 2) {
+            say(QStringLiteral("save begin %1 %2").arg(n).arg(hashText(*doc->material())));
+            if (!window.saveTo(doc->filePath()))
+                say(QStringLiteral("error %1").arg(window.lastError()));
+            say(QStringLiteral("save end %1").arg(n));
+        }
+        ++*stroke;
+    });
+    timer->start();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -346,9 +426,13 @@ int main(int argc, char** argv) {
         QStringLiteral("method"),
         QStringLiteral("Preview method: %1 (default auto).").arg(previewMethodNames()),
         QStringLiteral("M"));
+    QCommandLineOption crashTest(
+        QStringLiteral("crash-test-script"),
+        QStringLiteral("Test-only: paint, autosave and save the opened project until killed, "
+                       "printing each step (tests/unit/app/test_crash.cpp)."));
     parser.addOptions({shot, frames, bench, benchJson, liveCosts, viewportSize, windowSize,
                        noSettings, paintDemo, raiseDock, method, reference, referenceView,
-                       swapInterval});
+                       swapInterval, crashTest});
     parser.process(app);
     if (parser.isSet(swapInterval)) {
         // Before any window exists, so that every context gets it.
@@ -357,7 +441,11 @@ int main(int argc, char** argv) {
         QSurfaceFormat::setDefaultFormat(f);
     }
 
-    const bool scripted = parser.isSet(shot) || parser.isSet(bench);
+    const bool scripted = parser.isSet(shot) || parser.isSet(bench) || parser.isSet(crashTest);
+    if (parser.isSet(crashTest) && parser.positionalArguments().isEmpty()) {
+        std::fprintf(stderr, "lucent: --crash-test-script needs a project to open\n");
+        return 2;
+    }
     MainWindow window(!scripted && !parser.isSet(noSettings));
     // WxH of --viewport / --window; an empty size when malformed.
     const auto parseSize = [&parser](const QCommandLineOption& option) {
@@ -395,6 +483,7 @@ int main(int argc, char** argv) {
         if (auto* dock = window.findChild<QDockWidget*>(name))
             dock->raise();
     bool demoPainted = !parser.isSet(paintDemo);
+    bool crashTestStarted = !parser.isSet(crashTest);
     bool referenceStarted = !parser.isSet(reference);
     const auto referenceRunning = [&window] {
         return window.referencePanel() && window.referencePanel()->isRunning();
@@ -413,7 +502,11 @@ int main(int argc, char** argv) {
                 QTimer::singleShot(0, &window, [] { QApplication::exit(4); });
             return;
         }
-        if (parser.isSet(bench) && st.frames >= 1) {
+        if (!crashTestStarted) {
+            crashTestStarted = true;
+            done = true;  // runs until killed
+            QTimer::singleShot(0, &window, [&window] { startCrashTestScript(window); });
+        } else if (parser.isSet(bench) && st.frames >= 1) {
             done = true;
             const double startupMs = startup.elapsedMs();
             QTimer::singleShot(0, &window, [&, startupMs] {

@@ -21,8 +21,14 @@ size_t History::Stroke::bytes() const {
 }
 
 History::History(size_t budgetBytes) : m_budget(budgetBytes) {
+    setBudgetBytes(budgetBytes);
+}
+
+void History::setBudgetBytes(size_t budgetBytes) {
     LUCENT_CHECK(budgetBytes >= BRICK_FLOATS * sizeof(float), "History: budget of ", budgetBytes,
                  " bytes cannot hold one brick (", BRICK_FLOATS * sizeof(float), " bytes)");
+    m_budget = budgetBytes;
+    enforceBudget();
 }
 
 void History::checkVolume(const MaterialVolume& volume) const {

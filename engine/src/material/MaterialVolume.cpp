@@ -147,6 +147,18 @@ float MaterialVolume::component(const Coord& c, int comp) const {
     return data[comp * BRICK_VOXELS + voxelInBrick(c.x % BRICK, c.y % BRICK, c.z % BRICK)];
 }
 
+uint64_t MaterialVolume::contentHash() const {
+    uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a 64 offset basis and prime
+    const auto feed = [&h](const void* data, size_t n) {
+        const auto* p = static_cast<const unsigned char*>(data);
+        for (size_t i = 0; i < n; ++i)
+            h = (h ^ p[i]) * 0x100000001b3ull;
+    };
+    feed(m_inside.data(), m_inside.size());
+    feed(m_data.data(), m_data.size() * sizeof(float));
+    return h;
+}
+
 void MaterialVolume::setInsideMask(const std::vector<uint8_t>& inside) {
     LUCENT_CHECK(inside.size() == m_spec.voxelCount(), "MaterialVolume::setInsideMask: mask has ",
                  inside.size(), " entries, the grid has ", m_spec.voxelCount(), " voxels");

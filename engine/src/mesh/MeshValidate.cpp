@@ -15,7 +15,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <cstdint>
 #include <fstream>
+#include <functional>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <vector>
@@ -522,6 +525,111 @@ std::string xmlAttribute(const std::string& tag, const std::string& name) {
     return {};
 }
 
+/// Receives the values of an integer array one by one; false stops the reading.
+using ValueSink = std::function<bool(int64_t)>;
+
+/// Reads `bytes` bytes at `pos` of `f` as little-endian integers of VTK type `type` (Int32,
+/// UInt32, Int64, UInt64) into `sink`. @return the number of values; nullopt for another type.
+std::optional<uint64_t> readRawValues(std::ifstream& f, uint64_t pos, uint64_t bytes,
+                                      const std::string& type, const ValueSink& sink) {
+    const bool wide = type == "Int64" || type == "UInt64";
+    if (!wide && type != "Int32" && type != "UInt32")
+        return std::nullopt;
+    const bool isSigned = type[0] == 'I';
+    const uint64_t size = wide ? 8 : 4, count = bytes / size;
+    f.clear();
+    f.seekg(std::streamoff(pos));
+    std::vector<unsigned char> chunk(size_t(size) << 13);
+    for (uint64_t done = 0; done < count;) {
+        const uint64_t n = std::min<uint64_t>(count - done, chunk.size() / size);
+        f.read(reinterpret_cast<char*>(chunk.data()), std::streamsize(n * size));
+        if (uint64_t(f.gcount()) != n * size)
+            return done;  // past the end: the array's size was checked against the file
+        for (uint64_t i = 0; i < n; ++i) {
+            uint64_t v = 0;
+            for (uint64_t k = 0; k < size; ++k)
+                v |= uint64_t(chunk[size_t(i * size + k)]) << (8 * k);
+            int64_t value = int64_t(v);
+            if (!wide)
+                value = isSigned ? int64_t(int32_t(uint32_t(v))) : int64_t(v);
+            else if (!isSigned && v > uint64_t(INT64_MAX))
+                value = -1;  // beyond any array: reported as out of range
+            if (!sink(value))
+                return done + i + 1;
+        }
+        done += n;
+    }
+    return count;
+}
+
+/// Checks each cell section (Polys, Strips, Lines, Verts) of a VTK XML file before VTK reads
+/// it: its `offsets` (the end of each cell in `connectivity`) must not decrease and must stay
+/// within the connectivity array. VTK 9.1 sizes the connectivity array by the last offset
+/// and reads out of bounds on decreasing ones (fuzz findings vtp_cell_offsets_*.vtp). Arrays
+/// in ASCII are read from `xml`; `appended(tag, sink)` reads a raw appended array (nullopt
+/// when it cannot: compressed, base64 or an unknown type, left to VTK's own checks in the
+/// child process).
+template <class Appended, class Fail>
+void checkCellOffsets(const std::string& xml, const Appended& appended, const Fail& fail) {
+    const auto values = [&](size_t at, const ValueSink& sink) -> std::optional<uint64_t> {
+        const size_t close = xml.find('>', at);
+        const std::string tag = xml.substr(at, close - at);
+        const std::string format = xmlAttribute(tag, "format");
+        if (format == "appended")
+            return appended(tag, sink);
+        if (format != "ascii" || close == std::string::npos || xml[close - 1] == '/')
+            return std::nullopt;
+        const size_t end = xml.find("</DataArray", close);
+        std::istringstream text(xml.substr(close + 1, end - close - 1));
+        uint64_t n = 0;
+        for (long long v = 0; text >> v;) {
+            ++n;
+            if (!sink(int64_t(v)))
+                break;
+        }
+        return n;
+    };
+    for (const char* section : {"<Polys", "<Strips", "<Lines", "<Verts"}) {
+        for (size_t at = xml.find(section); at != std::string::npos;
+             at = xml.find(section, at + 1)) {
+            const size_t end = xml.find(std::string("</") + (section + 1), at);
+            size_t connectivity = std::string::npos, offsets = std::string::npos;
+            for (size_t a = xml.find("<DataArray", at); a < end;
+                 a = xml.find("<DataArray", a + 1)) {
+                const std::string tag = xml.substr(a, xml.find('>', a) - a);
+                const std::string name = xmlAttribute(tag, "Name");
+                if (name == "connectivity")
+                    connectivity = a;
+                else if (name == "offsets")
+                    offsets = a;
+            }
+            if (connectivity == std::string::npos || offsets == std::string::npos)
+                continue;
+            const std::optional<uint64_t> ids = values(connectivity, [](int64_t) { return true; });
+            if (!ids)
+                continue;
+            int64_t previous = 0;
+            uint64_t cell = 0;
+            std::string problem;
+            values(offsets, [&](int64_t v) {
+                if (v < previous)
+                    problem = "cell " + std::to_string(cell) + " ends at offset " +
+                              std::to_string(v) + ", before the previous cell's end " +
+                              std::to_string(previous) + ": cell offsets must not decrease";
+                else if (uint64_t(v) > *ids)
+                    problem = "cell " + std::to_string(cell) + " ends at offset " +
+                              std::to_string(v) + ", past the " + std::to_string(*ids) +
+                              " point ids of the connectivity array";
+                previous = v;
+                ++cell;
+                return problem.empty();
+            });
+            if (!problem.empty())
+                fail(std::string(section + 1) + ": " + problem + " (corrupt)");
+        }
+    }
+}
+
 /// VTK XML PolyData. VTK allocates for the Piece attributes NumberOfPoints/NumberOfPolys and
 /// for the sizes in each appended array's compression header ([#blocks, block size, last
 /// block size, compressed size of each block]) before it reads them: a mutated block count
@@ -556,14 +664,22 @@ ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
     }
     checkElementCount(c.points, "mesh file", path, "points");
     checkElementCount(c.polygons, "mesh file", path, "polygons");
-    if (appendedTag == std::string::npos)
+    const auto noAppendedArrays = [](const std::string&, const ValueSink&) {
+        return std::optional<uint64_t>();
+    };
+    if (appendedTag == std::string::npos) {
+        checkCellOffsets(xml, noAppendedArrays, fail);
         return c;
+    }
     const size_t tagEnd = text.find('>', appendedTag);
     const size_t underscore = tagEnd == std::string::npos ? tagEnd : text.find('_', tagEnd);
     if (underscore == std::string::npos)
         fail("AppendedData without its '_' marker");
-    if (xmlAttribute(text.substr(appendedTag, tagEnd - appendedTag), "encoding") != "raw")
-        return c;  // base64: decoded by VTK in the child process, bounded by its memory limit
+    if (xmlAttribute(text.substr(appendedTag, tagEnd - appendedTag), "encoding") != "raw") {
+        // base64: decoded by VTK in the child process, bounded by its memory limit
+        checkCellOffsets(xml, noAppendedArrays, fail);
+        return c;
+    }
     const size_t fileTag = xml.find("<VTKFile");
     const std::string head =
         fileTag == std::string::npos ? "" : xml.substr(fileTag, xml.find('>', fileTag) - fileTag);
@@ -614,6 +730,17 @@ ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
         if (stored > size - pos)
             fail("the compressed blocks" + where + " are larger than the file (corrupt)");
     }
+    if (!compressed)
+        checkCellOffsets(
+            xml,
+            [&](const std::string& tag, const ValueSink& sink) {
+                uint64_t offset = 0;
+                parseCount(xmlAttribute(tag, "offset"), offset);  // checked above
+                const uint64_t pos = dataStart + offset;
+                const uint64_t bytes = readWord(pos);  // ≤ the file's size, checked above
+                return readRawValues(f, pos + word, bytes, xmlAttribute(tag, "type"), sink);
+            },
+            fail);
     return c;
 }
 

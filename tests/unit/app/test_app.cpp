@@ -1563,6 +1563,141 @@ TEST(AppFiles, SaveOpenRoundTrip) {
     EXPECT_EQ(snapshot(*other.document()->material()), snapshot(*vol));
 }
 
+/// A hidden window painting through the viewport's scripted strokes (picking needs the
+/// viewport's size, not its GL frames).
+std::unique_ptr<MainWindow> paintingWindow() {
+    auto w = std::make_unique<MainWindow>(/*restoreSettings=*/false);
+    w->viewport()->setFixedSize(640, 360);
+    setExactBrush(w->viewport(), PAINT, 2.f * w->document()->material()->spec().voxelSize);
+    return w;
+}
+
+/// One horizontal stroke through the middle of the viewport, `dy` pixels below its centre.
+void paintRow(MainWindow& w, double dy) {
+    Viewport* vp = w.viewport();
+    const QPointF c(vp->width() / 2.0, vp->height() / 2.0 + dy);
+    ASSERT_EQ(vp->strokeBetween(c - QPointF(20, 0), c + QPointF(20, 0)), 1);
+}
+
+TEST(AppFiles, SaveKeepsTheUndoHistoryAndMarksItsStepClean) {
+    // As in Blender or Photoshop: saving (Save, Save As, autosave) neither clears nor moves the
+    // undo history; undoing past the saved step marks the project modified, coming back to it
+    // marks it saved. Open and New start a fresh history.
+    QStandardPaths::setTestModeEnabled(true);  // the autosave goes to ~/.qttest
+    auto w = paintingWindow();
+    Document* doc = w->document();
+    QAction* undo = findAction(*w, "actionUndo");
+    QAction* redo = findAction(*w, "actionRedo");
+    ASSERT_TRUE(undo && redo);
+    EXPECT_FALSE(undo->isEnabled()) << "a new document has nothing to undo";
+    paintRow(*w, -10);
+    const std::vector<float> first = snapshot(*doc->material());
+    paintRow(*w, 10);
+    const std::vector<float> saved = snapshot(*doc->material());
+    const QString path = outputPath("app_undo_save.json");
+    ASSERT_TRUE(w->saveTo(path)) << w->lastError().toStdString();
+    EXPECT_FALSE(doc->isModified());
+    EXPECT_EQ(doc->undoStack()->count(), 2) << "saving must keep the undo steps";
+    ASSERT_TRUE(undo->isEnabled());
+    undo->trigger();
+    EXPECT_EQ(snapshot(*doc->material()), first);
+    EXPECT_TRUE(doc->isModified()) << "undoing past the saved step changes the project";
+    EXPECT_TRUE(w->windowTitle().contains(QLatin1Char('*')));
+    redo->trigger();
+    EXPECT_EQ(snapshot(*doc->material()), saved);
+    EXPECT_FALSE(doc->isModified()) << "back at the saved step, the project is as saved";
+
+    // An autosave leaves the history and the modified state alone.
+    paintRow(*w, 0);
+    ASSERT_TRUE(doc->isModified());
+    w->autosaveNow();
+    EXPECT_TRUE(QFile::exists(MainWindow::autosavePath()));
+    EXPECT_TRUE(doc->isModified()) << "an autosave is not a save";
+    EXPECT_EQ(doc->undoStack()->count(), 3);
+    undo->trigger();
+    EXPECT_FALSE(doc->isModified()) << "the autosave must not move the clean step";
+    EXPECT_EQ(snapshot(*doc->material()), saved);
+    redo->trigger();
+
+    // Save As: the new file's step is the clean one; the old steps stay undoable.
+    const QString other = outputPath("app_undo_save_as.json");
+    ASSERT_TRUE(w->saveTo(other)) << w->lastError().toStdString();
+    EXPECT_FALSE(doc->isModified());
+    EXPECT_EQ(doc->filePath(), other);
+    EXPECT_EQ(doc->undoStack()->count(), 3);
+    undo->trigger();
+    undo->trigger();
+    EXPECT_EQ(snapshot(*doc->material()), first);
+    EXPECT_TRUE(doc->isModified());
+
+    // Open and New: a fresh history, nothing to undo into the previous project.
+    ASSERT_TRUE(w->openFile(path)) << w->lastError().toStdString();
+    EXPECT_EQ(snapshot(*doc->material()), saved);
+    EXPECT_EQ(doc->undoStack()->count(), 0);
+    EXPECT_EQ(doc->history().undoCount(), 0u);
+    EXPECT_FALSE(undo->isEnabled());
+    EXPECT_FALSE(redo->isEnabled());
+    EXPECT_FALSE(doc->isModified());
+    paintRow(*w, 0);
+    findAction(*w, "actionNew")->trigger();  // no question: scripted windows do not ask
+    EXPECT_EQ(doc->undoStack()->count(), 0);
+    EXPECT_EQ(doc->history().undoCount(), 0u);
+    EXPECT_FALSE(undo->isEnabled());
+    EXPECT_FALSE(doc->isModified());
+    removeProject(MainWindow::autosavePath().toStdString());  // the JSON and its VDB
+    QStandardPaths::setTestModeEnabled(false);
+}
+
+TEST(AppFiles, SaveInTheMiddleOfAStrokeLeavesTheProjectModified) {
+    // A save while the pen is down (Ctrl+S mid-drag) writes part of a stroke: no undo step
+    // equals that file, so undoing the stroke must not claim the project is as saved.
+    auto w = paintingWindow();
+    Document* doc = w->document();
+    BrushSettings brush = w->viewport()->brush().engine;
+    const Bounds3f box = doc->mesh()->bounds();
+    doc->beginStroke(brush);
+    // Voxels of the stroke: the object's surface where the default shape has volume.
+    size_t touched = 0;
+    for (int i = 0; i < 64 && touched == 0; ++i)
+        touched = doc->strokeStamp(box.lo + (box.hi - box.lo) * (float(i) / 64.f));
+    ASSERT_GT(touched, 0u) << "no stamp along the diagonal reached the object";
+    ASSERT_TRUE(w->saveTo(outputPath("app_mid_stroke.json"))) << w->lastError().toStdString();
+    EXPECT_TRUE(doc->isModified()) << "the stroke is still open: the project is not as saved";
+    doc->endStroke(QStringLiteral("stroke"));
+    ASSERT_EQ(doc->undoStack()->count(), 1);
+    findAction(*w, "actionUndo")->trigger();
+    EXPECT_TRUE(doc->isModified()) << "the volume before the stroke is not what was saved";
+}
+
+TEST(AppFiles, UndoStopsWhereTheHistoryBudgetDroppedStrokes) {
+    // The History drops its oldest strokes past its memory budget. The undo stack must stop
+    // above them: undoing a dropped step would change nothing, and reaching the saved step
+    // that way would call the project saved while its volume differs from the file.
+    auto w = paintingWindow();
+    Document* doc = w->document();
+    paintRow(*w, -20);
+    ASSERT_TRUE(w->saveTo(outputPath("app_undo_budget.json"))) << w->lastError().toStdString();
+    // The smallest budget: the History keeps only the newest stroke.
+    doc->setHistoryBudget(size_t(MaterialVolume::BRICK_VOXELS) * MaterialVolume::COMPONENTS *
+                          sizeof(float));
+    paintRow(*w, -5);
+    const std::vector<float> second = snapshot(*doc->material());
+    paintRow(*w, 10);
+    ASSERT_EQ(doc->history().undoCount(), 1u);
+    ASSERT_EQ(doc->undoStack()->count(), 3);
+    QAction* undo = findAction(*w, "actionUndo");
+    int undone = 0;
+    while (undo->isEnabled() && undone < 5) {
+        undo->trigger();
+        ++undone;
+    }
+    EXPECT_EQ(undone, 1) << "only the stroke the History still holds can be undone";
+    EXPECT_EQ(snapshot(*doc->material()), second);
+    EXPECT_TRUE(doc->isModified()) << "the saved step is out of reach: the volume differs";
+    findAction(*w, "actionRedo")->trigger();
+    EXPECT_EQ(doc->history().undoCount(), 1u);
+}
+
 TEST(AppFiles, ExportVdbRoundTrip) {
     auto w = shownWindow();
     Viewport* vp = w->viewport();

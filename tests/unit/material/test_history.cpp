@@ -148,19 +148,42 @@ TEST(History, CancelRestoresAndErrorsAreClear) {
     EXPECT_FALSE(h.isStrokeOpen());
 }
 
-TEST(History, BudgetDropsOldestStrokes) {
-    MaterialVolume v(unitGrid(32), BASE);
-    const size_t brickBytes = size_t(MaterialVolume::BRICK_VOXELS) * MaterialVolume::COMPONENTS * 4;
-    History h(10 * brickBytes);
+namespace {
+/// Bytes of one brick's copy (what a one-brick stroke stores, plus bookkeeping).
+constexpr size_t BRICK_BYTES =
+    size_t(MaterialVolume::BRICK_VOXELS) * MaterialVolume::COMPONENTS * 4;
+
+/// `count` strokes of one stamp each, all in the same single brick, into `h`.
+void stampOneBrickStrokes(MaterialVolume& v, History& h, int count) {
     PaintSession session(v, h);
     BrushSettings b;
     b.radius = 1.f;
     b.value = {Rgb(4.f), Rgb(1.f), Rgb(0.f)};
-    for (int i = 0; i < 30; ++i)
-        session.stamp(b, Point3f(4.f));  // one brick each
+    for (int i = 0; i < count; ++i)
+        session.stamp(b, Point3f(4.f));
+}
+}  // namespace
+
+TEST(History, BudgetDropsOldestStrokes) {
+    MaterialVolume v(unitGrid(32), BASE);
+    History h(10 * BRICK_BYTES);
+    stampOneBrickStrokes(v, h, 30);
     EXPECT_LE(h.bytesUsed(), h.budgetBytes());
     EXPECT_GE(h.undoCount(), 8u);
     EXPECT_LT(h.undoCount(), 10u);
+}
+
+TEST(History, LoweringTheBudgetDropsOldestStrokesAtOnce) {
+    MaterialVolume v(unitGrid(32), BASE);
+    History h;
+    stampOneBrickStrokes(v, h, 5);
+    ASSERT_EQ(h.undoCount(), 5u);
+    // The smallest budget keeps only the newest stroke, so the last edit stays undoable.
+    h.setBudgetBytes(BRICK_BYTES);
+    EXPECT_EQ(h.undoCount(), 1u);
+    EXPECT_EQ(h.budgetBytes(), BRICK_BYTES);
+    EXPECT_THROW(h.setBudgetBytes(16), ValueError);  // less than one brick
+    EXPECT_EQ(h.budgetBytes(), BRICK_BYTES);
 }
 
 TEST(PaintSession, InteractiveStrokeMatchesPolylineStroke) {

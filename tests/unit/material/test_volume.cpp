@@ -83,6 +83,21 @@ TEST(MaterialVolume, BricksAndAccess) {
     EXPECT_EQ(v.eta(), 1.5f);
 }
 
+TEST(MaterialVolume, ContentHashFollowsValuesAndMask) {
+    const MaterialSample base{Rgb(2.f), Rgb(1.f), Rgb(0.1f)};
+    MaterialVolume a(unitGrid(16), base), b(unitGrid(16), base);
+    EXPECT_EQ(a.contentHash(), b.contentHash());
+    const uint64_t before = a.contentHash();
+    a.set({3, 4, 5}, {Rgb(2.f), Rgb(1.f), Rgb(0.2f)});  // one component of one voxel
+    EXPECT_NE(a.contentHash(), before);
+    a.set({3, 4, 5}, base);
+    EXPECT_EQ(a.contentHash(), before);
+    std::vector<uint8_t> mask = b.insideMask();
+    mask[0] = 0;
+    b.setInsideMask(mask);
+    EXPECT_NE(b.contentHash(), before);
+}
+
 TEST(MaterialVolume, InsideMask) {
     const MaterialSample base{Rgb(2.f), Rgb(1.f), Rgb(0.f)};
     MaterialVolume v(unitGrid(16), base);

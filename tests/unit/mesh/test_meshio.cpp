@@ -255,10 +255,23 @@ TEST(MeshIO, FuzzFindingsAreClearErrors) {
     expectLoadError(fuzzFinding("ply_version_overflows_float.ply"),
                     "expected 'format <encoding> <version number>'");
     // A VTP whose cell offsets (raw appended data, uncompressed) end in 0x7272727272727272:
-    // VTK 9.1 sizes the connectivity array by that value before reading it. The child process
-    // (lucent/core/Isolate.h) contains it: the allocation fails there and becomes a clear
-    // error in half a second. The fuzz build reads VTK in-process and found it under ASan.
-    expectLoadError(fuzzFinding("vtp_cell_offsets_huge.vtp"), "out of memory");
+    // VTK 9.1 sizes the connectivity array by that value before reading it. The fuzz build
+    // reads VTK in-process and found it under ASan; the child process (lucent/core/Isolate.h)
+    // contained it ("out of memory"). The offsets are now checked before VTK reads them.
+    expectLoadError(fuzzFinding("vtp_cell_offsets_huge.vtp"),
+                    "Polys: cell 5 ends at offset 5642533481364848658, past the 24 point ids");
+    // Offsets that decrease (ASCII): refused before VTK, which would read cells of negative
+    // length.
+    expectLoadError(fuzzFinding("vtp_cell_offsets_decreasing.vtp"),
+                    "cell 2 ends at offset 2, before the previous cell's end 6: cell offsets must "
+                    "not decrease");
+    // The same tetrahedron with increasing offsets loads: the check refuses only bad ones.
+    std::ifstream in(fuzzFinding("vtp_cell_offsets_decreasing.vtp"));
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    text.replace(text.find("3 6 2 12"), 8, "3 6 9 12");
+    const std::string fixed = outPath("tetra_ascii_offsets.vtp");
+    std::ofstream(fixed) << text;
+    EXPECT_EQ(loadMesh(fixed).triangleCount(), 4u);
     // The same with a last offset of 3 GiB: 25 s and 3 GiB in the in-process fuzz build, a
     // clear error from the child process in under a second.
     expectLoadError(fuzzFinding("vtp_cell_offsets_3gib.vtp"), "VTK reader");

@@ -66,6 +66,9 @@ public:
     /// Bytes held by stored strokes (brick copies and indices).
     [[nodiscard]] size_t bytesUsed() const { return m_bytes; }
     [[nodiscard]] size_t budgetBytes() const { return m_budget; }
+    /// Changes the memory cap (≥ 1 brick pair, as in the constructor); the oldest strokes go at
+    /// once when the stored ones exceed it (the newest is always kept). @throw ValueError.
+    void setBudgetBytes(size_t budgetBytes);
     /// Forgets every stroke (and an open one, without restoring it).
     void clear();
 

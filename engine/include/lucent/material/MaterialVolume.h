@@ -119,6 +119,9 @@ public:
     /// zeroed, inside voxels that were outside get the base value. Marks all bricks dirty.
     void setInsideMask(const std::vector<uint8_t>& inside);
     [[nodiscard]] const std::vector<uint8_t>& insideMask() const { return m_inside; }
+    /// FNV-1a 64 of the inside mask and every stored value: equal volumes of one grid hash
+    /// equally, so a saved copy can be checked against the volume it came from.
+    [[nodiscard]] uint64_t contentHash() const;
     /// True if any voxel of brick b is inside.
     [[nodiscard]] bool brickHasInside(int b) const { return m_brickInside[b] != 0; }
     //! @}
