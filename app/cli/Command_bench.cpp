@@ -8,9 +8,9 @@
 #include <lucent/core/Error.h>
 #include <lucent/core/Parallel.h>
 #include <lucent/core/Timer.h>
-#include <lucent/dipole/Profiles.h>
 #include <lucent/gpu/GlContext.h>
 #include <lucent/sslpv/SslpvBench.h>
+#include <lucent/sslpv/SslpvCalibrationFit.h>
 #include <lucent/sslpv/SslpvGl.h>
 #include <lucent/sslpv/SslpvSolver.h>
 
@@ -177,234 +177,76 @@ int runBench(const std::vector<std::string>& argv) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// `lucent-cli bench sslpv-fit`: the calibrated mode's fit (docs/methods/sslpv.md).
-
-/// One thick-slab configuration of the fit.
-struct FitCase {
-    float albedo;   ///< α′ = σs′/σt (reduced)
-    float cellMfp;  ///< Δx·σt: cell size in reduced mean free paths
-};
-
-/// Thick slab of the fit: an N³ grid of cell size Δx, the slab filling cells [1, N−2]³ (sinks
-/// around it), σt = 1 mm⁻¹, σs′ = α′σt, g = 0, η. Unit-flux texels at normal incidence on the
-/// central 8×8 cells of the top face (2×2 texels per cell). Returns the exitant radiance
-/// integrated over the top face per unit incident flux, Σ_i L_o(x_i)·Δx² / Φ (mm²·sr⁻¹ /mm²:
-/// sr⁻¹), at normal view without Fresnel T(ω_o) and without the gain (raw 1/η² only): by
-/// superposition it equals L_o/E of a laterally infinite slab under uniform irradiance E.
-double slabResponse(const FitCase& fc, int n, const SslpvOptions& base, float eta, int* stepsUsed) {
-    const float h = fc.cellMfp;  // σt = 1 mm⁻¹
-    CoarseMaterial m;
-    m.spec.resolution = n;
-    m.spec.voxelSize = h;
-    m.spec.origin = Point3f(0.f);
-    const size_t count = m.spec.voxelCount();
-    m.insideFraction.assign(count, 0.f);
-    for (int c = 0; c < 3; ++c) {
-        m.sigma_t[c].assign(count, 1.f);
-        m.sigma_s[c].assign(count, fc.albedo);
-        m.g[c].assign(count, 0.f);
-    }
-    for (int z = 1; z < n - 1; ++z)
-        for (int y = 1; y < n - 1; ++y)
-            for (int x = 1; x < n - 1; ++x)
-                m.insideFraction[m.spec.linearIndex({x, y, z})] = 1.f;
-    m.homogeneous = true;
-    const float zTop = float(n - 1) * h;
-    std::vector<SslpvInjectionSample> texels;
-    const int lo = n / 2 - 4;
-    double phi = 0.0;
-    for (int j = 0; j < 16; ++j)
-        for (int i = 0; i < 16; ++i) {
-            texels.push_back(
-                {Point3f((lo + 0.25f + 0.5f * i) * h, (lo + 0.25f + 0.5f * j) * h, zTop),
-                 Normal3f(0, 0, 1), Vector3f(0, 0, -1), Rgb(1.f)});
-            phi += 1.0;
-        }
-    SslpvSolver solver(base);
-    solver.setMaterial(m, eta);
-    solver.setInjectionSamples(std::move(texels));
-    const SslpvStats& st = solver.solve();
-    if (stepsUsed)
-        *stepsUsed = st.stepsUsed;
-    const float gain = base.calibration.gain[base.order - 1];
-    double sum = 0.0;
-    for (int y = 1; y < n - 1; ++y)
-        for (int x = 1; x < n - 1; ++x)
-            sum += double(solver
-                              .radiance(Point3f((x + 0.5f) * h, (y + 0.5f) * h, zTop),
-                                        Normal3f(0, 0, 1))
-                              .y) *
-                   double(solver.exitScale() / gain) * double(h) * double(h);
-    return sum / phi;
-}
-
-/// The fit's target for the quantity of slabResponse(): Jensen et al. 2001's BSSRDF
-/// S_d = F_t(ω_i) R_d F_t(ω_o)/π (Eq. 4 of the paper, Mertens et al. 2005 Table 1) integrated over
-/// the surface for uniform normal irradiance gives L_o/E = F_t(0)·R_d·F_t(ω_o)/π; slabResponse()
-/// leaves out F_t(ω_o), so the target is F_t(0)·R_d/π with R_d the classical dipole's total
-/// diffuse reflectance.
-double slabTarget(float albedo, float eta) {
-    const dipole::ScalarMedium med = dipole::fromReduced(1.f, albedo, eta);
-    const double rd = dipole::totalReflectance(dipole::Model::Dipole, med);
-    constexpr double PI_D = 3.14159265358979323846;
-    return (1.0 - dipole::fresnelReflectance(1.0, eta)) * rd / PI_D;
-}
-
-struct FitResult {
-    double gain = 1.0;          ///< G minimising Σ log² (G·response/target)
-    double rmsLog = 0.0;        ///< RMS of log(G·response/target)
-    double maxAbsRel = 0.0;     ///< max |G·response/target − 1|
-    std::vector<double> ratio;  ///< response/target per case
-    std::vector<int> steps;
-};
-
-FitResult evaluateFit(const std::vector<FitCase>& cases, int n, const SslpvOptions& base,
-                      float eta) {
-    FitResult r;
-    double sumLog = 0.0;
-    for (const FitCase& fc : cases) {
-        int steps = 0;
-        const double resp = slabResponse(fc, n, base, eta, &steps);
-        r.ratio.push_back(resp / slabTarget(fc.albedo, eta));
-        r.steps.push_back(steps);
-        sumLog += std::log(std::max(r.ratio.back(), 1e-30));
-    }
-    r.gain = std::exp(-sumLog / double(cases.size()));
-    double ss = 0.0;
-    for (double q : r.ratio) {
-        const double l = std::log(std::max(q * r.gain, 1e-30));
-        ss += l * l;
-        r.maxAbsRel = std::max(r.maxAbsRel, std::abs(q * r.gain - 1.0));
-    }
-    r.rmsLog = std::sqrt(ss / double(cases.size()));
-    return r;
-}
+// `lucent-cli bench sslpv-fit`: the calibrated mode's fit (lucent/sslpv/SslpvCalibrationFit.h,
+// docs/methods/sslpv.md); parses and prints only.
 
 int runFit(const Args& args) {
-    const int n = args.intOr("grid", 48, 16, 128);
-    const int order = args.intOr("sh", 1, 1, 2);
-    const float eta = args.floatOr("eta", 1.3f, 1.f, 3.f);
-    const std::vector<float> albedos = {0.3f, 0.5f, 0.7f, 0.8f, 0.9f, 0.95f, 0.99f};
-    const std::vector<float> cells = {0.5f, 1.f, 2.f, 4.f};
-    std::vector<FitCase> cases;
-    for (float c : cells)
-        for (float a : albedos)
-            cases.push_back({a, c});
-    SslpvOptions base{.order = order,
-                      .maxSteps = 4096,
-                      .skipAccumulateSteps = 2,
-                      .removeExitant = true,
-                      .stopEpsilon = 1e-4f,
-                      .mode = SslpvMode::Calibrated};
-    base.calibration = defaultSslpvCalibration();
-    base.calibration.gain[0] = base.calibration.gain[1] = 1.f;  // fitted below
-    const bool search = args.has("search");
+    SslpvCalibrationFitSettings s;
+    s.gridCells = args.intOr("grid", 48, 16, 128);
+    s.order = args.intOr("sh", 1, 1, 2);
+    s.eta = args.floatOr("eta", 1.3f, 1.f, 3.f);
     if (args.value("linear"))
-        base.calibration.linear = args.floatOr("linear", 0.f, 0.f, 100.f);
+        s.calibration.linear = args.floatOr("linear", 0.f, 0.f, 100.f);
     if (args.value("diffusion"))
-        base.calibration.diffusion = args.floatOr("diffusion", 0.f, 0.f, 100.f);
+        s.calibration.diffusion = args.floatOr("diffusion", 0.f, 0.f, 100.f);
     if (args.value("transport"))
-        base.calibration.transport = args.floatOr("transport", 0.f, 0.f, 100.f);
+        s.calibration.transport = args.floatOr("transport", 0.f, 0.f, 100.f);
     if (args.value("per-step"))
-        base.calibration.perStep = args.floatOr("per-step", 0.f, 0.f, 100.f);
+        s.calibration.perStep = args.floatOr("per-step", 0.f, 0.f, 100.f);
     if (args.value("per-step-transport"))
-        base.calibration.perStepTransport = args.floatOr("per-step-transport", 0.f, 0.f, 100.f);
+        s.calibration.perStepTransport = args.floatOr("per-step-transport", 0.f, 0.f, 100.f);
     // Which weight --search fits (the others stay as given).
     const std::string param = args.valueOr("fit", "transport");
-    float SslpvCalibration::*fitted = &SslpvCalibration::transport;
+    SslpvFitWeight weight = SslpvFitWeight::Transport;
     if (param == "linear")
-        fitted = &SslpvCalibration::linear;
+        weight = SslpvFitWeight::Linear;
     else if (param == "diffusion")
-        fitted = &SslpvCalibration::diffusion;
+        weight = SslpvFitWeight::Diffusion;
     else if (param != "transport")
         LUCENT_THROW(ValueError, "--fit: '", param, "' is not linear, transport or diffusion");
 
     if (args.has("solve-beta")) {
-        // Per case, the per-step absorption β* at which the SSLPV response equals the target
-        // with the gain given (default 1): bisection in log β over [1e-4, 20] (the response
-        // falls monotonically with β). β is imposed through the linear weight alone,
-        // linear = β/(σa·Δx). The table is what the calibration formula is fitted to.
         const float gain = args.floatOr("gain", 1.f, 1e-3f, 1e3f);
         std::printf(
             "| dx*sigma_t | alpha' | beta* | beta*/(1-alpha') | sigma_tr dx | steps |\n"
             "|---|---|---|---|---|---|\n");
-        for (const FitCase& fc : cases) {
-            const double target = slabTarget(fc.albedo, eta);
-            double lo = std::log(1e-4), hi = std::log(20.0);
-            int steps = 0;
-            for (int it = 0; it < args.intOr("iterations", 10, 1, 40); ++it) {
-                const double mid = 0.5 * (lo + hi);
-                SslpvOptions o = base;
-                o.calibration = SslpvCalibration{};
-                o.calibration.linear =
-                    float(std::exp(mid) / ((1.0 - fc.albedo) * double(fc.cellMfp)));
-                const double resp = gain * slabResponse(fc, n, o, eta, &steps);
-                (resp > target ? lo : hi) = mid;
-            }
-            const double beta = std::exp(0.5 * (lo + hi));
-            std::printf("| %.2f | %.3f | %.5f | %.4f | %.4f | %d |\n", double(fc.cellMfp),
-                        double(fc.albedo), beta, beta / (1.0 - fc.albedo),
-                        std::sqrt(3.0 * (1.0 - fc.albedo)) * fc.cellMfp, steps);
-            std::fflush(stdout);
-        }
+        solveSslpvBeta(s, double(gain), args.intOr("iterations", 10, 1, 40),
+                       [](const SslpvBetaRow& r) {
+                           std::printf("| %.2f | %.3f | %.5f | %.4f | %.4f | %d |\n",
+                                       double(r.fitCase.cellMfp), double(r.fitCase.albedo), r.beta,
+                                       r.betaPerAbsorption, r.transportCell, r.steps);
+                           std::fflush(stdout);
+                       });
         return 0;
     }
-    if (search) {
-        // Golden-section search of the diffusion weight (log scale) at fixed linear weight: the
-        // objective is the RMS log residual after the optimal gain.
-        double a = std::log(0.02), b = std::log(5.0);
-        const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
-        auto f = [&](double x) {
-            SslpvOptions o = base;
-            o.calibration.*fitted = float(std::exp(x));
-            const double v = evaluateFit(cases, n, o, eta).rmsLog;
-            std::printf("# search: %s %.5f -> rms log %.5f\n", param.c_str(), std::exp(x), v);
+    if (args.has("search")) {
+        s.search = weight;
+        s.iterations = args.intOr("iterations", 12, 1, 100);
+        s.onSearchStep = [&param](double w, double rmsLog) {
+            std::printf("# search: %s %.5f -> rms log %.5f\n", param.c_str(), w, rmsLog);
             std::fflush(stdout);
-            return v;
         };
-        double c = b - phi * (b - a), d = a + phi * (b - a);
-        double fc = f(c), fd = f(d);
-        for (int it = 0; it < args.intOr("iterations", 12, 1, 100); ++it) {
-            if (fc < fd) {
-                b = d;
-                d = c;
-                fd = fc;
-                c = b - phi * (b - a);
-                fc = f(c);
-            } else {
-                a = c;
-                c = d;
-                fc = fd;
-                d = a + phi * (b - a);
-                fd = f(d);
-            }
-        }
-        base.calibration.*fitted = float(std::exp(0.5 * (a + b)));
     }
 
-    const FitResult r = evaluateFit(cases, n, base, eta);
+    const SslpvCalibrationFit r = fitSslpvCalibration(s);
     std::printf(
         "SSLPV calibrated-mode fit: thick slab %d^3 cells, SH order %d, eta %.2f, "
         "g = 0\n",
-        n, order, double(eta));
+        s.gridCells, s.order, double(s.eta));
     std::printf(
         "  model: beta = %.5f sigma_a dx + %.5f sigma_tr dx + %.5f (sigma_tr dx)^2 + "
         "%.5f sigma_a/sigma_t + %.5f sigma_tr/sigma_t, gain G = %.5f\n",
-        double(base.calibration.linear), double(base.calibration.transport),
-        double(base.calibration.diffusion), double(base.calibration.perStep),
-        double(base.calibration.perStepTransport), r.gain);
+        double(r.calibration.linear), double(r.calibration.transport),
+        double(r.calibration.diffusion), double(r.calibration.perStep),
+        double(r.calibration.perStepTransport), r.gain);
     std::printf("  target: classical dipole F_t(0) R_d / pi (Jensen 2001)\n");
     std::printf(
         "| dx*sigma_t | alpha' | dipole R_d | target L/E (1/sr) | SSLPV G*L/E | "
         "residual | steps |\n|---|---|---|---|---|---|---|\n");
-    for (size_t i = 0; i < cases.size(); ++i) {
-        const double t = slabTarget(cases[i].albedo, eta);
-        const double rd = dipole::totalReflectance(dipole::Model::Dipole,
-                                                   dipole::fromReduced(1.f, cases[i].albedo, eta));
+    for (const SslpvFitRow& row : r.rows)
         std::printf("| %.2f | %.3f | %.4f | %.5f | %.5f | %+.1f %% | %d |\n",
-                    double(cases[i].cellMfp), double(cases[i].albedo), rd, t,
-                    r.ratio[i] * r.gain * t, 100.0 * (r.ratio[i] * r.gain - 1.0), r.steps[i]);
-    }
+                    double(row.fitCase.cellMfp), double(row.fitCase.albedo), row.dipoleReflectance,
+                    row.target, row.fitted, 100.0 * row.residual, row.steps);
     std::printf("  RMS log residual %.4f, max |residual| %.1f %%\n", r.rmsLog, 100.0 * r.maxAbsRel);
     return 0;
 }
