@@ -122,8 +122,8 @@ void addReferenceCommand(CLI::App& cli, const CommandContext&) {
     args->app = sub;
     addSceneArgument(*sub, args->scene);
     CLI::Option* spp = sub->add_option("--spp", args->spp,
-                                       "samples per pixel (>= 3; with --rse: the cap, default "
-                                       "65536)")
+                                       "samples per pixel, >= 3 (default 64; with --rse: the "
+                                       "cap, default 65536)")
                            ->type_name("N")
                            ->check(CLI::Range(3, 1 << 24));
     CLI::Option* rse =
