@@ -24,7 +24,7 @@ packages=(build-essential cmake ninja-build pkg-config ccache
     qt6-base-dev qt6-base-dev-tools libqt6opengl6-dev qt6-charts-dev
     libvtk9-dev libopenvdb-dev libopenvdb-tools libboost-iostreams-dev libopenmesh-dev libglm-dev
     libtbb-dev libepoxy-dev libegl-dev libembree-dev libopenexr-dev libpng-dev nlohmann-json3-dev
-    libgtest-dev libgmock-dev libbenchmark-dev glslang-tools xvfb xauth clang-format)
+    libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev glslang-tools xvfb xauth clang-format)
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

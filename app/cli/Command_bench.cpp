@@ -3,14 +3,14 @@
 /// @brief `lucent-cli bench sslpv`: timing of the SSLPV propagation (docs/benchmarks.md, SSLPV)
 /// next to a memory-bandwidth floor measured in the same run.
 
-#include "CliArgs.h"
+#include "CliCommon.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Parallel.h>
 #include <lucent/core/Timer.h>
-#include <lucent/dipole/Profiles.h>
 #include <lucent/gpu/GlContext.h>
 #include <lucent/sslpv/SslpvBench.h>
+#include <lucent/sslpv/SslpvCalibrationFit.h>
 #include <lucent/sslpv/SslpvGl.h>
 #include <lucent/sslpv/SslpvSolver.h>
 
@@ -26,6 +26,14 @@ namespace lucent::cli {
 
 namespace {
 
+// The calibration fit's vocabulary (lucent/sslpv/SslpvCalibrationFit.h): this file only fills its
+// settings and prints its rows.
+using sslpv::SslpvBetaRow;
+using sslpv::SslpvCalibrationFit;
+using sslpv::SslpvCalibrationFitSettings;
+using sslpv::SslpvFitRow;
+using sslpv::SslpvFitWeight;
+
 /// Process CPU time (all threads), ms: unlike wall time, not inflated when the machine is
 /// shared and this process waits for a core.
 double cpuMs() {
@@ -39,36 +47,29 @@ double median(std::vector<double> v) {
     return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
-int runFit(const Args& args);
+struct BenchOptions {
+    std::string scene = "cube";
+    int grid = 32, steps = 8, sh = 1, threads = maxThreads(), repeats = 50;
+    bool heterogeneous = false, gl = false, fp16 = false, dense = false, json = false;
+};
 
-int runBench(const std::vector<std::string>& argv) {
-    const Args args(
-        argv,
-        {"grid", "steps", "sh", "threads", "repeats", "eta", "linear", "diffusion", "iterations",
-         "transport", "fit", "gain", "per-step", "per-step-transport", "scene"},
-        {"heterogeneous", "gl", "fp16", "dense", "json", "search", "solve-beta"});
-    if (args.positional().size() == 1 && args.positional().front() == "sslpv-fit")
-        return runFit(args);
-    if (args.positional().size() != 1 || args.positional().front() != "sslpv")
-        LUCENT_THROW(ValueError, "expected the benchmark name 'sslpv' or 'sslpv-fit' (see --help)");
-    const int n = args.intOr("grid", 32, 4, 256);
-    const int steps = args.intOr("steps", 8, 1, 4096);
-    const int order = args.intOr("sh", 1, 1, 2);
-    const int threads = args.intOr("threads", maxThreads(), 1, 256);
-    const int repeats = args.intOr("repeats", 50, 3, 100000);
-    const bool het = args.has("heterogeneous");
-    const bool gl = args.has("gl");
-    if (args.has("fp16") && !gl)
-        LUCENT_THROW(ValueError, "--fp16 needs --gl");
+void runBench(const BenchOptions& args) {
+    const int n = args.grid;
+    const int steps = args.steps;
+    const int order = args.sh;
+    const int threads = args.threads;
+    const int repeats = args.repeats;
+    const bool het = args.heterogeneous;
+    const bool gl = args.gl;
     const ThreadLimit limit(threads);
-    const sslpv::SslpvBenchScene scene = sslpv::parseSslpvBenchScene(args.valueOr("scene", "cube"));
+    const sslpv::SslpvBenchScene scene = sslpv::parseSslpvBenchScene(args.scene);
 
     sslpv::SslpvBenchSetup setup = sslpv::makeSslpvBenchSetup(scene, n, het);
     sslpv::SslpvSolver solver({.order = order,
                                .maxSteps = steps,
                                .skipAccumulateSteps = 0,
                                .removeExitant = setup.sinks,
-                               .skipEmptySlices = !args.has("dense")});
+                               .skipEmptySlices = !args.dense});
     solver.setMaterial(setup.material, setup.eta);
     solver.setInjectionSamples(std::move(setup.texels));
 
@@ -106,8 +107,8 @@ int runBench(const std::vector<std::string>& argv) {
         if (!gpu::GlContext::isHeadlessAvailable(&reason))
             LUCENT_THROW(GpuError, "--gl: no headless OpenGL 4.5 context: ", reason);
         auto ctx = gpu::GlContext::createHeadless();
-        sslpv::SslpvGlPropagator prop(args.has("fp16") ? sslpv::SslpvGlStorage::Float16
-                                                       : sslpv::SslpvGlStorage::Float32);
+        sslpv::SslpvGlPropagator prop(args.fp16 ? sslpv::SslpvGlStorage::Float16
+                                                : sslpv::SslpvGlStorage::Float32);
         const int glRepeats = std::max(3, std::min(repeats, 10));  // llvmpipe is slow
         prop.propagate(solver);                                    // warm-up (shader JIT)
         // Steady state: persistent buffers, nothing changed to upload, no read-back; then the
@@ -129,8 +130,8 @@ int runBench(const std::vector<std::string>& argv) {
         std::printf(
             "%sGL %s (%s): propagation %.3f ms GPU timer, %.3f ms wall per propagate (input "
             "diff/upload %.3f ms), read-back when asked %.3f ms\n",
-            args.has("json") ? "# " : "", ctx->renderer().c_str(),
-            args.has("fp16") ? "fp16" : "fp32", glGpuMs, glCpuMs, median(u), glReadbackMs);
+            args.json ? "# " : "", ctx->renderer().c_str(), args.fp16 ? "fp16" : "fp32", glGpuMs,
+            glCpuMs, median(u), glReadbackMs);
     }
 
     const double msSolve = median(solveMs);
@@ -138,7 +139,7 @@ int runBench(const std::vector<std::string>& argv) {
     const double msPerStep = msSteps / steps;
     const double floorPerStep = floorMs / steps;
     const double paperMs = 1.67;  // GTX 580, 32³, 8 steps, heterogeneous (Table 1, Fig. 6)
-    if (args.has("json")) {
+    if (args.json) {
         std::printf(
             "{\"benchmark\": \"sslpv\", \"scene\": \"%s\", \"grid\": %d, \"steps\": %d, "
             "\"sh_order\": %d, "
@@ -152,7 +153,7 @@ int runBench(const std::vector<std::string>& argv) {
             "\"gl_readback_ms\": %.4f, "
             "\"paper_ms_gtx580_32_8_het\": %.2f}\n",
             sslpv::sslpvBenchSceneName(scene), n, steps, order, het ? "true" : "false",
-            args.has("dense") ? "true" : "false", threads, repeats, st.brickCount, activeMean,
+            args.dense ? "true" : "false", threads, repeats, st.brickCount, activeMean,
             cellsPerStep, msSolve, cpuPerSolve, msSteps, msPerStep, floorPerStep,
             msPerStep / floorPerStep, glGpuMs, glCpuMs, glReadbackMs, paperMs);
     } else {
@@ -160,8 +161,7 @@ int runBench(const std::vector<std::string>& argv) {
             "SSLPV CPU propagation: scene %s, %d^3 cells, %d steps, SH order %d, %s, %s, %d "
             "thread(s)\n",
             sslpv::sslpvBenchSceneName(scene), n, steps, order,
-            het ? "heterogeneous" : "homogeneous", args.has("dense") ? "dense" : "active bricks",
-            threads);
+            het ? "heterogeneous" : "homogeneous", args.dense ? "dense" : "active bricks", threads);
         std::printf("  bricks (%dx%dx%d cells) per step: %.1f of %d active, %.0f cells computed\n",
                     sslpv::SSLPV_BRICK_X, sslpv::SSLPV_BRICK_Y, sslpv::SSLPV_BRICK_Z, activeMean,
                     st.brickCount, cellsPerStep);
@@ -174,290 +174,206 @@ int runBench(const std::vector<std::string>& argv) {
                     msPerStep / floorPerStep);
         std::printf("  paper (GTX 580, 32^3, 8 steps, heterogeneous): %.2f ms\n", paperMs);
     }
-    return 0;
 }
 
 // ---------------------------------------------------------------------------------------------
-// `lucent-cli bench sslpv-fit`: the calibrated mode's fit (docs/methods/sslpv.md).
+// `lucent-cli bench sslpv-fit`: the calibrated mode's fit (lucent/sslpv/SslpvCalibrationFit.h,
+// docs/methods/sslpv.md); parses and prints only.
 
-/// One thick-slab configuration of the fit.
-struct FitCase {
-    float albedo;   ///< α′ = σs′/σt (reduced)
-    float cellMfp;  ///< Δx·σt: cell size in reduced mean free paths
+struct FitOptions {
+    SslpvCalibrationFitSettings settings;
+    SslpvFitWeight weight = SslpvFitWeight::Transport;
+    float gain = 1.f;
+    int iterations = 0;  ///< 0: the mode's default
+    bool search = false, solveBeta = false;
 };
 
-/// Thick slab of the fit: an N³ grid of cell size Δx, the slab filling cells [1, N−2]³ (sinks
-/// around it), σt = 1 mm⁻¹, σs′ = α′σt, g = 0, η. Unit-flux texels at normal incidence on the
-/// central 8×8 cells of the top face (2×2 texels per cell). Returns the exitant radiance
-/// integrated over the top face per unit incident flux, Σ_i L_o(x_i)·Δx² / Φ (mm²·sr⁻¹ /mm²:
-/// sr⁻¹), at normal view without Fresnel T(ω_o) and without the gain (raw 1/η² only): by
-/// superposition it equals L_o/E of a laterally infinite slab under uniform irradiance E.
-double slabResponse(const FitCase& fc, int n, const sslpv::SslpvOptions& base, float eta,
-                    int* stepsUsed) {
-    const float h = fc.cellMfp;  // σt = 1 mm⁻¹
-    CoarseMaterial m;
-    m.spec.resolution = n;
-    m.spec.voxelSize = h;
-    m.spec.origin = Point3f(0.f);
-    const size_t count = m.spec.voxelCount();
-    m.insideFraction.assign(count, 0.f);
-    for (int c = 0; c < 3; ++c) {
-        m.sigma_t[c].assign(count, 1.f);
-        m.sigma_s[c].assign(count, fc.albedo);
-        m.g[c].assign(count, 0.f);
+const char* weightName(SslpvFitWeight w) {
+    switch (w) {
+        case SslpvFitWeight::Linear:
+            return "linear";
+        case SslpvFitWeight::Diffusion:
+            return "diffusion";
+        case SslpvFitWeight::Transport:
+            break;
     }
-    for (int z = 1; z < n - 1; ++z)
-        for (int y = 1; y < n - 1; ++y)
-            for (int x = 1; x < n - 1; ++x)
-                m.insideFraction[m.spec.linearIndex({x, y, z})] = 1.f;
-    m.homogeneous = true;
-    const float zTop = float(n - 1) * h;
-    std::vector<sslpv::SslpvInjectionSample> texels;
-    const int lo = n / 2 - 4;
-    double phi = 0.0;
-    for (int j = 0; j < 16; ++j)
-        for (int i = 0; i < 16; ++i) {
-            texels.push_back(
-                {Point3f((lo + 0.25f + 0.5f * i) * h, (lo + 0.25f + 0.5f * j) * h, zTop),
-                 Normal3f(0, 0, 1), Vector3f(0, 0, -1), Rgb(1.f)});
-            phi += 1.0;
-        }
-    sslpv::SslpvSolver solver(base);
-    solver.setMaterial(m, eta);
-    solver.setInjectionSamples(std::move(texels));
-    const sslpv::SslpvStats& st = solver.solve();
-    if (stepsUsed)
-        *stepsUsed = st.stepsUsed;
-    const float gain = base.calibration.gain[base.order - 1];
-    double sum = 0.0;
-    for (int y = 1; y < n - 1; ++y)
-        for (int x = 1; x < n - 1; ++x)
-            sum += double(solver
-                              .radiance(Point3f((x + 0.5f) * h, (y + 0.5f) * h, zTop),
-                                        Normal3f(0, 0, 1))
-                              .y) *
-                   double(solver.exitScale() / gain) * double(h) * double(h);
-    return sum / phi;
+    return "transport";
 }
 
-/// The fit's target for the quantity of slabResponse(): Jensen et al. 2001's BSSRDF
-/// S_d = F_t(ω_i) R_d F_t(ω_o)/π (Eq. 4 of the paper, Mertens et al. 2005 Table 1) integrated over
-/// the surface for uniform normal irradiance gives L_o/E = F_t(0)·R_d·F_t(ω_o)/π; slabResponse()
-/// leaves out F_t(ω_o), so the target is F_t(0)·R_d/π with R_d the classical dipole's total
-/// diffuse reflectance.
-double slabTarget(float albedo, float eta) {
-    const dipole::ScalarMedium med = dipole::fromReduced(1.f, albedo, eta);
-    const double rd = dipole::totalReflectance(dipole::Model::Dipole, med);
-    constexpr double PI_D = 3.14159265358979323846;
-    return (1.0 - dipole::fresnelReflectance(1.0, eta)) * rd / PI_D;
-}
-
-struct FitResult {
-    double gain = 1.0;          ///< G minimising Σ log² (G·response/target)
-    double rmsLog = 0.0;        ///< RMS of log(G·response/target)
-    double maxAbsRel = 0.0;     ///< max |G·response/target − 1|
-    std::vector<double> ratio;  ///< response/target per case
-    std::vector<int> steps;
-};
-
-FitResult evaluateFit(const std::vector<FitCase>& cases, int n, const sslpv::SslpvOptions& base,
-                      float eta) {
-    FitResult r;
-    double sumLog = 0.0;
-    for (const FitCase& fc : cases) {
-        int steps = 0;
-        const double resp = slabResponse(fc, n, base, eta, &steps);
-        r.ratio.push_back(resp / slabTarget(fc.albedo, eta));
-        r.steps.push_back(steps);
-        sumLog += std::log(std::max(r.ratio.back(), 1e-30));
-    }
-    r.gain = std::exp(-sumLog / double(cases.size()));
-    double ss = 0.0;
-    for (double q : r.ratio) {
-        const double l = std::log(std::max(q * r.gain, 1e-30));
-        ss += l * l;
-        r.maxAbsRel = std::max(r.maxAbsRel, std::abs(q * r.gain - 1.0));
-    }
-    r.rmsLog = std::sqrt(ss / double(cases.size()));
-    return r;
-}
-
-int runFit(const Args& args) {
-    const int n = args.intOr("grid", 48, 16, 128);
-    const int order = args.intOr("sh", 1, 1, 2);
-    const float eta = args.floatOr("eta", 1.3f, 1.f, 3.f);
-    const std::vector<float> albedos = {0.3f, 0.5f, 0.7f, 0.8f, 0.9f, 0.95f, 0.99f};
-    const std::vector<float> cells = {0.5f, 1.f, 2.f, 4.f};
-    std::vector<FitCase> cases;
-    for (float c : cells)
-        for (float a : albedos)
-            cases.push_back({a, c});
-    sslpv::SslpvOptions base{.order = order,
-                             .maxSteps = 4096,
-                             .skipAccumulateSteps = 2,
-                             .removeExitant = true,
-                             .stopEpsilon = 1e-4f,
-                             .mode = sslpv::SslpvMode::Calibrated};
-    base.calibration = sslpv::defaultSslpvCalibration();
-    base.calibration.gain[0] = base.calibration.gain[1] = 1.f;  // fitted below
-    const bool search = args.has("search");
-    if (args.value("linear"))
-        base.calibration.linear = args.floatOr("linear", 0.f, 0.f, 100.f);
-    if (args.value("diffusion"))
-        base.calibration.diffusion = args.floatOr("diffusion", 0.f, 0.f, 100.f);
-    if (args.value("transport"))
-        base.calibration.transport = args.floatOr("transport", 0.f, 0.f, 100.f);
-    if (args.value("per-step"))
-        base.calibration.perStep = args.floatOr("per-step", 0.f, 0.f, 100.f);
-    if (args.value("per-step-transport"))
-        base.calibration.perStepTransport = args.floatOr("per-step-transport", 0.f, 0.f, 100.f);
-    // Which weight --search fits (the others stay as given).
-    const std::string param = args.valueOr("fit", "transport");
-    float sslpv::SslpvCalibration::*fitted = &sslpv::SslpvCalibration::transport;
-    if (param == "linear")
-        fitted = &sslpv::SslpvCalibration::linear;
-    else if (param == "diffusion")
-        fitted = &sslpv::SslpvCalibration::diffusion;
-    else if (param != "transport")
-        LUCENT_THROW(ValueError, "--fit: '", param, "' is not linear, transport or diffusion");
-
-    if (args.has("solve-beta")) {
-        // Per case, the per-step absorption β* at which the SSLPV response equals the target
-        // with the gain given (default 1): bisection in log β over [1e-4, 20] (the response
-        // falls monotonically with β). β is imposed through the linear weight alone,
-        // linear = β/(σa·Δx). The table is what the calibration formula is fitted to.
-        const float gain = args.floatOr("gain", 1.f, 1e-3f, 1e3f);
+void runFit(const FitOptions& args) {
+    SslpvCalibrationFitSettings s = args.settings;
+    const std::string param = weightName(args.weight);
+    if (args.solveBeta) {
+        const float gain = args.gain;
         std::printf(
             "| dx*sigma_t | alpha' | beta* | beta*/(1-alpha') | sigma_tr dx | steps |\n"
             "|---|---|---|---|---|---|\n");
-        for (const FitCase& fc : cases) {
-            const double target = slabTarget(fc.albedo, eta);
-            double lo = std::log(1e-4), hi = std::log(20.0);
-            int steps = 0;
-            for (int it = 0; it < args.intOr("iterations", 10, 1, 40); ++it) {
-                const double mid = 0.5 * (lo + hi);
-                sslpv::SslpvOptions o = base;
-                o.calibration = sslpv::SslpvCalibration{};
-                o.calibration.linear =
-                    float(std::exp(mid) / ((1.0 - fc.albedo) * double(fc.cellMfp)));
-                const double resp = gain * slabResponse(fc, n, o, eta, &steps);
-                (resp > target ? lo : hi) = mid;
-            }
-            const double beta = std::exp(0.5 * (lo + hi));
-            std::printf("| %.2f | %.3f | %.5f | %.4f | %.4f | %d |\n", double(fc.cellMfp),
-                        double(fc.albedo), beta, beta / (1.0 - fc.albedo),
-                        std::sqrt(3.0 * (1.0 - fc.albedo)) * fc.cellMfp, steps);
-            std::fflush(stdout);
-        }
-        return 0;
+        solveSslpvBeta(s, double(gain), args.iterations ? args.iterations : 10,
+                       [](const SslpvBetaRow& r) {
+                           std::printf("| %.2f | %.3f | %.5f | %.4f | %.4f | %d |\n",
+                                       double(r.fitCase.cellMfp), double(r.fitCase.albedo), r.beta,
+                                       r.betaPerAbsorption, r.transportCell, r.steps);
+                           std::fflush(stdout);
+                       });
+        return;
     }
-    if (search) {
-        // Golden-section search of the diffusion weight (log scale) at fixed linear weight: the
-        // objective is the RMS log residual after the optimal gain.
-        double a = std::log(0.02), b = std::log(5.0);
-        const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
-        auto f = [&](double x) {
-            sslpv::SslpvOptions o = base;
-            o.calibration.*fitted = float(std::exp(x));
-            const double v = evaluateFit(cases, n, o, eta).rmsLog;
-            std::printf("# search: %s %.5f -> rms log %.5f\n", param.c_str(), std::exp(x), v);
+    if (args.search) {
+        s.search = args.weight;
+        s.iterations = args.iterations ? args.iterations : 12;
+        s.onSearchStep = [&param](double w, double rmsLog) {
+            std::printf("# search: %s %.5f -> rms log %.5f\n", param.c_str(), w, rmsLog);
             std::fflush(stdout);
-            return v;
         };
-        double c = b - phi * (b - a), d = a + phi * (b - a);
-        double fc = f(c), fd = f(d);
-        for (int it = 0; it < args.intOr("iterations", 12, 1, 100); ++it) {
-            if (fc < fd) {
-                b = d;
-                d = c;
-                fd = fc;
-                c = b - phi * (b - a);
-                fc = f(c);
-            } else {
-                a = c;
-                c = d;
-                fc = fd;
-                d = a + phi * (b - a);
-                fd = f(d);
-            }
-        }
-        base.calibration.*fitted = float(std::exp(0.5 * (a + b)));
     }
 
-    const FitResult r = evaluateFit(cases, n, base, eta);
+    const SslpvCalibrationFit r = fitSslpvCalibration(s);
     std::printf(
         "SSLPV calibrated-mode fit: thick slab %d^3 cells, SH order %d, eta %.2f, "
         "g = 0\n",
-        n, order, double(eta));
+        s.gridCells, s.order, double(s.eta));
     std::printf(
         "  model: beta = %.5f sigma_a dx + %.5f sigma_tr dx + %.5f (sigma_tr dx)^2 + "
         "%.5f sigma_a/sigma_t + %.5f sigma_tr/sigma_t, gain G = %.5f\n",
-        double(base.calibration.linear), double(base.calibration.transport),
-        double(base.calibration.diffusion), double(base.calibration.perStep),
-        double(base.calibration.perStepTransport), r.gain);
+        double(r.calibration.linear), double(r.calibration.transport),
+        double(r.calibration.diffusion), double(r.calibration.perStep),
+        double(r.calibration.perStepTransport), r.gain);
     std::printf("  target: classical dipole F_t(0) R_d / pi (Jensen 2001)\n");
     std::printf(
         "| dx*sigma_t | alpha' | dipole R_d | target L/E (1/sr) | SSLPV G*L/E | "
         "residual | steps |\n|---|---|---|---|---|---|---|\n");
-    for (size_t i = 0; i < cases.size(); ++i) {
-        const double t = slabTarget(cases[i].albedo, eta);
-        const double rd = dipole::totalReflectance(dipole::Model::Dipole,
-                                                   dipole::fromReduced(1.f, cases[i].albedo, eta));
+    for (const SslpvFitRow& row : r.rows)
         std::printf("| %.2f | %.3f | %.4f | %.5f | %.5f | %+.1f %% | %d |\n",
-                    double(cases[i].cellMfp), double(cases[i].albedo), rd, t,
-                    r.ratio[i] * r.gain * t, 100.0 * (r.ratio[i] * r.gain - 1.0), r.steps[i]);
-    }
+                    double(row.fitCase.cellMfp), double(row.fitCase.albedo), row.dipoleReflectance,
+                    row.target, row.fitted, 100.0 * row.residual, row.steps);
     std::printf("  RMS log residual %.4f, max |residual| %.1f %%\n", r.rmsLog, 100.0 * r.maxAbsRel);
-    return 0;
+}
+
+void addSslpvBench(CLI::App& bench) {
+    CLI::App* sub = addCommand(
+        bench, "sslpv", "time the SSLPV propagation against a bandwidth floor",
+        "usage: lucent-cli bench sslpv [--scene cube|sphere|shell|spot] [--grid N] [--steps K]\n"
+        "                              [--sh 1|2] [--heterogeneous] [--dense] [--threads T]\n"
+        "                              [--repeats R] [--gl [--fp16]] [--json]\n",
+        "Times repeated SSLPV solves (per-cell factors + propagation) on an N^3 grid of 1 mm\n"
+        "cells after 3 warm-up solves, and prints medians next to a memory-bandwidth floor\n"
+        "measured in the same run (streaming the same planes: copy + accumulate, per step).\n");
+    auto args = std::make_shared<BenchOptions>();
+    sub->add_option("--scene", args->scene,
+                    "cube: every cell material, top face lit (the paper's set-up, default); "
+                    "sphere: ball of radius 0.45 N with sinks lit from above; shell: hollow ball "
+                    "0.38-0.45 N; spot: cube lit on a 4x4-cell spot")
+        ->type_name("S");
+    sub->add_option("--grid", args->grid, "cells per axis (default 32)")
+        ->type_name("N")
+        ->check(CLI::Range(4, 256));
+    sub->add_option("--steps", args->steps, "propagation steps (default 8)")
+        ->type_name("K")
+        ->check(CLI::Range(1, 4096));
+    sub->add_option("--sh", args->sh, "spherical-harmonics order: 4 or 9 coefficients (default 1)")
+        ->type_name("1|2")
+        ->check(CLI::Range(1, 2));
+    sub->add_flag("--heterogeneous", args->heterogeneous,
+                  "random per-cell material (per-cell factor arrays)");
+    sub->add_flag("--dense", args->dense,
+                  "compute every cell of the object's box every step (no active-brick skipping: "
+                  "the paper's dense GPU work)");
+    sub->add_option("--threads", args->threads, "worker threads (default: all)")
+        ->type_name("T")
+        ->check(CLI::Range(1, 256));
+    sub->add_option("--repeats", args->repeats, "timed solves (default 50)")
+        ->type_name("R")
+        ->check(CLI::Range(3, 100000));
+    CLI::Option* gl = sub->add_flag("--gl", args->gl,
+                                    "also time the GL 4.5 compute propagation (headless EGL "
+                                    "context; GPU timer queries; persistent buffers, so repeats "
+                                    "upload nothing; the read-back is timed separately), fp32 "
+                                    "grids");
+    sub->add_flag("--fp16", args->fp16, "with --gl: fp16 grids")->needs(gl);
+    sub->add_flag("--json", args->json,
+                  "one JSON object: ms_per_solve, ms_propagation, ms_per_step, floor_ms_per_step, "
+                  "ratio_to_floor, brick_count, active_bricks_per_step, cells_per_step "
+                  "(gl_gpu_ms, gl_total_ms, gl_readback_ms: 0 without --gl)");
+    sub->callback([args] { runBench(*args); });
+}
+
+void addSslpvFit(CLI::App& bench) {
+    CLI::App* sub = addCommand(
+        bench, "sslpv-fit", "fit the calibrated SSLPV mode against the classical dipole",
+        "usage: lucent-cli bench sslpv-fit [--grid N] [--sh 1|2] [--eta E] [--linear U]\n"
+        "                                  [--transport T] [--diffusion K] [--per-step P]\n"
+        "                                  [--per-step-transport Q]\n"
+        "                                  [--search [--fit linear|transport|diffusion]]\n"
+        "                                  [--solve-beta [--gain G]] [--iterations I]\n",
+        "Fit of the calibrated SSLPV mode (docs/methods/sslpv.md): thick slabs (N^3 grid, default\n"
+        "48) for alpha' in {0.3 .. 0.99} and cell sizes {0.5, 1, 2, 4} mean free paths; per-step\n"
+        "absorption beta = U sigma_a dx + T sigma_tr dx + K (sigma_tr dx)^2 + P sigma_a/sigma_t\n"
+        "+ Q sigma_tr/sigma_t (each weight defaults to the shipped constant); prints the optimal\n"
+        "radiance gain G and the residual of each case against the classical dipole.\n");
+    auto args = std::make_shared<FitOptions>();
+    SslpvCalibrationFitSettings& s = args->settings;
+    sub->add_option("--grid", s.gridCells, "cells per axis of the slab grid (default 48)")
+        ->type_name("N")
+        ->check(CLI::Range(16, 128));
+    sub->add_option("--sh", s.order, "spherical-harmonics order (default 1)")
+        ->type_name("1|2")
+        ->check(CLI::Range(1, 2));
+    sub->add_option("--eta", s.eta, "relative index of refraction (default 1.3)")
+        ->type_name("E")
+        ->check(finiteRange(1, 3));
+    const struct {
+        const char* name;
+        float sslpv::SslpvCalibration::*weight;
+        const char* help;
+    } weights[] = {
+        {"--linear", &sslpv::SslpvCalibration::linear, "U, the weight of sigma_a dx"},
+        {"--transport", &sslpv::SslpvCalibration::transport, "T, the weight of sigma_tr dx"},
+        {"--diffusion", &sslpv::SslpvCalibration::diffusion, "K, the weight of (sigma_tr dx)^2"},
+        {"--per-step", &sslpv::SslpvCalibration::perStep, "P, the weight of sigma_a/sigma_t"},
+        {"--per-step-transport", &sslpv::SslpvCalibration::perStepTransport,
+         "Q, the weight of sigma_tr/sigma_t"}};
+    for (const auto& w : weights)
+        sub->add_option(w.name, s.calibration.*w.weight,
+                        std::string(w.help) + " (default: the shipped constant)")
+            ->type_name("W")
+            ->check(finiteRange(0, 100));
+    CLI::Option* search =
+        sub->add_flag("--search", args->search,
+                      "fit one weight by golden-section search (log scale over [0.02, 5], I "
+                      "iterations, default 12) minimising the RMS log residual");
+    addChoiceOption<SslpvFitWeight>(*sub, "--fit", args->weight,
+                                    {{"linear", SslpvFitWeight::Linear},
+                                     {"transport", SslpvFitWeight::Transport},
+                                     {"diffusion", SslpvFitWeight::Diffusion}},
+                                    "the weight --search fits (default transport)")
+        ->needs(search);
+    CLI::Option* solveBeta =
+        sub->add_flag("--solve-beta", args->solveBeta,
+                      "per case, bisect the per-step absorption beta* that matches the dipole "
+                      "with gain G, I iterations (default 10): the fit data")
+            ->excludes(search);
+    sub->add_option("--gain", args->gain, "--solve-beta: the radiance gain G (default 1)")
+        ->type_name("G")
+        ->check(finiteRange(1e-3, 1e3))
+        ->needs(solveBeta);
+    sub->add_option("--iterations", args->iterations,
+                    "search or bisection iterations (--search: at most 100, --solve-beta: 40)")
+        ->type_name("I")
+        ->check(CLI::Range(1, 100));
+    sub->callback([args] { runFit(*args); });
 }
 
 }  // namespace
 
-const Command benchCommand{
-    "bench", "time the SSLPV propagation against a bandwidth floor; fit its calibrated mode",
-    "usage: lucent-cli bench sslpv [--scene cube|sphere|shell|spot] [--grid N] [--steps K]\n"
-    "                              [--sh 1|2] [--heterogeneous] [--dense] [--threads T]\n"
-    "                              [--repeats R] [--gl [--fp16]] [--json]\n"
-    "\n"
-    "Times repeated SSLPV solves (per-cell factors + propagation) on an N^3 grid of 1 mm\n"
-    "cells after 3 warm-up solves, and prints medians next to a memory-bandwidth floor\n"
-    "measured in the same run (streaming the same planes: copy + accumulate, per step).\n"
-    "\n"
-    "  --scene S         cube: every cell material, top face lit (the paper's set-up,\n"
-    "                    default); sphere: ball of radius 0.45 N with sinks lit from above;\n"
-    "                    shell: hollow ball 0.38-0.45 N; spot: cube lit on a 4x4-cell spot\n"
-    "  --grid N          cells per axis, [4, 256] (default 32)\n"
-    "  --steps K         propagation steps, [1, 4096] (default 8)\n"
-    "  --sh 1|2          spherical-harmonics order: 4 or 9 coefficients (default 1)\n"
-    "  --heterogeneous   random per-cell material (per-cell factor arrays)\n"
-    "  --dense           compute every cell of the object's box every step (no active-brick\n"
-    "                    skipping: the paper's dense GPU work)\n"
-    "  --threads T       worker threads (default: all)\n"
-    "  --repeats R       timed solves (default 50)\n"
-    "  --gl              also time the GL 4.5 compute propagation (headless EGL context;\n"
-    "                    GPU timer queries; persistent buffers, so repeats upload nothing;\n"
-    "                    the read-back is timed separately), fp32 grids\n"
-    "  --fp16            with --gl: fp16 grids\n"
-    "  --json            one JSON object: ms_per_solve, ms_propagation, ms_per_step,\n"
-    "                    floor_ms_per_step, ratio_to_floor, brick_count,\n"
-    "                    active_bricks_per_step, cells_per_step (gl_gpu_ms, gl_total_ms,\n"
-    "                    gl_readback_ms: 0 without --gl)\n"
-    "\n"
-    "usage: lucent-cli bench sslpv-fit [--grid N] [--sh 1|2] [--eta E] [--linear U]\n"
-    "                                  [--transport T] [--diffusion K] [--per-step P]\n"
-    "                                  [--per-step-transport Q]\n"
-    "                                  [--search [--fit linear|transport|diffusion]]\n"
-    "                                  [--solve-beta [--gain G]] [--iterations I]\n"
-    "\n"
-    "Fit of the calibrated SSLPV mode (docs/methods/sslpv.md): thick slabs (N^3 grid, default\n"
-    "48) for alpha' in {0.3 .. 0.99} and cell sizes {0.5, 1, 2, 4} mean free paths; per-step\n"
-    "absorption beta = U sigma_a dx + T sigma_tr dx + K (sigma_tr dx)^2 + P sigma_a/sigma_t\n"
-    "+ Q sigma_tr/sigma_t (each weight defaults to the shipped constant); prints the optimal\n"
-    "radiance gain G and the residual of each case against the classical dipole.\n"
-    "  --search       fit one weight (default transport) by golden-section search (log scale\n"
-    "                 over [0.02, 5], I iterations, default 12) minimising the RMS log residual\n"
-    "  --solve-beta   per case, bisect the per-step absorption beta* that matches the dipole\n"
-    "                 with gain G (default 1), I iterations (default 10): the fit data\n",
-    &runBench};
+void addBenchCommand(CLI::App& cli, const CommandContext&) {
+    CLI::App* bench = addCommand(
+        cli, "bench",
+        "time the SSLPV propagation against a bandwidth floor; fit its calibrated mode",
+        "usage: lucent-cli bench sslpv [options]       (lucent-cli bench sslpv --help)\n"
+        "       lucent-cli bench sslpv-fit [options]   (lucent-cli bench sslpv-fit --help)\n",
+        "");
+    bench->require_subcommand(1);
+    addSslpvBench(*bench);
+    addSslpvFit(*bench);
+}
 
 }  // namespace lucent::cli

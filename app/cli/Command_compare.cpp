@@ -3,13 +3,14 @@
 /// @brief `lucent-cli compare`: RMSE, relative RMSE and mean relative error of an image against
 /// a reference, per channel and luminance, next to the Monte Carlo noise floor.
 
-#include "CliArgs.h"
+#include "CliCommon.h"
 
 #include <lucent/bench/ErrorMetrics.h>
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
 
 #include <cstdio>
+#include <memory>
 #include <optional>
 
 namespace lucent::cli {
@@ -30,12 +31,13 @@ ImageRgb readAny(const std::string& path) {
     return png ? readPng(path) : readExr(path);
 }
 
-int runCompare(const std::vector<std::string>& argv) {
-    const Args args(argv, {"mask"}, {});
-    if (args.positional().size() != 2)
-        LUCENT_THROW(ValueError, "expected TEST.exr REFERENCE.exr (see --help)");
-    const std::string& testPath = args.positional()[0];
-    const std::string& refPath = args.positional()[1];
+struct CompareOptions {
+    std::string test, reference, mask;
+};
+
+void runCompare(const CompareOptions& args) {
+    const std::string& testPath = args.test;
+    const std::string& refPath = args.reference;
     const ImageRgb test = readExr(testPath);
     const ImageRgb ref = readExr(refPath);
     const std::optional<ImageRgb> refVar = tryLayer(refPath, "variance");
@@ -43,7 +45,8 @@ int runCompare(const std::vector<std::string>& argv) {
 
     std::vector<uint8_t> mask;
     std::string maskFrom;
-    if (auto m = args.value("mask")) {
+    if (const std::optional<std::string> m =
+            args.mask.empty() ? std::nullopt : std::optional(args.mask)) {
         const ImageRgb img = readAny(*m);
         if (img.width() != ref.width() || img.height() != ref.height())
             LUCENT_THROW(ValueError, "--mask ", *m, ": ", img.width(), "×", img.height(),
@@ -71,22 +74,32 @@ int runCompare(const std::vector<std::string>& argv) {
                 : testVar         ? "the test image's variance layer"
                                   : "none (no variance layer)");
     std::fputs(bench::formatReport(r).c_str(), stdout);
-    return 0;
 }
 
 }  // namespace
 
-const Command compareCommand{
-    "compare", "error metrics of an image against a reference, with its noise floor",
-    "usage: lucent-cli compare TEST.exr REFERENCE.exr [--mask MASK]\n"
-    "\n"
-    "Prints per channel (R, G, B) and for luminance, over the object-covered pixels:\n"
-    "RMSE, relative RMSE (RMSE / mean reference) and mean relative error (|a−b| / b per pixel),\n"
-    "each beside its noise floor: the value expected from the Monte Carlo variance alone (the\n"
-    "'variance' layers of REFERENCE and, if present, TEST). Definitions: docs/reference.md.\n"
-    "\n"
-    "  --mask MASK   EXR or PNG, same size; pixels with any channel > 0.5 are compared.\n"
-    "                Default: REFERENCE's 'coverage' layer, else pixels not black in either.\n",
-    &runCompare};
+void addCompareCommand(CLI::App& cli, const CommandContext&) {
+    CLI::App* sub = addCommand(
+        cli, "compare", "error metrics of an image against a reference, with its noise floor",
+        "usage: lucent-cli compare TEST.exr REFERENCE.exr [--mask MASK]\n",
+        "Prints per channel (R, G, B) and for luminance, over the object-covered pixels:\n"
+        "RMSE, relative RMSE (RMSE / mean reference) and mean relative error (|a−b| / b per\n"
+        "pixel), each beside its noise floor: the value expected from the Monte Carlo variance\n"
+        "alone (the 'variance' layers of REFERENCE and, if present, TEST). Definitions:\n"
+        "docs/reference.md.\n");
+    auto args = std::make_shared<CompareOptions>();
+    sub->add_option("TEST.exr", args->test, "the image to judge")
+        ->required()
+        ->check(existingFile());
+    sub->add_option("REFERENCE.exr", args->reference, "the reference (lucent-cli reference)")
+        ->required()
+        ->check(existingFile());
+    sub->add_option("--mask", args->mask,
+                    "EXR or PNG, same size; pixels with any channel > 0.5 are compared. Default: "
+                    "REFERENCE's 'coverage' layer, else pixels not black in either")
+        ->type_name("MASK")
+        ->check(existingFile());
+    sub->callback([args] { runCompare(*args); });
+}
 
 }  // namespace lucent::cli

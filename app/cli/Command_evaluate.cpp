@@ -4,7 +4,7 @@
 /// the evaluation suite or on scene files. Parses and prints; the cases, the reference cache,
 /// the metrics and the report files are the engine's (lucent/evaluation/).
 
-#include "CliArgs.h"
+#include "CliCommon.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/core/FileIO.h>
@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -56,7 +57,7 @@ std::vector<float> parseEtas(const std::vector<std::string>& items) {
 }
 
 /// `--report DIR`: the derived reports redrawn from DIR/results.csv and DIR/results.json.
-int redrawReports(const std::string& dir) {
+void redrawReports(const std::string& dir) {
     const std::string csv = (fs::path(dir) / "results.csv").string();
     const std::string json = (fs::path(dir) / "results.json").string();
     const std::vector<evaluation::Result> results =
@@ -68,43 +69,48 @@ int redrawReports(const std::string& dir) {
         "%s\nrewrote the summary, the Pareto front and the chart data of %zu results in "
         "%s; charts: cd %s && gnuplot charts.gp\n",
         evaluation::summaryMarkdown(results).c_str(), results.size(), dir.c_str(), dir.c_str());
-    return 0;
 }
 
-int runEvaluate(const std::vector<std::string>& argv) {
-    const Args args(argv,
-                    {"suite", "cases", "methods", "ref-spp", "width", "height", "out", "repeats",
-                     "levels", "presets", "etas", "report"},
-                    {"subsurface-only", "json", "verbose", "no-images"});
-    if (const auto report = args.value("report")) {
+struct EvaluateOptions {
+    std::vector<std::string> scenes;
+    std::string suite, cases, methods, out, presets, etas, report;
+    int refSpp = 256, repeats = 3, levels = 3, width = 0, height = 0;
+    bool subsurfaceOnly = false, json = false, verbose = false, noImages = false;
+    const CLI::App* app = nullptr;
+    bool has(const std::string& option) const { return app->count(option) > 0; }
+};
+
+void runEvaluate(const EvaluateOptions& args, const std::vector<std::string>& argv) {
+    if (args.has("--report")) {
         if (argv.size() != 2 && !(argv.size() == 1 && argv[0].rfind("--report=", 0) == 0))
             LUCENT_THROW(ValueError, "--report DIR takes no other option");
-        return redrawReports(*report);
+        redrawReports(args.report);
+        return;
     }
-    const auto suite = args.value("suite");
-    if (suite && !args.positional().empty())
+    const bool suite = args.has("--suite");
+    if (suite && !args.scenes.empty())
         LUCENT_THROW(ValueError, "give either --suite NAME or SCENE.json files, not both");
-    if (!suite && args.positional().empty())
+    if (!suite && args.scenes.empty())
         LUCENT_THROW(ValueError, "expected --suite NAME or at least one SCENE.json (see --help)");
-    if (suite && (args.value("presets") || args.value("etas")))
+    if (suite && (args.has("--presets") || args.has("--etas")))
         LUCENT_THROW(ValueError, "--presets and --etas apply to SCENE.json files only");
-    if (!suite && args.value("cases"))
+    if (!suite && args.has("--cases"))
         LUCENT_THROW(ValueError, "--cases applies to --suite only");
-    const auto outDir = args.value("out");
-    if (!outDir || outDir->empty())
+    if (args.out.empty())
         LUCENT_THROW(ValueError, "missing --out DIR");
-    const std::vector<evaluation::Variant> variants =
-        evaluation::parseVariants(args.valueOr("methods", evaluation::defaultVariants()));
+    const std::string* outDir = &args.out;
+    const std::vector<evaluation::Variant> variants = evaluation::parseVariants(
+        args.has("--methods") ? args.methods : evaluation::defaultVariants());
 
     evaluation::RunOptions options;
     options.outDir = *outDir;
-    options.refSpp = args.intOr("ref-spp", 256, 3, 1 << 20);
-    options.repeats = args.intOr("repeats", 3, 1, 1000);
-    options.levels = args.intOr("levels", 3, 1, 16);
-    options.subsurfaceOnly = args.has("subsurface-only");
-    options.writeImages = !args.has("no-images");
-    const bool json = args.has("json");
-    const bool verbose = args.has("verbose");
+    options.refSpp = args.refSpp;
+    options.repeats = args.repeats;
+    options.levels = args.levels;
+    options.subsurfaceOnly = args.subsurfaceOnly;
+    options.writeImages = !args.noImages;
+    const bool json = args.json;
+    const bool verbose = args.verbose;
     options.silenceMethods = !verbose;
     FILE* log = json ? stderr : stdout;  // progress; with --json stdout holds the JSON only
     options.progress = [log](const std::string& line) {
@@ -122,24 +128,29 @@ int runEvaluate(const std::vector<std::string>& argv) {
     evaluation::RunInfo info;
     if (suite) {
         evaluation::SuiteOptions so;
-        so.width = args.intOr("width", so.width, 8, 4096);
-        so.height = args.intOr("height", args.value("width") ? so.width : so.height, 8, 4096);
+        for (const auto& [option, pixels] :
+             {std::pair{"--width", args.width}, std::pair{"--height", args.height}})
+            if (args.has(option) && (pixels < 8 || pixels > 4096))
+                LUCENT_THROW(ValueError, option, ": ", pixels,
+                             " is outside [8, 4096], the suite's image sizes");
+        if (args.has("--width"))
+            so.width = args.width;
+        so.height = args.has("--height") ? args.height : args.has("--width") ? so.width : so.height;
         so.log = [](const std::string& m) { std::fprintf(stderr, "evaluate: %s\n", m.c_str()); };
-        cases = evaluation::filterCases(evaluation::buildSuite(*suite, so),
-                                        splitComma(args.valueOr("cases", "")));
-        info.suite = *suite;
+        cases =
+            evaluation::filterCases(evaluation::buildSuite(args.suite, so), splitComma(args.cases));
+        info.suite = args.suite;
     } else {
         std::vector<const MaterialPreset*> presets;
-        for (const std::string& name : splitComma(args.valueOr("presets", "")))
+        for (const std::string& name : splitComma(args.presets))
             presets.push_back(&findPreset(name));  // ValueError listing the valid names
-        const std::vector<float> etas = parseEtas(splitComma(args.valueOr("etas", "")));
-        if (args.value("presets") && presets.empty())
+        const std::vector<float> etas = parseEtas(splitComma(args.etas));
+        if (args.has("--presets") && presets.empty())
             LUCENT_THROW(ValueError, "--presets: no preset given");
-        if (args.value("etas") && etas.empty())
+        if (args.has("--etas") && etas.empty())
             LUCENT_THROW(ValueError, "--etas: no value given");
-        cases = evaluation::casesFromSceneFiles(args.positional(), presets, etas,
-                                                args.intOr("width", 0, 1, 16384),
-                                                args.intOr("height", 0, 1, 16384));
+        cases =
+            evaluation::casesFromSceneFiles(args.scenes, presets, etas, args.width, args.height);
         info.suite = "files";
     }
 
@@ -172,7 +183,7 @@ int runEvaluate(const std::vector<std::string>& argv) {
     evaluation::writeReports(results, info, *outDir);
     if (json) {
         std::fputs(evaluation::toJson(results, info).c_str(), stdout);
-        return 0;
+        return;
     }
     std::printf("\n%s", evaluation::summaryMarkdown(results).c_str());
     const fs::path dir(*outDir);
@@ -183,55 +194,88 @@ int runEvaluate(const std::vector<std::string>& argv) {
         (dir / "summary.md").string().c_str(), (dir / "pareto.md").string().c_str(),
         (dir / "charts.gp").string().c_str(), results.size(), info.skipped.size(),
         dir.string().c_str());
-    return 0;
 }
 
 }  // namespace
 
-const Command evaluateCommand{
-    "evaluate", "run time vs error of the methods against the exact reference (suite or scenes)",
-    "usage: lucent-cli evaluate (--suite NAME [--cases F1,F2,...] | SCENE.json [SCENE2.json ...]\n"
-    "                            [--presets P1,...] [--etas E1,...]) --out DIR\n"
-    "                           [--methods M1,M2,...] [--ref-spp N] [--width W] [--height H]\n"
-    "                           [--repeats R] [--levels L] [--subsurface-only] [--no-images]\n"
-    "                           [--json] [--verbose]\n"
-    "       lucent-cli evaluate --report DIR\n"
-    "\n"
-    "For each case: the exact path-traced reference with variance and coverage (seed 1,\n"
-    "dielectric boundary), cached in DIR by scene hash and reference estimator version, with\n"
-    "its noise floor; the Direct render's time (the unit of cost); then each method at a few\n"
-    "quality settings, rendered in-process with the functions of `lucent-cli render`. Time:\n"
-    "median wall time of R runs after one warm-up, of the whole method call (GL context\n"
-    "creation included). Error, over the object-covered pixels in 4x4-pixel blocks of\n"
-    "luminance and per channel: block relative L1 and RMSE with the reference noise floor\n"
-    "removed in quadrature, the 95th-percentile block error and the mean ratio\n"
-    "(docs/evaluation.md). Writes DIR/results.csv (with the planner's scene features per\n"
-    "case), results.json, summary.md (best method per case against the goal: block rel. L1\n"
-    "<= 0.10, mean ratio 1 +- 0.05), pareto.md, charts.gp with its chart_*.dat (run\n"
-    "`gnuplot charts.gp` in DIR for the PNG charts) and, per render, an EXR and a PNG.\n"
-    "\n"
-    "  --suite NAME      default (every case of docs/evaluation.md, 64x64) or smoke (two\n"
-    "                    cases at 32x32 for a quick check)\n"
-    "  --cases LIST      only the suite's cases whose name contains one of the entries\n"
-    "  --methods LIST    comma-separated METHOD[:VARIANT] (default: each method's default\n"
-    "                    evaluation variants; `lucent-cli methods` lists the methods, their\n"
-    "                    variants and quality levels, e.g. sslpv:paper, dipole:cpu,\n"
-    "                    dirpole:raw). The reference method runs with seed 7.\n"
-    "                    A variant this binary or case cannot render is skipped with a message.\n"
-    "  --ref-spp N       reference samples per pixel (default 256)\n"
-    "  --width, --height image size (pixels; --suite: default 64, the height follows the width)\n"
-    "  --repeats R       timed runs per setting (default 3)\n"
-    "  --levels L        at most L quality settings per method, cheapest first (default 3)\n"
-    "  --presets LIST    scene files: evaluate every scene once per material preset (e.g.\n"
-    "                    skin1,marble,wholemilk) on the scene's grid\n"
-    "  --etas LIST       scene files: evaluate every scene (and preset) once per relative index\n"
-    "                    of refraction in [1, 3]; cases are named <scene>[-<preset>][-eta<E>]\n"
-    "  --subsurface-only reference and methods without the surface reflection\n"
-    "  --no-images       write no EXR/PNG per render\n"
-    "  --json            print results.json to stdout (progress goes to stderr)\n"
-    "  --verbose         keep the methods' own logs on stderr\n"
-    "  --report DIR      render nothing: rewrite summary.md, pareto.md and the chart data and\n"
-    "                    script from DIR/results.csv and DIR/results.json\n",
-    &runEvaluate};
+void addEvaluateCommand(CLI::App& cli, const CommandContext& context) {
+    CLI::App* sub = addCommand(
+        cli, "evaluate",
+        "run time vs error of the methods against the exact reference (suite or scenes)",
+        "usage: lucent-cli evaluate (--suite NAME [--cases F1,F2,...] |\n"
+        "                            SCENE.json [SCENE2.json ...]\n"
+        "                            [--presets P1,...] [--etas E1,...]) --out DIR\n"
+        "                           [--methods M1,M2,...] [--ref-spp N] [--width W] [--height H]\n"
+        "                           [--repeats R] [--levels L] [--subsurface-only] [--no-images]\n"
+        "                           [--json] [--verbose]\n"
+        "       lucent-cli evaluate --report DIR\n",
+        "For each case: the exact path-traced reference with variance and coverage (seed 1,\n"
+        "dielectric boundary), cached in DIR by scene hash and reference estimator version, with\n"
+        "its noise floor; the Direct render's time (the unit of cost); then each method at a few\n"
+        "quality settings, rendered in-process with the functions of `lucent-cli render`. Time:\n"
+        "median wall time of R runs after one warm-up, of the whole method call (GL context\n"
+        "creation included). Error, over the object-covered pixels in 4x4-pixel blocks of\n"
+        "luminance and per channel: block relative L1 and RMSE with the reference noise floor\n"
+        "removed in quadrature, the 95th-percentile block error and the mean ratio\n"
+        "(docs/evaluation.md). Writes DIR/results.csv (with the planner's scene features per\n"
+        "case), results.json, summary.md (best method per case against the goal: block rel. L1\n"
+        "<= 0.10, mean ratio 1 +- 0.05), pareto.md, charts.gp with its chart_*.dat (run\n"
+        "`gnuplot charts.gp` in DIR for the PNG charts) and, per render, an EXR and a PNG.\n");
+    auto args = std::make_shared<EvaluateOptions>();
+    args->app = sub;
+    sub->add_option("SCENE.json", args->scenes, "scene files to evaluate (instead of --suite)")
+        ->check(existingFile());
+    sub->add_option("--suite", args->suite,
+                    "default (every case of docs/evaluation.md, 64x64) or smoke (two cases at "
+                    "32x32 for a quick check)")
+        ->type_name("NAME");
+    sub->add_option("--cases", args->cases,
+                    "only the suite's cases whose name contains one of the entries")
+        ->type_name("LIST");
+    sub->add_option("--methods", args->methods,
+                    "comma-separated METHOD[:VARIANT] (default: each method's default evaluation "
+                    "variants; `lucent-cli methods` lists the methods, their variants and quality "
+                    "levels, e.g. sslpv:paper, dipole:cpu, dirpole:raw). The reference method "
+                    "runs with seed 7. A variant this binary or case cannot render is skipped "
+                    "with a message")
+        ->type_name("LIST");
+    sub->add_option("--out", args->out, "output directory (created if needed)")->type_name("DIR");
+    sub->add_option("--ref-spp", args->refSpp, "reference samples per pixel (default 256)")
+        ->type_name("N")
+        ->check(CLI::Range(3, 1 << 20));
+    sub->add_option("--width", args->width,
+                    "image width (pixels; --suite: default 64, the height follows the width)")
+        ->type_name("W")
+        ->check(CLI::Range(1, 16384));
+    sub->add_option("--height", args->height, "image height (pixels)")
+        ->type_name("H")
+        ->check(CLI::Range(1, 16384));
+    sub->add_option("--repeats", args->repeats, "timed runs per setting (default 3)")
+        ->type_name("R")
+        ->check(CLI::Range(1, 1000));
+    sub->add_option("--levels", args->levels,
+                    "at most L quality settings per method, cheapest first (default 3)")
+        ->type_name("L")
+        ->check(CLI::Range(1, 16));
+    sub->add_option("--presets", args->presets,
+                    "scene files: evaluate every scene once per material preset (e.g. "
+                    "skin1,marble,wholemilk) on the scene's grid")
+        ->type_name("LIST");
+    sub->add_option("--etas", args->etas,
+                    "scene files: evaluate every scene (and preset) once per relative index of "
+                    "refraction in [1, 3]; cases are named <scene>[-<preset>][-eta<E>]")
+        ->type_name("LIST");
+    sub->add_flag("--subsurface-only", args->subsurfaceOnly,
+                  "reference and methods without the surface reflection");
+    sub->add_flag("--no-images", args->noImages, "write no EXR/PNG per render");
+    sub->add_flag("--json", args->json, "print results.json to stdout (progress goes to stderr)");
+    sub->add_flag("--verbose", args->verbose, "keep the methods' own logs on stderr");
+    sub->add_option("--report", args->report,
+                    "render nothing: rewrite summary.md, pareto.md and the chart data and script "
+                    "from DIR/results.csv and DIR/results.json")
+        ->type_name("DIR")
+        ->check(existingDirectory());
+    sub->callback([args, &context] { runEvaluate(*args, context.arguments); });
+}
 
 }  // namespace lucent::cli

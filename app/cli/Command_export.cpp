@@ -4,7 +4,7 @@
 /// OpenVDB and/or Mitsuba 3 `.vol` grids + medium XML (docs/file-formats.md, "Material volumes
 /// (OpenVDB)" and its "Mitsuba 3 (.vol)" subsection).
 
-#include "CliArgs.h"
+#include "CliCommon.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Timer.h>
@@ -18,6 +18,10 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
 
 namespace lucent::cli {
 
@@ -43,38 +47,34 @@ bool isSameFile(const std::string& input, const std::string& output) {
     return std::filesystem::exists(output, ec) && std::filesystem::equivalent(input, output, ec);
 }
 
-int runExport(const std::vector<std::string>& argv) {
-    const Args args(
-        argv, {"preset", "mesh", "procedural", "res", "scale", "o", "output", "mitsuba"},
-        {"no-renderer-grids", "mitsuba-grey-sigma-t", "mitsuba-isotropic", "allow-open"});
-    if (!args.positional().empty())
-        LUCENT_THROW(ValueError, "unexpected argument '", args.positional().front(),
-                     "' (see --help)");
-    const auto presetName = args.value("preset");
-    if (!presetName)
-        LUCENT_THROW(ValueError, "--preset NAME is required (see --help)");
-    const MaterialPreset& preset = findPreset(*presetName);
-    const auto out = args.value("o") ? args.value("o") : args.value("output");
-    const auto mitsuba = args.value("mitsuba");
+struct ExportOptions {
+    std::string preset, mesh, procedural = "sphere", output, mitsuba;
+    int res = GridSpec::DEFAULT_RESOLUTION;
+    float scale = 1.f;
+    bool noRendererGrids = false, mitsubaGreySigmaT = false, mitsubaIsotropic = false,
+         allowOpen = false;
+    const CLI::App* app = nullptr;
+    bool has(const std::string& option) const { return app->count(option) > 0; }
+};
+
+void runExport(const ExportOptions& args) {
+    const MaterialPreset& preset = findPreset(args.preset);
+    const std::optional<std::string> out =
+        args.has("--output") ? std::optional(args.output) : std::nullopt;
+    const std::optional<std::string> mitsuba =
+        args.has("--mitsuba") ? std::optional(args.mitsuba) : std::nullopt;
     if ((!out || out->empty()) && !mitsuba)
         LUCENT_THROW(ValueError, "-o FILE.vdb or --mitsuba PREFIX is required (see --help)");
     if (mitsuba && mitsuba->empty())
         LUCENT_THROW(ValueError, "--mitsuba needs a non-empty PREFIX");
-    if (!mitsuba && (args.has("mitsuba-grey-sigma-t") || args.has("mitsuba-isotropic")))
+    if (!mitsuba && (args.mitsubaGreySigmaT || args.mitsubaIsotropic))
         LUCENT_THROW(ValueError,
                      "--mitsuba-grey-sigma-t and --mitsuba-isotropic apply to --mitsuba only");
-    if (!out && args.has("no-renderer-grids"))
+    if (!out && args.noRendererGrids)
         LUCENT_THROW(ValueError, "--no-renderer-grids applies to the .vdb output (-o) only");
-    if (args.has("mesh") && args.has("procedural"))
-        LUCENT_THROW(ValueError, "give either --mesh or --procedural, not both");
-    const int res = args.intOr("res", GridSpec::DEFAULT_RESOLUTION, GridSpec::MIN_RESOLUTION,
-                               GridSpec::MAX_RESOLUTION);
-    const float scale = args.floatOr("scale", 1.f, 1e-6f, 1e6f);
-    if (args.has("scale") && !args.has("mesh"))
-        LUCENT_THROW(ValueError, "--scale applies to --mesh only");
-    if (args.has("allow-open") && !args.has("mesh"))
-        LUCENT_THROW(ValueError, "--allow-open applies to --mesh only");
-    if (const auto file = args.value("mesh")) {
+    const int res = args.res;
+    const float scale = args.scale;
+    if (const std::string& file = args.mesh; !file.empty()) {
         // An output path naming the input mesh would replace it with the export.
         std::vector<std::string> outputs;
         if (out)
@@ -83,28 +83,29 @@ int runExport(const std::vector<std::string>& argv) {
             for (const char* suffix : {"_sigma_t.vol", "_albedo.vol", "_medium.xml"})
                 outputs.push_back(*mitsuba + suffix);
         for (const std::string& o : outputs)
-            if (isSameFile(*file, o))
-                LUCENT_THROW(ValueError, "output '", o, "' is the input mesh '", *file,
+            if (isSameFile(file, o))
+                LUCENT_THROW(ValueError, "output '", o, "' is the input mesh '", file,
                              "': it would be overwritten (choose another output name)");
     }
 
     Timer timer;
     TriangleMesh mesh;
     std::string source;
-    if (const auto file = args.value("mesh")) {
+    if (args.has("--mesh")) {
+        const std::string& file = args.mesh;
         MeshReport report;
-        mesh = loadMesh(*file, scale, &report);
-        source = *file;
+        mesh = loadMesh(file, scale, &report);
+        source = file;
         // An open mesh has no inside to fill: most often a truncated or incomplete file, whose
         // few enclosed voxels would otherwise be exported without complaint.
-        if (report.boundaryEdges > 0 && !args.has("allow-open"))
-            LUCENT_THROW(IoError, "mesh '", *file, "' is open (", report.boundaryEdges,
+        if (report.boundaryEdges > 0 && !args.allowOpen)
+            LUCENT_THROW(IoError, "mesh '", file, "' is open (", report.boundaryEdges,
                          " boundary edges): truncated or incomplete? Export fills the inside of "
                          "a closed mesh; --allow-open voxelises it anyway");
         for (const std::string& w : report.warnings)
             std::fprintf(stderr, "lucent-cli export: warning: %s\n", w.c_str());
     } else {
-        source = args.valueOr("procedural", "sphere");
+        source = args.procedural;
         mesh = proceduralMesh(source);
     }
     const SceneObject object = makeObject(std::move(mesh), res, preset.sample());
@@ -121,7 +122,7 @@ int runExport(const std::vector<std::string>& argv) {
     if (out) {
         io::VdbExportOptions options;
         options.materialName = preset.name;
-        options.rendererGrids = !args.has("no-renderer-grids");
+        options.rendererGrids = !args.noRendererGrids;
         io::exportVdb(volume, *out, options);
 
         std::error_code ec;
@@ -135,8 +136,8 @@ int runExport(const std::vector<std::string>& argv) {
         Timer mitsubaTimer;
         io::MitsubaExportOptions options;
         options.materialName = preset.name;
-        options.rgbSigmaT = !args.has("mitsuba-grey-sigma-t");
-        options.hgMeanG = !args.has("mitsuba-isotropic");
+        options.rgbSigmaT = !args.mitsubaGreySigmaT;
+        options.hgMeanG = !args.mitsubaIsotropic;
         const io::MitsubaExportResult r = io::exportMitsubaVol(volume, *mitsuba, options);
         std::printf(
             "wrote %s, %s, %s: Mitsuba 3 medium '%s', preset %s on %s, %d^3 voxels of "
@@ -146,41 +147,66 @@ int runExport(const std::vector<std::string>& argv) {
             options.rgbSigmaT ? "RGB" : "grey", options.hgMeanG ? "hg" : "isotropic",
             double(r.meanG), mitsubaTimer.elapsedMs());
     }
-    return 0;
 }
 
 }  // namespace
 
-const Command exportCommand{
-    "export", "write a material preset filling a mesh as OpenVDB and/or Mitsuba 3 .vol",
-    "usage: lucent-cli export --preset NAME [--mesh FILE [--scale S] [--allow-open] |\n"
-    "                                       --procedural SHAPE]\n"
-    "                         [--res N] [--no-renderer-grids] [-o OUT.vdb]\n"
-    "                         [--mitsuba PREFIX [--mitsuba-grey-sigma-t] [--mitsuba-isotropic]]\n"
-    "\n"
-    "Fills the volume of a mesh with a material preset and writes an OpenVDB file with the\n"
-    "grids sigma_t, sigma_s (REDUCED scattering), g (vec3s, 1/mm) and, unless\n"
-    "--no-renderer-grids, density (float), albedo and color (vec3s) for Blender/Mitsuba.\n"
-    "Lengths are millimetres (docs/file-formats.md).\n"
-    "\n"
-    "  --preset NAME         material preset (e.g. marble, skin1, jade; case-insensitive)\n"
-    "  --mesh FILE           mesh file (.obj .ply .off .stl .vtp .vtk), must be closed\n"
-    "                        (repairs and problems are printed as warnings on stderr)\n"
-    "  --allow-open          voxelise an open mesh (boundary edges) anyway, by ray voting\n"
-    "  --scale S             mesh file units to mm (default 1; 1000 for metres)\n"
-    "  --procedural SHAPE    sphere (radius 10 mm, the default), box (20 mm), torus (10/4 mm),\n"
-    "                        thin-thick (20 mm)\n"
-    "  --res N               voxels per axis, 16..256 (default 128)\n"
-    "  --no-renderer-grids   write only sigma_t, sigma_s and g\n"
-    "  -o, --output FILE     output .vdb (written atomically)\n"
-    "  --mitsuba PREFIX      also (or instead) write Mitsuba 3 files PREFIX_sigma_t.vol,\n"
-    "                        PREFIX_albedo.vol (dense, 1/mm and 1) and PREFIX_medium.xml (a\n"
-    "                        heterogeneous medium with gridvolume textures, to_world in mm,\n"
-    "                        scale 1: the scene must be in mm). sigma_t/albedo are the medium\n"
-    "                        unreduced with the mean g, used as the HG phase parameter\n"
-    "  --mitsuba-grey-sigma-t  1-channel sigma_t (Rec.709 luminance) instead of RGB\n"
-    "  --mitsuba-isotropic   write the reduced medium with an isotropic phase instead\n"
-    "At least one of -o and --mitsuba is required.\n",
-    &runExport};
+void addExportCommand(CLI::App& cli, const CommandContext&) {
+    CLI::App* sub = addCommand(
+        cli, "export", "write a material preset filling a mesh as OpenVDB and/or Mitsuba 3 .vol",
+        "usage: lucent-cli export --preset NAME [--mesh FILE [--scale S] [--allow-open] |\n"
+        "                                       --procedural SHAPE]\n"
+        "                         [--res N] [--no-renderer-grids] [-o OUT.vdb]\n"
+        "                         [--mitsuba PREFIX [--mitsuba-grey-sigma-t]\n"
+        "                                          [--mitsuba-isotropic]]\n",
+        "Fills the volume of a mesh with a material preset and writes an OpenVDB file with the\n"
+        "grids sigma_t, sigma_s (REDUCED scattering), g (vec3s, 1/mm) and, unless\n"
+        "--no-renderer-grids, density (float), albedo and color (vec3s) for Blender/Mitsuba.\n"
+        "Lengths are millimetres (docs/file-formats.md). -o, --mitsuba or both.\n");
+    auto args = std::make_shared<ExportOptions>();
+    args->app = sub;
+    sub->add_option("--preset", args->preset,
+                    "material preset (e.g. marble, skin1, jade; case-insensitive)")
+        ->type_name("NAME")
+        ->required();
+    CLI::Option* mesh =
+        sub->add_option("--mesh", args->mesh,
+                        "mesh file (.obj .ply .off .stl .vtp .vtk), must be closed (repairs and "
+                        "problems are printed as warnings on stderr)")
+            ->type_name("FILE")
+            ->check(existingFile());
+    sub->add_flag("--allow-open", args->allowOpen,
+                  "voxelise an open mesh (boundary edges) anyway, by ray voting")
+        ->needs(mesh);
+    sub->add_option("--scale", args->scale, "mesh file units to mm (default 1; 1000 for metres)")
+        ->type_name("S")
+        ->check(finiteRange(1e-6, 1e6))
+        ->needs(mesh);
+    sub->add_option("--procedural", args->procedural,
+                    "sphere (radius 10 mm, the default), box (20 mm), torus (10/4 mm), "
+                    "thin-thick (20 mm)")
+        ->type_name("SHAPE")
+        ->check(CLI::IsMember({"sphere", "box", "torus", "thin-thick"}))
+        ->excludes(mesh);
+    sub->add_option("--res", args->res, "voxels per axis (default 128)")
+        ->type_name("N")
+        ->check(CLI::Range(GridSpec::MIN_RESOLUTION, GridSpec::MAX_RESOLUTION));
+    sub->add_flag("--no-renderer-grids", args->noRendererGrids,
+                  "write only sigma_t, sigma_s and g");
+    sub->add_option("-o,--output", args->output, "output .vdb (written atomically)")
+        ->type_name("FILE");
+    sub->add_option("--mitsuba", args->mitsuba,
+                    "also (or instead) write Mitsuba 3 files PREFIX_sigma_t.vol, "
+                    "PREFIX_albedo.vol (dense, 1/mm and 1) and PREFIX_medium.xml (a "
+                    "heterogeneous medium with gridvolume textures, to_world in mm, scale 1: the "
+                    "scene must be in mm). sigma_t/albedo are the medium unreduced with the mean "
+                    "g, used as the HG phase parameter")
+        ->type_name("PREFIX");
+    sub->add_flag("--mitsuba-grey-sigma-t", args->mitsubaGreySigmaT,
+                  "1-channel sigma_t (Rec.709 luminance) instead of RGB");
+    sub->add_flag("--mitsuba-isotropic", args->mitsubaIsotropic,
+                  "write the reduced medium with an isotropic phase instead");
+    sub->callback([args] { runExport(*args); });
+}
 
 }  // namespace lucent::cli

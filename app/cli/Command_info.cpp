@@ -3,25 +3,29 @@
 /// @brief `lucent-cli info`: grids, types, bounds, active voxels, value ranges and metadata of
 /// any OpenVDB file; `--validate` also checks it as a Lucent material file.
 
-#include "CliArgs.h"
+#include "CliCommon.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/io/VdbIO.h>
 
 #include <cstdio>
+#include <memory>
+#include <string>
 
 namespace lucent::cli {
 
 namespace {
 
-int runInfo(const std::vector<std::string>& argv) {
-    const Args args(argv, {}, {"validate"});
-    if (args.positional().size() != 1)
-        LUCENT_THROW(ValueError, "expected exactly one FILE.vdb (see --help)");
-    const std::string& path = args.positional().front();
+struct InfoOptions {
+    std::string file;
+    bool validate = false;
+};
+
+void runInfo(const InfoOptions& args) {
+    const std::string& path = args.file;
     const io::VdbFileSummary summary = io::summarizeVdb(path);
     std::fputs(io::formatVdbSummary(summary).c_str(), stdout);
-    if (args.has("validate")) {
+    if (args.validate) {
         const io::ImportedMaterial m = io::importVdb(path);
         size_t inside = 0;
         for (uint8_t v : m.volume.insideMask())
@@ -33,21 +37,23 @@ int runInfo(const std::vector<std::string>& argv) {
             inside, double(m.metadata.eta), m.metadata.materialName.empty() ? "" : ", ",
             m.metadata.materialName.c_str());
     }
-    return 0;
 }
 
 }  // namespace
 
-const Command infoCommand{
-    "info", "describe an OpenVDB file (grids, bounds, value ranges, metadata)",
-    "usage: lucent-cli info [--validate] FILE.vdb\n"
-    "\n"
-    "Prints the file's metadata and, per grid: value type and class, active voxel count,\n"
-    "index and world bounding boxes, voxel size, the range of the active values (per\n"
-    "component) and the grid metadata. Works on any VDB file.\n"
-    "\n"
-    "  --validate   also read the file as a Lucent material volume and fail (exit 1) with the\n"
-    "               reason if it is not a valid one\n",
-    &runInfo};
+void addInfoCommand(CLI::App& cli, const CommandContext&) {
+    CLI::App* sub = addCommand(
+        cli, "info", "describe an OpenVDB file (grids, bounds, value ranges, metadata)",
+        "usage: lucent-cli info [--validate] FILE.vdb\n",
+        "Prints the file's metadata and, per grid: value type and class, active voxel count,\n"
+        "index and world bounding boxes, voxel size, the range of the active values (per\n"
+        "component) and the grid metadata. Works on any VDB file.\n");
+    auto args = std::make_shared<InfoOptions>();
+    sub->add_option("FILE.vdb", args->file, "the OpenVDB file")->required()->check(existingFile());
+    sub->add_flag("--validate", args->validate,
+                  "also read the file as a Lucent material volume and fail (exit 1) with the "
+                  "reason if it is not a valid one");
+    sub->callback([args] { runInfo(*args); });
+}
 
 }  // namespace lucent::cli

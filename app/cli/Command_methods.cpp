@@ -3,12 +3,13 @@
 /// @brief `lucent-cli methods [NAME] [--json]`: the registered translucency methods with their
 /// backends and parameters (lucent/methods/Registry.h).
 
-#include "CliArgs.h"
+#include "CliCommon.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/methods/Registry.h>
 
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -104,36 +105,40 @@ void printJson(const std::vector<const methods::MethodInfo*>& list) {
     std::printf("]\n");
 }
 
-int runMethods(const std::vector<std::string>& argv) {
-    const Args args(argv, {}, {"json"});
-    if (args.positional().size() > 1)
-        LUCENT_THROW(ValueError, "expected at most one method name (see --help)");
+struct MethodsOptions {
+    std::string name;
+    bool json = false;
+};
+
+void runMethods(const MethodsOptions& args) {
     std::vector<const methods::MethodInfo*> list = methods::all();
-    if (!args.positional().empty())
-        list = {&methods::find(args.positional().front())};
-    if (args.has("json")) {
+    if (!args.name.empty())
+        list = {&methods::find(args.name)};  // ValueError naming the closest method
+    if (args.json) {
         printJson(list);
-        return 0;
+        return;
     }
     for (size_t i = 0; i < list.size(); ++i) {
         if (i)
             std::printf("\n");
         printText(*list[i]);
     }
-    return 0;
 }
 
 }  // namespace
 
-const Command methodsCommand{
-    "methods", "list the translucency methods, their backends and parameters",
-    "usage: lucent-cli methods [NAME] [--json]\n"
-    "\n"
-    "Lists every registered method (or NAME only): its backends (gl: the GPU scene renderer\n"
-    "with the method's subsurface pass; cpu: its CPU renderer; the default is what\n"
-    "`render` uses when GL is available), and each parameter with its type, range, default\n"
-    "and meaning. Parameters are given to `render` as --NAME VALUE or --param NAME=VALUE.\n"
-    "  --json   machine-readable list\n",
-    &runMethods};
+void addMethodsCommand(CLI::App& cli, const CommandContext&) {
+    CLI::App* sub = addCommand(
+        cli, "methods", "list the translucency methods, their backends and parameters",
+        "usage: lucent-cli methods [NAME] [--json]\n",
+        "Lists every registered method (or NAME only): its backends (gl: the GPU scene renderer\n"
+        "with the method's subsurface pass; cpu: its CPU renderer; the default is what\n"
+        "`render` uses when GL is available), and each parameter with its type, range, default\n"
+        "and meaning. Parameters are given to `render` as --NAME VALUE or --param NAME=VALUE.\n");
+    auto args = std::make_shared<MethodsOptions>();
+    sub->add_option("NAME", args->name, "one method only");
+    sub->add_flag("--json", args->json, "machine-readable list");
+    sub->callback([args] { runMethods(*args); });
+}
 
 }  // namespace lucent::cli

@@ -5,7 +5,7 @@
 /// fits the planner's cost and error models (lucent/planner/Models.h). Parsing and printing
 /// only.
 
-#include "CliArgs.h"
+#include "CliCommon.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/gpu/GlContext.h>
@@ -13,6 +13,8 @@
 #include <lucent/scene/SceneFile.h>
 
 #include <cstdio>
+#include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -41,24 +43,31 @@ void printFeatures(const planner::SceneFeatures& f) {
                 f.backLitFraction, f.pixelsCovered, f.imagePixels);
 }
 
-planner::CostMeasure costMeasure(const Args& args) {
-    const std::string c = args.valueOr("cost", "wall");
-    if (c == "wall")
-        return planner::CostMeasure::WallTime;
-    if (c == "cpu")
-        return planner::CostMeasure::CpuTime;
-    LUCENT_THROW(ValueError, "--cost: expected wall or cpu, got '", c, "'");
-}
+struct PlanOptions {
+    std::string scene, models, output, source, cost = "wall";
+    std::vector<std::string> fit, check;
+    float budgetMs = 1000.f, maxError = 0.f, directMs = 1.f, ridge = 0.05f, budgetRatio = 20.f;
+    int width = 0, height = 0;
+    bool cpu = false;
+    const CLI::App* app = nullptr;
+    bool has(const std::string& option) const { return app->count(option) > 0; }
+    planner::CostMeasure costMeasure() const {
+        return cost == "cpu" ? planner::CostMeasure::CpuTime : planner::CostMeasure::WallTime;
+    }
+    planner::Models loadModels() const {
+        return has("--models") ? planner::loadModels(models) : planner::defaultModels();
+    }
+};
 
-int runFit(const Args& args) {
-    const std::string out = args.value("o").value_or(args.valueOr("output", ""));
+void runFit(const PlanOptions& args) {
+    const std::string& out = args.output;
     if (out.empty())
         LUCENT_THROW(ValueError, "plan --fit: missing -o/--output models.json");
-    const double ridge = args.floatOr("ridge", 0.05f, 0.f, 100.f);
+    const double ridge = args.ridge;
     std::vector<planner::MeasuredRow> rows;
-    std::string source = "lucent-cli plan --cost " + args.valueOr("cost", "wall") + " --fit";
-    for (const std::string& csv : args.values("fit")) {
-        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv, costMeasure(args));
+    std::string source = "lucent-cli plan --cost " + args.cost + " --fit";
+    for (const std::string& csv : args.fit) {
+        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv, args.costMeasure());
         rows.insert(rows.end(), r.begin(), r.end());
         source += " " + csv;
     }
@@ -68,7 +77,7 @@ int runFit(const Args& args) {
                r.method == "direct";
     });
     planner::Models models = planner::fitModels(rows, ridge);
-    models.source = args.valueOr("source", source);
+    models.source = args.has("--source") ? args.source : source;
     planner::saveModels(models, out);
     std::printf("%-22s %-20s %5s %14s %15s\n", "method", "setting", "cases", "cost log-RMS",
                 "error log-RMS");
@@ -77,16 +86,14 @@ int runFit(const Args& args) {
                     c.costLogRms, c.errorLogRms);
     std::printf("wrote %s (%zu candidates from %zu rows; log-RMS: leave-one-out, ln units)\n",
                 out.c_str(), models.candidates.size(), rows.size());
-    return 0;
 }
 
-int runCheck(const Args& args) {
-    const planner::Models models =
-        args.has("models") ? planner::loadModels(*args.value("models")) : planner::defaultModels();
-    const double budgetRatio = args.floatOr("budget-ratio", 20.f, 1e-3f, 1e9f);
+void runCheck(const PlanOptions& args) {
+    const planner::Models models = args.loadModels();
+    const double budgetRatio = args.budgetRatio;
     std::vector<planner::MeasuredRow> rows;
-    for (const std::string& csv : args.values("check")) {
-        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv, costMeasure(args));
+    for (const std::string& csv : args.check) {
+        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv, args.costMeasure());
         rows.insert(rows.end(), r.begin(), r.end());
     }
     const std::vector<planner::FrontCheck> checks =
@@ -114,46 +121,39 @@ int runCheck(const Args& args) {
         "\nwithin 1.2x of the front at equal error: %d of %zu cases; the best point in the "
         "budget: %d of %zu\n",
         within, checks.size(), best, checks.size());
-    return 0;
 }
 
-int runPlan(const std::vector<std::string>& argv) {
-    const Args args(argv,
-                    {"budget-ms", "max-error", "direct-ms", "models", "width", "height", "fit", "o",
-                     "output", "ridge", "source", "check", "budget-ratio", "cost"},
-                    {"cpu"});
-    if (args.has("fit"))
+void runPlan(const PlanOptions& args) {
+    if (!args.fit.empty())
         return runFit(args);
-    if (args.has("check"))
+    if (!args.check.empty())
         return runCheck(args);
-    if (args.positional().size() != 1)
-        LUCENT_THROW(ValueError, "expected exactly one SCENE.json (see --help)");
-    Scene scene = loadScene(args.positional().front());
+    if (args.scene.empty())
+        LUCENT_THROW(ValueError, "expected one SCENE.json, --fit CSV or --check CSV (see --help)");
+    Scene scene = loadScene(args.scene);
     for (const std::string& w : scene.warnings)
         std::fprintf(stderr, "lucent-cli plan: warning: %s\n", w.c_str());
-    scene.camera.width = args.intOr("width", scene.camera.width, 1, 16384);
-    scene.camera.height = args.intOr("height", scene.camera.height, 1, 16384);
-    const planner::Models models =
-        args.has("models") ? planner::loadModels(*args.value("models")) : planner::defaultModels();
+    overrideImageSize(*args.app, args.width, args.height, scene.camera.width, scene.camera.height);
+    const planner::Models models = args.loadModels();
     std::string glReason;
-    const bool gl = !args.has("cpu") && gpu::GlContext::isHeadlessAvailable(&glReason);
+    const bool gl = !args.cpu && gpu::GlContext::isHeadlessAvailable(&glReason);
     planner::Budget budget;
-    budget.frameMs = args.floatOr("budget-ms", 1000.f, 1e-3f, 1e9f);
-    budget.maxError = args.floatOr("max-error", 0.f, 0.f, 1e3f);
-    budget.directMs = args.has("direct-ms") ? args.floatOr("direct-ms", 1.f, 1e-3f, 1e9f) : 0.0;
+    budget.frameMs = args.budgetMs;
+    budget.maxError = args.maxError;
+    budget.directMs = args.has("--direct-ms") ? double(args.directMs) : 0.0;
     const planner::AutoChoice c = planner::chooseOffline(
         scene, models, budget, gl,
         [](const std::string& m) { std::fprintf(stderr, "plan: %s\n", m.c_str()); });
     printFeatures(c.features);
     std::printf("scene class: %s\n", planner::describe(c.plan.sceneClass, c.features.eta).c_str());
     std::printf("Direct frame: %s; %s\n",
-                args.has("direct-ms") ? fmtMs(c.directMs).c_str()
-                : gl                  ? (fmtMs(c.directMs) + " (measured)").c_str()
-                                      : "none (no GL)",
+                args.has("--direct-ms") ? fmtMs(c.directMs).c_str()
+                : gl                    ? (fmtMs(c.directMs) + " (measured)").c_str()
+                                        : "none (no GL)",
                 budget.maxError > 0 ? ("error target " + fmtMs(budget.maxError, false)).c_str()
                                     : ("budget " + fmtMs(budget.frameMs)).c_str());
     if (!gl)
-        std::printf("no GL: %s\n", args.has("cpu") ? "--cpu" : glReason.c_str());
+        std::printf("no GL: %s\n", args.cpu ? "--cpu" : glReason.c_str());
     std::printf("\n%-22s %-20s %12s %12s %5s\n", "candidate", "setting", "predicted ms",
                 "block error", "fits");
     for (const planner::Option& o : c.plan.options) {
@@ -162,47 +162,92 @@ int runPlan(const std::vector<std::string>& argv) {
                     o.error, o.fits ? "yes" : "no", o.index == c.plan.choice ? "  <- chosen" : "");
     }
     std::printf("\nplan: %s\n", c.plan.reason.c_str());
-    std::printf("render: lucent-cli render %s --method %s%s", args.positional().front().c_str(),
-                c.method.c_str(),
+    std::printf("render: lucent-cli render %s --method %s%s", args.scene.c_str(), c.method.c_str(),
                 c.backend == methods::Backend::Auto
                     ? ""
                     : (std::string(" --backend ") + methods::backendName(c.backend)).c_str());
     for (const auto& [k, v] : c.params.items())
         std::printf(" --param %s=%s", k.c_str(), v.c_str());
     std::printf("\n");
-    return 0;
 }
 
 }  // namespace
 
-const Command planCommand{
-    "plan", "what the Auto planner sees in a scene and which method it picks; fits its models",
-    "usage: lucent-cli plan SCENE.json [--budget-ms B | --max-error E] [--direct-ms D]\n"
-    "                       [--models models.json] [--width W] [--height H] [--cpu]\n"
-    "       lucent-cli plan --fit suite.csv [--fit more.csv ...] -o models.json [--ridge R]\n"
-    "       lucent-cli plan --check suite.csv [--models F] [--budget-ratio R]\n"
-    "\n"
-    "Prints the scene's features and class, every candidate (a method at one quality level)\n"
-    "with its predicted time and 4x4-block error against the exact reference, the choice and\n"
-    "its one-line reason, and the `lucent-cli render` command that renders it\n"
-    "(`render --method auto` does both). docs/planner.md explains the models.\n"
-    "\n"
-    "  --budget-ms B     time the render may take (default 1000 ms; predicted as the model's\n"
-    "                    cost ratio times the Direct render of the same frame)\n"
-    "  --max-error E     instead: the cheapest candidate predicted at or under block error E\n"
-    "  --direct-ms D     this machine's Direct render of the frame (default: measured now)\n"
-    "  --models F        models file (default: the ones built in, resources/planner/models.json)\n"
-    "  --cpu             plan as if no OpenGL were available\n"
-    "  --fit CSV         fit the models on an evaluation CSV (`lucent-cli evaluate --suite`),\n"
-    "                    one model per method and setting measured on at least 2 cases\n"
-    "  --ridge R         regularisation of the fit (default 0.05)\n"
-    "  --cost wall|cpu   --fit/--check: the cost column, wall-time or process CPU-time ratio\n"
-    "                    to the Direct render (default wall; cpu on a shared machine)\n"
-    "  --check CSV       judge Auto on measured cases: per case its choice (from the models)\n"
-    "                    against the measured front: the time ratio to the cheapest candidate\n"
-    "                    at or under its measured error (goal <= 1.2) and whether it is the\n"
-    "                    measured best within the budget\n"
-    "  --budget-ratio R  the budget of --check as a multiple of the Direct frame (default 20)\n",
-    &runPlan};
+void addPlanCommand(CLI::App& cli, const CommandContext&) {
+    CLI::App* sub = addCommand(
+        cli, "plan",
+        "what the Auto planner sees in a scene and which method it picks; fits its models",
+        "usage: lucent-cli plan SCENE.json [--budget-ms B | --max-error E] [--direct-ms D]\n"
+        "                       [--models models.json] [--width W] [--height H] [--cpu]\n"
+        "       lucent-cli plan --fit suite.csv [--fit more.csv ...] -o models.json [--ridge R]\n"
+        "       lucent-cli plan --check suite.csv [--models F] [--budget-ratio R]\n",
+        "Prints the scene's features and class, every candidate (a method at one quality level)\n"
+        "with its predicted time and 4x4-block error against the exact reference, the choice and\n"
+        "its one-line reason, and the `lucent-cli render` command that renders it\n"
+        "(`render --method auto` does both). docs/planner.md explains the models.\n");
+    auto args = std::make_shared<PlanOptions>();
+    args->app = sub;
+    CLI::Option* scene =
+        sub->add_option("SCENE.json", args->scene, "the scene to plan")->check(existingFile());
+    sub->add_option("--budget-ms", args->budgetMs,
+                    "time the render may take (default 1000 ms; predicted as the model's cost "
+                    "ratio times the Direct render of the same frame)")
+        ->type_name("B")
+        ->check(finiteRange(1e-3, 1e9));
+    sub->add_option("--max-error", args->maxError,
+                    "instead: the cheapest candidate predicted at or under block error E")
+        ->type_name("E")
+        ->check(finiteRange(0, 1e3));
+    sub->add_option("--direct-ms", args->directMs,
+                    "this machine's Direct render of the frame (default: measured now)")
+        ->type_name("D")
+        ->check(finiteRange(1e-3, 1e9));
+    sub->add_option("--models", args->models,
+                    "models file (default: the ones built in, resources/planner/models.json)")
+        ->type_name("F")
+        ->check(existingFile());
+    addImageSizeOptions(*sub, args->width, args->height);
+    sub->add_flag("--cpu", args->cpu, "plan as if no OpenGL were available");
+    CLI::Option* fit =
+        sub->add_option("--fit", args->fit,
+                        "fit the models on an evaluation CSV (`lucent-cli evaluate --suite`), one "
+                        "model per method and setting measured on at least 2 cases (repeatable)")
+            ->type_name("CSV")
+            ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+            ->check(existingFile())
+            ->excludes(scene);
+    sub->add_option("-o,--output", args->output, "--fit: the models file to write")
+        ->type_name("models.json")
+        ->needs(fit);
+    sub->add_option("--ridge", args->ridge, "regularisation of the fit (default 0.05)")
+        ->type_name("R")
+        ->check(finiteRange(0, 100))
+        ->needs(fit);
+    sub->add_option("--source", args->source, "--fit: the models' source note")
+        ->type_name("TEXT")
+        ->needs(fit);
+    sub->add_option("--cost", args->cost,
+                    "--fit/--check: the cost column, wall-time or process CPU-time ratio to the "
+                    "Direct render (default wall; cpu on a shared machine)")
+        ->type_name("wall|cpu")
+        ->check(CLI::IsMember({"wall", "cpu"}));
+    CLI::Option* check =
+        sub->add_option("--check", args->check,
+                        "judge Auto on measured cases: per case its choice (from the models) "
+                        "against the measured front: the time ratio to the cheapest candidate at "
+                        "or under its measured error (goal <= 1.2) and whether it is the measured "
+                        "best within the budget (repeatable)")
+            ->type_name("CSV")
+            ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+            ->check(existingFile())
+            ->excludes(scene)
+            ->excludes(fit);
+    sub->add_option("--budget-ratio", args->budgetRatio,
+                    "the budget of --check as a multiple of the Direct frame (default 20)")
+        ->type_name("R")
+        ->check(finiteRange(1e-3, 1e9))
+        ->needs(check);
+    sub->callback([args] { runPlan(*args); });
+}
 
 }  // namespace lucent::cli

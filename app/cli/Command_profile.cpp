@@ -4,7 +4,7 @@
 /// R(r) of the dipole (Jensen 2001), better dipole (d'Eon 2012) or directional dipole
 /// (Frisvad et al. 2014, normal incidence); optional JSON and a PNG plot of R(r)·r.
 
-#include "CliArgs.h"
+#include "CliCommon.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
@@ -15,6 +15,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -88,16 +89,22 @@ void writePlot(const std::string& path, Model model,
     writePng(img, path);
 }
 
-int runProfile(const std::vector<std::string>& argv) {
-    const Args args(argv, {"model", "sigma-a", "sigma-s", "eta", "plot", "radii"}, {"json"});
-    const Model model = dipole::parseModel(args.valueOr("model", "dipole"));
+struct ProfileOptions {
+    // Defaults: Jensen et al. 2001 Table 2 marble (mm⁻¹), η = 1.5.
+    std::string model = "dipole", sigmaA = "0.0021,0.0041,0.0071", sigmaS = "2.19,2.62,3.00", plot;
+    float eta = 1.5f;
+    int radii = 16;
+    bool json = false;
+};
+
+void runProfile(const ProfileOptions& args) {
+    const Model model = dipole::parseModel(args.model);
     if (model == Model::Directional)
         warnExperimentalDirpole();
-    // Defaults: Jensen et al. 2001 Table 2 marble (mm⁻¹), η = 1.5.
-    const Rgb sigmaA = args.rgb("sigma-a", 0.f, 1e6f).value_or(Rgb(0.0021f, 0.0041f, 0.0071f));
-    const Rgb sigmaS = args.rgb("sigma-s", 0.f, 1e6f).value_or(Rgb(2.19f, 2.62f, 3.00f));
-    const float eta = args.floatOr("eta", 1.5f, 1.f, 3.f);
-    const int radiiCount = args.intOr("radii", 16, 2, 1000);
+    const Rgb sigmaA = parseRgb("--sigma-a", args.sigmaA, 0.f, 1e6f);
+    const Rgb sigmaS = parseRgb("--sigma-s", args.sigmaS, 0.f, 1e6f);
+    const float eta = args.eta;
+    const int radiiCount = args.radii;
     std::array<dipole::ScalarMedium, 3> media;
     for (int c = 0; c < 3; ++c)
         media[size_t(c)] = {double(sigmaA[c]), double(sigmaS[c]), double(eta)};
@@ -117,7 +124,7 @@ int runProfile(const std::vector<std::string>& argv) {
     for (int i = 0; i < radiiCount; ++i)
         radii[size_t(i)] = rMax * std::pow(1e-3, 1.0 - double(i) / (radiiCount - 1));
 
-    if (args.has("json")) {
+    if (args.json) {
         std::printf("{\n  \"model\": \"%s\",\n  \"eta\": %.9g,\n", dipole::modelName(model),
                     double(eta));
         std::printf(
@@ -155,31 +162,45 @@ int runProfile(const std::vector<std::string>& argv) {
                         dipole::radialProfile(model, media[1], r),
                         dipole::radialProfile(model, media[2], r));
     }
-    if (auto plot = args.value("plot")) {
-        writePlot(*plot, model, media, rMax);
+    if (!args.plot.empty()) {
+        writePlot(args.plot, model, media, rMax);
         std::fprintf(stderr, "wrote %s (R(r)*r for r in [0, %.4g] mm; red, green, blue channels)\n",
-                     plot->c_str(), rMax);
+                     args.plot.c_str(), rMax);
     }
-    return 0;
 }
 
 }  // namespace
 
-const Command profileCommand{
-    "profile", "diffuse reflectance profile R(r) of a dipole model",
-    "usage: lucent-cli profile [--model dipole|better-dipole|dirpole] [--sigma-a R,G,B]\n"
-    "                          [--sigma-s R,G,B] [--eta E] [--radii N] [--json] [--plot out.png]\n"
-    "\n"
-    "Prints the total diffuse reflectance per channel (closed form and quadrature for the two\n"
-    "dipoles; quadrature for the directional dipole, at normal incidence) and R(r) in mm^-2 at\n"
-    "N radii (default 16) spaced geometrically up to the radius holding 99% of the profile.\n"
-    "\n"
-    "  --model     dipole (Jensen 2001), better-dipole (d'Eon 2012), dirpole (Frisvad 2014)\n"
-    "  --sigma-a   absorption coefficient, mm^-1 (default marble 0.0021,0.0041,0.0071)\n"
-    "  --sigma-s   reduced scattering coefficient sigma_s', mm^-1 (default 2.19,2.62,3.00)\n"
-    "  --eta       relative index of refraction, [1, 3] (default 1.5)\n"
-    "  --json      machine-readable output\n"
-    "  --plot      write a PNG plot of R(r)*r per channel\n",
-    &runProfile};
+void addProfileCommand(CLI::App& cli, const CommandContext&) {
+    CLI::App* sub = addCommand(
+        cli, "profile", "diffuse reflectance profile R(r) of a dipole model",
+        "usage: lucent-cli profile [--model dipole|better-dipole|dirpole] [--sigma-a R,G,B]\n"
+        "                          [--sigma-s R,G,B] [--eta E] [--radii N] [--json]\n"
+        "                          [--plot out.png]\n",
+        "Prints the total diffuse reflectance per channel (closed form and quadrature for the two\n"
+        "dipoles; quadrature for the directional dipole, at normal incidence) and R(r) in\n"
+        "mm^-2 at N radii spaced geometrically up to the radius holding 99% of the profile.\n");
+    auto args = std::make_shared<ProfileOptions>();
+    sub->add_option("--model", args->model,
+                    "dipole (Jensen 2001, default), better-dipole (d'Eon 2012), dirpole (Frisvad "
+                    "2014)")
+        ->type_name("MODEL");
+    sub->add_option("--sigma-a", args->sigmaA,
+                    "absorption coefficient, mm^-1 (default marble 0.0021,0.0041,0.0071)")
+        ->type_name("R,G,B");
+    sub->add_option("--sigma-s", args->sigmaS,
+                    "reduced scattering coefficient sigma_s', mm^-1 (default 2.19,2.62,3.00)")
+        ->type_name("R,G,B");
+    sub->add_option("--eta", args->eta, "relative index of refraction (default 1.5)")
+        ->type_name("E")
+        ->check(finiteRange(1, 3));
+    sub->add_option("--radii", args->radii, "number of radii (default 16)")
+        ->type_name("N")
+        ->check(CLI::Range(2, 1000));
+    sub->add_flag("--json", args->json, "machine-readable output");
+    sub->add_option("--plot", args->plot, "write a PNG plot of R(r)*r per channel")
+        ->type_name("out.png");
+    sub->callback([args] { runProfile(*args); });
+}
 
 }  // namespace lucent::cli

@@ -3,7 +3,7 @@
 /// @brief `lucent-cli reference`: the Monte Carlo ground truth of a scene as a linear EXR with
 /// per-pixel variance and coverage layers (lucent/reference/PathTracer.h).
 
-#include "CliArgs.h"
+#include "CliCommon.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/reference/PathTracer.h>
@@ -14,6 +14,8 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
+#include <string>
 
 namespace lucent::cli {
 
@@ -41,16 +43,19 @@ void printProgress(const reference::ReferenceProgress& p) {
     printProgressBar(frac, status);
 }
 
-int runReference(const std::vector<std::string>& argv) {
-    const Args args(argv,
-                    {"spp", "rse", "o", "output", "seed", "threads", "boundary", "max-scatter",
-                     "majorant", "width", "height"},
-                    {"subsurface-only", "per-channel", "quiet"});
-    if (args.positional().size() != 1)
-        LUCENT_THROW(ValueError, "expected exactly one SCENE.json (see --help)");
-    const std::string out = args.value("o").value_or(args.valueOr("output", ""));
-    if (out.empty())
-        LUCENT_THROW(ValueError, "missing -o OUT.exr");
+struct ReferenceCliOptions {
+    std::string scene, output, boundary = "dielectric";
+    int spp = 64, threads = 0, maxScatter = 1 << 20, width = 0, height = 0;
+    float rse = 0.f;
+    uint64_t seed = 1;
+    reference::MajorantMode majorant = reference::MajorantMode::Auto;
+    bool subsurfaceOnly = false, perChannel = false, quiet = false;
+    const CLI::App* app = nullptr;
+    bool has(const std::string& option) const { return app->count(option) > 0; }
+};
+
+void runReference(const ReferenceCliOptions& args) {
+    const std::string& out = args.output;
     // The output is always OpenEXR (linear radiance with variance layers): another extension
     // would name EXR bytes as something else.
     std::string ext = std::filesystem::path(out).extension().string();
@@ -60,47 +65,27 @@ int runReference(const std::vector<std::string>& argv) {
         LUCENT_THROW(ValueError, "-o/--output '", out,
                      "': the reference writes OpenEXR (linear radiance with variance layers), "
                      "use a .exr name (render --method reference writes PNG)");
-    if (!args.has("spp") && !args.has("rse"))
-        LUCENT_THROW(ValueError, "give --spp N or --rse R (or both: R with N as the cap)");
 
     reference::ReferenceOptions opt;
-    opt.targetRse = args.floatOr("rse", 0.f, 1e-5f, 1.f);
-    opt.spp = args.intOr("spp", args.has("rse") ? 1 << 16 : 64, 3, 1 << 24);
-    const std::string seed = args.valueOr("seed", "1");
-    try {
-        size_t used = 0;
-        opt.seed = std::stoull(seed, &used);
-        if (used != seed.size())
-            throw std::invalid_argument(seed);
-    } catch (const std::exception&) {
-        LUCENT_THROW(ValueError, "--seed: expected a non-negative integer, got '", seed, "'");
-    }
-    opt.threads = args.intOr("threads", 0, 0, 1024);
-    opt.boundary = reference::parseBoundaryModel(args.valueOr("boundary", "dielectric"));
-    opt.subsurfaceOnly = args.has("subsurface-only");
-    const std::string majorant = args.valueOr("majorant", "auto");
-    if (majorant == "auto")
-        opt.majorant = reference::MajorantMode::Auto;
-    else if (majorant == "bricks")
-        opt.majorant = reference::MajorantMode::Bricks;
-    else if (majorant == "global")
-        opt.majorant = reference::MajorantMode::Global;
-    else
-        LUCENT_THROW(ValueError, "--majorant: expected auto, bricks or global, got '", majorant,
-                     "'");
-    opt.spectralMis = !args.has("per-channel");
-    opt.maxScatter = args.intOr("max-scatter", 1 << 20, 1, 1 << 30);
-    const bool quiet = args.has("quiet");
+    opt.targetRse = args.rse;
+    opt.spp = args.has("--spp") ? args.spp : args.has("--rse") ? 1 << 16 : 64;
+    opt.seed = args.seed;
+    opt.threads = args.threads;
+    opt.boundary = reference::parseBoundaryModel(args.boundary);
+    opt.subsurfaceOnly = args.subsurfaceOnly;
+    opt.majorant = args.majorant;
+    opt.spectralMis = !args.perChannel;
+    opt.maxScatter = args.maxScatter;
+    const bool quiet = args.quiet;
     if (!quiet)
         opt.progress = printProgress;
     g_interrupted = false;
     opt.cancel = &g_interrupted;
 
-    Scene scene = loadScene(args.positional().front());
+    Scene scene = loadScene(args.scene);
     for (const std::string& w : scene.warnings)
         std::fprintf(stderr, "lucent-cli reference: warning: %s\n", w.c_str());
-    scene.camera.width = args.intOr("width", scene.camera.width, 1, 16384);
-    scene.camera.height = args.intOr("height", scene.camera.height, 1, 16384);
+    overrideImageSize(*args.app, args.width, args.height, scene.camera.width, scene.camera.height);
     auto previous = std::signal(SIGINT, onInterrupt);
     reference::ReferenceImage img;
     try {
@@ -119,35 +104,66 @@ int runReference(const std::vector<std::string>& argv) {
                 img.mean.width(), img.mean.height(), img.spp, double(img.rse), img.seconds,
                 img.seconds > 0 ? double(img.paths) / img.seconds : 0.0,
                 img.cancelled ? " (interrupted: partial)" : "");
-    return 0;
 }
 
 }  // namespace
 
-const Command referenceCommand{
-    "reference", "Monte Carlo ground truth of a scene (linear EXR with variance)",
-    "usage: lucent-cli reference SCENE.json (--spp N | --rse R) -o OUT.exr [options]\n"
-    "\n"
-    "Volumetric path tracing of the painted material inside the mesh (null-collision tracking,\n"
-    "per-brick majorants, HG phase, hero-channel spectral MIS; docs/reference.md).\n"
-    "Writes linear RGB radiance with the layers 'variance' (per-pixel variance of the mean)\n"
-    "and 'coverage' (1 where the object covers the pixel centre). Ctrl-C stops after the\n"
-    "current tiles and writes the passes completed.\n"
-    "\n"
-    "  --spp N            samples per pixel (≥ 3; with --rse: the cap, default 65536)\n"
-    "  --rse R            stop when the image relative standard error is ≤ R (e.g. 0.01)\n"
-    "  -o, --output FILE  output EXR\n"
-    "  --width, --height  override the scene camera's image size (pixels)\n"
-    "  --seed S           random seed (default 1); same seed and spp → same image\n"
-    "  --threads T        worker threads (default: all)\n"
-    "  --boundary B       'dielectric' (default, exact: Fresnel and refraction at every crossing,\n"
-    "                     η from the scene), 'matched' (η = 1) or 'straight' (fast approximation\n"
-    "                     with straight shadow rays; not ground truth)\n"
-    "  --subsurface-only  drop the direct Fresnel surface reflection\n"
-    "  --majorant M       auto (default), bricks (per-brick majorants + DDA) or global\n"
-    "  --per-channel      trace one channel per sample instead of hero-channel spectral MIS\n"
-    "  --max-scatter K    cut paths after K scattering events (default 1048576)\n"
-    "  --quiet            no progress bar\n",
-    &runReference};
+void addReferenceCommand(CLI::App& cli, const CommandContext&) {
+    CLI::App* sub = addCommand(
+        cli, "reference", "Monte Carlo ground truth of a scene (linear EXR with variance)",
+        "usage: lucent-cli reference SCENE.json (--spp N | --rse R) -o OUT.exr [options]\n",
+        "Volumetric path tracing of the painted material inside the mesh (null-collision\n"
+        "tracking, per-brick majorants, HG phase, hero-channel spectral MIS;\n"
+        "docs/reference.md).\n"
+        "Writes linear RGB radiance with the layers 'variance' (per-pixel variance of the mean)\n"
+        "and 'coverage' (1 where the object covers the pixel centre). Ctrl-C stops after the\n"
+        "current tiles and writes the passes completed.\n");
+    auto args = std::make_shared<ReferenceCliOptions>();
+    args->app = sub;
+    addSceneArgument(*sub, args->scene);
+    CLI::Option* spp = sub->add_option("--spp", args->spp,
+                                       "samples per pixel, >= 3 (default 64; with --rse: the "
+                                       "cap, default 65536)")
+                           ->type_name("N")
+                           ->check(CLI::Range(3, 1 << 24));
+    CLI::Option* rse =
+        sub->add_option("--rse", args->rse,
+                        "stop when the image relative standard error is <= R (e.g. 0.01)")
+            ->type_name("R")
+            ->check(finiteRange(1e-5, 1));
+    sub->add_option("-o,--output", args->output, "output EXR")->type_name("FILE")->required();
+    addImageSizeOptions(*sub, args->width, args->height);
+    sub->add_option("--seed", args->seed,
+                    "random seed (default 1); same seed and spp -> same image")
+        ->type_name("S");
+    sub->add_option("--threads", args->threads, "worker threads (default 0: all)")
+        ->type_name("T")
+        ->check(CLI::Range(0, 1024));
+    sub->add_option("--boundary", args->boundary,
+                    "'dielectric' (default, exact: Fresnel and refraction at every crossing, eta "
+                    "from the scene), 'matched' (eta = 1) or 'straight' (fast approximation with "
+                    "straight shadow rays; not ground truth)")
+        ->type_name("B");
+    sub->add_flag("--subsurface-only", args->subsurfaceOnly,
+                  "drop the direct Fresnel surface reflection");
+    addChoiceOption<reference::MajorantMode>(
+        *sub, "--majorant", args->majorant,
+        {{"auto", reference::MajorantMode::Auto},
+         {"bricks", reference::MajorantMode::Bricks},
+         {"global", reference::MajorantMode::Global}},
+        "auto (default), bricks (per-brick majorants + DDA) or global");
+    sub->add_flag("--per-channel", args->perChannel,
+                  "trace one channel per sample instead of hero-channel spectral MIS");
+    sub->add_option("--max-scatter", args->maxScatter,
+                    "cut paths after K scattering events (default 1048576)")
+        ->type_name("K")
+        ->check(CLI::Range(1, 1 << 30));
+    sub->add_flag("--quiet", args->quiet, "no progress bar");
+    sub->callback([args, spp, rse] {
+        if (!spp->count() && !rse->count())
+            LUCENT_THROW(ValueError, "give --spp N or --rse R (or both: R with N as the cap)");
+        runReference(*args);
+    });
+}
 
 }  // namespace lucent::cli

@@ -4,7 +4,7 @@
 /// with any registered method (lucent/methods/RenderImage.h); argument parsing and printing
 /// only.
 
-#include "CliArgs.h"
+#include "CliCommon.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
@@ -15,6 +15,8 @@
 #include <lucent/scene/SceneFile.h>
 
 #include <algorithm>
+#include <map>
+#include <memory>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -28,70 +30,73 @@ bool endsWith(const std::string& s, const std::string& suffix) {
            s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-int runRender(const std::vector<std::string>& argv) {
+struct RenderOptions {
+    std::string scene, method = "direct", output, backend = "auto";
+    int width = 0, height = 0;
+    float exposure = 1.f, budgetMs = 1000.f, maxError = 0.f;
+    ToneMap::Curve curve = ToneMap::Curve::Aces;
+    std::string models;
+    std::vector<std::string> assignments;             ///< --param NAME=VALUE
+    std::map<std::string, std::string> methodParams;  ///< --NAME VALUE, every method's names
+    bool subsurfaceOnly = false, cpu = false, gl = false;
+    const CLI::App* app = nullptr;
+    bool has(const std::string& option) const { return app->count(option) > 0; }
+};
+
+void runRender(const RenderOptions& args) {
     // The method decides which --NAME VALUE options are its parameters; Auto takes the
     // planner's instead.
-    const std::string requested = Args::peek(argv, "method").value_or("direct");
+    const std::string& requested = args.method;
     const bool autoMethod = requested == "auto";
-    std::vector<std::string> valueOptions = {"method",   "o",       "output",  "width", "height",
-                                             "exposure", "tonemap", "backend", "param"};
-    if (autoMethod)
-        valueOptions.insert(valueOptions.end(), {"budget-ms", "max-error", "models"});
-    else
-        for (const methods::ParamDescriptor& d : methods::find(requested).params)
-            valueOptions.push_back(d.name);
-    const Args args(argv, valueOptions, {"subsurface-only", "cpu", "gl"});
-    if (args.positional().size() != 1)
-        LUCENT_THROW(ValueError, "expected exactly one SCENE.json (see --help)");
-    const std::string out = args.value("o").value_or(args.valueOr("output", ""));
-    if (out.empty())
-        LUCENT_THROW(ValueError, "missing -o/--output FILE (.png or .exr)");
+    if (!autoMethod) {
+        const methods::MethodInfo& info = methods::find(requested);  // lists the valid names
+        for (const char* option : {"--budget-ms", "--max-error", "--models"})
+            if (args.has(option))
+                LUCENT_THROW(ValueError, option, " applies to --method auto only");
+        for (const auto& [name, value] : args.methodParams)
+            if (std::none_of(info.params.begin(), info.params.end(),
+                             [&](const methods::ParamDescriptor& d) { return d.name == name; }))
+                LUCENT_THROW(ValueError, "--", name, " is not a parameter of method ", info.name,
+                             " (lucent-cli methods ", info.name, " lists them)");
+    } else if (!args.methodParams.empty()) {
+        LUCENT_THROW(ValueError, "--", args.methodParams.begin()->first,
+                     ": --method auto chooses the parameters itself");
+    }
+    const std::string& out = args.output;
     const bool exr = endsWith(out, ".exr");
     if (!exr && !endsWith(out, ".png"))
         LUCENT_THROW(ValueError, "-o/--output '", out, "': expected a .png or .exr file name");
     ToneMap tm;
-    tm.exposure = args.floatOr("exposure", 1.f, 0.f, 1e6f);
-    const std::string curve = args.valueOr("tonemap", "aces");
-    if (curve == "clamp")
-        tm.curve = ToneMap::Curve::Clamp;
-    else if (curve == "reinhard")
-        tm.curve = ToneMap::Curve::Reinhard;
-    else if (curve == "aces")
-        tm.curve = ToneMap::Curve::Aces;
-    else
-        LUCENT_THROW(ValueError, "--tonemap: '", curve, "' is not one of clamp, reinhard, aces");
+    tm.exposure = args.exposure;
+    tm.curve = args.curve;
 
     methods::RenderOptions options;
-    options.backend = methods::parseBackend(args.valueOr("backend", "auto"));
-    if (args.has("cpu") && args.has("gl"))
-        LUCENT_THROW(ValueError, "--cpu and --gl exclude each other");
-    if (args.has("cpu"))
+    options.backend = methods::parseBackend(args.backend);
+    if (args.cpu)
         options.backend = methods::Backend::Cpu;
-    if (args.has("gl"))
+    if (args.gl)
         options.backend = methods::Backend::Gl;
-    options.subsurfaceOnly = args.has("subsurface-only");
+    options.subsurfaceOnly = args.subsurfaceOnly;
     options.log = [](const std::string& m) { std::fprintf(stderr, "render: %s\n", m.c_str()); };
     options.progress = printProgressBar;
 
-    Scene scene = loadScene(args.positional().front());
+    Scene scene = loadScene(args.scene);
     for (const std::string& w : scene.warnings)
         std::fprintf(stderr, "lucent-cli render: warning: %s\n", w.c_str());
-    scene.camera.width = args.intOr("width", scene.camera.width, 1, 16384);
-    scene.camera.height = args.intOr("height", scene.camera.height, 1, 16384);
+    overrideImageSize(*args.app, args.width, args.height, scene.camera.width, scene.camera.height);
 
     std::string methodName = requested;
     methods::ParamSet params;
     if (autoMethod) {
         planner::Budget budget;
-        budget.frameMs = args.floatOr("budget-ms", 1000.f, 1e-3f, 1e9f);
-        budget.maxError = args.floatOr("max-error", 0.f, 0.f, 1e3f);
+        budget.frameMs = args.budgetMs;
+        budget.maxError = args.maxError;
         std::string glReason;
         const bool gl = options.backend != methods::Backend::Cpu &&
                         gpu::GlContext::isHeadlessAvailable(&glReason);
         budget.directMs = 0;  // measured
-        const planner::Models models = args.has("models")
-                                           ? planner::loadModels(*args.value("models"))
-                                           : planner::defaultModels();
+        const planner::Models models =
+            args.has("--models") ? planner::loadModels(args.models) : planner::defaultModels();
         const planner::AutoChoice c =
             planner::chooseOffline(scene, models, budget, gl, options.log);
         std::fprintf(stderr, "render: auto: %s\n", c.plan.reason.c_str());
@@ -101,11 +106,9 @@ int runRender(const std::vector<std::string>& argv) {
             options.backend = c.backend;
     }
     const methods::MethodInfo& method = methods::find(methodName);
-    params.merge(methods::ParamSet::fromAssignments(args.values("param")));
-    if (!autoMethod)
-        for (const methods::ParamDescriptor& d : method.params)
-            if (auto v = args.value(d.name))
-                params.set(d.name, *v);
+    params.merge(methods::ParamSet::fromAssignments(args.assignments));
+    for (const auto& [name, value] : args.methodParams)
+        params.set(name, value);
     const methods::RenderResult r = methods::renderImage(scene, method.name, params, options);
     if (method.caps.cpu && r.backend == methods::Backend::Cpu && options.progress)
         std::fputc('\n', stderr);
@@ -125,46 +128,96 @@ int runRender(const std::vector<std::string>& argv) {
     std::printf("wrote %s (%dx%d, method %s%s)\n", out.c_str(), r.radiance.width(),
                 r.radiance.height(), method.name.c_str(),
                 options.subsurfaceOnly ? ", subsurface only" : "");
-    return 0;
 }
 
 }  // namespace
 
-const Command renderCommand{
-    "render", "one image of a scene with any translucency method (lucent-cli methods)",
-    "usage: lucent-cli render SCENE.json [--method NAME] -o OUT.png|OUT.exr\n"
-    "                         [--NAME VALUE | --param NAME=VALUE ...]\n"
-    "                         [--backend auto|gl|cpu | --gl | --cpu]\n"
-    "                         [--width W] [--height H] [--subsurface-only]\n"
-    "       lucent-cli render SCENE.json --method auto [--budget-ms B | --max-error E]\n"
-    "                         [--models F] -o OUT ...\n"
-    "                         [--exposure E] [--tonemap clamp|reinhard|aces]\n"
-    "\n"
-    "Renders the scene with a registered method (`lucent-cli methods` lists them and their\n"
-    "parameters). GL methods run through an offscreen OpenGL 4.5 context (EGL, no display\n"
-    "needed); without one, a method with a CPU renderer falls back to it (said on stderr).\n"
-    "\n"
-    "  --method NAME      a method of `lucent-cli methods` (default direct);\n"
-    "                     `lucent-cli methods NAME` lists its parameters and defaults;\n"
-    "                     auto: the planner chooses method and setting from the scene's\n"
-    "                     features and its fitted cost and error models, and says why on\n"
-    "                     stderr (`lucent-cli plan SCENE` shows every candidate)\n"
-    "  --budget-ms B      auto: time the render may take (default 1000 ms)\n"
-    "  --max-error E      auto: the cheapest method predicted at or under block error E\n"
-    "  --models F         auto: a models file (default: the built-in ones)\n"
-    "  --NAME VALUE       a parameter of the method, e.g. --spp 64 --seed 3; the same as\n"
-    "  --param NAME=VALUE (repeatable)\n"
-    "  --backend B        auto (default: the method's own choice, GL falling back to the CPU),\n"
-    "                     gl or cpu; --gl and --cpu are short for --backend gl|cpu\n"
-    "  -o, --output FILE  .exr: linear radiance W/(mm^2 sr), 32-bit float;\n"
-    "                     .png: 8-bit sRGB after --exposure and --tonemap (default aces)\n"
-    "  --width, --height  override the scene camera's image size (pixels)\n"
-    "  --subsurface-only  keep only the subsurface term of the method; for direct, which has\n"
-    "                     none, the image is black\n"
-    "\n"
-    "The device, per-pass GPU/CPU timings and the method's statistics go to stderr.\n"
-    "LUCENT_SHADER_DIR=DIR loads the shaders from DIR instead of the embedded copies;\n"
-    "LUCENT_EGL_PLATFORM=surfaceless|device forces an EGL platform.\n",
-    &runRender};
+void addRenderCommand(CLI::App& cli, const CommandContext&) {
+    CLI::App* sub = addCommand(
+        cli, "render", "one image of a scene with any translucency method (lucent-cli methods)",
+        "usage: lucent-cli render SCENE.json [--method NAME] -o OUT.png|OUT.exr\n"
+        "                         [--NAME VALUE | --param NAME=VALUE ...]\n"
+        "                         [--backend auto|gl|cpu | --gl | --cpu]\n"
+        "                         [--width W] [--height H] [--subsurface-only]\n"
+        "                         [--exposure E] [--tonemap clamp|reinhard|aces]\n"
+        "       lucent-cli render SCENE.json --method auto [--budget-ms B | --max-error E]\n"
+        "                         [--models F] -o OUT ...\n",
+        "Renders the scene with a registered method (`lucent-cli methods` lists them and their\n"
+        "parameters). GL methods run through an offscreen OpenGL 4.5 context (EGL, no display\n"
+        "needed); without one, a method with a CPU renderer falls back to it (said on stderr).\n"
+        "The device, per-pass GPU/CPU timings and the method's statistics go to stderr.\n");
+    sub->footer(
+        "LUCENT_SHADER_DIR=DIR loads the shaders from DIR instead of the embedded copies;\n"
+        "LUCENT_EGL_PLATFORM=surfaceless|device forces an EGL platform.");
+    auto args = std::make_shared<RenderOptions>();
+    args->app = sub;
+    addSceneArgument(*sub, args->scene);
+    sub->add_option("--method", args->method,
+                    "a method of `lucent-cli methods` (default direct); `lucent-cli methods "
+                    "NAME` lists its parameters and defaults; auto: the planner chooses method "
+                    "and setting from the scene's features and its fitted cost and error models, "
+                    "and says why on stderr (`lucent-cli plan SCENE` shows every candidate)")
+        ->type_name("NAME");
+    sub->add_option("-o,--output", args->output,
+                    ".exr: linear radiance W/(mm^2 sr), 32-bit float; .png: 8-bit sRGB after "
+                    "--exposure and --tonemap")
+        ->type_name("FILE")
+        ->required();
+    sub->add_option("--param", args->assignments,
+                    "a parameter of the method, the same as --NAME VALUE (repeatable)")
+        ->type_name("NAME=VALUE")
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    CLI::Option* backend =
+        sub->add_option("--backend", args->backend,
+                        "auto (default: the method's own choice, GL falling back to the CPU), gl "
+                        "or cpu")
+            ->type_name("B")
+            ->check(CLI::IsMember({"auto", "gl", "cpu"}));
+    CLI::Option* gl = sub->add_flag("--gl", args->gl, "short for --backend gl")->excludes(backend);
+    sub->add_flag("--cpu", args->cpu, "short for --backend cpu")->excludes(backend)->excludes(gl);
+    addImageSizeOptions(*sub, args->width, args->height);
+    sub->add_flag("--subsurface-only", args->subsurfaceOnly,
+                  "keep only the subsurface term of the method; for direct, which has none, the "
+                  "image is black");
+    sub->add_option("--exposure", args->exposure, "PNG: exposure multiplier (default 1)")
+        ->type_name("E")
+        ->check(finiteRange(0, 1e6));
+    addChoiceOption<ToneMap::Curve>(*sub, "--tonemap", args->curve,
+                                    {{"clamp", ToneMap::Curve::Clamp},
+                                     {"reinhard", ToneMap::Curve::Reinhard},
+                                     {"aces", ToneMap::Curve::Aces}},
+                                    "PNG: tone curve (default aces)");
+    const char* autoGroup = "Options of --method auto";
+    sub->add_option("--budget-ms", args->budgetMs, "time the render may take (default 1000 ms)")
+        ->type_name("B")
+        ->check(finiteRange(1e-3, 1e9))
+        ->group(autoGroup);
+    sub->add_option("--max-error", args->maxError,
+                    "instead: the cheapest method predicted at or under block error E")
+        ->type_name("E")
+        ->check(finiteRange(0, 1e3))
+        ->group(autoGroup);
+    sub->add_option("--models", args->models, "a models file (default: the built-in ones)")
+        ->type_name("F")
+        ->check(existingFile())
+        ->group(autoGroup);
+    // Every method's parameters as --NAME VALUE; runRender() rejects those the chosen method
+    // lacks. (The method's own ranges are checked by the engine, which knows them.)
+    std::map<std::string, std::string> users;
+    std::map<std::string, std::string> help;
+    for (const methods::MethodInfo* m : methods::all())
+        for (const methods::ParamDescriptor& d : m->params) {
+            users[d.name] += (users[d.name].empty() ? "" : ", ") + m->name;
+            help.emplace(d.name, d.help);
+        }
+    for (const auto& [name, methodsList] : users)
+        sub->add_option_function<std::string>(
+               "--" + name,
+               [args, name = name](const std::string& v) { args->methodParams[name] = v; },
+               help[name] + " (" + methodsList + ")")
+            ->type_name("VALUE")
+            ->group("Method parameters (lucent-cli methods NAME: types, ranges, defaults)");
+    sub->callback([args] { runRender(*args); });
+}
 
 }  // namespace lucent::cli

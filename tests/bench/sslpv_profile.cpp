@@ -16,6 +16,7 @@
 #include <lucent/material/MaterialVolume.h>
 #include <lucent/mesh/Procedural.h>
 #include <lucent/reference/Transport.h>
+#include <lucent/sslpv/SslpvCalibrationFit.h>
 #include <lucent/sslpv/SslpvSolver.h>
 
 #include <algorithm>
@@ -93,22 +94,8 @@ Profile exactProfile(float albedo, int walks) {
 /// unit-flux texels in the centre cell of the top face, propagated to 10⁻⁴; per top cell the
 /// flux leaving, per unit transmitted flux (as the exact profile).
 Profile sslpvProfile(float albedo, float dx, int n) {
-    CoarseMaterial m;
-    m.spec.resolution = n;
-    m.spec.voxelSize = dx;
-    m.spec.origin = Point3f(-0.5f * float(n) * dx, -0.5f * float(n) * dx, 0.f);
-    const size_t count = m.spec.voxelCount();
-    m.insideFraction.assign(count, 0.f);
-    for (int c = 0; c < 3; ++c) {
-        m.sigma_t[c].assign(count, 1.f);
-        m.sigma_s[c].assign(count, albedo);
-        m.g[c].assign(count, 0.f);
-    }
-    for (int z = 1; z < n - 1; ++z)
-        for (int y = 1; y < n - 1; ++y)
-            for (int x = 1; x < n - 1; ++x)
-                m.insideFraction[m.spec.linearIndex({x, y, z})] = 1.f;
-    m.homogeneous = true;
+    const CoarseMaterial m =
+        sslpvThickSlab(n, dx, albedo, Point3f(-0.5f * float(n) * dx, -0.5f * float(n) * dx, 0.f));
     const float zTop = float(n - 1) * dx;
     std::vector<SslpvInjectionSample> texels;
     for (int j = 0; j < 2; ++j)

@@ -7,7 +7,7 @@
 #include <lucent/sslpv/SslpvSolver.h>
 
 #include <lucent/core/Error.h>
-#include <lucent/dipole/Profiles.h>
+#include <lucent/sslpv/SslpvCalibrationFit.h>
 
 #include "SslpvTestGrids.h"
 
@@ -19,59 +19,6 @@ using namespace lucent;
 using namespace lucent::sslpv;
 
 namespace {
-
-/// Thick slab exactly as `lucent-cli bench sslpv-fit` builds it (app/cli/Command_bench.cpp,
-/// slabResponse): N³ grid, slab in cells [1, N−2]³, σt = 1 mm⁻¹, σs′ = α′, g = 0, Δx = cell
-/// size in mean free paths; 16×16 unit-flux texels at normal incidence on the central 8×8
-/// cells of the top face. Returns Σ_top L_i·exitScale·Δx²/Φ (sr⁻¹) and the solver stats.
-double slabResponse(float albedo, float cellMfp, const SslpvOptions& opt, float eta, int n,
-                    SslpvStats* stats) {
-    const float h = cellMfp;
-    CoarseMaterial m;
-    m.spec.resolution = n;
-    m.spec.voxelSize = h;
-    m.spec.origin = Point3f(0.f);
-    const size_t count = m.spec.voxelCount();
-    m.insideFraction.assign(count, 0.f);
-    for (int c = 0; c < 3; ++c) {
-        m.sigma_t[c].assign(count, 1.f);
-        m.sigma_s[c].assign(count, albedo);
-        m.g[c].assign(count, 0.f);
-    }
-    for (int z = 1; z < n - 1; ++z)
-        for (int y = 1; y < n - 1; ++y)
-            for (int x = 1; x < n - 1; ++x)
-                m.insideFraction[m.spec.linearIndex({x, y, z})] = 1.f;
-    m.homogeneous = true;
-    const float zTop = float(n - 1) * h;
-    const int lo = n / 2 - 4;
-    std::vector<SslpvInjectionSample> texels;
-    for (int j = 0; j < 16; ++j)
-        for (int i = 0; i < 16; ++i)
-            texels.push_back(
-                {Point3f((lo + 0.25f + 0.5f * i) * h, (lo + 0.25f + 0.5f * j) * h, zTop),
-                 Normal3f(0, 0, 1), Vector3f(0, 0, -1), Rgb(1.f)});
-    const double phi = double(texels.size());
-    SslpvSolver solver(opt);
-    solver.setMaterial(m, eta);
-    solver.setInjectionSamples(std::move(texels));
-    *stats = solver.solve();
-    double sum = 0.0;
-    for (int y = 1; y < n - 1; ++y)
-        for (int x = 1; x < n - 1; ++x)
-            sum += double(
-                solver.radiance(Point3f((x + 0.5f) * h, (y + 0.5f) * h, zTop), Normal3f(0, 0, 1))
-                    .y);
-    return sum * double(solver.exitScale()) * double(h) * double(h) / phi;
-}
-
-/// Target of the fit: F_t(0)·R_d/π of the classical dipole (Jensen et al. 2001; see
-/// slabTarget in app/cli/Command_bench.cpp).
-double slabTarget(float albedo, float eta) {
-    const double rd =
-        dipole::totalReflectance(dipole::Model::Dipole, dipole::fromReduced(1.f, albedo, eta));
-    return (1.0 - dipole::fresnelReflectance(1.0, eta)) * rd / 3.14159265358979323846;
-}
 
 CoarseMaterial ball(int n, float h, float st, float ss, float g) {
     CoarseMaterial m = test::centredMaterial(n, h, st, ss, g);
@@ -190,9 +137,11 @@ TEST(SslpvCalibrated, ThickSlabWithinFitResidualBand) {
     for (const Case& c : cases) {
         SslpvOptions o = calibrated(c.order, 4096);
         o.stopEpsilon = 1e-4f;
+        // The fit's slab (lucent/sslpv/SslpvCalibrationFit.h), measured with the shipped gain.
         SslpvStats st;
-        const double resp = slabResponse(c.albedo, c.cellMfp, o, 1.3f, 48, &st);
-        const double residual = resp / slabTarget(c.albedo, 1.3f) - 1.0;
+        const double resp = sslpvSlabResponse({c.albedo, c.cellMfp}, 48, o, 1.3f, &st) *
+                            double(o.calibration.gain[c.order - 1]);
+        const double residual = resp / sslpvSlabTarget(c.albedo, 1.3f) - 1.0;
         SCOPED_TRACE("order " + std::to_string(c.order) + " albedo " + std::to_string(c.albedo) +
                      " cell " + std::to_string(c.cellMfp));
         EXPECT_LE(std::abs(residual), FIT_MAX_RESIDUAL[c.order - 1]);
