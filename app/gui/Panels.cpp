@@ -851,6 +851,7 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     m_method->setObjectName(QStringLiteral("renderMethod"));
     m_method->setProperty(SAVED_BY_NAME, true);
     m_paramPages = new QStackedWidget;
+    m_paramPages->setSizePolicy(QSizePolicy::Preferred, QSizePolicy::Maximum);
     // Auto first: the planner picks a registry method for the scene (no fields of its own).
     m_method->addItem(tr("Auto"), QString::fromLatin1(AUTO_METHOD));
     m_method->setItemData(0,
@@ -860,6 +861,7 @@ RenderPanel::RenderPanel(Document* doc, Viewport* viewport, QWidget* parent)
     m_autoPlan = new QLabel(tr("The planner chooses the method for the scene."));
     m_autoPlan->setObjectName(QStringLiteral("renderAutoPlan"));
     m_autoPlan->setWordWrap(true);
+    m_autoPlan->setAlignment(Qt::AlignTop | Qt::AlignLeft);
     m_autoPlan->setTextInteractionFlags(Qt::TextSelectableByMouse);
     m_paramPages->addWidget(m_autoPlan);
     for (const methods::MethodInfo* info : PreviewRenderer::previewMethods()) {

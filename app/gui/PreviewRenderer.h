@@ -18,7 +18,7 @@
 /// error models and the live preview's measured stroke → frame costs (planner/LiveCosts.h).
 /// The unit of those costs, the render of a Direct frame, is timed here on the viewport's own
 /// passes: once per scene and render size, the preview shows Direct for four frames and
-/// plans with the fastest of the last three. It re-plans when the scene changes (a new scene,
+/// plans with the median of the last three. It re-plans when the scene changes (a new scene,
 /// paint, lights, η, camera), at most twice a second, with the planner's hysteresis: painting
 /// does not make the preview switch methods back and forth.
 ///

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace lucent::planner {
 
@@ -94,6 +95,18 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
         p.reason = "no method can render this scene" + skippedClauses(skipped);
         return p;
     }
+    // Nothing fits the time budget: relax it to the fastest candidate's time × (1 + tolerance),
+    // and choose within that as within a budget (least error, ties, hysteresis).
+    double relaxedMs = 0.0;
+    if (!errorTarget && budget.overrunTolerance > 0 &&
+        std::none_of(p.options.begin(), p.options.end(), [](const Option& o) { return o.fits; })) {
+        double fastest = std::numeric_limits<double>::infinity();
+        for (const Option& o : p.options)
+            fastest = std::min(fastest, o.ms);
+        relaxedMs = fastest * (1.0 + budget.overrunTolerance);
+        for (Option& o : p.options)
+            o.fits = o.ms <= relaxedMs;
+    }
     // Fitting options first; among them the least error (time budget) or the least time
     // (error target), the other quantity breaking ties. If none fits: the cheapest (time
     // budget) or the most accurate (error target), the closest to fitting.
@@ -134,6 +147,11 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
         }
     }
     p.choice = p.chosen.index;
+    if (relaxedMs > 0) {  // chosen within the relaxed budget; none fits the real one
+        for (Option& o : p.options)
+            o.fits = false;
+        p.chosen.fits = false;
+    }
 
     const Candidate& chosen = candidates[p.choice];
     const char* timeFormat = budget.directKnown ? "%.0f ms" : "%.1f× Direct";
@@ -145,7 +163,10 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
     p.reason += format(", block error %.2f", p.chosen.error);
     if (errorTarget)
         p.reason += format(" (target %.2f)", budget.maxError);
-    if (!p.chosen.fits)
+    if (relaxedMs > 0)
+        p.reason +=
+            format(", over budget: nothing fits, the least error within %.0f ms", relaxedMs);
+    else if (!p.chosen.fits)
         p.reason += errorTarget ? ", no method reaches the target" : ", over budget";
     if (cheaperAtEqualError && !p.kept)
         p.reason += format(", the cheapest within %.0f %% of the least error",

@@ -122,8 +122,9 @@ TEST(LiveCosts, AutoWithTheLiveModelsFitsTheBudgetOrTakesTheCheapest) {
     EXPECT_EQ(c.backend, methods::Backend::Gl);
     EXPECT_TRUE(c.plan.chosen.fits) << c.plan.reason;
     EXPECT_NEAR(c.plan.chosen.ms, cheapest * budget.directMs, 1e-9);
-    // A budget nothing fits: the cheapest, said to be over budget.
+    // A budget nothing fits, no overrun allowed: the cheapest, said to be over budget.
     budget.frameMs = cheapest * budget.directMs * 0.5;
+    budget.overrunTolerance = 0.0;
     c = chooseMethod(scene, lm, budget, true, nullptr, methods::Backend::Gl);
     EXPECT_FALSE(c.plan.chosen.fits);
     EXPECT_NEAR(c.plan.chosen.ms, cheapest * budget.directMs, 1e-9);

@@ -54,6 +54,12 @@ struct Budget {
     /// cost twice the time for an error the measurement cannot tell apart (the suite's
     /// 8/32/128 spp rows).
     double errorTolerance = 0.1;
+    /// When nothing fits frameMs (a slow machine, a large viewport), the budget becomes the
+    /// fastest candidate's time × (1 + this) and the least error within that is chosen: the
+    /// frame is late either way, and the fastest alone can be several times as wrong as a
+    /// candidate 20 % slower (SSLPV 16³ at 0.61 against the directional dipole at 0.24 on the
+    /// default scene at 1920×1080). 0: the fastest.
+    double overrunTolerance = 0.5;
 };
 
 /// One scored candidate.
