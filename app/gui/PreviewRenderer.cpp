@@ -413,9 +413,7 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
             a.measuring = true;  // renderFrame renders Direct and appends its time
             return nullptr;
         }
-        std::vector<double> timed(a.directSamples.begin() + 1, a.directSamples.end());
-        std::sort(timed.begin(), timed.end());
-        a.directMs = timed[timed.size() / 2];
+        a.directMs = medianMs({a.directSamples.begin() + 1, a.directSamples.end()});
         a.directWidth = a.samplesWidth;
         a.directHeight = a.samplesHeight;
         a.directSamples.clear();

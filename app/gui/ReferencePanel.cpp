@@ -215,10 +215,7 @@ bool ReferencePanel::compareWithPreview() {
         return false;
     }
     const OrbitCamera& cam = m_viewport->camera();
-    const glm::vec3 eye = cam.eye();
-    const float now[7] = {eye.x,        eye.y,        eye.z,      cam.target.x,
-                          cam.target.y, cam.target.z, cam.fovYDeg};
-    if (!std::equal(std::begin(now), std::end(now), std::begin(m_refCamera))) {
+    if (cam.eye() != m_refEye || cam.target != m_refTarget || cam.fovYDeg != m_refFovYDeg) {
         m_accuracy->setText(
             tr("The view changed since the reference started: render it again "
                "to compare."));
@@ -278,10 +275,9 @@ void ReferencePanel::start() {
     scene.camera.height = std::max(16, int(std::lround(m_width->value() * aspect)));
     const float exposure = std::exp2(m_viewport->renderSettings().exposureStops);
     const int spp = m_spp->value();
-    const glm::vec3 eye = cam.eye();
-    const float started[7] = {eye.x,        eye.y,        eye.z,      cam.target.x,
-                              cam.target.y, cam.target.z, cam.fovYDeg};
-    std::copy(std::begin(started), std::end(started), std::begin(m_refCamera));
+    m_refEye = scene.camera.position;  // the view the comparison needs
+    m_refTarget = scene.camera.target;
+    m_refFovYDeg = scene.camera.fovYDeg;
     m_exposure = exposure;
     m_refMean = m_refVariance = m_refCoverage = ImageRgb();
     m_previewImage = m_errorImage = QImage();

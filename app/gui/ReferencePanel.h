@@ -80,8 +80,9 @@ private:
     QImage m_previewImage;  ///< the preview at the reference's size, display
     QImage m_errorImage;    ///< the block error heat-map
     ImageRgb m_refMean, m_refVariance, m_refCoverage;  ///< linear; variance and coverage at the end
-    /// The camera the reference was started with: eye, target (mm), vertical field of view (°).
-    float m_refCamera[7] = {};
+    /// The view the reference was started from: eye, target (mm), vertical field of view (°).
+    Point3f m_refEye{0.f}, m_refTarget{0.f};
+    float m_refFovYDeg = 0.f;
     float m_exposure = 1.f;
     double m_blockRelL1 = 0.0, m_meanRatio = 0.0;
     Timer m_sinceCompare;

@@ -232,10 +232,6 @@ void measureLiveCosts(MainWindow& w, const QString& path) {
         vp->setRenderSettings(rs);
         return timeMethod(vp);
     };
-    const auto median = [](std::vector<double> v) {
-        std::sort(v.begin(), v.end());
-        return v[v.size() / 2];
-    };
     const std::vector<lucent::planner::LiveCost>& entries =
         lucent::planner::defaultLiveCosts().entries;
     std::vector<std::vector<double>> ratios(entries.size()), strokeMs(entries.size());
@@ -251,18 +247,18 @@ void measureLiveCosts(MainWindow& w, const QString& path) {
             strokeMs[i].push_back(t.strokeMs);
         }
     std::printf("viewport %dx%d, renderer %s; Direct frame render %.1f ms (median of %zu)\n",
-                vp->width(), vp->height(), qPrintable(vp->stats().glRenderer), median(unitMs),
-                unitMs.size());
+                vp->width(), vp->height(), qPrintable(vp->stats().glRenderer),
+                lucent::medianMs(unitMs), unitMs.size());
     std::printf("%-28s %-10s %14s %13s %20s\n", "candidate", "setting", "stroke->frame",
                 "stroke_ratio", "ratios (rounds)");
     lucent::planner::LiveCosts measured;
-    measured.directMs = median(unitMs);
+    measured.directMs = lucent::medianMs(unitMs);
     for (size_t i = 0; i < entries.size(); ++i) {
         lucent::planner::LiveCost m = entries[i];
-        m.strokeRatio = median(ratios[i]);
+        m.strokeRatio = lucent::medianMs(ratios[i]);
         measured.entries.push_back(m);
         std::printf("%-28s %-10s %11.1f ms %13.2f      ", m.method.c_str(), m.setting.c_str(),
-                    median(strokeMs[i]), m.strokeRatio);
+                    lucent::medianMs(strokeMs[i]), m.strokeRatio);
         for (double r : ratios[i])
             std::printf(" %.2f", r);
         std::printf("\n");
