@@ -8,6 +8,7 @@
 /// local-radius window, the better dipole; GL compute (camera only). `--light-view-cost`: the
 /// light views' share of a frame (back-lit scene, CPU and GL). Results:
 /// docs/benchmarks.md, "Dipoles".
+#include <lucent/core/Fresnel.h>
 #include <lucent/dipole/DipoleProvider.h>
 #include <lucent/dipole/GpuGather.h>
 #include <lucent/dipole/IrradiancePass.h>
@@ -268,7 +269,7 @@ int referenceError(float eta) {
     // L = T₂₁ T₁₂ E ∫ S_d dA. The radial profile is R = S_d·4πC_φ(1/η) (Profiles.h), so
     // ∫ S_d dA = ρ/(π(1 − 2C₁(1/η))) (Frisvad et al. 2014's 1/(4C_φ(1/η)) exitance→radiance
     // factor; it is 1 at η = 1).
-    const double ft = 1.0 - fresnelReflectance(1.0, eta);
+    const double ft = 1.0 - fresnelDielectric(1.0, eta);
     const double toRadiance =
         1.0 / (3.14159265358979323846 * (1.0 - 2.0 * fresnelMoment(1, 1.0 / double(eta))));
     Rgb dir;

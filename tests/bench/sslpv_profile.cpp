@@ -12,6 +12,7 @@
 /// Δx = 0.5, 1 and 2 mm, and SSLPV's total over the exact total (flux leaving the top face per
 /// unit flux entering, within 12 mm).
 
+#include <lucent/core/Fresnel.h>
 #include <lucent/core/Random.h>
 #include <lucent/material/MaterialVolume.h>
 #include <lucent/mesh/Procedural.h>
@@ -116,9 +117,9 @@ Profile sslpvProfile(float albedo, float dx, int n) {
     constexpr int K = 2000;
     for (int i = 0; i < K; ++i) {
         const double mu = (i + 0.5) / K;
-        fbar += 2.0 * double(dielectricReflectance(float(mu), g_eta)) * mu / K;
+        fbar += 2.0 * double(fresnelDielectric(float(mu), g_eta)) * mu / K;
     }
-    const double t0 = 1.0 - double(dielectricReflectance(1.f, g_eta));
+    const double t0 = 1.0 - double(fresnelDielectric(1.f, g_eta));
     Profile p;
     for (int y = 1; y < n - 1; ++y)
         for (int x = 1; x < n - 1; ++x) {

@@ -6,6 +6,7 @@
 #include <lucent/combined/Combined.h>
 
 #include <lucent/core/Error.h>
+#include <lucent/core/Fresnel.h>
 #include <lucent/core/Parallel.h>
 #include <lucent/core/Random.h>
 #include <lucent/core/Sampling.h>
@@ -159,7 +160,7 @@ SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, flo
             ++ringCells[size_t(b)];
         }
     // Per unit *transmitted* irradiance (the dipole's E): divide by T(0); R-units: × π.
-    const double t0 = 1.0 - double(sslpv::dielectricReflectance(1.f, eta));
+    const double t0 = 1.0 - double(fresnelDielectric(1.f, eta));
     SslpvSurfaceKernel k;
     k.cellSize = cellSize;
     double inner = 0.0;
@@ -280,7 +281,7 @@ ImageRgb localSslpvEstimate(const dipole::SurfaceBuffers& buf, const SslpvSurfac
         [&](int x, int y, const Point3f& xo, const Normal3f& no, const glm::dvec3& B) {
             // Seed 004 Eq. 3: L = F_t(η, ω_o) B/π, the dipole's exit.
             const double cosO = std::max(0.0, double(glm::dot(no, buf.towardEye(xo))));
-            const double ft = 1.0 - dipole::fresnelReflectance(cosO, eta);
+            const double ft = 1.0 - fresnelDielectric(cosO, eta);
             out.at(x, y) = Rgb(glm::vec3(B * (ft / PI_D)));
         });
     return out;

@@ -2,6 +2,7 @@
 /// @file
 /// @brief CPU directional-dipole pipeline (the dirpole thesis §4, Frisvad et al. 2014 BSSRDF).
 
+#include <lucent/core/Fresnel.h>
 #include <lucent/dipole/DirectionalPipeline.h>
 
 #include <lucent/core/Error.h>
@@ -130,7 +131,7 @@ void DirectionalDipoleRenderer::addPass() {
                 const Normal3f no = glm::normalize(buf.normal[idx]);
                 const Vector3f toEye = buf.towardEye(xo);
                 const double cosO = std::max(0.0, double(glm::dot(no, toEye)));
-                const double t21 = 1.0 - fresnelReflectance(cosO, eta);  // T₂₁(ω_o)
+                const double t21 = 1.0 - fresnelDielectric(cosO, eta);  // T₂₁(ω_o)
                 // Per-pixel Cranley–Patterson offset of the R2 sequence (deterministic per seed)
                 // and a per-pixel, per-pass stream for the source choice.
                 Pcg32 rng(pixelSeed(uint32_t(x), uint32_t(y), 0, m.settings.seed));
@@ -173,7 +174,8 @@ void DirectionalDipoleRenderer::addPass() {
                         const float sin2T = (1.f - cosI * cosI) / (eta * eta);
                         const float cosT = std::sqrt(std::max(0.f, 1.f - sin2T));
                         const Vector3f w12 = glm::normalize(wl / eta + (cosI / eta - cosT) * ni);
-                        const double t12 = 1.0 - fresnelReflectance(cosI, eta);  // T₁₂(ω_i)
+                        const double t12 =
+                            1.0 - fresnelDielectric(double(cosI), double(eta));  // T₁₂(ω_i)
                         for (int c = 0; c < 3; ++c) {
                             const double sd =
                                 dd[size_t(c)].Sd(glm::dvec3(xi), glm::dvec3(ni), glm::dvec3(w12),

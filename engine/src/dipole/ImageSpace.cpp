@@ -2,6 +2,7 @@
 /// @file
 /// @brief CPU image-space dipole integration (Mertens et al. 2005 §5–7).
 
+#include <lucent/core/Fresnel.h>
 #include <lucent/dipole/ImageSpace.h>
 
 #include <lucent/core/Error.h>
@@ -256,7 +257,7 @@ void exitanceToRadiance(const SurfaceBuffers& buf, float eta, GatherResult& out)
             // Eq. 3: L = F_t(η, ω_o) B/π, F_t = 1 − F_r for the exit direction.
             const double cosO =
                 std::max(0.0, double(glm::dot(no, buf.towardEye(buf.position[idx]))));
-            const float ft = float(1.0 - fresnelReflectance(cosO, eta));
+            const float ft = float(1.0 - fresnelDielectric(cosO, eta));
             out.radiance.at(x, y) = out.exitance.at(x, y) * (ft * INV_PI);
         }
 }

@@ -2,6 +2,7 @@
 /// @file
 /// @brief Camera-view irradiance pass for the image-space dipole (Mertens et al. 2005 §5–6).
 
+#include <lucent/core/Fresnel.h>
 #include <lucent/dipole/IrradiancePass.h>
 
 #include <lucent/core/Error.h>
@@ -36,7 +37,7 @@ Rgb lightIrradiance(const Light& light, const Point3f& p, const Normal3f& n, flo
     if (cosI <= 0.f)
         return Rgb(0.f);
     // Eq. 5: E = L_i F_t(η, ω_i) (N·ω_i), F_t = 1 − F_r for light arriving from outside.
-    const float ft = float(1.0 - fresnelReflectance(cosI, eta));
+    const float ft = float(1.0 - fresnelDielectric(double(cosI), double(eta)));
     return incident * (ft * cosI);
 }
 

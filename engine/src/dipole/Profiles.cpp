@@ -2,6 +2,7 @@
 /// @file
 /// @brief Dipole, better-dipole and directional-dipole profiles (see Profiles.h for sources).
 
+#include <lucent/core/Fresnel.h>
 #include <lucent/dipole/Profiles.h>
 
 #include <lucent/core/Error.h>
@@ -76,18 +77,6 @@ void checkMedium(double sigma_a, double sigma_s, double eta) {
 // ---------------------------------------------------------------------------------------------
 // Fresnel
 
-double fresnelReflectance(double cosThetaI, double eta) {
-    const double ci = std::clamp(cosThetaI, 0.0, 1.0);
-    const double sin2T = (1.0 - ci * ci) / (eta * eta);
-    if (sin2T >= 1.0)
-        return 1.0;  // total internal reflection
-    const double ct = std::sqrt(1.0 - sin2T);
-    // Fresnel equations for s and p polarisation, unpolarised average.
-    const double rs = (ci - eta * ct) / (ci + eta * ct);
-    const double rp = (eta * ci - ct) / (eta * ci + ct);
-    return 0.5 * (rs * rs + rp * rp);
-}
-
 double fresnelDiffuseReflectanceJensen(double eta) {
     // Seed 004, Table 1 (Jensen et al. 2001, after Egan & Hilgeman).
     return -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta;
@@ -99,7 +88,7 @@ double fresnelMoment(int n, double eta) {
     // Light travels inside the medium (index η) towards the outside (index 1): relative index
     // n_t/n_i = 1/η. For η > 1, μ < μ_c = √(1 − 1/η²) is totally reflected (F = 1).
     const double rel = 1.0 / eta;
-    const auto f = [&](double mu) { return fresnelReflectance(mu, rel) * std::pow(mu, n); };
+    const auto f = [&](double mu) { return fresnelDielectric(mu, rel) * std::pow(mu, n); };
     if (rel >= 1.0)
         return gl64().integrate(0.0, 1.0, f);
     const double muC = std::sqrt(1.0 - rel * rel);

@@ -4,6 +4,7 @@
 /// Snell's law (see RefractionSearch.h and docs/reference.md).
 
 #include <lucent/core/Error.h>
+#include <lucent/core/Fresnel.h>
 #include <lucent/reference/RefractionSearch.h>
 #include <lucent/reference/Transport.h>
 

@@ -9,6 +9,7 @@
 /// dD' = μ·dD + (μ·dc − dc_t)·n, dc = −dD·n, dc_t = μ²·c·dc/c_t (Igehy 1999, "Tracing ray
 /// differentials", Sec. 3.3, with dn = 0 on a flat face).
 
+#include <lucent/core/Fresnel.h>
 #include <lucent/core/Sampling.h>
 #include <lucent/reference/SpecularChain.h>
 #include <lucent/reference/Transport.h>

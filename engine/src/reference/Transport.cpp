@@ -17,6 +17,7 @@
 /// the public functions at the end instantiate them.
 
 #include <lucent/core/Error.h>
+#include <lucent/core/Fresnel.h>
 #include <lucent/core/Sampling.h>
 #include <lucent/core/SphericalHarmonics.h>
 #include <lucent/reference/SpecularChain.h>
@@ -142,19 +143,6 @@ std::optional<LightSample> sampleLightFrom(const Light& light, const Point3f& x,
 }
 
 }  // namespace
-
-float fresnelDielectric(float cosI, float eta) {
-    cosI = std::clamp(cosI, 0.f, 1.f);
-    // Snell: sin θt = sin θi / η (η = η_t/η_i).
-    const float sin2T = (1.f - cosI * cosI) / (eta * eta);
-    if (sin2T >= 1.f)
-        return 1.f;  // total internal reflection
-    const float cosT = std::sqrt(1.f - sin2T);
-    // Fresnel equations for s and p polarisation, divided through by η_i (pbrt-v3 Eq. 8.1–8.2).
-    const float rs = (cosI - eta * cosT) / (cosI + eta * cosT);
-    const float rp = (eta * cosI - cosT) / (eta * cosI + cosT);
-    return 0.5f * (rs * rs + rp * rp);
-}
 
 const char* boundaryModelName(BoundaryModel model) {
     switch (model) {

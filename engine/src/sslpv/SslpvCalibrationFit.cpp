@@ -1,4 +1,5 @@
 // SPDX-License-Identifier: MIT
+#include <lucent/core/Fresnel.h>
 #include <lucent/sslpv/SslpvCalibrationFit.h>
 
 #include <lucent/core/Error.h>
@@ -174,8 +175,7 @@ double sslpvSlabDipoleReflectance(float albedo, float eta) {
 
 double sslpvSlabTarget(float albedo, float eta) {
     constexpr double PI_D = 3.14159265358979323846;
-    return (1.0 - dipole::fresnelReflectance(1.0, eta)) * sslpvSlabDipoleReflectance(albedo, eta) /
-           PI_D;
+    return (1.0 - fresnelDielectric(1.0, eta)) * sslpvSlabDipoleReflectance(albedo, eta) / PI_D;
 }
 
 SslpvCalibrationFit fitSslpvCalibration(const SslpvCalibrationFitSettings& s) {

@@ -2,6 +2,7 @@
 /// @file
 /// @brief CPU SSLPV renderer: RSM injection texels, solver driving, ray-cast shading.
 
+#include <lucent/core/Fresnel.h>
 #include <lucent/sslpv/SslpvRenderer.h>
 
 #include <lucent/core/Error.h>
@@ -267,7 +268,7 @@ ImageRgb SslpvRenderer::render(const Camera& camera) {
                     if (m_opt.subsurface) {
                         // Eq. 4/7: L_o = T(ω_i, ω_o) L_i with T = 1 − F_r(cos θ_o, η);
                         // calibrated mode also scales by G/η² (SslpvSolver::exitScale).
-                        L += (m_solver.exitScale() * (1.f - dielectricReflectance(cosO, m_eta))) *
+                        L += (m_solver.exitScale() * (1.f - fresnelDielectric(cosO, m_eta))) *
                              m_solver.radiance(hit->position, n);
                     }
                     if (m_opt.direct) {
@@ -301,7 +302,7 @@ ImageRgb SslpvRenderer::render(const Camera& camera) {
                             // Fresnel-weighted Blinn–Phong (the paper's "basic Phong" direct
                             // term, §5) plus an optional Lambertian lobe.
                             const float spec = m_opt.specularWeight *
-                                               dielectricReflectance(glm::dot(wl, hv), m_eta) *
+                                               fresnelDielectric(glm::dot(wl, hv), m_eta) *
                                                specNorm * std::pow(cosH, shininess);
                             L += (Rgb(spec) + m_opt.diffuseReflectance * INV_PI) * E * cosL;
                         }

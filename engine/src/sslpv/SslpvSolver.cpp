@@ -2,6 +2,7 @@
 /// @file
 /// @brief CPU SSLPV: injection, propagation (the hot loop) and the radiance estimate.
 
+#include <lucent/core/Fresnel.h>
 #include <lucent/sslpv/SslpvSolver.h>
 
 #include <lucent/core/Error.h>
@@ -677,7 +678,7 @@ void SslpvSolver::inject() {
         // Eq. 1: I_p(ω) = (1/π) T(ω_p, ω_t) Φ_p max(0, ω_t·ω), T exact dielectric Fresnel
         // transmittance, ω_t from Snell's law; projected on SH with the clamped-cosine zonal
         // coefficients √π/2, √(π/3), √(5π)/8 (the SSLPV project page errata).
-        const float T = 1.f - dielectricReflectance(cosI, m_eta);
+        const float T = 1.f - fresnelDielectric(cosI, m_eta);
         const Vector3f wt = refractInto(smp.direction, smp.normal, m_eta);
         const Rgb interacting = interactingFraction(smp.position, wt, cell);
         const ShCoeffs<2> lobe = clampedCosineLobe<2>(wt);

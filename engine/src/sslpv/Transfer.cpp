@@ -136,20 +136,6 @@ const std::array<PropagationMatrix, 6>& propagationMatrices(int order) {
     return cache[k];
 }
 
-float dielectricReflectance(float cosThetaI, float eta) {
-    // Exact unpolarised Fresnel equations (Born & Wolf §1.5; pbrt-v4 FrDielectric).
-    cosThetaI = std::clamp(cosThetaI, 0.f, 1.f);
-    if (!(eta > 0.f))
-        return 1.f;
-    const float sin2T = (1.f - cosThetaI * cosThetaI) / (eta * eta);
-    if (sin2T >= 1.f)
-        return 1.f;  // total internal reflection
-    const float cosT = std::sqrt(1.f - sin2T);
-    const float rParl = (eta * cosThetaI - cosT) / (eta * cosThetaI + cosT);
-    const float rPerp = (cosThetaI - eta * cosT) / (cosThetaI + eta * cosT);
-    return std::clamp(0.5f * (rParl * rParl + rPerp * rPerp), 0.f, 1.f);
-}
-
 Vector3f refractInto(const Vector3f& wi, const Normal3f& n, float eta) {
     // Snell's law, vector form: t = wi/η + (cosi/η − cost) n with cosi = −wi·n (outside → in).
     const float cosI = std::clamp(-glm::dot(wi, n), 0.f, 1.f);

@@ -12,7 +12,7 @@
 #include "Viewport.h"
 #include "GuiTestWaits.h"
 #include "KeepLibrariesLoaded.h"
-#include "scene/LightIrradiance.h"
+#include "LightIrradiance.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/material/Procedural.h>

@@ -76,7 +76,7 @@ struct PreviewFixture : ::testing::Test {
         if (preview.isCreated())
             preview.destroy();
         delete target;
-        if (auto* ctx = gpu::test::sharedContext()) {
+        if (auto* ctx = lucent::test::sharedGlContext()) {
             EXPECT_EQ(glGetError(), GLenum(GL_NO_ERROR));
             const auto errors = ctx->debugLog().takeErrors();
             EXPECT_TRUE(errors.empty()) << errors.front();

@@ -12,6 +12,7 @@
 #include <lucent/combined/Combined.h>
 #include <lucent/combined/CombinedProvider.h>
 #include <lucent/core/Error.h>
+#include <lucent/core/Fresnel.h>
 #include <lucent/dipole/IrradiancePass.h>
 #include <lucent/dipole/Profiles.h>
 #include <lucent/gpu/GlContext.h>
@@ -156,7 +157,7 @@ TEST(CombinedSplit, ThickSlabStepsSplitDropsNothingFarAndDoubleCountsTheOverlap)
     const int n = 39, half = 18;
     const int side = 2 * half + 1;
     const float eta = 1.3f;
-    const double ft0 = 1.0 - dipole::fresnelReflectance(1.0, eta);
+    const double ft0 = 1.0 - fresnelDielectric(1.0, eta);
     for (float albedo : {0.8f, 0.95f}) {
         const std::vector<double> g0 = slabKernel(albedo, /*skip=*/2, n, half);  // SSLPV alone
         const dipole::ScalarMedium med = dipole::fromReduced(1.f, albedo, eta);
@@ -350,7 +351,7 @@ TEST(CombinedCpu, KernelSplitOnFrontLitSlabMatchesItsBookkeeping) {
     const SslpvSurfaceKernel k =
         computeSslpvSurfaceKernel(skinMaterial(), s.eta, cs.sslpv.solver, r.plan.cellSize, rs);
     const dipole::Boundary bnd = dipole::Boundary::of(s.eta);
-    const double ft0 = 1.0 - dipole::fresnelReflectance(1.0, s.eta);
+    const double ft0 = 1.0 - fresnelDielectric(1.0, s.eta);
     for (int c = 0; c < 3; ++c) {
         const dipole::ScalarMedium med =
             dipole::fromReduced(skinMaterial().sigma_t[c], skinMaterial().sigma_s[c], s.eta);
@@ -629,9 +630,9 @@ TEST_F(CombinedGl, OutputIsSumOfPartsAndMatchesCpuFormulasOnItsGBuffer) {
             const Point3f p = buf.position[i];
             const Normal3f nn = buf.normal[i];
             const float cosO = std::max(0.f, glm::dot(nn, buf.towardEye(p)));
-            const Rgb lpv = (solver.exitScale() *
-                             float(1.0 - dipole::fresnelReflectance(double(cosO), scene.eta))) *
-                            solver.radiance(p, nn);
+            const Rgb lpv =
+                (solver.exitScale() * float(1.0 - fresnelDielectric(double(cosO), scene.eta))) *
+                solver.radiance(p, nn);
             // SSLPV's local part min(L̂, f·L_sslpv)
             const Rgb cpuLocal = glm::min(cpuLhat.at(x, y), cpuFrac.at(x, y) * lpv);
             const float a = luminance(glm::max(cpuDipole.at(x, y) + lpv - cpuLocal, Rgb(0.f))),

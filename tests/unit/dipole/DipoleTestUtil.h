@@ -4,9 +4,10 @@
 /// @brief Exact reference integrals and unbiasedness checks shared by the dipole image tests,
 /// and the headless-GL fixture of the two GL providers' tests.
 
+#include "GlTestContext.h"
+
 #include <lucent/core/Image.h>
 #include <lucent/dipole/ImageSpace.h>
-#include <lucent/gpu/GlContext.h>
 #include <lucent/gpu/SceneRenderer.h>
 #include <lucent/material/MaterialVolume.h>
 #include <lucent/mesh/Procedural.h>
@@ -167,9 +168,9 @@ class GlProviderFixture : public ::testing::Test {
 protected:
     void SetUp() override {
         std::string reason;
-        if (!gpu::GlContext::isHeadlessAvailable(&reason))
+        ctx = ::lucent::test::ownGlContext(reason);
+        if (!ctx)
             GTEST_SKIP() << "no headless GL: " << reason;
-        ctx = gpu::GlContext::createHeadless();
         renderer.create();
         provider.create();
     }

@@ -5,6 +5,7 @@
 /// 1/√frames convergence, resets, and per-brick material upload.
 
 #include <lucent/core/Error.h>
+#include <lucent/core/Fresnel.h>
 #include <lucent/dipole/DipoleProvider.h>
 #include <lucent/dipole/IrradiancePass.h>
 #include <lucent/gpu/GlContext.h>
@@ -308,7 +309,7 @@ TEST_F(ProviderFixture, SlabCentreMatchesClosedFormAndConvergesAsInverseSqrtFram
     Scene s = largeSlab(m);
     const ProviderSettings ps = slabSettings(/*samplesPerFrame=*/8);
     load(s, ps);
-    const double ft0 = 1.0 - fresnelReflectance(1.0, ps.eta);
+    const double ft0 = 1.0 - fresnelDielectric(1.0, ps.eta);
     std::array<double, 3> expected{};
     for (int c = 0; c < 3; ++c)
         expected[size_t(c)] =
@@ -651,7 +652,7 @@ TEST_F(ProviderFixture, BackLitSlabIsLitThroughTheLightView) {
     EXPECT_GT(st.minRadius, 0.f);
     EXPECT_EQ(st.minRadius, st.maxRadius);  // one material
     const ImageRgb img = renderer.readRadiance();
-    const double ft0 = 1.0 - fresnelReflectance(1.0, ps.eta);
+    const double ft0 = 1.0 - fresnelDielectric(1.0, ps.eta);
     const Boundary bd = Boundary::of(ps.eta);
     const int k = ps.interleave;
     for (int c = 0; c < 3; ++c) {

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include <lucent/core/Error.h>
+#include <lucent/core/Fresnel.h>
 #include <lucent/dipole/DirectionalPipeline.h>
 #include <lucent/mesh/Procedural.h>
 
@@ -68,7 +69,7 @@ TEST(DirectionalPipeline, SlabAtNormalIncidenceMatchesQuadrature) {
         const double cPhiInv = 0.25 * (1.0 - 2.0 * fresnelMoment(1, 1.0 / 1.3));
         const double rho =
             normalised ? totalReflectance(Model::BetterDipole, {sa, ss, 1.3}) : integrateProfile(d);
-        const double t = 1.0 - fresnelReflectance(1.0, 1.3);
+        const double t = 1.0 - fresnelDielectric(1.0, 1.3);
         const double expected = t * t * rho / (4 * M_PI * cPhiInv);
         std::printf("directional pipeline (%s): mean %.6g, expected %.6g, standard error %.2g\n",
                     normalised ? "normalised" : "published", mean, expected, se);

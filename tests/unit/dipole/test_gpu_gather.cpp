@@ -18,10 +18,7 @@ using namespace lucent;
 using namespace lucent::dipole;
 
 TEST(GpuGather, MatchesCpuGatherOnALitSphere) {
-    std::string reason;
-    if (!gpu::GlContext::isHeadlessAvailable(&reason))
-        GTEST_SKIP() << "no headless GL: " << reason;
-    auto ctx = gpu::GlContext::createHeadless();
+    LUCENT_OWN_GL_CONTEXT(ctx);
 
     // A 10 mm sphere lit by a point light, perspective camera 160×90.
     const Scene s = testutil::pointLitSphere(4, 160, 90);
@@ -68,10 +65,7 @@ TEST(GpuGather, MatchesCpuGatherOnALitSphere) {
 
 TEST(GpuGather, GrazingOwnPixelIntegratesItsFootprint) {
     // Issue 6 in dipole_gather.comp, as ImageSpace.GrazingOwnPixelIntegratesItsFootprint.
-    std::string reason;
-    if (!gpu::GlContext::isHeadlessAvailable(&reason))
-        GTEST_SKIP() << "no headless GL: " << reason;
-    auto ctx = gpu::GlContext::createHeadless();
+    LUCENT_OWN_GL_CONTEXT(ctx);
     GpuGather gather{gpu::ShaderLibrary{}};
     testutil::expectGrazingPixelUnbiased(
         [&](const SurfaceBuffers& b, const GatherSettings& gs) { return gather.run(b, gs); }, "GL");

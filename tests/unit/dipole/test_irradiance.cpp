@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include <lucent/core/Error.h>
+#include <lucent/core/Fresnel.h>
 #include <lucent/dipole/IrradiancePass.h>
 #include <lucent/mesh/Procedural.h>
 
@@ -37,7 +38,7 @@ TEST(IrradiancePass, PointLightIrradianceFollowsEq5) {
     l.position = {0.f, 3.f, 4.f};  // 5 mm away, cos θ = 0.8
     l.intensity = Rgb(25.f);       // W/sr
     const Rgb e = lightIrradiance(l, Point3f(0.f), Normal3f(0.f, 0.f, 1.f), 1.5f);
-    const float ft = float(1.0 - fresnelReflectance(0.8, 1.5));
+    const float ft = float(1.0 - fresnelDielectric(0.8, 1.5));
     EXPECT_NEAR(e.r, ft * 25.f * 0.8f / 25.f, 1e-6f);
     l.position = {0.f, 0.f, -4.f};  // behind the surface
     EXPECT_EQ(lightIrradiance(l, Point3f(0.f), Normal3f(0.f, 0.f, 1.f), 1.5f), Rgb(0.f));
@@ -46,7 +47,7 @@ TEST(IrradiancePass, PointLightIrradianceFollowsEq5) {
 TEST(IrradiancePass, SlabFaceMatchesExactIntegral) {
     const Scene scene = slabScene();
     const SurfaceBuffers buf = buildSurfaceBuffers(scene);
-    const float ft = float(1.0 - fresnelReflectance(1.0, 1.3));
+    const float ft = float(1.0 - fresnelDielectric(1.0, 1.3));
     for (size_t i = 0; i < buf.covered.size(); ++i) {
         ASSERT_TRUE(buf.covered[i]);
         ASSERT_NEAR(buf.position[i].z, 5.f, 1e-4f);

@@ -3,6 +3,7 @@
 // heuristic over the camera and light images, "through" transport of thin parts, the skip
 // criterion and the scene-level pass (buildLightViewBuffers / renderImageSpaceDipole).
 #include <lucent/core/Error.h>
+#include <lucent/core/Fresnel.h>
 #include <lucent/dipole/ImageSpace.h>
 #include <lucent/dipole/IrradiancePass.h>
 #include <lucent/mesh/Procedural.h>
@@ -170,7 +171,7 @@ TEST(LightView, SceneLevelBackLitSlab) {
     EXPECT_TRUE(light.orthographic);
     const size_t centre = light.index(64, 64);
     ASSERT_TRUE(light.covered[centre]);
-    const float ft = float(1.0 - fresnelReflectance(1.0, 1.3));
+    const float ft = float(1.0 - fresnelDielectric(1.0, 1.3));
     EXPECT_NEAR(light.position[centre].z, -0.5f * T, 1e-4f);
     EXPECT_NEAR(light.irradiance[centre].g, ft, 1e-6f);
 

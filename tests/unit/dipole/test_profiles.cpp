@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 #include <lucent/core/Error.h>
+#include <lucent/core/Fresnel.h>
 #include <lucent/dipole/Profiles.h>
 
 #include <gtest/gtest.h>
@@ -34,8 +35,8 @@ TEST(Fresnel, MomentsMatchKnownValues) {
     // η = 1: no boundary, no reflection.
     EXPECT_NEAR(fresnelMoment(1, 1.0), 0.0, 1e-12);
     // Normal incidence reflectance ((η−1)/(η+1))² for η = 1.5 is 0.04.
-    EXPECT_NEAR(fresnelReflectance(1.0, 1.5), 0.04, 1e-12);
-    EXPECT_DOUBLE_EQ(fresnelReflectance(0.1, 1.0 / 1.5), 1.0);  // beyond critical angle
+    EXPECT_NEAR(fresnelDielectric(1.0, 1.5), 0.04, 1e-12);
+    EXPECT_DOUBLE_EQ(fresnelDielectric(0.1, 1.0 / 1.5), 1.0);  // beyond critical angle
     // 2C₁ is the internal diffuse reflectance that Jensen's F_dr fits (Egan–Hilgeman fit,
     // quoted accurate to about 1%): agreement within 0.01 over the fitted range.
     for (double eta = 1.1; eta <= 2.0; eta += 0.1)
@@ -60,7 +61,7 @@ TEST(Fresnel, MomentQuadratureIsConverged) {
     double s = 0.0;
     for (int i = 0; i < n; ++i) {
         const double mu = (i + 0.5) / n;
-        s += fresnelReflectance(mu, rel) * mu / n;
+        s += fresnelDielectric(mu, rel) * mu / n;
     }
     EXPECT_NEAR(fresnelMoment(1, eta), s, 1e-6);
 }

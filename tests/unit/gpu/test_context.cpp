@@ -18,7 +18,7 @@ using namespace lucent::gpu;
 
 TEST(GlContext, CreatesHeadless45CoreContext) {
     LUCENT_REQUIRE_GL();
-    GlContext* ctx = test::sharedContext();
+    GlContext* ctx = test::sharedGlContext();
     EXPECT_FALSE(ctx->renderer().empty());
     EXPECT_GE(epoxy_gl_version(), 45) << ctx->version();
     GLint profile = 0;
@@ -38,7 +38,7 @@ TEST(GlContext, RejectsUnknownPlatform) {
 
 TEST(GlContext, DebugLogCollectsErrors) {
     LUCENT_REQUIRE_GL();
-    GlContext* ctx = test::sharedContext();
+    GlContext* ctx = test::sharedGlContext();
     if (!ctx->debugLog().isInstalled())
         GTEST_SKIP() << "KHR_debug not available";
     ctx->debugLog().takeErrors();
@@ -53,10 +53,10 @@ TEST(GlContext, DebugLogCollectsErrors) {
 
 TEST(GlContext, DebugLogKeepsCompilerWarningsOutOfErrors) {
     LUCENT_REQUIRE_GL();
-    GlContext* ctx = test::sharedContext();
+    GlContext* ctx = test::sharedGlContext();
     if (!ctx->debugLog().isInstalled())
         GTEST_SKIP() << "KHR_debug not available";
-    test::drainDebugLog();
+    test::drainGlDebugLog();
     // Compiles, with a warning on Mesa ("`x' used uninitialized"), which Mesa sends through
     // KHR_debug with GL_DEBUG_SEVERITY_HIGH and type OTHER: a message, not an error. Mesa's
     // shader cache skips the compiler, and so its warnings, for a source it has seen before:
@@ -72,7 +72,7 @@ TEST(GlContext, DebugLogKeepsCompilerWarningsOutOfErrors) {
     const auto errors = ctx->debugLog().takeErrors();
     EXPECT_TRUE(errors.empty()) << errors.front();
     // (Whether a driver also sends the warning as a message is its choice: not checked.)
-    test::drainDebugLog();
+    test::drainGlDebugLog();
 }
 
 TEST(GlContext, CheckGlErrorThrowsWithLocation) {
@@ -84,7 +84,7 @@ TEST(GlContext, CheckGlErrorThrowsWithLocation) {
     } catch (const GpuError& e) {
         EXPECT_NE(std::string(e.what()).find("test-site"), std::string::npos);
     }
-    test::sharedContext()->debugLog().takeErrors();
+    test::sharedGlContext()->debugLog().takeErrors();
 }
 
 TEST(GlContext, SecondContextOnAnotherThread) {
@@ -101,7 +101,7 @@ TEST(GlContext, SecondContextOnAnotherThread) {
     });
     worker.join();
     EXPECT_TRUE(error.empty()) << error;
-    EXPECT_EQ(renderer, test::sharedContext()->renderer());
+    EXPECT_EQ(renderer, test::sharedGlContext()->renderer());
 }
 
 TEST(GlContext, AvailabilityProbeKeepsTheCurrentContext) {
@@ -114,7 +114,7 @@ TEST(GlContext, AvailabilityProbeKeepsTheCurrentContext) {
     EXPECT_TRUE(GlContext::isHeadlessAvailable(&reason)) << reason;
     EXPECT_TRUE(glIsBuffer(buf.id()));
     buf.destroy();
-    EXPECT_TRUE(test::sharedContext()->debugLog().takeErrors().empty());
+    EXPECT_TRUE(test::sharedGlContext()->debugLog().takeErrors().empty());
 }
 
 TEST(GlResources, ExplicitDestroyAndLeakAccounting) {

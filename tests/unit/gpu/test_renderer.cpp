@@ -59,13 +59,13 @@ struct RendererFixture : ::testing::Test {
         LUCENT_REQUIRE_GL();
         // The log belongs to the process-wide context: what earlier tests left in it is theirs,
         // not this test's (TearDown judges only the GL calls made by this test).
-        test::drainDebugLog();
+        test::drainGlDebugLog();
         r.create();
     }
     void TearDown() override {
         if (r.isCreated())
             r.destroy();
-        if (auto* ctx = test::sharedContext()) {
+        if (auto* ctx = test::sharedGlContext()) {
             const auto errors = ctx->debugLog().takeErrors();
             std::string all;
             for (const std::string& e : errors)
@@ -785,7 +785,7 @@ TEST_F(RendererFixture, FrameLargerThanTheDeviceAllowsGivesAnActionableError) {
     // target is 4 GiB). The error must say why and what to do, and the renderer must stay
     // usable. (A GPU with about 26 GB free renders the frame; its readback is read in strips,
     // since 4 GiB in one read overflows the GLsizei byte count.)
-    if (test::sharedContext()->renderer().find("llvmpipe") == std::string::npos)
+    if (test::sharedGlContext()->renderer().find("llvmpipe") == std::string::npos)
         GTEST_SKIP() << "not llvmpipe: a 16384² frame may fit, and would take ~26 GB";
     Camera cam = litSphere(r, 16384);
     try {
@@ -797,7 +797,7 @@ TEST_F(RendererFixture, FrameLargerThanTheDeviceAllowsGivesAnActionableError) {
         for (const char* part : {"16384x16384", "GiB", "8192x8192", "--width"})
             EXPECT_NE(msg.find(part), std::string::npos) << part << ": " << msg;
     }
-    test::drainDebugLog();  // the refused allocations were reported as GL errors
+    test::drainGlDebugLog();  // the refused allocations were reported as GL errors
     cam.width = cam.height = 32;
     r.setCamera(cam);
     r.render();
@@ -832,5 +832,5 @@ TEST(SceneRendererCreate, ShaderErrorThrowsAndLeaksNothing) {
     EXPECT_FALSE(r.isCreated());
     EXPECT_EQ(liveGlObjectCount(), live);
     EXPECT_EQ(leakedGlObjectCount(), leaked);
-    test::sharedContext()->debugLog().takeErrors();
+    test::sharedGlContext()->debugLog().takeErrors();
 }

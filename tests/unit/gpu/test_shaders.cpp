@@ -13,8 +13,10 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -190,7 +192,7 @@ TEST(GlProgram, CompileErrorReportsIncludedFileAndLine) {
                     msg.find("main.comp(5)") != std::string::npos)
             << msg;
     }
-    test::sharedContext()->debugLog().takeErrors();
+    test::sharedGlContext()->debugLog().takeErrors();
 }
 
 TEST(GlProgram, EveryEmbeddedStageCompiles) {
@@ -221,7 +223,7 @@ TEST(GlProgram, EveryEmbeddedStageCompiles) {
     EXPECT_GE(stages, 6);
     // Leave the shared context's log empty: the compiler's diagnostics reach it as messages
     // (errors, when a stage failed, are reported above).
-    test::drainDebugLog();
+    test::drainGlDebugLog();
 }
 
 TEST(GlProgram, SharedStructLayoutsMatchGlsl) {

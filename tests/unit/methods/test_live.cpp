@@ -11,7 +11,7 @@
 #include <lucent/methods/Registry.h>
 #include <lucent/scene/SceneFile.h>
 
-#include "gpu/GlTestContext.h"
+#include "GlTestContext.h"
 
 #include <gtest/gtest.h>
 
@@ -35,7 +35,7 @@ double frameSum(gpu::SceneRenderer& renderer) {
 
 TEST(MethodsLive, GridChangeAtRunTimeKeepsRendering) {
     std::string reason;
-    if (!gpu::test::sharedContext(&reason))
+    if (!lucent::test::sharedGlContext(&reason))
         GTEST_SKIP() << "no OpenGL 4.5 context: " << reason;
     Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + "/resources/scenes/skin_sphere.json");
     scene.camera.width = 64;

@@ -13,7 +13,7 @@
 #include <lucent/methods/RenderImage.h>
 #include <lucent/scene/SceneFile.h>
 
-#include "gpu/GlTestContext.h"
+#include "GlTestContext.h"
 
 #include <gtest/gtest.h>
 
@@ -91,7 +91,7 @@ TEST(MethodsParity, EveryCaseMatchesThePreRegistryCli) {
     const std::vector<ParityCase> cases = readManifest();
     ASSERT_GE(cases.size(), 20u) << "tests/data/parity/manifest.txt is missing or short";
     std::string reason;
-    gpu::GlContext* ctx = gpu::test::sharedContext(&reason);
+    gpu::GlContext* ctx = lucent::test::sharedGlContext(&reason);
     const bool llvmpipe = ctx && ctx->renderer().find("llvmpipe") != std::string::npos;
     int compared = 0;
     for (const ParityCase& c : cases) {

@@ -28,7 +28,7 @@
 #include <lucent/methods/RenderImage.h>
 #include <lucent/scene/SceneFile.h>
 
-#include "gpu/GlTestContext.h"
+#include "GlTestContext.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -153,7 +153,7 @@ std::vector<StabilityCase> cases() {
 
 TEST(StabilityMatrix, EveryMethodStaysFiniteAndBoundedOnEveryCase) {
     std::string why;
-    gpu::GlContext* ctx = gpu::test::sharedContext(&why);
+    gpu::GlContext* ctx = lucent::test::sharedGlContext(&why);
     std::printf("| case | method | finite | energy ratio | time (ms) |\n|---|---|---|---:|---:|\n");
     for (const StabilityCase& c : cases()) {
         const Scene scene = buildScene(c);

@@ -8,6 +8,7 @@
 #include "ForwardTracer.h"
 #include "TestScenes.h"
 
+#include <lucent/core/Fresnel.h>
 #include <lucent/core/Sampling.h>
 #include <lucent/core/SphericalHarmonics.h>
 #include <lucent/mesh/Procedural.h>
@@ -413,8 +414,8 @@ TEST(DielectricClosedForm, ObliqueSingleScatteringThroughTheSurface) {
             const glm::dvec3 lightIn = refractIn(-towardLight);
             const glm::dvec3 cameraIn = refractIn(-towardCamera);  // camera ray travelling in
             const double muL = -lightIn.z, muV = -cameraIn.z;
-            const double fl = fresnelDielectric(float(towardLight.z), eta);
-            const double fv = fresnelDielectric(float(towardCamera.z), eta);
+            const double fl = fresnelDielectric(float(towardLight.z), float(eta));
+            const double fv = fresnelDielectric(float(towardCamera.z), float(eta));
             const double eBeam = 2.0 * (1.0 - fl) * towardLight.z / muL;
             // Θ: light travel direction against the direction back toward the camera.
             const double cosTheta = glm::dot(lightIn, -cameraIn);

@@ -7,6 +7,7 @@
 #include "TestScenes.h"
 
 #include <lucent/core/Error.h>
+#include <lucent/core/Fresnel.h>
 #include <lucent/core/Sampling.h>
 #include <lucent/core/SphericalHarmonics.h>
 #include <lucent/reference/Transport.h>

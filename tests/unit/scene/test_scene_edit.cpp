@@ -7,7 +7,7 @@
 #include <lucent/mesh/Procedural.h>
 #include <lucent/scene/SceneEdit.h>
 
-#include "scene/LightIrradiance.h"
+#include "LightIrradiance.h"
 
 #include <gtest/gtest.h>
 

@@ -4,7 +4,6 @@
 /// @brief Shared by the SSLPV unit tests: a coarse material to fill, ball injection texels, a
 /// headless GL context.
 
-#include <lucent/gpu/GlContext.h>
 #include <lucent/material/Resample.h>
 #include <lucent/sslpv/SslpvSolver.h>
 
@@ -14,14 +13,6 @@
 #include <vector>
 
 namespace lucent::test {
-
-/// A headless OpenGL 4.5 context, current on this thread, or nullptr (then `reason` says why:
-/// the GL tests GTEST_SKIP with it).
-inline std::unique_ptr<gpu::GlContext> headlessContextOrNull(std::string& reason) {
-    if (!gpu::GlContext::isHeadlessAvailable(&reason))
-        return nullptr;
-    return gpu::GlContext::createHeadless();
-}
 
 /// N³ cells of h mm centred on the origin, every cell σt, σs′ (mm⁻¹) and g as given, no
 /// inside cell yet.

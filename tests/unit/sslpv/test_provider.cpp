@@ -2,6 +2,7 @@
 /// @file
 /// @brief SslpvSubsurfaceProvider: same grid as the CPU SslpvRenderer, per-pixel GL radiance
 /// against the CPU formula and the CPU image, incremental painting, and the GL backend.
+#include <lucent/core/Fresnel.h>
 #include <lucent/sslpv/SslpvProvider.h>
 
 #include <lucent/core/Error.h>
@@ -10,6 +11,7 @@
 #include <lucent/mesh/Procedural.h>
 #include <lucent/mesh/Voxelize.h>
 
+#include "GlTestContext.h"
 #include "SslpvTestGrids.h"
 
 #include <epoxy/gl.h>
@@ -99,7 +101,7 @@ class SslpvProviderGl : public ::testing::Test {
 protected:
     void SetUp() override {
         std::string reason;
-        m_ctx = test::headlessContextOrNull(reason);
+        m_ctx = test::ownGlContext(reason);
         if (!m_ctx)
             GTEST_SKIP() << "no headless OpenGL 4.5 context: " << reason;
         m_renderer.create();
@@ -233,7 +235,7 @@ TEST_F(SslpvProviderGl, PixelsMatchCpuFormulaAndCpuImage) {
                     if (cosO > 0.f) {
                         ++covered;
                         expected =
-                            (p.solver().exitScale() * (1.f - dielectricReflectance(cosO, s.eta))) *
+                            (p.solver().exitScale() * (1.f - fresnelDielectric(cosO, s.eta))) *
                             p.solver().radiance(Point3f(P), n);
                     }
                 }

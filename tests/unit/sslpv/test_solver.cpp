@@ -1,4 +1,5 @@
 // SPDX-License-Identifier: MIT
+#include <lucent/core/Fresnel.h>
 #include <lucent/sslpv/SslpvSolver.h>
 
 #include <lucent/core/Error.h>
@@ -65,7 +66,7 @@ TEST(SslpvSolver, InjectedFluxIsFresnelTransmitted) {
     const auto texels = ballTexels(m, Vector3f(0, 0, -1), Rgb(1.f, 2.f, 3.f));
     double expected = 0.0;
     for (const auto& t : texels)
-        expected += (1.0 - dielectricReflectance(-glm::dot(t.direction, t.normal), eta)) * t.flux.x;
+        expected += (1.0 - fresnelDielectric(-glm::dot(t.direction, t.normal), eta)) * t.flux.x;
     solver.setInjectionSamples(texels);
     const SslpvStats& st = solver.solve();
     EXPECT_EQ(st.skippedTexels, 0);

@@ -1,4 +1,5 @@
 // SPDX-License-Identifier: MIT
+#include <lucent/core/Fresnel.h>
 #include <lucent/sslpv/Transfer.h>
 
 #include <lucent/core/Error.h>
@@ -98,13 +99,13 @@ TEST(SslpvTransfer, RejectsBadArguments) {
 
 TEST(SslpvTransfer, FresnelLimits) {
     // Normal incidence: ((η−1)/(η+1))²; η = 1: no reflection; grazing: total reflection.
-    EXPECT_NEAR(dielectricReflectance(1.f, 1.5f), 0.04f, 1e-6f);
-    EXPECT_NEAR(dielectricReflectance(0.3f, 1.f), 0.f, 1e-6f);
-    EXPECT_NEAR(dielectricReflectance(0.f, 1.5f), 1.f, 1e-6f);
+    EXPECT_NEAR(fresnelDielectric(1.f, 1.5f), 0.04f, 1e-6f);
+    EXPECT_NEAR(fresnelDielectric(0.3f, 1.f), 0.f, 1e-6f);
+    EXPECT_NEAR(fresnelDielectric(0.f, 1.5f), 1.f, 1e-6f);
     // From inside (η < 1) beyond the critical angle: total internal reflection.
-    EXPECT_EQ(dielectricReflectance(0.2f, 1.f / 1.5f), 1.f);
+    EXPECT_EQ(fresnelDielectric(0.2f, 1.f / 1.5f), 1.f);
     for (float c = 0.f; c <= 1.f; c += 0.05f) {
-        const float f = dielectricReflectance(c, 2.5f);
+        const float f = fresnelDielectric(c, 2.5f);
         EXPECT_GE(f, 0.f);
         EXPECT_LE(f, 1.f);
     }

@@ -25,7 +25,7 @@
 /// @code
 ///   dipole::DipoleSubsurfaceProvider dp;
 ///   dp.create();                                   // compiles the compute programs
-///   int id = renderer.addMesh(mesh, {Rgb(0.f), Rgb(fresnelReflectance(1.0, eta)), 64.f});
+///   int id = renderer.addMesh(mesh, {Rgb(0.f), Rgb(fresnelDielectric(1.0, eta)), 64.f});
 ///   dipole::ProviderSettings ps; ps.model = Model::BetterDipole; ps.eta = eta; ps.meshId = id;
 ///   dp.setSettings(ps);
 ///   dp.setMaterial(&volume);                       // non-owning; full upload at the next frame
@@ -87,6 +87,8 @@ struct ProviderSettings {
 
     /// The CPU gather settings of frame 0 (importance = samplesPerFrame − uniform).
     [[nodiscard]] GatherSettings gatherSettings() const;
+
+    bool operator==(const ProviderSettings&) const = default;
 };
 
 /// State of the progressive accumulation.

@@ -22,11 +22,7 @@
 namespace lucent::dipole {
 
 //! @{ \name Fresnel helpers
-/// Unpolarised Fresnel reflectance of a smooth dielectric boundary.
-/// @param cosThetaI cosine of the angle of incidence, in [0, 1] (clamped).
-/// @param eta relative index n_transmitted / n_incident (> 0).
-/// @return reflectance in [0, 1]; 1 under total internal reflection.
-double fresnelReflectance(double cosThetaI, double eta);
+/// (The reflectance itself is lucent::fresnelDielectric, lucent/core/Fresnel.h.)
 
 /// Jensen et al. 2001 diffuse Fresnel reflectance fit (Mertens et al. 2005, Table 1):
 /// F_dr = −1.440/η² + 0.710/η + 0.668 + 0.0636 η, η = n_medium / n_outside.

@@ -183,7 +183,7 @@ private:
 /// is not reflected enters the medium and comes back through the subsurface term) and a
 /// normalised Blinn-Phong lobe (exponent 64) of albedo F_r(0, η) = ((η − 1)/(η + 1))², the
 /// unpolarised Fresnel reflectance at normal incidence (Born & Wolf §1.5.3), η clamped to
-/// [1, 3]. Computed in double precision: bit-identical to dipole::fresnelReflectance(1, η).
+/// [1, 3]. Computed in double precision: bit-identical to fresnelDielectric(1, η).
 [[nodiscard]] gpu::SurfaceMaterial translucentSurface(float eta);
 
 }  // namespace lucent::methods

@@ -146,9 +146,4 @@ Rgb estimateRadianceRgb(const VolumeScene& scene, const Point3f& o, const Vector
                         Pcg32& rng, const TransportOptions& options,
                         TrackingStats* stats = nullptr);
 
-/// Unpolarised Fresnel reflectance of a smooth dielectric (Born & Wolf; pbrt-v3 Eq. 8.1–8.2)
-/// for the cosine of incidence `cosI` ≥ 0 on the incident side and relative index
-/// `eta` = η_transmitted / η_incident. Returns 1 for total internal reflection.
-float fresnelDielectric(float cosI, float eta);
-
 }  // namespace lucent::reference

@@ -76,8 +76,4 @@ private:
     std::unique_ptr<Impl> m_impl;
 };
 
-/// IEEE 754 binary16 conversions (round to nearest even), used for fp16 grids.
-uint16_t floatToHalf(float value);
-float halfToFloat(uint16_t bits);
-
 }  // namespace lucent::sslpv

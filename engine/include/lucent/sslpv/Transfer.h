@@ -50,13 +50,6 @@ PropagationMatrix computePropagationMatrix(int order, int axis, int sign, int no
 /// call) and cached. @throw ValueError for an order other than 1 or 2.
 const std::array<PropagationMatrix, 6>& propagationMatrices(int order);
 
-/// Exact unpolarised Fresnel reflectance of a smooth dielectric interface (same maths as
-/// reference/Transport.h fresnelDielectric; kept here so sslpv does not link the path tracer).
-/// @param cosThetaI cosine of the angle of incidence, in [0, 1] (clamped).
-/// @param eta n_transmitted / n_incident (> 0). @return R ∈ [0, 1]; 1 under total internal
-/// reflection.
-float dielectricReflectance(float cosThetaI, float eta);
-
 /// Snell refraction of the travel direction `wi` (unit, pointing into the surface, i.e.
 /// dot(wi, n) < 0) through the interface with outward unit normal `n`, from outside (index 1)
 /// into a medium of relative index `eta`. @return the unit transmitted travel direction.
