@@ -12,6 +12,8 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace lucent::methods::detail {
@@ -47,8 +49,9 @@ std::unique_ptr<Method> make(const MethodInfo& info, const MethodContext& contex
 /// The GL lifecycle the image-space dipole passes share (dipole::DipoleSubsurfaceProvider and
 /// dipole::DirpoleSubsurfaceProvider): the provider made by createGl, the material volume bound
 /// once (a full upload at the next frame) and then updated brick by brick, the gather restarted
-/// when the shown mesh moves, progressive frames until the provider has converged. Subclasses
-/// give the provider its settings in applySettings() (also called by setScene, for η and the
+/// when the shown mesh moves, progressive frames until the provider has converged; the sample
+/// schedule (spp-frame, seed, offline spp) and the "set only when changed" rule. Subclasses add
+/// their own settings in fillSettings() (applied by applyParams and by setScene, for η and the
 /// mesh id).
 template <class Provider>
 class ImageSpaceDipoleMethod : public Method {
@@ -94,15 +97,56 @@ public:
     }
 
 protected:
-    /// Sets the provider's settings from the parameters, m_eta and m_meshId, only when they
-    /// changed (every change restarts the accumulation); sets m_settingsSet.
-    virtual void applySettings() = 0;
+    using Settings = std::decay_t<decltype(std::declval<const Provider&>().settings())>;
+
+    /// The provider's settings from the parameters, m_eta and m_meshId: fill `s` (a copy of the
+    /// provider's) with what the method owns; applySettings() sets it when it changed.
+    virtual void fillSettings(Settings& s) const = 0;
+
+    /// Reads the parameters both pipelines share: spp-frame, seed and (offline) spp.
+    void readSampleParams(const Params& p) {
+        m_sppFrame = p.getInt("spp-frame");
+        m_seed = uint32_t(p.getInt("seed"));
+        if (!isLive())
+            m_spp = p.getInt("spp");
+    }
+
+    /// Sets the provider's settings (fillSettings on the shared sample schedule), only when they
+    /// changed: every change restarts the accumulation.
+    void applySettings() {
+        Settings s = m_provider->settings();
+        s.eta = m_eta;
+        s.meshId = m_meshId;
+        s.seed = m_seed;
+        s.samplesPerFrame = m_sppFrame;
+        if (!isLive()) {  // offline: whole frames of spp-frame samples up to spp (or convergence)
+            s.samplesPerFrame = std::min(m_sppFrame, m_spp);
+            s.maxFrames = (m_spp + s.samplesPerFrame - 1) / s.samplesPerFrame;
+        }
+        fillSettings(s);
+        if (!m_settingsSet || !(s == m_provider->settings()))
+            m_provider->setSettings(s);
+        m_settingsSet = true;
+    }
+
+    /// The progress lines both pipelines report; `samplesLabel` names what a sample counts.
+    [[nodiscard]] Stats progressStats(const std::string& samplesLabel) const {
+        const auto& st = m_provider->stats();
+        return {{"frames", std::to_string(st.frames)},
+                {"samples per frame", std::to_string(m_provider->settings().samplesPerFrame)},
+                {samplesLabel, std::to_string(st.samplesPerPixel)},
+                {"last change", num(st.lastChange, "%.2e")},
+                {"converged", st.converged ? "yes" : "no"},
+                {"last upload bricks", std::to_string(st.lastUploadBricks)}};
+    }
 
     std::unique_ptr<Provider> m_provider;
     const MaterialVolume* m_material = nullptr;
     bool m_settingsSet = false;
     float m_eta = 1.3f;  ///< clamped to [1, 3]
     int m_meshId = -1;
+    int m_spp = 256, m_sppFrame = 16;
+    uint32_t m_seed = 1;
 };
 
 }  // namespace lucent::methods::detail

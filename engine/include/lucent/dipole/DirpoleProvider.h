@@ -106,6 +106,8 @@ struct DirpoleSettings {
     /// SceneRenderer mesh id (addMesh's return) holding the material: only it is rasterised into
     /// the light and cube G-buffers and only its pixels get the term. −1: every mesh.
     int meshId = -1;
+
+    bool operator==(const DirpoleSettings&) const = default;
 };
 
 /// What the directional-dipole provider did (beyond ProviderStats), for tests and timings.

@@ -14,8 +14,6 @@
 
 #include "../MethodUtil.h"
 
-#include <algorithm>
-
 namespace lucent::methods {
 
 namespace {
@@ -67,16 +65,12 @@ public:
         if (!m_provider)
             return {};
         const dipole::ProviderStats& st = m_provider->stats();
-        Stats s = {{"frames", std::to_string(st.frames)},
-                   {"samples per frame", std::to_string(m_provider->settings().samplesPerFrame)},
-                   {"spp", std::to_string(st.samplesPerPixel)},
-                   {"last change", num(st.lastChange, "%.2e")},
-                   {"converged", st.converged ? "yes" : "no"},
-                   {"last upload bricks", std::to_string(st.lastUploadBricks)},
-                   {"eps", num(st.epsilon, "%.3g")},
-                   {"disc radius mm", num(st.minRadius, "%.3g") + ".." + num(st.maxRadius, "%.3g")},
-                   {"light views", std::to_string(st.lightViewsGathered) + " of " +
-                                       std::to_string(st.lightViewsRendered) + " gathered"}};
+        Stats s = progressStats("spp");
+        s.push_back({"eps", num(st.epsilon, "%.3g")});
+        s.push_back(
+            {"disc radius mm", num(st.minRadius, "%.3g") + ".." + num(st.maxRadius, "%.3g")});
+        s.push_back({"light views", std::to_string(st.lightViewsGathered) + " of " +
+                                        std::to_string(st.lightViewsRendered) + " gathered"});
         for (size_t l = 0; l < st.backlitFractions.size(); ++l) {
             const float f = st.backlitFractions[l];
             s.push_back({"light " + std::to_string(l) + " view",
@@ -92,47 +86,23 @@ private:
     void applyParams(const Params& p) override {
         if (backend() == Backend::Cpu)
             return;  // renderCpu reads its parameters
-        m_sppFrame = p.getInt("spp-frame");
-        m_seed = uint32_t(p.getInt("seed"));
+        readSampleParams(p);
         m_maxRadius = p.getFloat("max-radius");
         m_lightViews = p.getBool("light-views");
         m_lightViewRes = p.getInt("light-view-res");
-        if (!isLive())
-            m_spp = p.getInt("spp");
         if (m_provider && m_settingsSet)
             applySettings();
     }
 
-    /// The provider's settings from the parameters and the scene; set only when they changed
-    /// (every change restarts the accumulation).
-    void applySettings() override {
-        dipole::ProviderSettings ps = m_provider->settings();
+    void fillSettings(dipole::ProviderSettings& ps) const override {
         ps.model = m_model;
-        ps.eta = m_eta;
-        ps.samplesPerFrame = m_sppFrame;
-        if (!isLive()) {  // offline: frames of spp-frame samples up to spp (or convergence)
-            ps.samplesPerFrame = std::min(m_sppFrame, m_spp);
-            ps.maxFrames = (m_spp + ps.samplesPerFrame - 1) / ps.samplesPerFrame;
-        }
-        ps.seed = m_seed;
-        ps.meshId = m_meshId;
         ps.maxRadius = m_maxRadius;
         ps.lightViews = m_lightViews;
         ps.lightViewResolution = m_lightViewRes;
-        const dipole::ProviderSettings& old = m_provider->settings();
-        const bool changed =
-            !m_settingsSet || ps.model != old.model || ps.eta != old.eta ||
-            ps.samplesPerFrame != old.samplesPerFrame || ps.maxFrames != old.maxFrames ||
-            ps.seed != old.seed || ps.meshId != old.meshId || ps.maxRadius != old.maxRadius ||
-            ps.lightViews != old.lightViews || ps.lightViewResolution != old.lightViewResolution;
-        if (changed)
-            m_provider->setSettings(ps);
-        m_settingsSet = true;
     }
 
     dipole::Model m_model;
-    int m_spp = 256, m_sppFrame = 16, m_lightViewRes = 512;
-    uint32_t m_seed = 1;
+    int m_lightViewRes = 512;
     float m_maxRadius = 0.f;
     bool m_lightViews = true;
     Stats m_cpuStats;

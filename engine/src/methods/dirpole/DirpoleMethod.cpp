@@ -13,8 +13,6 @@
 
 #include "../MethodUtil.h"
 
-#include <algorithm>
-
 namespace lucent::methods {
 
 namespace {
@@ -65,17 +63,12 @@ public:
             return m_cpuStats;
         if (!m_provider)
             return {};
-        const dipole::ProviderStats& st = m_provider->stats();
         const dipole::DirpoleStats& ds = m_provider->dirpoleStats();
-        return {{"frames", std::to_string(st.frames)},
-                {"samples per frame", std::to_string(m_provider->settings().samplesPerFrame)},
-                {"samples per texel and light", std::to_string(st.samplesPerPixel)},
-                {"last change", num(st.lastChange, "%.2e")},
-                {"converged", st.converged ? "yes" : "no"},
-                {"last upload bricks", std::to_string(st.lastUploadBricks)},
-                {"texels covered", std::to_string(ds.texelsCovered)},
-                {"texels sampled", std::to_string(ds.texelsSampled)},
-                {"texels restarted", std::to_string(ds.texelsRestarted)}};
+        Stats s = progressStats("samples per texel and light");
+        s.push_back({"texels covered", std::to_string(ds.texelsCovered)});
+        s.push_back({"texels sampled", std::to_string(ds.texelsSampled)});
+        s.push_back({"texels restarted", std::to_string(ds.texelsRestarted)});
+        return s;
     }
 
 private:
@@ -84,45 +77,20 @@ private:
             note(EXPERIMENTAL_WARNING);
         if (backend() == Backend::Cpu)
             return;  // renderCpu reads the rest
-        m_sppFrame = p.getInt("spp-frame");
-        m_seed = uint32_t(p.getInt("seed"));
+        readSampleParams(p);
         m_normalised = p.getBool("dirpole-normalise");
-        if (!isLive())
-            m_spp = p.getInt("spp");
         if (m_provider && m_settingsSet)
             applySettings();
     }
 
-    /// The provider's settings; set only when they changed (a change restarts the gather).
-    void applySettings() override {
-        dipole::DirpoleSettings ds = m_provider->settings();
-        ds.eta = m_eta;
-        ds.samplesPerFrame = m_sppFrame;
-        if (!isLive()) {
-            // Offline: whole frames of spp-frame samples up to spp (the frame budgets bound
-            // interactive frames only; the image after N samples per texel is the same
-            // either way).
-            ds.samplesPerFrame = std::min(m_sppFrame, m_spp);
-            ds.maxFrames = (m_spp + ds.samplesPerFrame - 1) / ds.samplesPerFrame;
-            ds.frameSampleBudget = ds.firstFrameSampleBudget = 0;
-        }
-        ds.seed = m_seed;
+    void fillSettings(dipole::DirpoleSettings& ds) const override {
         ds.energyNormalised = m_normalised;
-        ds.meshId = m_meshId;
-        const dipole::DirpoleSettings& old = m_provider->settings();
-        const bool changed =
-            !m_settingsSet || ds.eta != old.eta || ds.samplesPerFrame != old.samplesPerFrame ||
-            ds.maxFrames != old.maxFrames || ds.seed != old.seed ||
-            ds.energyNormalised != old.energyNormalised || ds.meshId != old.meshId ||
-            ds.frameSampleBudget != old.frameSampleBudget ||
-            ds.firstFrameSampleBudget != old.firstFrameSampleBudget;
-        if (changed)
-            m_provider->setSettings(ds);
-        m_settingsSet = true;
+        // Offline, the frame budgets are off: they bound interactive frames only, and the image
+        // after N samples per texel is the same either way.
+        if (!isLive())
+            ds.frameSampleBudget = ds.firstFrameSampleBudget = 0;
     }
 
-    int m_spp = 256, m_sppFrame = 16;
-    uint32_t m_seed = 1;
     bool m_normalised = true;
     Stats m_cpuStats;
 };
