@@ -6,6 +6,7 @@
 
 #include "CliCommon.h"
 
+#include <lucent/bench/LinePlot.h>
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
 #include <lucent/dipole/Profiles.h>
@@ -17,6 +18,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace lucent::cli {
@@ -24,16 +26,6 @@ namespace lucent::cli {
 namespace {
 
 using dipole::Model;
-
-/// The directional dipole is implemented as published (verified against the authors' reference
-/// program), but the published model is not energy-conserving (docs/methods/dipole.md §1 and
-/// §4), so every use of it says so.
-void warnExperimentalDirpole() {
-    std::fprintf(stderr,
-                 "warning: the published Frisvad et al. 2014 directional dipole overestimates "
-                 "total reflectance (1.34 at sigma_a = 0) and is +48..131%% against the "
-                 "reference path tracer (docs/methods/dipole.md, sections 1 and 4)\n");
-}
 
 /// Radius holding 99% of the widest channel's profile (Jensen-shaped sampler of the better
 /// dipole's parameters; used for the table and plot range only).
@@ -47,46 +39,22 @@ double profileRange(const std::array<dipole::ScalarMedium, 3>& media) {
     return range > 0.0 ? range : 1.0;
 }
 
-/// Line plot of R(r)·r for the three channels (red, green, blue curves) on a white canvas.
+/// Line plot of R(r)·r for the three channels (red, green, blue curves), r in [0, rMax].
 void writePlot(const std::string& path, Model model,
                const std::array<dipole::ScalarMedium, 3>& media, double rMax) {
-    const int W = 800, H = 500, margin = 40;
-    ImageRgb img(W, H, Rgb(1.f));
-    const int plotW = W - 2 * margin, plotH = H - 2 * margin;
-    std::array<std::vector<double>, 3> ys;
-    double yMax = 0.0;
-    for (int c = 0; c < 3; ++c) {
-        ys[size_t(c)].resize(size_t(plotW) + 1);
-        for (int i = 0; i <= plotW; ++i) {
-            const double r = rMax * i / plotW;
-            const double v = dipole::radialProfile(model, media[size_t(c)], r) * r;
-            ys[size_t(c)][size_t(i)] = v;
-            yMax = std::max(yMax, v);
-        }
-    }
-    if (!(yMax > 0.0))
-        yMax = 1.0;
-    // Axes (black): x along the bottom, y along the left.
-    for (int x = margin; x <= W - margin; ++x)
-        img.at(x, H - margin) = Rgb(0.f);
-    for (int y = margin; y <= H - margin; ++y)
-        img.at(margin, y) = Rgb(0.f);
+    bench::LinePlot plot;
     const std::array<Rgb, 3> colours = {Rgb(0.85f, 0.1f, 0.1f), Rgb(0.1f, 0.6f, 0.1f),
                                         Rgb(0.1f, 0.2f, 0.9f)};
+    const int samples = plot.width - 2 * plot.margin + 1;  // one per pixel column
     for (int c = 0; c < 3; ++c) {
-        int prev = -1;
-        for (int i = 0; i <= plotW; ++i) {
-            const int y =
-                H - margin - int(std::lround(ys[size_t(c)][size_t(i)] / yMax * (plotH - 1)));
-            const int lo = prev < 0 ? y : std::min(prev, y), hi = prev < 0 ? y : std::max(prev, y);
-            for (int yy = lo; yy <= hi; ++yy)
-                for (int t = 0; t < 2; ++t)
-                    img.at(std::min(W - 1, margin + i + t), std::clamp(yy, 0, H - 1)) =
-                        colours[size_t(c)];
-            prev = y;
+        bench::LinePlot::Curve curve{std::vector<double>(size_t(samples)), colours[size_t(c)]};
+        for (int i = 0; i < samples; ++i) {
+            const double r = rMax * i / (samples - 1);
+            curve.values[size_t(i)] = dipole::radialProfile(model, media[size_t(c)], r) * r;
         }
+        plot.curves.push_back(std::move(curve));
     }
-    writePng(img, path);
+    writePng(bench::renderLinePlot(plot), path);
 }
 
 struct ProfileOptions {
@@ -100,7 +68,7 @@ struct ProfileOptions {
 void runProfile(const ProfileOptions& args) {
     const Model model = dipole::parseModel(args.model);
     if (model == Model::Directional)
-        warnExperimentalDirpole();
+        std::fprintf(stderr, "%s\n", dipole::PUBLISHED_DIRPOLE_WARNING);
     const Rgb sigmaA = parseRgb("--sigma-a", args.sigmaA, 0.f, 1e6f);
     const Rgb sigmaS = parseRgb("--sigma-s", args.sigmaS, 0.f, 1e6f);
     const float eta = args.eta;

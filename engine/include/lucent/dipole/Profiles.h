@@ -38,6 +38,13 @@ double fresnelMoment(int n, double eta);
 //! @}
 
 /// Which diffusion profile.
+/// What every use of the published (not energy-normalised) directional dipole says: the model
+/// is as published, but it is not energy-conserving (docs/methods/dipole.md §1 and §4).
+inline constexpr const char* PUBLISHED_DIRPOLE_WARNING =
+    "warning: the published Frisvad et al. 2014 directional dipole overestimates total "
+    "reflectance (1.34 at sigma_a = 0) and is +48..131% against the reference path tracer "
+    "(docs/methods/dipole.md, sections 1 and 4)";
+
 enum class Model {
     Dipole,        ///< Jensen et al. 2001 (Mertens et al. 2005 Table 1)
     BetterDipole,  ///< d'Eon 2012

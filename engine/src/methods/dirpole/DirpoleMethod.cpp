@@ -8,6 +8,7 @@
 #include <lucent/core/Error.h>
 #include <lucent/dipole/DirectionalPipeline.h>
 #include <lucent/dipole/DirpoleProvider.h>
+#include <lucent/dipole/Profiles.h>
 #include <lucent/material/MaterialVolume.h>
 #include <lucent/methods/Registry.h>
 
@@ -18,13 +19,6 @@ namespace lucent::methods {
 namespace {
 
 using detail::num;
-
-/// The published model is not energy-conserving (docs/methods/dipole.md §1 and §4): every use
-/// of it says so.
-constexpr const char* EXPERIMENTAL_WARNING =
-    "warning: the published Frisvad et al. 2014 directional dipole overestimates total "
-    "reflectance (1.34 at sigma_a = 0) and is +48..131% against the reference path tracer "
-    "(docs/methods/dipole.md, sections 1 and 4)";
 
 class DirpoleMethod final
     : public detail::ImageSpaceDipoleMethod<dipole::DirpoleSubsurfaceProvider> {
@@ -74,7 +68,7 @@ public:
 private:
     void applyParams(const Params& p) override {
         if (!p.getBool("dirpole-normalise"))
-            note(EXPERIMENTAL_WARNING);
+            note(dipole::PUBLISHED_DIRPOLE_WARNING);
         if (backend() == Backend::Cpu)
             return;  // renderCpu reads the rest
         readSampleParams(p);
