@@ -233,7 +233,7 @@ ImageSpaceViews buildImageSpaceViews(const Scene& scene, const GatherSettings& s
         SurfaceBuffers view = renderView(scene, obj, boundary, cam);
         rep.built = true;
         rep.backlitFraction = backlitFluxFraction(views.camera, view, settings);
-        rep.used = rep.backlitFraction > lv.threshold;
+        rep.used = lv.gatherAll || rep.backlitFraction > lv.threshold;
         if (rep.used)
             views.lights.push_back(std::move(view));
         views.reports.push_back(rep);

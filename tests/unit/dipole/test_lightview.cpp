@@ -215,3 +215,39 @@ TEST(LightView, SceneLevelBackLitSlab) {
     bad.resolution = 8;
     EXPECT_THROW(renderImageSpaceDipole(scene, settings(), bad), ValueError);
 }
+
+TEST(LightView, SkippedFrontLitViewChangesNothingButTheWork) {
+    // The light-view skip (LightViewSettings::threshold, docs/benchmarks.md "Skips") on a
+    // front-lit slab whose whole lit face the camera sees: the view adds no surface the camera
+    // misses (back-lit fraction 0), so gathering it (gatherAll) has the same expectation (the
+    // balance heuristic over images counts each point once); skipping it leaves exactly the
+    // camera-only gather. Both are checked against the half-space value F_t ∫₀^15mm R_d dA
+    // (the face's edges are ≥ 15 mm from the centre, beyond R′ of the reddest channel).
+    Scene front = backlitSlab(1.f);
+    front.lights[0].direction = {0.f, 0.f, -1.f};
+    front.camera.orthoHeight = 40.f;
+    std::vector<LightViewReport> reports;
+    const GatherResult skipped = renderImageSpaceDipole(front, settings(), {}, &reports);
+    ASSERT_EQ(reports.size(), 1u);
+    EXPECT_TRUE(reports[0].built);
+    EXPECT_FALSE(reports[0].used) << "the skip did not fire";
+    EXPECT_EQ(skipped.stats.lightViews, 0);
+    LightViewSettings all;
+    all.gatherAll = true;
+    const GatherResult gathered = renderImageSpaceDipole(front, settings(), all, &reports);
+    EXPECT_TRUE(reports[0].used);
+    EXPECT_EQ(gathered.stats.lightViews, 1);
+    LightViewSettings off;
+    off.enabled = false;
+    const GatherResult cameraOnly = renderImageSpaceDipole(front, settings(), off);
+    EXPECT_EQ(skipped.exitance.pixels(), cameraOnly.exitance.pixels());  // exact: same estimator
+    const SurfaceBuffers cam = buildSurfaceBuffers(front);
+    const float ft = float(1.0 - fresnelReflectance(1.0, 1.3));
+    for (int ch = 0; ch < 3; ++ch) {
+        const DipoleProfile p = channelProfile(ch);
+        const double exact = ft * radialIntegral(p, 15.0);
+        const auto value = [&](glm::dvec2, int) { return exact; };
+        expectUnbiased(skipped, cam, block(46, 46, 8, 8), value, ch);
+        expectUnbiased(gathered, cam, block(46, 46, 8, 8), value, ch);
+    }
+}

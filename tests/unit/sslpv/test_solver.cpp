@@ -449,3 +449,37 @@ TEST(SslpvSolver, SliceSkippingIsExact) {
         }
     }
 }
+
+TEST(SslpvSolver, EarlyStopDropsAtMostTheFluxLeftInTheGrid) {
+    // The early stop (stopEpsilon, docs/benchmarks.md "Skips") against the same solve run to
+    // maxSteps. After the stop the grid's flux R (≤ ε·injected) would only have been split
+    // between the sinks, absorption and the grid (energy never grows), so the full solve's exitant
+    // flux exceeds the early one by between 0 and R; and each dropped step would have added the
+    // grid's flux at that step (≤ R, non-increasing) to the accumulation, so the accumulation the
+    // renderer reads loses at most (full steps − early steps)·R. Rounding: ENERGY_TOL.
+    const CoarseMaterial m =
+        ballMaterial(16, 1.f, Rgb(1.f, 1.2f, 1.5f), Rgb(0.95f, 1.f, 1.f), Rgb(0.f));
+    const float eps = 1e-3f;
+    SslpvSolver early({.maxSteps = 256, .stopEpsilon = eps});
+    SslpvSolver full({.maxSteps = 256});
+    for (SslpvSolver* s : {&early, &full}) {
+        s->setMaterial(m, 1.3f);
+        s->setInjectionSamples(ballTexels(m, Vector3f(0, 0, -1), Rgb(1.f)));
+    }
+    const SslpvStats a = early.solve();
+    const SslpvStats b = full.solve();
+    ASSERT_GT(b.stepsUsed, a.stepsUsed) << "the stop did not fire";
+    EXPECT_EQ(b.stepsUsed, 256);
+    const Rgb accEarly = early.accumulation().flux(), accFull = full.accumulation().flux();
+    const float dropped = float(b.stepsUsed - a.stepsUsed);
+    for (int c = 0; c < 3; ++c) {
+        SCOPED_TRACE("channel " + std::to_string(c));
+        const float tol = ENERGY_TOL * a.injected[c];
+        EXPECT_EQ(a.injected[c], b.injected[c]);
+        EXPECT_LE(a.remaining[c], eps * a.injected[c]);
+        EXPECT_GE(b.exitant[c] - a.exitant[c], -tol);
+        EXPECT_LE(b.exitant[c] - a.exitant[c], a.remaining[c] + tol);
+        EXPECT_GE(accFull[c] - accEarly[c], -ENERGY_TOL * accFull[c]);
+        EXPECT_LE(accFull[c] - accEarly[c], dropped * a.remaining[c] + ENERGY_TOL * accFull[c]);
+    }
+}

@@ -65,13 +65,18 @@ struct LightViewSettings {
     /// would take a share of the per-pixel samples and add visibility tests for nothing).
     /// [0, 1).
     double threshold = 1e-3;
+    /// true: gather every built view whatever its back-lit fraction (the skip above off). A view
+    /// at back-lit fraction 0 adds no surface the camera misses, so the expectation is the same
+    /// either way (balance heuristic over images); the reference of the skip's equivalence test
+    /// and of its measured saving (docs/benchmarks.md, "Skips").
+    bool gatherAll = false;
 };
 
 /// What happened to one light's view.
 struct LightViewReport {
     int light = 0;
     bool built = false;  ///< rendered (false: disabled, or a light inside the bounding sphere)
-    bool used = false;   ///< gathered (backlitFraction > threshold)
+    bool used = false;   ///< gathered (backlitFraction > threshold, or gatherAll)
     double backlitFraction = 0.0;  ///< backlitFluxFraction() of the view
     std::string note;              ///< why it was not built, if not
 };
