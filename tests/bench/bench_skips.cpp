@@ -7,6 +7,7 @@
 ///
 ///     bench_skips [--repeats 7]
 
+#include <lucent/core/Fresnel.h>
 #include <lucent/core/Image.h>
 #include <lucent/core/Timer.h>
 #include <lucent/dipole/ImageSpace.h>
@@ -184,7 +185,7 @@ double halfSpaceGreen(double R) {
     const double h = 1e-3;
     for (double r = 0.5 * h; r < R; r += h)
         sum += p.Rd(r) * 2.0 * M_PI * r * h;
-    return (1.0 - dipole::fresnelReflectance(1.0, 1.3)) * sum;
+    return (1.0 - fresnelDielectric(1.0, 1.3)) * sum;
 }
 
 dipole::GatherSettings gather() {

@@ -242,7 +242,7 @@ TEST(LightView, SkippedFrontLitViewChangesNothingButTheWork) {
     const GatherResult cameraOnly = renderImageSpaceDipole(front, settings(), off);
     EXPECT_EQ(skipped.exitance.pixels(), cameraOnly.exitance.pixels());  // exact: same estimator
     const SurfaceBuffers cam = buildSurfaceBuffers(front);
-    const float ft = float(1.0 - fresnelReflectance(1.0, 1.3));
+    const float ft = float(1.0 - fresnelDielectric(1.0, 1.3));
     for (int ch = 0; ch < 3; ++ch) {
         const DipoleProfile p = channelProfile(ch);
         const double exact = ft * radialIntegral(p, 15.0);
