@@ -7,17 +7,13 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Parallel.h>
-#include <lucent/core/Timer.h>
-#include <lucent/gpu/GlContext.h>
 #include <lucent/sslpv/SslpvBench.h>
 #include <lucent/sslpv/SslpvCalibrationFit.h>
-#include <lucent/sslpv/SslpvGl.h>
 #include <lucent/sslpv/SslpvSolver.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,19 +30,6 @@ using sslpv::SslpvCalibrationFitSettings;
 using sslpv::SslpvFitRow;
 using sslpv::SslpvFitWeight;
 
-/// Process CPU time (all threads), ms: unlike wall time, not inflated when the machine is
-/// shared and this process waits for a core.
-double cpuMs() {
-    timespec t{};
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-    return double(t.tv_sec) * 1e3 + double(t.tv_nsec) * 1e-6;
-}
-
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
 struct BenchOptions {
     std::string scene = "cube";
     int grid = 32, steps = 8, sh = 1, threads = maxThreads(), repeats = 50;
@@ -60,84 +43,28 @@ void runBench(const BenchOptions& args) {
     const int threads = args.threads;
     const int repeats = args.repeats;
     const bool het = args.heterogeneous;
-    const bool gl = args.gl;
     const ThreadLimit limit(threads);
     const sslpv::SslpvBenchScene scene = sslpv::parseSslpvBenchScene(args.scene);
-
-    sslpv::SslpvBenchSetup setup = sslpv::makeSslpvBenchSetup(scene, n, het);
-    sslpv::SslpvSolver solver({.order = order,
-                               .maxSteps = steps,
-                               .skipAccumulateSteps = 0,
-                               .removeExitant = setup.sinks,
-                               .skipEmptySlices = !args.dense});
-    solver.setMaterial(setup.material, setup.eta);
-    solver.setInjectionSamples(std::move(setup.texels));
-
-    // Warm-up, then repeated re-propagations (what a paint stroke triggers).
-    for (int i = 0; i < 3; ++i) {
-        solver.markMaterialDirty();
-        solver.solve();
-    }
-    std::vector<double> solveMs, stepsMs;
-    const double cpu0 = cpuMs();
-    for (int i = 0; i < repeats; ++i) {
-        solver.markMaterialDirty();
-        const Timer t;
-        solver.solve();
-        solveMs.push_back(t.elapsedMs());
-        stepsMs.push_back(solver.stats().stepsMs);
-    }
-    const double cpuPerSolve = (cpuMs() - cpu0) / repeats;
-
-    // Bandwidth floor, same run, same threads: the least traffic one dense step can have
-    // without the stencil (SslpvBench.h: stream the source planes into the destination and
-    // add them into the accumulation planes, plus the factor planes when heterogeneous).
-    const double floorMs = sslpv::sslpvBandwidthFloorMs(n, order, het, steps, repeats);
-    const sslpv::SslpvStats& st = solver.stats();
-    double activeMean = 0.0;
-    for (int a : st.activeBricksPerStep)
-        activeMean += a;
-    activeMean /= std::max<size_t>(st.activeBricksPerStep.size(), 1);
-    const double cellsPerStep = double(st.cellsComputed) / std::max(st.stepsUsed, 1);
-
-    // GL compute path: the same propagation on the GPU (injection and factors from the CPU).
-    double glGpuMs = 0.0, glCpuMs = 0.0, glReadbackMs = 0.0;
-    if (gl) {
-        std::string reason;
-        if (!gpu::GlContext::isHeadlessAvailable(&reason))
-            LUCENT_THROW(GpuError, "--gl: no headless OpenGL 4.5 context: ", reason);
-        auto ctx = gpu::GlContext::createHeadless();
-        sslpv::SslpvGlPropagator prop(args.fp16 ? sslpv::SslpvGlStorage::Float16
-                                                : sslpv::SslpvGlStorage::Float32);
-        const int glRepeats = std::max(3, std::min(repeats, 10));  // llvmpipe is slow
-        prop.propagate(solver);                                    // warm-up (shader JIT)
-        // Steady state: persistent buffers, nothing changed to upload, no read-back; then the
-        // read-back a CPU consumer would add, timed separately.
-        std::vector<double> g, c, r, u;
-        for (int i = 0; i < glRepeats; ++i) {
-            const Timer wall;
-            prop.propagate(solver);
-            c.push_back(wall.elapsedMs());
-            g.push_back(prop.timings().propagateGpuMs);
-            u.push_back(prop.timings().uploadCpuMs);
-            (void)prop.accumulation();
-            r.push_back(prop.timings().readbackCpuMs);
-        }
-        glGpuMs = median(g);
-        glCpuMs = median(c);
-        glReadbackMs = median(r);
-        prop.destroy();
+    const sslpv::SslpvBenchResult b = sslpv::runSslpvBench({.scene = scene,
+                                                            .gridCells = n,
+                                                            .steps = steps,
+                                                            .order = order,
+                                                            .repeats = repeats,
+                                                            .heterogeneous = het,
+                                                            .dense = args.dense,
+                                                            .gl = args.gl,
+                                                            .fp16 = args.fp16});
+    if (args.gl)
         std::printf(
             "%sGL %s (%s): propagation %.3f ms GPU timer, %.3f ms wall per propagate (input "
             "diff/upload %.3f ms), read-back when asked %.3f ms\n",
-            args.json ? "# " : "", ctx->renderer().c_str(), args.fp16 ? "fp16" : "fp32", glGpuMs,
-            glCpuMs, median(u), glReadbackMs);
-    }
+            args.json ? "# " : "", b.glRenderer.c_str(), args.fp16 ? "fp16" : "fp32", b.glGpuMs,
+            b.glWallMs, b.glUploadMs, b.glReadbackMs);
 
-    const double msSolve = median(solveMs);
-    const double msSteps = median(stepsMs);
+    const double msSolve = b.solveMs, cpuPerSolve = b.cpuSolveMs;
+    const double msSteps = b.stepsMs;
     const double msPerStep = msSteps / steps;
-    const double floorPerStep = floorMs / steps;
+    const double floorPerStep = b.floorStepMs;
     const double paperMs = 1.67;  // GTX 580, 32³, 8 steps, heterogeneous (Table 1, Fig. 6)
     if (args.json) {
         std::printf(
@@ -153,9 +80,9 @@ void runBench(const BenchOptions& args) {
             "\"gl_readback_ms\": %.4f, "
             "\"paper_ms_gtx580_32_8_het\": %.2f}\n",
             sslpv::sslpvBenchSceneName(scene), n, steps, order, het ? "true" : "false",
-            args.dense ? "true" : "false", threads, repeats, st.brickCount, activeMean,
-            cellsPerStep, msSolve, cpuPerSolve, msSteps, msPerStep, floorPerStep,
-            msPerStep / floorPerStep, glGpuMs, glCpuMs, glReadbackMs, paperMs);
+            args.dense ? "true" : "false", threads, repeats, b.brickCount, b.activeBricks,
+            b.cellsPerStep, msSolve, cpuPerSolve, msSteps, msPerStep, floorPerStep,
+            msPerStep / floorPerStep, b.glGpuMs, b.glWallMs, b.glReadbackMs, paperMs);
     } else {
         std::printf(
             "SSLPV CPU propagation: scene %s, %d^3 cells, %d steps, SH order %d, %s, %s, %d "
@@ -163,8 +90,8 @@ void runBench(const BenchOptions& args) {
             sslpv::sslpvBenchSceneName(scene), n, steps, order,
             het ? "heterogeneous" : "homogeneous", args.dense ? "dense" : "active bricks", threads);
         std::printf("  bricks (%dx%dx%d cells) per step: %.1f of %d active, %.0f cells computed\n",
-                    sslpv::SSLPV_BRICK_X, sslpv::SSLPV_BRICK_Y, sslpv::SSLPV_BRICK_Z, activeMean,
-                    st.brickCount, cellsPerStep);
+                    sslpv::SSLPV_BRICK_X, sslpv::SSLPV_BRICK_Y, sslpv::SSLPV_BRICK_Z,
+                    b.activeBricks, b.brickCount, b.cellsPerStep);
         std::printf("  median over %d solves after warm-up\n", repeats);
         std::printf("  solve (factors + propagation): %.3f ms wall, %.3f ms CPU (all threads)\n",
                     msSolve, cpuPerSolve);

@@ -4,6 +4,7 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/FileIO.h>
+#include <lucent/core/Timer.h>
 #include <lucent/evaluation/Evaluate.h>
 #include <lucent/methods/Registry.h>
 #include <lucent/methods/RenderImage.h>
@@ -324,13 +325,6 @@ methods::RenderResult renderVariant(const Scene& scene, const Variant& v,
     ro.subsurfaceOnly = options.subsurfaceOnly;
     ro.log = options.methodLog;
     return methods::renderImage(scene, v.method, params, ro);
-}
-
-/// CPU time of the whole process (every thread, llvmpipe's included), ms.
-double processCpuMs() {
-    timespec t{};
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-    return double(t.tv_sec) * 1e3 + double(t.tv_nsec) * 1e-6;
 }
 
 /// Wall and process CPU times of a render's runs, ms.

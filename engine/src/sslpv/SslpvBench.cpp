@@ -8,6 +8,8 @@
 #include <lucent/core/Parallel.h>
 #include <lucent/core/Random.h>
 #include <lucent/core/Timer.h>
+#include <lucent/gpu/GlContext.h>
+#include <lucent/sslpv/SslpvGl.h>
 
 #include <algorithm>
 #include <cmath>
@@ -144,6 +146,80 @@ double sslpvBandwidthFloorMs(int n, int order, bool heterogeneous, int steps, in
     (void)sink;
     std::sort(ms.begin(), ms.end());
     return ms[ms.size() / 2];
+}
+
+SslpvBenchResult runSslpvBench(const SslpvBenchRun& run) {
+    LUCENT_CHECK(run.repeats >= 1 && run.repeats <= 100000, "SSLPV bench: repeats ", run.repeats,
+                 " is outside [1, 100000]");
+    LUCENT_CHECK(run.steps >= 1, "SSLPV bench: steps must be >= 1 (got ", run.steps, ")");
+    SslpvBenchSetup setup = makeSslpvBenchSetup(run.scene, run.gridCells, run.heterogeneous);
+    SslpvSolver solver({.order = run.order,
+                        .maxSteps = run.steps,
+                        .skipAccumulateSteps = 0,
+                        .removeExitant = setup.sinks,
+                        .skipEmptySlices = !run.dense});
+    solver.setMaterial(setup.material, setup.eta);
+    solver.setInjectionSamples(std::move(setup.texels));
+
+    // Warm-up, then repeated re-propagations (what a paint stroke triggers).
+    for (int i = 0; i < 3; ++i) {
+        solver.markMaterialDirty();
+        solver.solve();
+    }
+    std::vector<double> solveMs, stepsMs;
+    const double cpu0 = processCpuMs();
+    for (int i = 0; i < run.repeats; ++i) {
+        solver.markMaterialDirty();
+        const Timer t;
+        solver.solve();
+        solveMs.push_back(t.elapsedMs());
+        stepsMs.push_back(solver.stats().stepsMs);
+    }
+    SslpvBenchResult r;
+    r.cpuSolveMs = (processCpuMs() - cpu0) / run.repeats;
+    r.solveMs = medianMs(solveMs);
+    r.stepsMs = medianMs(stepsMs);
+    // Bandwidth floor, same run, same threads: the least traffic one dense step can have
+    // without the stencil (stream the source planes into the destination and add them into the
+    // accumulation planes, plus the factor planes when heterogeneous).
+    r.floorStepMs =
+        sslpvBandwidthFloorMs(run.gridCells, run.order, run.heterogeneous, run.steps, run.repeats) /
+        run.steps;
+    const SslpvStats& st = solver.stats();
+    r.brickCount = st.brickCount;
+    for (int a : st.activeBricksPerStep)
+        r.activeBricks += a;
+    r.activeBricks /= double(std::max<size_t>(st.activeBricksPerStep.size(), 1));
+    r.cellsPerStep = double(st.cellsComputed) / std::max(st.stepsUsed, 1);
+
+    if (run.gl) {  // the same propagation on the GPU (injection and factors from the CPU)
+        std::string reason;
+        if (!gpu::GlContext::isHeadlessAvailable(&reason))
+            LUCENT_THROW(GpuError, "SSLPV bench --gl: no headless OpenGL 4.5 context: ", reason);
+        const auto ctx = gpu::GlContext::createHeadless();
+        SslpvGlPropagator prop(run.fp16 ? SslpvGlStorage::Float16 : SslpvGlStorage::Float32);
+        const int glRepeats = std::max(3, std::min(run.repeats, 10));  // llvmpipe is slow
+        prop.propagate(solver);                                        // warm-up (shader JIT)
+        // Steady state: persistent buffers, nothing changed to upload, no read-back; then the
+        // read-back a CPU consumer would add, timed separately.
+        std::vector<double> gpuMs, wallMs, uploadMs, readbackMs;
+        for (int i = 0; i < glRepeats; ++i) {
+            const Timer wall;
+            prop.propagate(solver);
+            wallMs.push_back(wall.elapsedMs());
+            gpuMs.push_back(prop.timings().propagateGpuMs);
+            uploadMs.push_back(prop.timings().uploadCpuMs);
+            (void)prop.accumulation();
+            readbackMs.push_back(prop.timings().readbackCpuMs);
+        }
+        r.glGpuMs = medianMs(gpuMs);
+        r.glWallMs = medianMs(wallMs);
+        r.glUploadMs = medianMs(uploadMs);
+        r.glReadbackMs = medianMs(readbackMs);
+        r.glRenderer = ctx->renderer();
+        prop.destroy();
+    }
+    return r;
 }
 
 }  // namespace lucent::sslpv

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: MIT
 #pragma once
 /// @file
-/// @brief The SSLPV propagation benchmark's scenes and bandwidth floor, shared by
-/// `lucent-cli bench sslpv` (app/cli/Command_bench.cpp) and tests/bench/bench_sslpv.cpp so
-/// both time the same work (docs/benchmarks.md, SSLPV).
+/// @brief The SSLPV propagation benchmark: its scenes, bandwidth floor and timed run, shared by
+/// `lucent-cli bench sslpv` (which parses and prints) and tests/bench/bench_sslpv.cpp so both
+/// time the same work (docs/benchmarks.md, SSLPV).
 ///
 ///     SslpvBenchSetup b = makeSslpvBenchSetup(SslpvBenchScene::Shell, 32, /*heterogeneous=*/true);
 ///     SslpvSolver solver({.maxSteps = 8, .removeExitant = b.sinks});
@@ -52,5 +52,37 @@ SslpvBenchSetup makeSslpvBenchSetup(SslpvBenchScene scene, int n, bool heterogen
 /// 3·(order+1) factor planes when heterogeneous. Median over `repeats` after 3 warm-ups.
 /// @throw ValueError for n, order, steps or repeats out of range.
 double sslpvBandwidthFloorMs(int n, int order, bool heterogeneous, int steps, int repeats);
+
+/// One benchmark run: what `lucent-cli bench sslpv` times.
+struct SslpvBenchRun {
+    SslpvBenchScene scene = SslpvBenchScene::Cube;
+    int gridCells = 32, steps = 8, order = 1;
+    int repeats = 50;  ///< timed solves after 3 warm-ups
+    bool heterogeneous = false;
+    bool dense = false;  ///< every cell every step (SslpvOptions::skipEmptySlices off)
+    bool gl = false;     ///< also the GL compute propagation (needs a headless GL 4.5 context)
+    bool fp16 = false;   ///< the GL grids in half floats
+};
+
+/// What one run measured; times in ms, medians over the repeats (medianMs).
+struct SslpvBenchResult {
+    double solveMs = 0.0;       ///< wall, one solve (factors + propagation)
+    double cpuSolveMs = 0.0;    ///< process CPU time per solve (all threads)
+    double stepsMs = 0.0;       ///< the propagation steps of one solve (SslpvStats::stepsMs)
+    double floorStepMs = 0.0;   ///< sslpvBandwidthFloorMs / steps, same run, same threads
+    int brickCount = 0;         ///< bricks of the grid
+    double activeBricks = 0.0;  ///< mean active bricks per step
+    double cellsPerStep = 0.0;  ///< cells computed per step
+    /// GL (run.gl only): propagation by the GPU timer, wall per propagate, input upload and
+    /// read-back when asked; the context's GL_RENDERER.
+    double glGpuMs = 0.0, glWallMs = 0.0, glUploadMs = 0.0, glReadbackMs = 0.0;
+    std::string glRenderer;
+};
+
+/// Times repeated re-propagations of one scene (what a paint stroke triggers: markMaterialDirty
+/// + solve), after 3 warm-ups, under the caller's ThreadLimit, and the bandwidth floor in the
+/// same run. @throw ValueError for arguments out of range; GpuError when run.gl and no headless
+/// context can be made.
+SslpvBenchResult runSslpvBench(const SslpvBenchRun& run);
 
 }  // namespace lucent::sslpv
