@@ -38,7 +38,7 @@ struct RenderOptions {
     std::string models;
     std::vector<std::string> assignments;             ///< --param NAME=VALUE
     std::map<std::string, std::string> methodParams;  ///< --NAME VALUE, every method's names
-    bool subsurfaceOnly = false, cpu = false, gl = false;
+    bool subsurfaceOnly = false, cpu = false, gl = false, allLights = false;
     const CLI::App* app = nullptr;
     bool has(const std::string& option) const { return app->count(option) > 0; }
 };
@@ -77,6 +77,8 @@ void runRender(const RenderOptions& args) {
     if (args.gl)
         options.backend = methods::Backend::Gl;
     options.subsurfaceOnly = args.subsurfaceOnly;
+    if (args.allLights)
+        options.lightSkipEpsilon = -1.f;
     options.log = [](const std::string& m) { std::fprintf(stderr, "render: %s\n", m.c_str()); };
     options.progress = printProgressBar;
 
@@ -138,7 +140,7 @@ void addRenderCommand(CLI::App& cli, const CommandContext&) {
         "usage: lucent-cli render SCENE.json [--method NAME] -o OUT.png|OUT.exr\n"
         "                         [--NAME VALUE | --param NAME=VALUE ...]\n"
         "                         [--backend auto|gl|cpu | --gl | --cpu]\n"
-        "                         [--width W] [--height H] [--subsurface-only]\n"
+        "                         [--width W] [--height H] [--subsurface-only] [--all-lights]\n"
         "                         [--exposure E] [--tonemap clamp|reinhard|aces]\n"
         "       lucent-cli render SCENE.json --method auto [--budget-ms B | --max-error E]\n"
         "                         [--models F] -o OUT ...\n",
@@ -179,6 +181,10 @@ void addRenderCommand(CLI::App& cli, const CommandContext&) {
     sub->add_flag("--subsurface-only", args->subsurfaceOnly,
                   "keep only the subsurface term of the method; for direct, which has none, the "
                   "image is black");
+    sub->add_flag("--all-lights", args->allLights,
+                  "render every light: without it, lights that miss the object or give it at "
+                  "most 1/1024 of the strongest light's irradiance are skipped (said on stderr; "
+                  "the reference method never skips)");
     sub->add_option("--exposure", args->exposure, "PNG: exposure multiplier (default 1)")
         ->type_name("E")
         ->check(finiteRange(0, 1e6));

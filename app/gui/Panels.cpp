@@ -541,11 +541,6 @@ PresetPanel::PresetPanel(Document* doc, BrushPanel* brush, QWidget* parent)
 
 // ---- LightPanel -----------------------------------------------------------------------------
 
-namespace {
-/// Light type names, in Light::Type order.
-const char* const LIGHT_TYPE_NAMES[] = {"point", "spot", "directional", "sphere"};
-}  // namespace
-
 LightPanel::LightPanel(Document* doc, QWidget* parent) : QWidget(parent), m_doc(doc) {
     m_form = new QFormLayout(this);
     m_light = new QComboBox;
@@ -722,8 +717,8 @@ void LightPanel::syncList() {
     }
     // Names follow type changes, which keep the count.
     for (int i = 0; i < n; ++i)
-        m_light->setItemText(
-            i, tr("L%1 (%2)").arg(i).arg(tr(LIGHT_TYPE_NAMES[int(lights[size_t(i)].type)])));
+        m_light->setItemText(i,
+                             tr("L%1 (%2)").arg(i).arg(tr(lightTypeName(lights[size_t(i)].type))));
     m_loading = false;
     if (countChanged)
         Q_EMIT currentLightChanged(m_light->currentIndex());
@@ -1175,6 +1170,8 @@ void StatsPanel::refresh() {
                  .arg(QString::fromStdString(p.name))
                  .arg(p.gpuMs, 0, 'f', 2)
                  .arg(p.cpuMs, 0, 'f', 2);
+    for (const std::string& skipped : s.preview.skippedLights)
+        t += tr("skipped %1<br>").arg(QString::fromStdString(skipped).toHtmlEscaped());
     if (!s.preview.autoReason.empty())
         t += tr("<b>Auto</b>: %1<br>")
                  .arg(QString::fromStdString(s.preview.autoReason).toHtmlEscaped());

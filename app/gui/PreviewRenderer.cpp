@@ -11,6 +11,7 @@
 #include <lucent/gpu/Shader.h>
 #include <lucent/methods/Registry.h>
 #include <lucent/planner/AutoMethod.h>
+#include <lucent/scene/LightReach.h>
 #include <lucent/planner/LiveCosts.h>
 
 #include <epoxy/gl.h>
@@ -249,7 +250,9 @@ struct PreviewRenderer::Impl {
     /// every AUTO_REPLAN_MS), or nullptr while the Direct frame it needs is being measured
     /// (the frame then renders Direct and renderFrame times it).
     /// @throw ValueError when no candidate can render the scene.
-    const planner::AutoChoice* planAuto(const PreviewFrame& f, const std::vector<float>& lightKey);
+    /// `lights`: the frame's lights after the light skip, `lightKey` their lightsKey.
+    const planner::AutoChoice* planAuto(const PreviewFrame& f, const std::vector<Light>& lights,
+                                        const std::vector<float>& lightKey);
 };
 
 PreviewRenderer::PreviewRenderer() : m(std::make_unique<Impl>()) {}
@@ -373,6 +376,7 @@ methods::Method& PreviewRenderer::Impl::useMethod(const std::string& name,
 }
 
 const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f,
+                                                           const std::vector<Light>& lights,
                                                            const std::vector<float>& lightKey) {
     // Re-plan at most twice a second: a stroke or an orbit changes the features a little every
     // frame, and the hysteresis keeps the choice anyway unless the scene class changes.
@@ -418,8 +422,9 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
         a.directHeight = a.samplesHeight;
         a.directSamples.clear();
     }
-    Scene scene = *f.scene;  // the viewport's camera: the features see it
+    Scene scene = *f.scene;  // the viewport's camera and lights: the features see them
     scene.camera = f.camera;
+    scene.lights = lights;
     planner::Budget budget;  // the planner's live frame budget (50 ms) and hysteresis
     budget.directMs = a.directMs;
     // The previous plan of the same scene, for hysteresis (a new scene plans from scratch).
@@ -461,6 +466,11 @@ void PreviewRenderer::Impl::renderFrame(PreviewFrame& f) {
     std::vector<Light> lights = f.scene->lights;
     if (lights.size() > size_t(gpu::SceneRenderer::MAX_LIGHTS))
         lights.resize(size_t(gpu::SceneRenderer::MAX_LIGHTS));
+    // Lights that miss the shown mesh or give it less than LIGHT_SKIP_EPSILON of the strongest
+    // light's irradiance cost shadow maps and the method's per-light work for nothing.
+    LightCulling culling = cullLights(lights, haveMesh ? f.shownMesh->bounds() : Bounds3f{});
+    lights = std::move(culling.kept);
+    r.stats.skippedLights = std::move(culling.skipped);
     std::vector<float> key = lightsKey(lights);
     if (key != r.lights) {
         sr.setLights(lights);
@@ -492,7 +502,7 @@ void PreviewRenderer::Impl::renderFrame(PreviewFrame& f) {
     r.stats.autoReason.clear();
     r.stats.autoChoice.clear();
     if (name == AUTO_METHOD) {
-        if (const planner::AutoChoice* choice = r.planAuto(f, key)) {
+        if (const planner::AutoChoice* choice = r.planAuto(f, lights, key)) {
             name = choice->method;
             params = choice->params;
             r.stats.autoReason = choice->plan.reason;

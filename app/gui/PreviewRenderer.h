@@ -91,8 +91,10 @@ struct PreviewStats {
     /// the choice ("dipole 32 spp"); empty otherwise.
     std::string autoReason, autoChoice;
     methods::Stats methodStats;  ///< its Method::stats() (SSLPV timings, dipole progress)
-    int bricksUploaded = 0;      ///< bricks consumed by the last material update
-    double uploadMs = 0.0;       ///< CPU ms of the last material update
+    /// Lights the frame left out, and why (cullLights, lucent/scene/LightReach.h).
+    std::vector<std::string> skippedLights;
+    int bricksUploaded = 0;  ///< bricks consumed by the last material update
+    double uploadMs = 0.0;   ///< CPU ms of the last material update
     /// The method's stat `key` ("" when it has none).
     [[nodiscard]] std::string methodStat(const std::string& key) const;
     /// Frames since create() that reused the shadow maps, the G-buffer and the direct-lighting

@@ -3,7 +3,8 @@
 /// @brief The engine's skips (issue 15, "skip what a scene doesn't need") measured on and off in
 /// one process: the same scene, the median of `--repeats` runs each, the saving as a ratio and
 /// the change in the answer. Not a Google Benchmark: it prints the table of docs/benchmarks.md,
-/// "Skips". CPU paths only (SSLPV solver, image-space dipole), so it runs without GL.
+/// "Skips". CPU paths only (SSLPV solver, image-space dipole, SSLPV's CPU renderImage), so it
+/// runs without GL.
 ///
 ///     bench_skips [--repeats 7]
 
@@ -14,7 +15,10 @@
 #include <lucent/dipole/IrradiancePass.h>
 #include <lucent/dipole/Profiles.h>
 #include <lucent/material/MaterialVolume.h>
+#include <lucent/material/Presets.h>
+#include <lucent/methods/RenderImage.h>
 #include <lucent/mesh/Procedural.h>
+#include <lucent/scene/LightReach.h>
 #include <lucent/scene/Scene.h>
 #include <lucent/sslpv/SslpvBench.h>
 #include <lucent/sslpv/SslpvSolver.h>
@@ -250,6 +254,59 @@ Row dipoleMaxRadius(int repeats) {
     return r;
 }
 
+/// The light skip (RenderOptions::lightSkipEpsilon) against every light rendered: the SSLPV CPU
+/// render of the 10 mm skin1 sphere lit by its sun, plus a spot aimed away from it and a point
+/// light at half the skip threshold (a fill light nobody can see), each injected into the
+/// grid when the skip is off.
+Row lightSkip(int repeats) {
+    Scene scene;  // resources/scenes/skin_sphere.json at 64² (the file's sun, η 1.4)
+    scene.objects.push_back(makeObject(makeSphere(10.f, 4), 48, findPreset("skin1").sample()));
+    scene.eta = 1.4f;
+    Light sun;
+    sun.type = Light::Type::Directional;
+    sun.direction = glm::normalize(Vector3f(-0.8f, -0.3f, -0.5f));
+    sun.intensity = Rgb(3.f);
+    scene.lights.push_back(sun);
+    scene.camera.width = scene.camera.height = 64;
+    Light away;
+    away.type = Light::Type::Spot;
+    away.position = Point3f(0.f, 40.f, 0.f);
+    away.direction = Vector3f(0.f, 1.f, 0.f);
+    away.intensity = Rgb(5e4f);
+    scene.lights.push_back(away);
+    Light dim;
+    dim.position = Point3f(30.f, 10.f, 20.f);
+    const Bounds3f b = objectBounds(scene);
+    const float near = glm::length(dim.position - b.center()) - 0.5f * glm::length(b.extent());
+    dim.intensity = Rgb(0.5f * LIGHT_SKIP_EPSILON * 3.f * near * near);
+    scene.lights.push_back(dim);
+    const methods::ParamSet grid = methods::ParamSet::fromAssignments({"grid=32"});
+    methods::RenderOptions on, off;
+    on.backend = off.backend = methods::Backend::Cpu;
+    off.lightSkipEpsilon = -1.f;
+    methods::RenderResult a, c;
+    Row r{"lights that miss the object or give < ε",
+          "skin1 sphere 64², SSLPV CPU 32³, sun + spot "
+          "aimed away + point light at ε/2",
+          0,
+          0,
+          "",
+          ""};
+    r.onMs = medianOf(repeats, [&] { a = methods::renderImage(scene, "sslpv", grid, on); });
+    r.offMs = medianOf(repeats, [&] { c = methods::renderImage(scene, "sslpv", grid, off); });
+    float moved = 0.f, peak = 0.f;
+    for (int y = 0; y < a.radiance.height(); ++y)
+        for (int x = 0; x < a.radiance.width(); ++x)
+            for (int k = 0; k < 3; ++k) {
+                moved = std::max(moved, std::abs(a.radiance.at(x, y)[k] - c.radiance.at(x, y)[k]));
+                peak = std::max(peak, c.radiance.at(x, y)[k]);
+            }
+    r.fired = std::to_string(a.skippedLights.size()) + " of 3 lights skipped";
+    r.error = fmt("largest pixel change %.2g of the peak (bound ε = %.2g)", moved / peak,
+                  double(LIGHT_SKIP_EPSILON));
+    return r;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -271,6 +328,7 @@ int main(int argc, char** argv) {
     rows.push_back(sslpvUnchanged(repeats));
     rows.push_back(dipoleLightViews(repeats));
     rows.push_back(dipoleMaxRadius(repeats));
+    rows.push_back(lightSkip(repeats));
     std::printf(
         "| skip | scene | on ms | off ms | off/on | fired | answer "
         "|\n|---|---|---|---|---|---|---|\n");

@@ -18,7 +18,8 @@ void say(const Log& log, const std::string& message) {
 
 /// The GL render: every object as a translucent surface (or the method's own surface), the
 /// method's pass, frames until it converges.
-void renderGl(const Scene& scene, Method& method, const RenderOptions& options, RenderResult& out) {
+void renderGl(const Scene& scene, const std::vector<Light>& lights, Method& method,
+              const RenderOptions& options, RenderResult& out) {
     LUCENT_CHECK(!scene.objects.empty(), method.info().name, ": the scene has no object");
     std::unique_ptr<gpu::GlContext> own;
     gpu::GlContext* ctx = options.context;
@@ -46,7 +47,7 @@ void renderGl(const Scene& scene, Method& method, const RenderOptions& options, 
             if (objectMesh < 0)
                 objectMesh = id;  // the material volume belongs to objects[0]
         }
-        renderer.setLights(scene.lights);
+        renderer.setLights(lights);
         renderer.setCamera(scene.camera);
         gpu::DirectSettings settings;
         settings.subsurfaceOnly = options.subsurfaceOnly;
@@ -55,7 +56,7 @@ void renderGl(const Scene& scene, Method& method, const RenderOptions& options, 
         inputs.mesh = &scene.objects[0].mesh;
         inputs.material = scene.objects[0].material.get();
         inputs.eta = scene.eta;
-        inputs.lights = scene.lights;
+        inputs.lights = lights;
         inputs.meshId = objectMesh;
         method.setScene(inputs);
         method.cameraChanged(scene.camera);
@@ -97,14 +98,27 @@ RenderResult renderImage(const Scene& scene, const std::string& name, const Para
         say(options.log, "no headless GL (" + reason + "); " + name + " on the CPU");
     std::unique_ptr<Method> method =
         create(name, params, {out.backend, /*live=*/false, options.log});
+    // Skip the lights the objects do not need (never for the ground truth); the CPU renderers
+    // take them from a copy of the scene, made only when a light is skipped.
+    LightCulling lights = cullLights(scene.lights, objectBounds(scene),
+                                     info.caps.groundTruth ? -1.f : options.lightSkipEpsilon);
+    for (const std::string& s : lights.skipped)
+        say(options.log, "skipped " + s);
+    out.skippedLights = std::move(lights.skipped);
     if (out.backend == Backend::Gl) {
-        renderGl(scene, *method, options, out);
+        renderGl(scene, lights.kept, *method, options, out);
     } else {
         CpuRequest request;
         request.subsurfaceOnly = options.subsurfaceOnly;
         request.progress = options.progress;
         out.device = "CPU";
-        out.radiance = method->renderCpu(scene, request);
+        if (out.skippedLights.empty()) {
+            out.radiance = method->renderCpu(scene, request);
+        } else {
+            Scene lit = scene;
+            lit.lights = std::move(lights.kept);
+            out.radiance = method->renderCpu(lit, request);
+        }
         out.frames = 1;
         out.stats = method->stats();
     }

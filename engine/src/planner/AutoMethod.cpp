@@ -10,20 +10,6 @@ namespace lucent::planner {
 
 namespace {
 
-const char* lightTypeName(Light::Type t) {
-    switch (t) {
-        case Light::Type::Point:
-            return "point";
-        case Light::Type::Spot:
-            return "spot";
-        case Light::Type::Directional:
-            return "directional";
-        case Light::Type::Sphere:
-            return "sphere";
-    }
-    return "unknown";
-}
-
 /// A candidate resolved against the registry, or why it cannot serve the scene.
 struct Resolved : CandidateRun {
     std::string unusable;

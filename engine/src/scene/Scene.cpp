@@ -36,6 +36,20 @@ Rgb Light::intensityToward(const Vector3f& towardSurface) const {
     return Rgb(0.f);
 }
 
+const char* lightTypeName(Light::Type type) {
+    switch (type) {
+        case Light::Type::Point:
+            return "point";
+        case Light::Type::Spot:
+            return "spot";
+        case Light::Type::Directional:
+            return "directional";
+        case Light::Type::Sphere:
+            return "sphere";
+    }
+    return "unknown";
+}
+
 Mat4f Camera::viewFromWorld() const {
     // Right-handed view space: camera at the origin looking down −z, +y up (OpenGL).
     return glm::lookAtRH(position, target, up);

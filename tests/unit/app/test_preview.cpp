@@ -364,3 +364,32 @@ TEST_F(PreviewFixture, DirectionalDipoleAndCombinedRenderTranslucency) {
         EXPECT_FALSE(preview.stats().methodStats.empty());
     }
 }
+
+// Issue 15, "lights that miss the object": the preview leaves out a spot aimed away from the
+// mesh (Statistics dock: "skipped light 1 (spot): …"), draws the same image as without it and,
+// while it keeps missing, moving it redraws no shadow map; aimed at the object it is drawn.
+TEST_F(PreviewFixture, SpotThatMissesTheMeshIsSkippedUntilItReachesIt) {
+    const RenderSettings s = directSettings();
+    render(preview, s, /*first=*/true);
+    const auto unlit = render(preview, s);
+    const Bounds3f box = scene.objects[0].mesh.bounds();
+    const float size = glm::length(box.extent());
+    Light spot;
+    spot.type = Light::Type::Spot;
+    spot.position = box.center() + Vector3f(0.f, 2.f * size, 0.f);
+    spot.direction = Vector3f(0.f, 1.f, 0.f);  // up, away from the mesh below it
+    spot.intensity = Rgb(10.f * size * size);
+    scene.lights.push_back(spot);
+    EXPECT_EQ(render(preview, s), unlit);
+    ASSERT_EQ(preview.stats().skippedLights.size(), 1u);
+    EXPECT_NE(preview.stats().skippedLights[0].find("(spot): its cone misses the object"),
+              std::string::npos)
+        << preview.stats().skippedLights[0];
+    const long long shadowsReused = preview.stats().shadowsReused;
+    scene.lights.back().position.x += 0.25f * size;  // still aimed away
+    EXPECT_EQ(render(preview, s), unlit);
+    EXPECT_EQ(preview.stats().shadowsReused, shadowsReused + 1) << "the skipped spot moved";
+    scene.lights.back().direction = Vector3f(0.f, -1.f, 0.f);  // down, onto the mesh
+    EXPECT_NE(render(preview, s), unlit);
+    EXPECT_TRUE(preview.stats().skippedLights.empty());
+}

@@ -318,6 +318,29 @@ elseif(CASE STREQUAL "methods")
     run(ref render ${SCENE} --method reference --param spp=4 --width 8 --height 8 -o ${OUT}/m.exr)
     expect_ok(ref)
     expect_contains(ref "${ref_OUT}" "wrote" "method reference")
+    # Issue 15: a spot aimed away from the object is skipped, and said on stderr; --all-lights
+    # renders it (SSLPV on the CPU: no GL needed).
+    file(WRITE ${OUT}/spot_away.json [=[{
+  "version": 1,
+  "mesh": { "procedural": "sphere", "radius": 10 },
+  "material": { "preset": "skin1" },
+  "lights": [
+    { "type": "directional", "direction": [-0.8, -0.3, -0.5], "irradiance": [3, 3, 3] },
+    { "type": "spot", "position": [0, 40, 0], "direction": [0, 1, 0], "intensity": [5e4, 5e4, 5e4],
+      "inner_deg": 25, "outer_deg": 30 }
+  ],
+  "camera": { "position": [0, 0, 60], "target": [0, 0, 0], "fov_y_deg": 40, "width": 16,
+              "height": 16 }
+}]=])
+    run(skip render ${OUT}/spot_away.json --method sslpv --cpu --grid 16 -o ${OUT}/skip.exr)
+    expect_ok(skip)
+    expect_contains(skip "${skip_ERR}" "skipped light 1 (spot): its cone misses the object")
+    run(all render ${OUT}/spot_away.json --method sslpv --cpu --grid 16 --all-lights
+        -o ${OUT}/all.exr)
+    expect_ok(all)
+    if(all_ERR MATCHES "skipped light")
+        message(FATAL_ERROR "--all-lights still skipped a light: ${all_ERR}")
+    endif()
     # Single scattering was app-only before the registry; now the CLI renders it (GL).
     run(single render ${SCENE} --method single-scattering --steps 12 --width 16 --height 16
         -o ${OUT}/single.exr)

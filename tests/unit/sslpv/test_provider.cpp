@@ -12,6 +12,7 @@
 #include <lucent/mesh/Voxelize.h>
 
 #include "GlTestContext.h"
+#include "ImageTestUtil.h"
 #include "SslpvTestGrids.h"
 
 #include <epoxy/gl.h>
@@ -78,23 +79,6 @@ void setUp(SslpvSubsurfaceProvider& p, const TestScene& s) {
     p.setMesh(s.mesh);
     p.setLights(s.lights);
     p.setMaterial(s.volume, s.eta);
-}
-
-float maxValue(const ImageRgb& img) {
-    float m = 0.f;
-    for (int y = 0; y < img.height(); ++y)
-        for (int x = 0; x < img.width(); ++x)
-            m = std::max(m, std::max(img.at(x, y).x, std::max(img.at(x, y).y, img.at(x, y).z)));
-    return m;
-}
-
-float maxAbsDiff(const ImageRgb& a, const ImageRgb& b) {
-    float d = 0.f;
-    for (int y = 0; y < a.height(); ++y)
-        for (int x = 0; x < a.width(); ++x)
-            for (int c = 0; c < 3; ++c)
-                d = std::max(d, std::abs(a.at(x, y)[c] - b.at(x, y)[c]));
-    return d;
 }
 
 class SslpvProviderGl : public ::testing::Test {
@@ -211,7 +195,7 @@ TEST_F(SslpvProviderGl, PixelsMatchCpuFormulaAndCpuImage) {
         p.create();
         setUp(p, s);
         const ImageRgb gl = render(p, s);
-        const float peak = maxValue(gl);
+        const float peak = test::largestValue(gl);
         ASSERT_GT(peak, 0.f);
 
         // (1) The CPU formula (SslpvSolver::radiance and Fresnel T, as SslpvRenderer) evaluated at
@@ -306,7 +290,8 @@ TEST_F(SslpvProviderGl, PaintingUpdatesIncrementallyAndMatchesFromScratch) {
     EXPECT_EQ(p.stats().incrementalUpdates, 1);
     EXPECT_GT(p.stats().lastResampledCells, 0u);
     EXPECT_LT(p.stats().lastResampledCells, size_t(16 * 16 * 16) / 4);
-    EXPECT_GT(maxAbsDiff(before, after), 1e-3f * maxValue(before));  // the paint shows
+    EXPECT_GT(test::largestDifference(before, after),
+              1e-3f * test::largestValue(before));  // the paint shows
 
     // From scratch: a new provider resampling the painted volume fully gives the same frame
     // (bit-identical coarse grid ⇒ identical solve, upload and shader arithmetic).
@@ -316,7 +301,7 @@ TEST_F(SslpvProviderGl, PaintingUpdatesIncrementallyAndMatchesFromScratch) {
     const ImageRgb scratch = render(fresh, s);
     EXPECT_EQ(p.coarseMaterial().sigma_t[0], fresh.coarseMaterial().sigma_t[0]);
     EXPECT_EQ(p.solver().accumulation().raw(), fresh.solver().accumulation().raw());
-    EXPECT_EQ(maxAbsDiff(after, scratch), 0.f);
+    EXPECT_EQ(test::largestDifference(after, scratch), 0.f);
     std::printf(
         "[sslpv provider] stroke: %zu bricks -> %zu cells; resample %.2f ms, propagate "
         "%.2f ms, upload %.2f ms, sample %.2f ms CPU\n",
@@ -341,9 +326,9 @@ TEST_F(SslpvProviderGl, GlBackendMatchesCpuBackend) {
     // The GL propagation matches the CPU grid to 1e-4 of its peak (test_gl.cpp, fp32); the
     // sample pass is linear in the coefficients with weights summing to 1, so the images agree
     // to 1e-4 of the peak of the image (plus the float rounding bound of the sample pass).
-    const float peak = maxValue(a);
+    const float peak = test::largestValue(a);
     ASSERT_GT(peak, 0.f);
-    EXPECT_LT(maxAbsDiff(a, b), 2e-4f * peak);
+    EXPECT_LT(test::largestDifference(a, b), 2e-4f * peak);
     gl.destroy();
     cpu.destroy();
 }
@@ -387,6 +372,6 @@ TEST_F(SslpvProviderGl, StrokeToFrameTimingsAt32) {
         p.solver().stats().stepsUsed, t.uploadMs, t.sampleCpuMs, t.sampleGpuMs, frameMs);
     EXPECT_EQ(p.stats().fullResamples, 1);
     EXPECT_EQ(p.stats().incrementalUpdates, 1);
-    EXPECT_GT(maxAbsDiff(before, m_renderer.readRadiance()), 0.f);
+    EXPECT_GT(test::largestDifference(before, m_renderer.readRadiance()), 0.f);
     p.destroy();
 }

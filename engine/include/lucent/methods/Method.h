@@ -56,6 +56,10 @@ struct Capabilities {
     bool progressive = false;          ///< GL frames refine while idle until converged()
     LightMask glLights = ALL_LIGHTS;   ///< light types the GL pass handles
     LightMask cpuLights = ALL_LIGHTS;  ///< light types the CPU renderer handles (others ignored)
+    /// The measuring stick (the reference path tracer): renderImage gives it every light, with
+    /// no light skip (RenderOptions::lightSkipEpsilon), so nothing is ever judged against an
+    /// approximation.
+    bool groundTruth = false;
 };
 
 /// Named parameter values: an `evaluate` variant ("sslpv:paper") or a quality level.

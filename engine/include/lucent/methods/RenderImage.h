@@ -17,6 +17,7 @@
 #include <lucent/core/Image.h>
 #include <lucent/gpu/GpuTimer.h>
 #include <lucent/methods/Method.h>
+#include <lucent/scene/LightReach.h>
 #include <lucent/scene/Scene.h>
 
 #include <functional>
@@ -39,6 +40,10 @@ struct RenderOptions {
     /// Render GL methods in this context (made current; e.g. a test's shared context) instead
     /// of a new headless one. Not owned.
     gpu::GlContext* context = nullptr;
+    /// Lights that miss every object or give it at most this fraction of the strongest light's
+    /// irradiance are not rendered (cullLights, lucent/scene/LightReach.h); < 0 renders every
+    /// light (the skip off). The ground truth (Capabilities::groundTruth) renders every light.
+    float lightSkipEpsilon = LIGHT_SKIP_EPSILON;
 };
 
 /// What a render produced.
@@ -51,6 +56,8 @@ struct RenderResult {
     std::vector<gpu::PassTiming> passes;  ///< Gl: the last frame's renderer passes
     Stats stats;                          ///< the method's statistics after the last frame
     std::vector<std::string> glErrors;    ///< Gl: errors the context's debug log collected
+    /// The lights left out and why (cullLights), one line each; also sent to options.log.
+    std::vector<std::string> skippedLights;
 };
 
 /// Renders scene.camera's image with `method` (registry name) and `params` (unset ones take

@@ -32,6 +32,10 @@ struct Light {
     [[nodiscard]] Rgb intensityToward(const Vector3f& towardSurface) const;
 };
 
+/// The type's name as scene files, the CLI and the app spell it: "point", "spot",
+/// "directional", "sphere".
+[[nodiscard]] const char* lightTypeName(Light::Type type);
+
 /// Pinhole (perspective) or orthographic camera.
 struct Camera {
     Point3f position{0.f, 0.f, 60.f};

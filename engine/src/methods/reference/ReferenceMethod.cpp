@@ -63,6 +63,7 @@ MethodEntry referenceMethod() {
     i.docs = "docs/reference.md";
     i.caps.cpu = true;
     i.caps.preferred = Backend::Cpu;
+    i.caps.groundTruth = true;
     i.params = {
         {"spp", ParamType::Int, "samples per pixel", 3, 1 << 24, {}, "64"},
         {"seed",
