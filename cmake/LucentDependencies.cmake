@@ -6,6 +6,8 @@ find_package(glm REQUIRED)
 find_package(TBB CONFIG REQUIRED)
 find_package(OpenEXR CONFIG REQUIRED)
 find_package(PNG REQUIRED)
+# zlib: the mesh importer inflates compressed VTK XML arrays to check them (Debian zlib1g-dev).
+find_package(ZLIB REQUIRED)
 find_package(nlohmann_json 3 REQUIRED)
 find_package(embree 3 REQUIRED)
 find_package(OpenMesh REQUIRED)

@@ -21,7 +21,10 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <string_view>
 #include <vector>
+
+#include <zlib.h>
 
 namespace lucent::detail {
 
@@ -528,63 +531,274 @@ std::string xmlAttribute(const std::string& tag, const std::string& name) {
 /// Receives the values of an integer array one by one; false stops the reading.
 using ValueSink = std::function<bool(int64_t)>;
 
-/// Reads `bytes` bytes at `pos` of `f` as little-endian integers of VTK type `type` (Int32,
-/// UInt32, Int64, UInt64) into `sink`. @return the number of values; nullopt for another type.
-std::optional<uint64_t> readRawValues(std::ifstream& f, uint64_t pos, uint64_t bytes,
-                                      const std::string& type, const ValueSink& sink) {
-    const bool wide = type == "Int64" || type == "UInt64";
-    if (!wide && type != "Int32" && type != "UInt32")
-        return std::nullopt;
-    const bool isSigned = type[0] == 'I';
-    const uint64_t size = wide ? 8 : 4, count = bytes / size;
-    f.clear();
-    f.seekg(std::streamoff(pos));
-    std::vector<unsigned char> chunk(size_t(size) << 13);
-    for (uint64_t done = 0; done < count;) {
-        const uint64_t n = std::min<uint64_t>(count - done, chunk.size() / size);
-        f.read(reinterpret_cast<char*>(chunk.data()), std::streamsize(n * size));
-        if (uint64_t(f.gcount()) != n * size)
-            return done;  // past the end: the array's size was checked against the file
-        for (uint64_t i = 0; i < n; ++i) {
-            uint64_t v = 0;
-            for (uint64_t k = 0; k < size; ++k)
-                v |= uint64_t(chunk[size_t(i * size + k)]) << (8 * k);
-            int64_t value = int64_t(v);
-            if (!wide)
-                value = isSigned ? int64_t(int32_t(uint32_t(v))) : int64_t(v);
-            else if (!isSigned && v > uint64_t(INT64_MAX))
-                value = -1;  // beyond any array: reported as out of range
-            if (!sink(value))
-                return done + i + 1;
-        }
-        done += n;
+/// Assembles little-endian integers of VTK type Int32, UInt32, Int64 or UInt64 from bytes fed
+/// in pieces and passes each to a sink (false from the sink stops it).
+class IntegerDecoder {
+public:
+    /// False for a type that is not one of the four (the array is then not checked).
+    bool setType(const std::string& type) {
+        wide_ = type == "Int64" || type == "UInt64";
+        signed_ = !type.empty() && type[0] == 'I';
+        return wide_ || type == "Int32" || type == "UInt32";
     }
-    return count;
+    [[nodiscard]] uint64_t width() const { return wide_ ? 8 : 4; }
+    /// Feeds `n` bytes; false once the sink has stopped.
+    bool feed(const unsigned char* p, size_t n, const ValueSink& sink) {
+        for (size_t i = 0; i < n && !stopped_; ++i) {
+            word_ |= uint64_t(p[i]) << (8 * filled_);
+            if (++filled_ < width())
+                continue;
+            int64_t value = int64_t(word_);
+            if (!wide_)
+                value = signed_ ? int64_t(int32_t(uint32_t(word_))) : int64_t(uint32_t(word_));
+            else if (!signed_ && word_ > uint64_t(INT64_MAX))
+                value = -1;  // beyond any array: reported as out of range
+            ++count_;
+            stopped_ = !sink(value);
+            word_ = 0;
+            filled_ = 0;
+        }
+        return !stopped_;
+    }
+    [[nodiscard]] uint64_t count() const { return count_; }
+
+private:
+    bool wide_ = false, signed_ = false, stopped_ = false;
+    uint64_t word_ = 0, count_ = 0;
+    uint32_t filled_ = 0;
+};
+
+/// Decodes base64 (RFC 4648 §4) from `text`: whole groups of four characters, a group with
+/// '=' padding ending the decoded bytes of that group. @return false on a character outside the
+/// alphabet.
+bool decodeBase64(std::string_view text, std::string& out) {
+    const auto value = [](char c) -> int {
+        if (c >= 'A' && c <= 'Z')
+            return c - 'A';
+        if (c >= 'a' && c <= 'z')
+            return c - 'a' + 26;
+        if (c >= '0' && c <= '9')
+            return c - '0' + 52;
+        return c == '+' ? 62 : c == '/' ? 63 : c == '=' ? 64 : -1;
+    };
+    out.clear();
+    out.reserve(text.size() / 4 * 3);
+    for (size_t i = 0; i + 4 <= text.size(); i += 4) {
+        int v[4];
+        for (int k = 0; k < 4; ++k)
+            if ((v[k] = value(text[i + size_t(k)])) < 0)
+                return false;
+        if (v[0] == 64 || v[1] == 64)
+            return false;
+        out.push_back(char((v[0] << 2) | (v[1] >> 4)));
+        if (v[2] != 64)
+            out.push_back(char(((v[1] & 15) << 4) | (v[2] >> 2)));
+        if (v[2] != 64 && v[3] != 64)
+            out.push_back(char(((v[2] & 3) << 6) | v[3]));
+    }
+    return true;
+}
+
+/// Base64 characters that encode `bytes` bytes (a group of four per three bytes, padded).
+uint64_t base64Chars(uint64_t bytes) {
+    return (bytes + 2) / 3 * 4;
+}
+
+/// Bytes `n` at `pos` of a VTK XML array's storage: the file (raw or base64 appended data) or
+/// the element's text (inline base64); "" past its end.
+using ReadBytes = std::function<std::string(uint64_t pos, uint64_t n)>;
+
+/// The most decoded bytes of a compressed array that the check inflates in the importing
+/// process (beyond it the array is left to VTK in the child process, which has the memory and
+/// CPU limits of lucent/core/Isolate.h).
+constexpr uint64_t MAX_CHECKED_INFLATE = uint64_t(256) << 20;
+
+/// One integer array of a VTK XML file, as VTK stores it: `word`-byte headers (UInt32 or
+/// UInt64); uncompressed, [byte count][data]; zlib-compressed, [#blocks, block size, last block
+/// size, compressed size of each block][blocks]. In base64 the header of a compressed array is
+/// encoded on its own and the blocks after it, an uncompressed array in one piece.
+struct StoredArray {
+    ReadBytes read;
+    uint64_t available = 0;  ///< bytes (raw) or characters (base64) from the array's start on
+    bool base64 = false, compressed = false;
+    uint32_t word = 4;
+};
+
+/// Reads `count` header words of `a` from byte `first` of its header.
+template <class Fail>
+std::vector<uint64_t> headerWords(const StoredArray& a, uint64_t count, const Fail& fail) {
+    const uint64_t bytes = count * a.word;
+    std::string raw;
+    if (a.base64) {
+        if (base64Chars(bytes) > a.available)
+            fail("an array header is past the end of its data");
+        if (!decodeBase64(a.read(0, base64Chars(bytes)), raw) || raw.size() < bytes)
+            fail("an array header is not valid base64");
+    } else {
+        if (bytes > a.available)
+            fail("an array header is past the end of its data");
+        raw = a.read(0, bytes);
+    }
+    if (raw.size() < bytes)
+        fail("an array header is past the end of its data");
+    std::vector<uint64_t> words(size_t(count), 0);
+    for (uint64_t i = 0; i < count; ++i)
+        for (uint32_t k = 0; k < a.word; ++k)
+            words[size_t(i)] |= uint64_t(static_cast<unsigned char>(raw[size_t(i * a.word + k)]))
+                                << (8 * k);
+    return words;
+}
+
+/// The values of array `a` into `decoder`/`sink`; `sink` empty: only their number, from the
+/// header. @return the number of values; nullopt when the array is not checked here (a
+/// compressed array beyond MAX_CHECKED_INFLATE).
+template <class Fail>
+std::optional<uint64_t> storedValues(const StoredArray& a, IntegerDecoder& decoder,
+                                     const ValueSink& sink, const Fail& fail) {
+    const uint64_t width = decoder.width();
+    if (!a.compressed) {
+        const uint64_t bytes = headerWords(a, 1, fail)[0];
+        const uint64_t stored = a.word + std::min(bytes, a.available);  // no overflow
+        if (bytes > a.available || (a.base64 ? base64Chars(stored) : stored) > a.available)
+            fail("an array of " + std::to_string(bytes) + " bytes is larger than its data");
+        if (!sink)
+            return bytes / width;
+        std::string data;
+        if (a.base64) {
+            std::string decoded;
+            if (!decodeBase64(a.read(0, base64Chars(stored)), decoded) || decoded.size() < stored)
+                fail("an array is not valid base64");
+            data = decoded.substr(a.word, size_t(bytes));
+        } else {
+            data = a.read(a.word, bytes);
+        }
+        decoder.feed(reinterpret_cast<const unsigned char*>(data.data()), data.size(), sink);
+        return decoder.count();
+    }
+    const uint64_t blocks = headerWords(a, 1, fail)[0];
+    if (blocks > a.available / a.word)
+        fail("the compression header claims " + std::to_string(blocks) +
+             " blocks, more than the file holds (corrupt)");
+    const std::vector<uint64_t> header = headerWords(a, 3 + blocks, fail);
+    const uint64_t blockSize = header[1], lastSize = header[2] ? header[2] : header[1];
+    const uint64_t limit = importLimits().maxDecodedBytes;
+    if (blockSize > limit || lastSize > limit)
+        fail("the compression header claims blocks of " + std::to_string(blockSize) +
+             " bytes, more than the import limit of " + std::to_string(limit));
+    // blocks ≤ the file's size / 4 and block sizes ≤ the limit: no overflow.
+    const uint64_t decodedBytes = blocks == 0 ? 0 : (blocks - 1) * blockSize + lastSize;
+    if (decodedBytes > limit)
+        fail("the compression header claims " + std::to_string(decodedBytes) +
+             " bytes, more than the import limit of " + std::to_string(limit));
+    if (!sink)
+        return decodedBytes / width;
+    if (decodedBytes > MAX_CHECKED_INFLATE)
+        return std::nullopt;
+    uint64_t stored = 0;
+    for (uint64_t b = 0; b < blocks; ++b) {
+        if (header[size_t(3 + b)] > a.available - stored)
+            fail("the compressed blocks are larger than the file (corrupt)");
+        stored += header[size_t(3 + b)];
+    }
+    const uint64_t headerStored =
+        a.base64 ? base64Chars((3 + blocks) * a.word) : (3 + blocks) * a.word;
+    if (headerStored + (a.base64 ? base64Chars(stored) : stored) > a.available)
+        fail("the compressed blocks are larger than the file (corrupt)");
+    std::string data = a.read(headerStored, a.base64 ? base64Chars(stored) : stored);
+    if (!a.base64 && data.size() < stored)
+        fail("the compressed blocks are past the end of the file (corrupt)");
+    if (a.base64) {
+        std::string decoded;
+        if (!decodeBase64(data, decoded) || decoded.size() < stored)
+            fail("compressed blocks are not valid base64");
+        data.swap(decoded);
+    }
+    // Each block inflated through a fixed buffer, its values decoded as they come.
+    unsigned char out[1 << 16];
+    uint64_t at = 0;
+    for (uint64_t b = 0; b < blocks; ++b) {
+        const uint64_t in = header[size_t(3 + b)],
+                       expected = b + 1 == blocks ? lastSize : blockSize;
+        z_stream z{};
+        if (inflateInit(&z) != Z_OK)
+            fail("zlib could not start");
+        z.next_in = reinterpret_cast<Bytef*>(data.data() + at);
+        z.avail_in = uInt(std::min<uint64_t>(in, UINT32_MAX));
+        uint64_t produced = 0;
+        int rc = Z_OK;
+        bool more = true;
+        while (rc == Z_OK && more) {
+            z.next_out = out;
+            z.avail_out = sizeof out;
+            rc = inflate(&z, Z_NO_FLUSH);
+            const size_t n = sizeof out - z.avail_out;
+            produced += n;
+            if (produced > expected)
+                break;
+            more = decoder.feed(out, n, sink);
+        }
+        inflateEnd(&z);
+        if (!more)
+            return decoder.count();
+        if (rc != Z_STREAM_END || produced != expected)
+            fail("compressed block " + std::to_string(b) + " does not inflate to the " +
+                 std::to_string(expected) + " bytes its header claims (corrupt)");
+        at += in;
+    }
+    return decoder.count();
 }
 
 /// Checks each cell section (Polys, Strips, Lines, Verts) of a VTK XML file before VTK reads
 /// it: its `offsets` (the end of each cell in `connectivity`) must not decrease and must stay
 /// within the connectivity array. VTK 9.1 sizes the connectivity array by the last offset
 /// and reads out of bounds on decreasing ones (fuzz findings vtp_cell_offsets_*.vtp). Arrays
-/// in ASCII are read from `xml`; `appended(tag, sink)` reads a raw appended array (nullopt
-/// when it cannot: compressed, base64 or an unknown type, left to VTK's own checks in the
-/// child process).
+/// in ASCII and inline base64 (format "binary") are read from `xml`; `appended(tag)` gives
+/// an appended array's storage (nullopt when the file has none). Every encoding VTK writes is
+/// read (ASCII, base64, raw; uncompressed or zlib); other compressors are left to VTK's own
+/// checks in the child process.
 template <class Appended, class Fail>
-void checkCellOffsets(const std::string& xml, const Appended& appended, const Fail& fail) {
+void checkCellOffsets(const std::string& xml, uint32_t word, bool compressed,
+                      const Appended& appended, const Fail& fail) {
     const auto values = [&](size_t at, const ValueSink& sink) -> std::optional<uint64_t> {
         const size_t close = xml.find('>', at);
+        if (close == std::string::npos)
+            return std::nullopt;
         const std::string tag = xml.substr(at, close - at);
         const std::string format = xmlAttribute(tag, "format");
-        if (format == "appended")
-            return appended(tag, sink);
-        if (format != "ascii" || close == std::string::npos || xml[close - 1] == '/')
+        IntegerDecoder decoder;
+        if (!decoder.setType(xmlAttribute(tag, "type")))
             return std::nullopt;
-        const size_t end = xml.find("</DataArray", close);
-        std::istringstream text(xml.substr(close + 1, end - close - 1));
+        if (format == "appended") {
+            const std::optional<StoredArray> a = appended(tag);
+            return a ? storedValues(*a, decoder, sink, fail) : std::nullopt;
+        }
+        if (xml[close - 1] == '/')
+            return std::nullopt;
+        // The element's text: up to the next tag (VTK may write InformationKey children).
+        const size_t end = xml.find('<', close);
+        const std::string body = xml.substr(close + 1, end - close - 1);
+        if (format == "binary") {
+            std::string text;
+            for (char c : body)
+                if (!std::isspace(static_cast<unsigned char>(c)))
+                    text.push_back(c);
+            StoredArray a;
+            a.read = [text](uint64_t pos, uint64_t n) {
+                return pos < text.size() ? text.substr(size_t(pos), size_t(n)) : std::string();
+            };
+            a.available = text.size();
+            a.base64 = true;
+            a.compressed = compressed;
+            a.word = word;
+            return storedValues(a, decoder, sink, fail);
+        }
+        if (format != "ascii")
+            return std::nullopt;
+        std::istringstream text(body);
         uint64_t n = 0;
         for (long long v = 0; text >> v;) {
             ++n;
-            if (!sink(int64_t(v)))
+            if (sink && !sink(int64_t(v)))
                 break;
         }
         return n;
@@ -605,7 +819,7 @@ void checkCellOffsets(const std::string& xml, const Appended& appended, const Fa
             }
             if (connectivity == std::string::npos || offsets == std::string::npos)
                 continue;
-            const std::optional<uint64_t> ids = values(connectivity, [](int64_t) { return true; });
+            const std::optional<uint64_t> ids = values(connectivity, {});
             if (!ids)
                 continue;
             int64_t previous = 0;
@@ -634,7 +848,8 @@ void checkCellOffsets(const std::string& xml, const Appended& appended, const Fa
 /// for the sizes in each appended array's compression header ([#blocks, block size, last
 /// block size, compressed size of each block]) before it reads them: a mutated block count
 /// made vtkXMLDataParser::ReadCompressionHeader run for minutes at 4-13 GB. For raw appended
-/// data, every header is checked against the file size and the import limits here.
+/// data, every header is checked against the file size and the import limits here; the cell
+/// offsets are checked in every encoding (checkCellOffsets).
 ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
     std::ifstream f(path, std::ios::binary);
     // The XML part: everything before the appended data (bounded: 64 MiB of text).
@@ -664,83 +879,87 @@ ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
     }
     checkElementCount(c.points, "mesh file", path, "points");
     checkElementCount(c.polygons, "mesh file", path, "polygons");
-    const auto noAppendedArrays = [](const std::string&, const ValueSink&) {
-        return std::optional<uint64_t>();
-    };
+    const size_t fileTag = xml.find("<VTKFile");
+    const std::string head =
+        fileTag == std::string::npos ? "" : xml.substr(fileTag, xml.find('>', fileTag) - fileTag);
+    const uint32_t word = xmlAttribute(head, "header_type") == "UInt64" ? 8 : 4;
+    const std::string compressor = xmlAttribute(head, "compressor");
+    const bool compressed = !compressor.empty();
+    // Other compressors (LZ4, LZMA): their arrays are left to VTK in the child process.
+    const bool zlib = !compressed || compressor == "vtkZLibDataCompressor";
+    const auto noAppendedArrays = [](const std::string&) { return std::optional<StoredArray>(); };
     if (appendedTag == std::string::npos) {
-        checkCellOffsets(xml, noAppendedArrays, fail);
+        if (zlib)
+            checkCellOffsets(xml, word, compressed, noAppendedArrays, fail);
         return c;
     }
     const size_t tagEnd = text.find('>', appendedTag);
     const size_t underscore = tagEnd == std::string::npos ? tagEnd : text.find('_', tagEnd);
     if (underscore == std::string::npos)
         fail("AppendedData without its '_' marker");
-    if (xmlAttribute(text.substr(appendedTag, tagEnd - appendedTag), "encoding") != "raw") {
-        // base64: decoded by VTK in the child process, bounded by its memory limit
-        checkCellOffsets(xml, noAppendedArrays, fail);
-        return c;
-    }
-    const size_t fileTag = xml.find("<VTKFile");
-    const std::string head =
-        fileTag == std::string::npos ? "" : xml.substr(fileTag, xml.find('>', fileTag) - fileTag);
-    const uint32_t word = xmlAttribute(head, "header_type") == "UInt64" ? 8 : 4;
-    const bool compressed = !xmlAttribute(head, "compressor").empty();
+    const bool base64 =
+        xmlAttribute(text.substr(appendedTag, tagEnd - appendedTag), "encoding") != "raw";
     const uint64_t dataStart = uint64_t(underscore) + 1;
     const uint64_t limit = importLimits().maxDecodedBytes;
-    auto readWord = [&](uint64_t pos) {
-        if (pos + word > size)
-            fail("appended data header at byte " + std::to_string(pos) + " is past the end");
-        unsigned char b[8] = {};
+    const ReadBytes readFile = [&](uint64_t pos, uint64_t n) {
+        if (pos >= size)
+            return std::string();
+        std::string bytes(size_t(std::min(n, size - pos)), '\0');
         f.clear();
         f.seekg(std::streamoff(pos));
-        f.read(reinterpret_cast<char*>(b), word);
-        uint64_t v = 0;
-        for (uint32_t k = 0; k < word; ++k)
-            v |= uint64_t(b[k]) << (8 * k);  // byte_order LittleEndian (VTK writes the host's)
-        return v;
+        f.read(bytes.data(), std::streamsize(bytes.size()));
+        bytes.resize(size_t(f.gcount()));
+        return bytes;
     };
-    for (size_t at = xml.find("<DataArray"); at != std::string::npos;
-         at = xml.find("<DataArray", at + 1)) {
-        const std::string tag = xml.substr(at, xml.find('>', at) - at);
-        if (xmlAttribute(tag, "format") != "appended")
-            continue;
+    // An appended array's storage: from dataStart + its offset (bytes, or base64 characters)
+    // to the end of the file.
+    const auto appended = [&](const std::string& tag) -> std::optional<StoredArray> {
         uint64_t offset = 0;
         if (!parseCount(xmlAttribute(tag, "offset"), offset) || dataStart + offset > size)
             fail("appended array offset out of the file in '" + tag.substr(0, 80) + "'");
         const uint64_t pos = dataStart + offset;
-        const std::string where = " of the appended array at byte " + std::to_string(pos);
+        StoredArray a;
+        a.read = [&readFile, pos](uint64_t at, uint64_t n) { return readFile(pos + at, n); };
+        a.available = size - pos;
+        a.base64 = base64;
+        a.compressed = compressed;
+        a.word = word;
+        return a;
+    };
+    for (size_t at = xml.find("<DataArray"); at != std::string::npos;
+         at = xml.find("<DataArray", at + 1)) {
+        const std::string tag = xml.substr(at, xml.find('>', at) - at);
+        if (xmlAttribute(tag, "format") != "appended" || !zlib)
+            continue;
+        const StoredArray a = *appended(tag);
+        const std::string where = " of the appended array at offset " + xmlAttribute(tag, "offset");
         if (!compressed) {
-            if (readWord(pos) > size - pos)
+            const uint64_t bytes = headerWords(a, 1, fail)[0];
+            const uint64_t stored = a.word + std::min(bytes, a.available);  // no overflow
+            if (bytes > a.available || (base64 ? base64Chars(stored) : stored) > a.available)
                 fail("the size" + where + " is larger than the file");
             continue;
         }
-        const uint64_t blocks = readWord(pos), blockSize = readWord(pos + word),
-                       lastSize = readWord(pos + 2 * word);
-        if (blocks > (size - pos) / word)
+        const uint64_t blocks = headerWords(a, 1, fail)[0];
+        if (blocks > a.available / a.word)
             fail("the compression header" + where + " claims " + std::to_string(blocks) +
                  " blocks, more than the file holds (corrupt)");
+        const std::vector<uint64_t> header = headerWords(a, 3 + blocks, fail);
+        const uint64_t blockSize = header[1], lastSize = header[2];
         const uint64_t decoded =
             blocks == 0 ? 0 : (blocks - 1) * blockSize + (lastSize ? lastSize : blockSize);
         if (blockSize > limit || decoded > limit)
             fail("the compression header" + where + " claims " + std::to_string(decoded) +
                  " bytes, more than the import limit of " + std::to_string(limit));
         uint64_t stored = 0;
-        for (uint64_t b = 0; b < blocks; ++b)
-            stored += readWord(pos + (3 + b) * word);
-        if (stored > size - pos)
-            fail("the compressed blocks" + where + " are larger than the file (corrupt)");
+        for (uint64_t b = 0; b < blocks; ++b) {
+            if (header[size_t(3 + b)] > a.available - stored)
+                fail("the compressed blocks" + where + " are larger than the file (corrupt)");
+            stored += header[size_t(3 + b)];
+        }
     }
-    if (!compressed)
-        checkCellOffsets(
-            xml,
-            [&](const std::string& tag, const ValueSink& sink) {
-                uint64_t offset = 0;
-                parseCount(xmlAttribute(tag, "offset"), offset);  // checked above
-                const uint64_t pos = dataStart + offset;
-                const uint64_t bytes = readWord(pos);  // ≤ the file's size, checked above
-                return readRawValues(f, pos + word, bytes, xmlAttribute(tag, "type"), sink);
-            },
-            fail);
+    if (zlib)
+        checkCellOffsets(xml, word, compressed, appended, fail);
     return c;
 }
 

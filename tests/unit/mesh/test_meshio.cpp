@@ -277,6 +277,23 @@ TEST(MeshIO, FuzzFindingsAreClearErrors) {
     expectLoadError(fuzzFinding("vtp_cell_offsets_3gib.vtp"), "VTK reader");
 }
 
+// Issue 16: the cell offsets of a VTK XML file are checked before VTK reads them in every
+// encoding VTK writes, not only ASCII and raw appended data. The tetrahedra were written by
+// vtkXMLPolyDataWriter (inline base64, appended base64, appended raw; each uncompressed and
+// zlib); the corrupt twins end their last cell at offset 1000 of 12 point ids. Before, VTK in
+// the child process sized its arrays by that offset and reported "VTK found no points".
+TEST(MeshIO, CellOffsetsAreCheckedInEveryVtkXmlEncoding) {
+    for (const char* encoding : {"inline_binary", "inline_binary_zlib", "appended_base64",
+                                 "appended_base64_zlib", "appended_raw", "appended_raw_zlib"}) {
+        SCOPED_TRACE(encoding);
+        EXPECT_EQ(
+            loadMesh(robustInput(std::string("vtp_tetra_") + encoding + ".vtp")).triangleCount(),
+            4u);
+        expectLoadError(robustInput(std::string("vtp_offsets_past_") + encoding + ".vtp"),
+                        "Polys: cell 3 ends at offset 1000, past the 12 point ids");
+    }
+}
+
 TEST(MeshIO, ImportLimitsApplyBeforeAllocation) {
     const std::string sphere = robustInput("sphere_closed.off");
     EXPECT_EQ(loadMesh(sphere).triangleCount(), 224u);
