@@ -223,6 +223,64 @@ void backlitThinThick(std::vector<EvalCase>& out, const SuiteOptions& o) {
             s);
 }
 
+/// A point light behind the object (its far side from the camera, a little off the view axis so
+/// the light itself is not hidden exactly behind the centre), 10⁴ W/sr at about 50 mm: the
+/// key light's irradiance, arriving from behind.
+Light backLight(const Point3f& position) {
+    return pointLight(position, KEY_LIGHT_W_PER_SR);
+}
+
+/// Back-lit and thin cases (issue 15): few suite cases were back-lit or thin, so the planner's
+/// error models extrapolated exactly where subsurface preview matters most. Each is cheap for
+/// the reference: low to moderate albedo or a small optical size (short paths).
+void backlitCases(std::vector<EvalCase>& out, const SuiteOptions& o) {
+    const MaterialSample skin = findPreset("skin1").sample();
+    const MaterialSample jade = findPreset("jade").sample();
+    {  // A 2 mm skin slab in front of a point light: light through a thin, flat part.
+        Scene s = objectScene(makeBox({30.f, 30.f, 2.f}), skin, 1.3f, o.materialResolution);
+        s.lights.push_back(backLight({8.f, 6.f, -50.f}));
+        s.camera = camera({0.f, 12.f, 52.f}, Point3f(0.f), o.width, o.height);
+        addCase(out, "backlit-slab-skin1-eta1.3", "shape",
+                "slab 30x30x2 mm, skin1, eta 1.3, point light behind", s);
+    }
+    {  // A small jade sphere (r 6 mm) with the light behind it and up: the glow through a
+        // curved body and its rim, at jade's long mean free paths.
+        Scene s = objectScene(makeSphere(6.f, 4), jade, 1.3f, o.materialResolution);
+        s.lights.push_back(backLight({12.f, 18.f, -45.f}));
+        s.camera = camera({0.f, 0.f, 36.f}, Point3f(0.f), o.width, o.height);
+        addCase(out, "backlit-sphere-jade-eta1.3", "shape",
+                "sphere r 6 mm, jade, eta 1.3, point light behind and above", s);
+    }
+    {  // A thin-walled ring (torus 10 / 2 mm) of marble lit from behind: thin features of a
+        // high-albedo medium, where every path is short (4 mm across).
+        Scene s = objectScene(makeTorus(10.f, 2.f, 96, 32), findPreset("marble").sample(), 1.3f,
+                              o.materialResolution);
+        // The ring lies in the xz plane (makeTorus is around +y): seen from above, lit from
+        // below.
+        s.lights.push_back(backLight({-10.f, -45.f, -15.f}));
+        s.camera = camera({0.f, 40.f, 14.f}, Point3f(0.f), o.width, o.height);
+        addCase(out, "backlit-thin-torus-marble-eta1.3", "shape",
+                "torus 10/2 mm (thin ring), marble, eta 1.3, point light behind", s);
+    }
+    {  // A painted 3 mm jade slab, back-lit: a dark-absorber stroke across it and a skin1
+        // stamp, so the transmitted light varies with the paint (heterogeneous and thin).
+        Scene s = objectScene(makeBox({30.f, 30.f, 3.f}), jade, 1.3f, o.materialResolution);
+        MaterialVolume& vol = *s.objects.front().material;
+        BrushSettings stroke;
+        stroke.radius = 2.5f;
+        stroke.value = withAbsorption(jade, 0.8f);
+        paintStroke(vol, stroke, {{-12.f, -6.f, 0.f}, {0.f, 2.f, 0.f}, {12.f, -2.f, 0.f}});
+        BrushSettings blob;
+        blob.radius = 5.f;
+        blob.value = skin;
+        stamp(vol, blob, {-4.f, 8.f, 0.f});
+        s.lights.push_back(backLight({-6.f, 4.f, -50.f}));
+        s.camera = camera({0.f, 12.f, 52.f}, Point3f(0.f), o.width, o.height);
+        addCase(out, "backlit-painted-slab-jade", "heterogeneous",
+                "slab 30x30x3 mm, jade with a dark-absorber stroke and a skin1 stamp, back-lit", s);
+    }
+}
+
 /// skin1 spheres under the other light types.
 void lightCases(std::vector<EvalCase>& out, const SuiteOptions& o) {
     const MaterialSample skin = findPreset("skin1").sample();
@@ -341,6 +399,7 @@ std::vector<EvalCase> buildSuite(const std::string& name, const SuiteOptions& op
     backlitThinThick(out, o);
     lightCases(out, o);
     deformingFrame(out, o);
+    backlitCases(out, o);
     return out;
 }
 

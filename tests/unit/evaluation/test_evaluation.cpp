@@ -125,6 +125,11 @@ TEST(EvaluationSuite, DefaultSuiteCoversTheIssue) {
         // Painted cases are heterogeneous, the others uniform (planner's own thresholds).
         const bool painted = c.group == "heterogeneous";
         EXPECT_EQ(!c.scene.objects.front().material->isHomogeneous(), painted) << c.name;
+        // The back-lit cases are there for the planner's back-lit term: they must read as
+        // back-lit to it (classify's threshold).
+        if (c.name.rfind("backlit-", 0) == 0) {
+            EXPECT_GT(f.backLitFraction, 0.5) << c.name;
+        }
     }
     EXPECT_EQ(groups, (std::set<std::string>{"homogeneous", "heterogeneous", "shape", "lights",
                                              "deforming"}));
@@ -132,10 +137,13 @@ TEST(EvaluationSuite, DefaultSuiteCoversTheIssue) {
          {"sphere-marble-eta1.3", "sphere-skin1-eta1", "sphere-jade-eta1.3",
           "sphere-wholemilk-eta1.3", "sphere-skin1-eta1.3-g0.8", "veins-marble", "layer-over-core",
           "g-layer-skin1", "bunny-painted", "backlit-thin-thick", "lights-spot",
-          "lights-directional", "lights-two", "deformed-torus"})
+          "lights-directional", "lights-two", "deformed-torus", "backlit-slab-skin1-eta1.3",
+          "backlit-sphere-jade-eta1.3", "backlit-thin-torus-marble-eta1.3",
+          "backlit-painted-slab-jade"})
         EXPECT_TRUE(names.count(name)) << name;
     EXPECT_THROW(buildSuite("nightly"), ValueError);
     EXPECT_EQ(filterCases(cases, {"lights-"}).size(), 3u);
+    EXPECT_EQ(filterCases(cases, {"backlit-"}).size(), 5u);  // with backlit-thin-thick
     EXPECT_THROW(filterCases(cases, {"no-such-case"}), ValueError);
 }
 
