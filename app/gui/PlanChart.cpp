@@ -19,6 +19,7 @@
 #include <QChart>
 #include <QChartView>
 #include <QCoreApplication>
+#include <QEvent>
 #include <QLabel>
 #include <QLineSeries>
 #include <QLogValueAxis>
@@ -156,31 +157,46 @@ PlanChart::PlanChart(Document* doc, Viewport* viewport, ReferencePanel* referenc
         else
             measure();
     });
+    m_reference->installEventFilter(this);
     connect(m_viewport, &Viewport::autoPlanChanged, this, [this] { refreshPlan(); });
-    // A measurement is of one scene and view: any edit makes it stale, so it stops.
+    // A measurement is of one scene and view: any edit makes it stale, so it stops and its
+    // points go; the plan is made again.
     for (auto signal :
          {&Document::sceneReplaced, &Document::materialEdited, &Document::sceneEdited})
         connect(m_doc, signal, this, [this] {
             cancelMeasurement();
-            m_measured.clear();
-            m_measuredReason.clear();
+            m_planDirty = true;
+            if (!m_measured.empty()) {
+                m_measured.clear();
+                m_measuredReason.clear();
+                redraw();
+            }
         });
-    // With a fixed method the viewport makes no plan: plan for the view at most once a second
-    // while the page is shown. Queued: the viewport emits from inside its paintGL.
+    // With a fixed method the viewport makes no plan: plan for the view when something it
+    // depends on changed, at most once a second and only while the page is shown (planning
+    // measures the painted volume). Queued: the viewport emits from inside its paintGL.
     auto since = std::make_shared<Timer>();
     connect(
         m_viewport, &Viewport::frameRendered, this,
         [this, since] {
-            if (isMeasuring() && (m_viewport->camera().eye() != m_measureEye ||
-                                  m_viewport->camera().target != m_measureTarget))
+            const OrbitCamera& cam = m_viewport->camera();
+            if (isMeasuring() && (cam.eye() != m_measureEye || cam.target != m_measureTarget))
                 cancelMeasurement();  // the view moved
-            if (isVisible() && since->elapsedMs() > 1000.0) {
+            if (cam.eye() != m_plannedEye || cam.target != m_plannedTarget ||
+                m_viewport->renderSettings().method != m_plannedMethod)
+                m_planDirty = true;
+            if (m_planDirty && isVisible() && since->elapsedMs() > 1000.0) {
                 since->reset();
                 refreshPlan();
             }
         },
         Qt::QueuedConnection);
-    refreshPlan();
+}
+
+void PlanChart::showEvent(QShowEvent* event) {
+    QWidget::showEvent(event);
+    if (m_planDirty)
+        refreshPlan();
 }
 
 PlanChart::~PlanChart() {
@@ -191,9 +207,12 @@ PlanChart::~PlanChart() {
     }
 }
 
-void PlanChart::hideEvent(QHideEvent* event) {
-    cancelMeasurement();  // the dock was closed (or the page left)
-    QWidget::hideEvent(event);
+bool PlanChart::eventFilter(QObject* watched, QEvent* event) {
+    // The dock was closed or put behind another (the whole panel hides), not merely the other
+    // page shown: a measurement may go on while the reference renders.
+    if (watched == m_reference && event->type() == QEvent::Hide)
+        cancelMeasurement();
+    return QWidget::eventFilter(watched, event);
 }
 
 QString PlanChart::chosenLabel() const {
@@ -204,6 +223,10 @@ QString PlanChart::chosenLabel() const {
 }
 
 void PlanChart::refreshPlan() {
+    m_planDirty = false;
+    m_plannedEye = m_viewport->camera().eye();
+    m_plannedTarget = m_viewport->camera().target;
+    m_plannedMethod = m_viewport->renderSettings().method;
     if (!m_doc->hasObject()) {
         m_predicted.clear();
         m_planLine->setText(tr("No object: nothing to plan."));

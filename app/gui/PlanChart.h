@@ -13,6 +13,7 @@
 
 #include <atomic>
 #include <memory>
+#include <string>
 #include <vector>
 
 class QLabel;
@@ -67,7 +68,10 @@ Q_SIGNALS:
     void measurementFinished();
 
 protected:
-    void hideEvent(QHideEvent* event) override;
+    /// Stops a measurement when the Reference dock hides (closed, or behind another dock).
+    bool eventFilter(QObject* watched, QEvent* event) override;
+    /// Plans when shown if the scene, view or method changed while hidden.
+    void showEvent(QShowEvent* event) override;
 
 private:
     void redraw();
@@ -91,6 +95,10 @@ private:
     QString m_planKey;  ///< what the shown plan was made from (no redraw when unchanged)
     /// The view the running measurement renders (a move cancels it).
     Point3f m_measureEye{0.f}, m_measureTarget{0.f};
+    /// What the shown plan was made for; m_planDirty: something changed since.
+    Point3f m_plannedEye{0.f}, m_plannedTarget{0.f};
+    std::string m_plannedMethod;
+    bool m_planDirty = true;
     QThread* m_thread = nullptr;
     std::shared_ptr<std::atomic<bool>> m_cancel;
 };

@@ -3,7 +3,8 @@
 /// @brief The Reference dock's "Run time vs error" page (PlanChart) under Xvfb: one predicted
 /// point per option of the Auto plan with the choice marked and the frame budget drawn, the
 /// plan Auto would make while a fixed method runs (that method marked), and "Measure this
-/// scene" on a small view with a finished reference: measured points and a measured plan.
+/// scene" on a small view with a finished reference: measured points and a measured plan; an
+/// edit or closing the dock stops a measurement.
 /// Also writes the user guide's screenshot of the page when LUCENT_SCREENSHOT_DIR is set.
 
 #include "Document.h"
@@ -177,8 +178,23 @@ TEST(AppPlanChart, MeasuringASmallSceneGivesMeasuredPointsAndAPlan) {
     EXPECT_EQ(chart->measuredPoints(), 0);
     EXPECT_TRUE(line->text().contains(QStringLiteral("stopped"))) << line->text().toStdString();
 
+    // The other page of the dock shown: it goes on; the dock closed: it stops.
+    chart->measure();
+    ASSERT_TRUE(chart->isMeasuring());
+    ref->showPage(0);
+    EXPECT_TRUE(chart->isMeasuring());
+    auto* dock = w->findChild<QDockWidget*>(QStringLiteral("dockReference"));
+    ASSERT_NE(dock, nullptr);
+    dock->close();
+    ASSERT_TRUE(QTest::qWaitFor([&] { return !chart->isMeasuring(); }, 120000));
+    EXPECT_EQ(chart->measuredPoints(), 0);
+    EXPECT_TRUE(line->text().contains(QStringLiteral("stopped"))) << line->text().toStdString();
+
     const QString dir = qEnvironmentVariable("LUCENT_SCREENSHOT_DIR");
     if (!dir.isEmpty()) {  // the user guide's picture: measure again, then grab the window
+        dock->show();
+        dock->raise();
+        ref->showPage(1);
         chart->measure();
         ASSERT_TRUE(QTest::qWaitFor([&] { return !chart->isMeasuring(); }, 240000));
         renderUntil(vp, [] { return false; });
