@@ -11,7 +11,6 @@
 
 #include <lucent/core/Image.h>
 #include <lucent/core/Timer.h>
-#include <lucent/scene/Scene.h>
 
 #include <QImage>
 #include <QWidget>
@@ -26,6 +25,10 @@ class QPushButton;
 class QSpinBox;
 class QTabWidget;
 class QThread;
+
+namespace lucent {
+struct Scene;
+}
 
 namespace lucent::app {
 
