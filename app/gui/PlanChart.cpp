@@ -227,10 +227,15 @@ void PlanChart::refreshPlan() {
     m_plannedEye = m_viewport->camera().eye();
     m_plannedTarget = m_viewport->camera().target;
     m_plannedMethod = m_viewport->renderSettings().method;
-    if (!m_doc->hasObject()) {
+    const auto noPlan = [this](const QString& why) {
         m_predicted.clear();
-        m_planLine->setText(tr("No object: nothing to plan."));
+        m_optionIndices.clear();
+        m_planKey.clear();
+        m_planLine->setText(why);
         redraw();
+    };
+    if (!m_doc->hasObject()) {
+        noPlan(tr("No object: nothing to plan."));
         return;
     }
     const planner::Models& models = PreviewRenderer::liveModels();
@@ -251,9 +256,7 @@ void PlanChart::refreshPlan() {
                                       /*glAvailable=*/true, nullptr, methods::Backend::Gl);
         }
     } catch (const Error& e) {
-        m_predicted.clear();
-        m_planLine->setText(tr("No plan: %1").arg(QString::fromUtf8(e.what())));
-        redraw();
+        noPlan(tr("No plan: %1").arg(QString::fromUtf8(e.what())));
         return;
     }
     const std::string current = m_viewport->renderSettings().method;
@@ -278,10 +281,14 @@ void PlanChart::refreshPlan() {
         indices.push_back(o.index);
     }
     const QString reason = QString::fromStdString(shown.choice.plan.reason);
-    m_planLine->setText(shown.fromViewport
-                            ? tr("Auto (predicted): %1").arg(reason)
-                            : tr("The preview runs %1; Auto would choose (predicted): %2")
-                                  .arg(QString::fromStdString(current), reason));
+    if (shown.fromViewport)
+        m_planLine->setText(tr("Auto (predicted): %1").arg(reason));
+    else if (isAuto)  // the preview still times the Direct frame it plans with
+        m_planLine->setText(
+            tr("Auto (predicted, before the preview's first plan): %1").arg(reason));
+    else
+        m_planLine->setText(tr("The preview runs %1; Auto would choose (predicted): %2")
+                                .arg(QString::fromStdString(current), reason));
     m_directMs = shown.directMs;
     if (key == m_planKey)
         return;
