@@ -174,18 +174,6 @@ private:
     glm::vec2 m_range{0.f};
 };
 
-/// The shipped planner models (planner::defaultModels) of the candidates that were measured on
-/// the GL pass the preview runs: a candidate whose method and variant resolve to the CPU
-/// renderer with GL available (SSLPV prefers its CPU ray caster offline) predicts another
-/// renderer's cost and error, so the preview does not plan with it.
-/// The live preview's candidates: the shipped live costs (stroke → frame, measured by the app's
-/// latency harness) with the shipped error models (planner/LiveCosts.h).
-const planner::Models& liveModels() {
-    static const planner::Models models =
-        planner::liveModels(planner::defaultModels(), planner::defaultLiveCosts());
-    return models;
-}
-
 /// Whether two cameras give the same frame.
 bool sameCamera(const Camera& a, const Camera& b) {
     return a.position == b.position && a.target == b.target && a.up == b.up &&
@@ -296,6 +284,20 @@ void PreviewRenderer::destroy() {
 
 bool PreviewRenderer::wantsAnotherFrame() const {
     return m->created && ((m->method && !m->method->converged()) || isPlanning());
+}
+
+const planner::Models& PreviewRenderer::liveModels() {
+    static const planner::Models models =
+        planner::liveModels(planner::defaultModels(), planner::defaultLiveCosts());
+    return models;
+}
+
+const planner::AutoChoice* PreviewRenderer::autoChoice() const {
+    return m->autoPlan.valid ? &m->autoPlan.choice : nullptr;
+}
+
+double PreviewRenderer::autoDirectMs() const {
+    return m->autoPlan.directMs;
 }
 
 bool PreviewRenderer::isPlanning() const {
@@ -430,8 +432,9 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
     // The previous plan of the same scene, for hysteresis (a new scene plans from scratch).
     const planner::Plan previous = a.choice.plan;
     const bool hasPrevious = a.valid && !f.sceneReplaced;
-    a.choice = planner::chooseMethod(scene, liveModels(), budget, /*glAvailable=*/true,
-                                     hasPrevious ? &previous : nullptr, methods::Backend::Gl);
+    a.choice =
+        planner::chooseMethod(scene, PreviewRenderer::liveModels(), budget, /*glAvailable=*/true,
+                              hasPrevious ? &previous : nullptr, methods::Backend::Gl);
     a.valid = true;
     a.stale = false;
     a.camera = f.camera;

@@ -43,6 +43,10 @@
 namespace lucent::gpu {
 class ShaderLibrary;
 }
+namespace lucent::planner {
+struct AutoChoice;
+struct Models;
+}  // namespace lucent::planner
 
 namespace lucent::app {
 
@@ -142,6 +146,13 @@ public:
     /// Auto plans with `ms` as its Direct frame instead of timing one (> 0; 0 times again):
     /// a choice that does not depend on the machine's load, for tests and benchmarks.
     void pinAutoDirectMs(double ms);
+    /// With Auto: the plan the last frame used (null before one, or with a fixed method).
+    [[nodiscard]] const planner::AutoChoice* autoChoice() const;
+    /// The Direct frame Auto last planned with, ms (0 before one was timed or pinned).
+    [[nodiscard]] double autoDirectMs() const;
+    /// The live preview's candidates Auto plans with: the shipped live costs (stroke → frame)
+    /// with the shipped error models (planner/LiveCosts.h).
+    [[nodiscard]] static const planner::Models& liveModels();
     [[nodiscard]] const PreviewStats& stats() const;
     /// The last frame's linear radiance at render resolution (camera width × height),
     /// W/(mm²·sr), before tone mapping and overlays, top row first (for EXR export). Reads the

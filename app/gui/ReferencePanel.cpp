@@ -6,6 +6,7 @@
 
 #include "Document.h"
 #include "ImageView.h"
+#include "PlanChart.h"
 #include "Viewport.h"
 
 #include <lucent/bench/ErrorMap.h>
@@ -22,6 +23,7 @@
 #include <QProgressBar>
 #include <QPushButton>
 #include <QSpinBox>
+#include <QTabWidget>
 #include <QThread>
 #include <QVBoxLayout>
 
@@ -86,7 +88,15 @@ QPixmap legendPixmap(int width) {
 
 ReferencePanel::ReferencePanel(Document* doc, Viewport* viewport, QWidget* parent)
     : QWidget(parent), m_doc(doc), m_viewport(viewport) {
-    auto* layout = new QVBoxLayout(this);
+    // Two pages: the reference and the preview's error against it; the Auto plan's
+    // run-time-vs-error chart.
+    auto* outer = new QVBoxLayout(this);
+    outer->setContentsMargins(0, 0, 0, 0);
+    m_pages = new QTabWidget;
+    m_pages->setObjectName(QStringLiteral("referencePages"));
+    outer->addWidget(m_pages);
+    auto* referencePage = new QWidget;
+    auto* layout = new QVBoxLayout(referencePage);
     auto* form = new QFormLayout;
     m_width = new QSpinBox;
     m_width->setRange(32, 1920);
@@ -146,6 +156,10 @@ ReferencePanel::ReferencePanel(Document* doc, Viewport* viewport, QWidget* paren
     legendLayout->addWidget(m_legend);
     legendBox->setVisible(false);
     layout->addWidget(legendBox);
+    m_pages->addTab(referencePage, tr("Reference"));
+    m_planChart = new PlanChart(m_doc, m_viewport, this);
+    m_planChart->setObjectName(QStringLiteral("planChart"));
+    m_pages->addTab(m_planChart, tr("Run time vs error"));
     connect(m_view, &QComboBox::currentIndexChanged, this, [this, legendBox](int index) {
         legendBox->setVisible(index == int(View::ErrorMap));
         if (index != int(View::Reference))
@@ -214,8 +228,7 @@ bool ReferencePanel::compareWithPreview() {
         m_accuracy->setText(tr("Render a reference to see how accurate the preview is."));
         return false;
     }
-    const OrbitCamera& cam = m_viewport->camera();
-    if (cam.eye() != m_refEye || cam.target != m_refTarget || cam.fovYDeg != m_refFovYDeg) {
+    if (!viewIsReferenceView()) {
         m_accuracy->setText(
             tr("The view changed since the reference started: render it again "
                "to compare."));
@@ -258,10 +271,20 @@ bool ReferencePanel::compareWithPreview() {
     return true;
 }
 
-void ReferencePanel::start() {
-    if (m_thread || !m_doc->hasObject())
-        return;
-    // A frozen copy: painting may go on while the worker renders.
+bool ReferencePanel::viewIsReferenceView() const {
+    const OrbitCamera& cam = m_viewport->camera();
+    return cam.eye() == m_refEye && cam.target == m_refTarget && cam.fovYDeg == m_refFovYDeg;
+}
+
+bool ReferencePanel::hasFinishedReferenceOfView() const {
+    return !m_thread && !m_refMean.isEmpty() && !m_refCoverage.isEmpty() && viewIsReferenceView();
+}
+
+void ReferencePanel::showPage(int page) {
+    m_pages->setCurrentIndex(page);
+}
+
+Scene ReferencePanel::frozenScene() const {
     Scene scene = m_doc->scene();
     scene.objects[0].material = std::make_shared<MaterialVolume>(*m_doc->material());
     const OrbitCamera& cam = m_viewport->camera();
@@ -273,6 +296,14 @@ void ReferencePanel::start() {
     scene.camera.width = m_width->value();
     const double aspect = double(m_viewport->height()) / double(std::max(m_viewport->width(), 1));
     scene.camera.height = std::max(16, int(std::lround(m_width->value() * aspect)));
+    return scene;
+}
+
+void ReferencePanel::start() {
+    if (m_thread || !m_doc->hasObject())
+        return;
+    // A frozen copy: painting may go on while the worker renders.
+    Scene scene = frozenScene();
     const float exposure = std::exp2(m_viewport->renderSettings().exposureStops);
     const int spp = m_spp->value();
     m_refEye = scene.camera.position;  // the view the comparison needs

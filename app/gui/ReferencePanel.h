@@ -23,12 +23,18 @@ class QLabel;
 class QProgressBar;
 class QPushButton;
 class QSpinBox;
+class QTabWidget;
 class QThread;
+
+namespace lucent {
+struct Scene;
+}
 
 namespace lucent::app {
 
 class Document;
 class ImageView;
+class PlanChart;
 class Viewport;
 
 class ReferencePanel : public QWidget {
@@ -54,9 +60,25 @@ public:
     /// over its object pixels); the accuracy line says the result, or why there is none (no
     /// reference yet, the view changed since it started). @return whether it compared.
     bool compareWithPreview();
+    /// Whether the viewport still shows the view the reference was started from.
+    [[nodiscard]] bool viewIsReferenceView() const;
     /// The last comparison's luminance block relative L1 and mean ratio (0 before one).
     [[nodiscard]] double blockRelL1() const { return m_blockRelL1; }
     [[nodiscard]] double meanRatio() const { return m_meanRatio; }
+
+    /// A frozen copy of the document's scene at the viewport's current view, `width` px wide
+    /// (the Image setting) with the viewport's aspect: what a reference render starts from.
+    [[nodiscard]] Scene frozenScene() const;
+    /// Whether a finished (not running, not cleared) reference of the viewport's current view
+    /// exists: then referenceMean/Variance/Coverage are its images.
+    [[nodiscard]] bool hasFinishedReferenceOfView() const;
+    [[nodiscard]] const ImageRgb& referenceMean() const { return m_refMean; }
+    [[nodiscard]] const ImageRgb& referenceVariance() const { return m_refVariance; }
+    [[nodiscard]] const ImageRgb& referenceCoverage() const { return m_refCoverage; }
+    /// The "Run time vs error" page (the Auto plan's chart and the measure button).
+    [[nodiscard]] PlanChart* planChart() const { return m_planChart; }
+    /// Shows the reference page (0) or the chart page (1).
+    void showPage(int page);
 
 Q_SIGNALS:
     void finished();
@@ -76,6 +98,8 @@ private:
     QLabel* m_accuracy;
     QLabel* m_legend;
     ImageView* m_picture;
+    QTabWidget* m_pages;
+    PlanChart* m_planChart;
     QImage m_image;         ///< the reference, display
     QImage m_previewImage;  ///< the preview at the reference's size, display
     QImage m_errorImage;    ///< the block error heat-map

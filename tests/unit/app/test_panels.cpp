@@ -11,7 +11,7 @@
 #include "SliceView.h"
 #include "Viewport.h"
 #include "GuiTestWaits.h"
-#include "KeepLibrariesLoaded.h"
+#include "GuiTestMain.h"
 #include "LightIrradiance.h"
 
 #include <lucent/core/Error.h>
@@ -790,10 +790,5 @@ TEST(BrushPanelTest, ScatteringCannotExceedExtinctionAndProblemsAreInWords) {
 }  // namespace lucent::app
 
 int main(int argc, char** argv) {
-    lucent::app::MainWindow::useGlSurfaceFormat();
-    QApplication app(argc, argv);
-    ::testing::InitGoogleTest(&argc, argv);
-    const int result = RUN_ALL_TESTS();
-    lucent::app::test::keepLibrariesLoaded();  // LSan names the GL driver's leaks at exit
-    return result;
+    return lucent::app::test::runGuiTests(argc, argv);
 }

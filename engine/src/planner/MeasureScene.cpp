@@ -1,0 +1,104 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief Candidates measured on one scene (MeasureScene.h).
+
+#include <lucent/bench/ErrorMetrics.h>
+#include <lucent/core/Error.h>
+#include <lucent/planner/AutoMethod.h>
+#include <lucent/planner/MeasureScene.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace lucent::planner {
+
+SceneMeasurement measureCandidates(const Scene& scene, const Models& models,
+                                   const MeasureOptions& options) {
+    const ImageRgb* ref = options.reference;
+    if (ref && (ref->width() != scene.camera.width || ref->height() != scene.camera.height))
+        LUCENT_THROW(ValueError, "measureCandidates: the reference is ", ref->width(), "x",
+                     ref->height(), ", the camera ", scene.camera.width, "x", scene.camera.height);
+    std::vector<size_t> which = options.which;
+    if (which.empty()) {
+        which.resize(models.candidates.size());
+        std::iota(which.begin(), which.end(), size_t{0});
+    }
+    for (size_t i : which)
+        if (i >= models.candidates.size())
+            LUCENT_THROW(ValueError, "measureCandidates: candidate ", i, " of ",
+                         models.candidates.size());
+    const auto cancelled = [&] { return options.cancel && options.cancel->load(); };
+
+    SceneMeasurement out;
+    // The unit: a Direct render of the same frame through the same call (context creation
+    // included), as the evaluation suite measures it for the models (measureDirectMs).
+    out.directMs = measureDirectMs(scene, options.render);
+    const size_t total = which.size();
+    if (options.progress)
+        options.progress(0, total, nullptr);
+    for (size_t done = 0; done < total; ++done) {
+        if (cancelled()) {
+            out.cancelled = true;
+            break;
+        }
+        const CandidateModel& model = models.candidates[which[done]];
+        CandidateMeasurement m;
+        m.method = model.method;
+        m.setting = model.setting;
+        try {
+            const CandidateRun run = resolveCandidate(model.method, model.setting);
+            methods::RenderOptions o = options.render;
+            if (o.backend == methods::Backend::Auto)
+                o.backend = run.backend;
+            o.progress = nullptr;
+            const methods::RenderResult r = methods::renderImage(scene, run.method, run.params, o);
+            m.ms = r.milliseconds;
+            m.radiance = r.radiance;
+            m.costRatio = r.milliseconds / std::max(out.directMs, 1e-9);
+            if (ref) {
+                const bench::ErrorReport e = bench::compareImages(
+                    r.radiance, *ref, options.referenceVariance, nullptr, options.mask);
+                // The dock's number (ReferencePanel::compareWithPreview): luminance blocks.
+                m.blockRelL1 = e.blocks[bench::ErrorReport::LUMINANCE].relL1;
+            }
+        } catch (const Error& e) {
+            m = CandidateMeasurement();
+            m.method = model.method;
+            m.setting = model.setting;
+            m.failed = e.what();
+        }
+        out.candidates.push_back(m);
+        if (options.progress)
+            options.progress(done + 1, total, &out.candidates.back());
+    }
+    return out;
+}
+
+Models measuredModels(const Models& models, const SceneMeasurement& measurement) {
+    Models out = models;
+    out.source = models.source + "; measured on the scene";
+    // The models' smallest positive error: log-linear, so an exact 0 has no log.
+    constexpr double MIN_ERROR = 1e-6;
+    for (const CandidateMeasurement& m : measurement.candidates) {
+        if (!m.ok() || !(m.costRatio > 0) || !std::isfinite(m.costRatio))
+            continue;
+        for (CandidateModel& c : out.candidates) {
+            if (c.method != m.method || c.setting != m.setting)
+                continue;
+            // Intercept only (term 0 is the constant 1): the measurement on every scene
+            // features this scene has, as liveModels does with a measured stroke cost.
+            std::fill(c.cost.begin(), c.cost.end(), 0.0);
+            c.cost[0] = std::log(m.costRatio);
+            c.costLogRms = 0.0;
+            if (m.blockRelL1 >= 0 && std::isfinite(m.blockRelL1)) {
+                std::fill(c.error.begin(), c.error.end(), 0.0);
+                c.error[0] = std::log(std::max(m.blockRelL1, MIN_ERROR));
+                c.errorLogRms = 0.0;
+            }
+        }
+    }
+    return out;
+}
+
+}  // namespace lucent::planner

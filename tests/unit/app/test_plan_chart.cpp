@@ -1,0 +1,209 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief The Reference dock's "Run time vs error" page (PlanChart) under Xvfb: one predicted
+/// point per option of the Auto plan with the choice marked and the frame budget drawn, the
+/// plan Auto would make while a fixed method runs (that method marked), and "Measure this
+/// scene" on a small view with a finished reference: measured points and a measured plan; an
+/// edit or closing the dock stops a measurement.
+/// Also writes the user guide's screenshot of the page when LUCENT_SCREENSHOT_DIR is set.
+
+#include "Document.h"
+#include "MainWindow.h"
+#include "PlanChart.h"
+#include "PreviewRenderer.h"
+#include "ReferencePanel.h"
+#include "Viewport.h"
+#include "GuiTestWaits.h"
+#include "GuiTestMain.h"
+
+#include <lucent/planner/AutoMethod.h>
+#include <lucent/planner/LiveCosts.h>
+
+#include <QApplication>
+#include <QChart>
+#include <QChartView>
+#include <QDockWidget>
+#include <QLabel>
+#include <QScatterSeries>
+#include <QLineSeries>
+#include <QSignalSpy>
+#include <QTest>
+
+#include <gtest/gtest.h>
+
+#include <memory>
+
+namespace lucent::app {
+namespace {
+
+/// Renders frames until `done` or 30 frames.
+template <class F>
+bool renderUntil(Viewport* vp, F done) {
+    for (int i = 0; i < 30 && !done(); ++i) {
+        const long long f = vp->stats().frames;
+        vp->update();
+        if (!QTest::qWaitFor([&] { return vp->stats().frames > f; }, 20000))
+            return false;
+    }
+    return done();
+}
+
+/// The chart's series named `objectName` (null when the chart has none).
+QXYSeries* series(PlanChart* chart, const char* objectName) {
+    auto* view = chart->findChild<QChartView*>(QStringLiteral("planChartView"));
+    if (!view)
+        return nullptr;
+    for (QAbstractSeries* s : view->chart()->series())
+        if (s->objectName() == QLatin1String(objectName))
+            return qobject_cast<QXYSeries*>(s);
+    return nullptr;
+}
+
+int count(PlanChart* chart, const char* objectName) {
+    QXYSeries* s = series(chart, objectName);
+    return s ? int(s->count()) : 0;
+}
+
+/// The main window at 1366×708 (a 1366×768 screen less its panel) with the Reference dock's
+/// chart page shown.
+std::unique_ptr<MainWindow> windowOnChart() {
+    auto w = std::make_unique<MainWindow>(/*restoreSettings=*/false);
+    w->resize(1366, 708);
+    w->show();
+    EXPECT_TRUE(QTest::qWaitForWindowExposed(w.get(), test::kWindowWaitMs));
+    if (auto* d = w->findChild<QDockWidget*>(QStringLiteral("dockReference")))
+        d->raise();
+    w->referencePanel()->showPage(1);
+    return w;
+}
+
+}  // namespace
+
+TEST(AppPlanChart, OnePointPerOptionTheChoiceMarkedAndTheBudgetDrawn) {
+    auto w = windowOnChart();
+    Viewport* vp = w->viewport();
+    PlanChart* chart = w->referencePanel()->planChart();
+    ASSERT_NE(chart, nullptr);
+    ASSERT_EQ(vp->renderSettings().method, AUTO_METHOD);
+    // Auto plans once its Direct frames are timed; pinned: a plan that does not hang on load.
+    vp->previewRenderer().pinAutoDirectMs(planner::defaultLiveCosts().directMs);
+    ASSERT_TRUE(renderUntil(vp, [&] { return vp->previewRenderer().autoChoice() != nullptr; }));
+    chart->refreshPlan();
+    const planner::AutoChoice choice = *vp->previewRenderer().autoChoice();
+    const planner::Plan& plan = choice.plan;
+    ASSERT_TRUE(plan.valid);
+    ASSERT_GE(plan.options.size(), 2u);
+    EXPECT_EQ(chart->predictedPoints(), int(plan.options.size()));
+    EXPECT_EQ(count(chart, "predictedSeries"), int(plan.options.size()));
+    // The chosen one, once, at its predicted time and error (in %).
+    ASSERT_EQ(count(chart, "chosenSeries"), 1);
+    const QPointF c = series(chart, "chosenSeries")->at(0);
+    EXPECT_DOUBLE_EQ(c.x(), plan.chosen.ms);
+    EXPECT_DOUBLE_EQ(c.y(), 100.0 * plan.chosen.error);
+    const planner::CandidateModel& m = PreviewRenderer::liveModels().candidates[plan.choice];
+    EXPECT_EQ(chart->chosenLabel().toStdString(), m.method + " " + m.setting);
+    // Every option is a point.
+    QXYSeries* predicted = series(chart, "predictedSeries");
+    for (size_t i = 0; i < plan.options.size(); ++i) {
+        EXPECT_DOUBLE_EQ(predicted->at(qsizetype(i)).x(), plan.options[i].ms);
+        EXPECT_DOUBLE_EQ(predicted->at(qsizetype(i)).y(), 100.0 * plan.options[i].error);
+    }
+    // The budget: a vertical line at the preview's frame budget.
+    QXYSeries* budget = series(chart, "budgetSeries");
+    ASSERT_NE(budget, nullptr);
+    ASSERT_EQ(budget->count(), 2);
+    EXPECT_DOUBLE_EQ(budget->at(0).x(), planner::Budget().frameMs);
+    EXPECT_DOUBLE_EQ(budget->at(1).x(), planner::Budget().frameMs);
+    EXPECT_EQ(count(chart, "currentMethodSeries"), 0) << "Auto runs: no fixed method to mark";
+
+    // A fixed method: the plan Auto would make, the method's candidates marked.
+    RenderSettings rs = vp->renderSettings();
+    rs.method = "dirpole";
+    vp->setRenderSettings(rs);
+    ASSERT_TRUE(renderUntil(vp, [&] { return vp->stats().preview.method == "dirpole"; }));
+    chart->refreshPlan();
+    EXPECT_GE(chart->predictedPoints(), 2);
+    EXPECT_EQ(count(chart, "chosenSeries"), 1);
+    int dirpoleOptions = 0;
+    for (const planner::CandidateModel& cm : PreviewRenderer::liveModels().candidates)
+        dirpoleOptions += cm.method == "dirpole";
+    ASSERT_GT(dirpoleOptions, 0) << "the shipped live costs have a dirpole candidate";
+    EXPECT_EQ(count(chart, "currentMethodSeries"), dirpoleOptions);
+}
+
+TEST(AppPlanChart, MeasuringASmallSceneGivesMeasuredPointsAndAPlan) {
+    auto w = windowOnChart();
+    Viewport* vp = w->viewport();
+    ReferencePanel* ref = w->referencePanel();
+    PlanChart* chart = ref->planChart();
+    vp->previewRenderer().pinAutoDirectMs(planner::defaultLiveCosts().directMs);
+    ASSERT_TRUE(renderUntil(vp, [&] { return vp->previewRenderer().autoChoice() != nullptr; }));
+    chart->refreshPlan();
+    ASSERT_GE(chart->predictedPoints(), 2);
+    // A finished reference of this view, small: the error is measured against it.
+    ref->setParameters(/*width=*/48, /*spp=*/8);
+    ref->start();
+    ASSERT_TRUE(QTest::qWaitFor([&] { return !ref->isRunning(); }, 120000));
+    ASSERT_TRUE(ref->hasFinishedReferenceOfView());
+
+    QSignalSpy finished(chart, &PlanChart::measurementFinished);
+    chart->measure();
+    EXPECT_TRUE(chart->isMeasuring());
+    // Off the UI thread: the viewport keeps drawing while the candidates render.
+    const long long f = vp->stats().frames;
+    vp->update();
+    EXPECT_TRUE(QTest::qWaitFor([&] { return vp->stats().frames > f; }, 10000));
+    ASSERT_TRUE(QTest::qWaitFor([&] { return !chart->isMeasuring(); }, 240000));
+    EXPECT_EQ(finished.count(), 1);
+    auto* line = chart->findChild<QLabel*>(QStringLiteral("planChartMeasured"));
+    ASSERT_NE(line, nullptr);
+    // Every candidate measured (each one is a GL preview method), with its error.
+    EXPECT_EQ(chart->measuredPoints(), chart->predictedPoints()) << line->text().toStdString();
+    EXPECT_EQ(count(chart, "measuredSeries"), chart->measuredPoints());
+    EXPECT_EQ(count(chart, "measuredChosenSeries"), 1);
+    EXPECT_FALSE(chart->measuredPlanReason().isEmpty());
+    EXPECT_TRUE(line->text().contains(QStringLiteral("Measured on this scene")))
+        << line->text().toStdString();
+    for (int i = 0; i < count(chart, "measuredSeries"); ++i) {
+        const QPointF p = series(chart, "measuredSeries")->at(i);
+        EXPECT_GT(p.x(), 0.0);
+        EXPECT_GT(p.y(), 0.0);
+    }
+
+    // An edit makes the measurement stale: a new one is cancelled by it.
+    chart->measure();
+    ASSERT_TRUE(chart->isMeasuring());
+    w->document()->setEta(w->document()->scene().eta + 0.05f);
+    ASSERT_TRUE(QTest::qWaitFor([&] { return !chart->isMeasuring(); }, 120000));
+    EXPECT_EQ(chart->measuredPoints(), 0);
+    EXPECT_TRUE(line->text().contains(QStringLiteral("stopped"))) << line->text().toStdString();
+
+    // The other page of the dock shown: it goes on; the dock closed: it stops.
+    chart->measure();
+    ASSERT_TRUE(chart->isMeasuring());
+    ref->showPage(0);
+    EXPECT_TRUE(chart->isMeasuring());
+    auto* dock = w->findChild<QDockWidget*>(QStringLiteral("dockReference"));
+    ASSERT_NE(dock, nullptr);
+    dock->close();
+    ASSERT_TRUE(QTest::qWaitFor([&] { return !chart->isMeasuring(); }, 120000));
+    EXPECT_EQ(chart->measuredPoints(), 0);
+    EXPECT_TRUE(line->text().contains(QStringLiteral("stopped"))) << line->text().toStdString();
+
+    const QString dir = qEnvironmentVariable("LUCENT_SCREENSHOT_DIR");
+    if (!dir.isEmpty()) {  // the user guide's picture: measure again, then grab the window
+        dock->show();
+        dock->raise();
+        ref->showPage(1);
+        chart->measure();
+        ASSERT_TRUE(QTest::qWaitFor([&] { return !chart->isMeasuring(); }, 240000));
+        renderUntil(vp, [] { return false; });
+        ASSERT_TRUE(vp->grabWithFrame(w.get()).save(dir + QStringLiteral("/app-plan-chart.png")));
+    }
+}
+
+}  // namespace lucent::app
+
+int main(int argc, char** argv) {
+    return lucent::app::test::runGuiTests(argc, argv);
+}

@@ -1,0 +1,141 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief Candidates measured on one scene (planner/MeasureScene.h): the cost is the render's
+/// time over the Direct render's, the error is the Reference dock's block relative L1 against
+/// the given reference, the measured models predict exactly what was measured, and a cancel
+/// stops before the next render.
+
+#include <lucent/bench/ErrorMetrics.h>
+#include <lucent/core/Error.h>
+#include <lucent/planner/LiveCosts.h>
+#include <lucent/planner/MeasureScene.h>
+#include <lucent/scene/SceneFile.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+using namespace lucent;
+using namespace lucent::planner;
+
+namespace {
+
+/// The minimal scene at a small size: a measurement renders every candidate once.
+Scene smallScene() {
+    Scene scene = loadScene(std::string(LUCENT_SCENES_DIR) + "/minimal.json");
+    scene.camera.width = 48;
+    scene.camera.height = 32;
+    return scene;
+}
+
+/// The live preview's cheapest candidate: what the app's measure button renders too.
+size_t cheapestLive(const Models& live) {
+    size_t best = 0;
+    const SceneFeatures f;
+    for (size_t i = 1; i < live.candidates.size(); ++i)
+        if (predictCost(live.candidates[i], f) < predictCost(live.candidates[best], f))
+            best = i;
+    return best;
+}
+
+}  // namespace
+
+TEST(MeasureScene, CostIsTheRatioToDirectAndErrorIsTheBlockMetric) {
+    const Scene scene = smallScene();
+    const Models live = liveModels(defaultModels(), defaultLiveCosts());
+    ASSERT_FALSE(live.candidates.empty());
+    MeasureOptions opt;
+    opt.which = {cheapestLive(live)};
+    opt.render.backend = methods::Backend::Gl;  // as the preview runs them
+    size_t calls = 0;
+    opt.progress = [&](size_t done, size_t total, const CandidateMeasurement* last) {
+        EXPECT_EQ(total, 1u);
+        EXPECT_EQ(done, calls);
+        EXPECT_EQ(last != nullptr, done > 0);
+        ++calls;
+    };
+    const SceneMeasurement first = measureCandidates(scene, live, opt);
+    EXPECT_EQ(calls, 2u);  // after Direct, after the candidate
+    EXPECT_FALSE(first.cancelled);
+    EXPECT_GT(first.directMs, 0.0);
+    ASSERT_EQ(first.candidates.size(), 1u);
+    const CandidateMeasurement& a = first.candidates[0];
+    ASSERT_TRUE(a.ok()) << a.failed;
+    EXPECT_EQ(a.method, live.candidates[opt.which[0]].method);
+    EXPECT_EQ(a.setting, live.candidates[opt.which[0]].setting);
+    EXPECT_GT(a.ms, 0.0);
+    EXPECT_DOUBLE_EQ(a.costRatio, a.ms / first.directMs);
+    EXPECT_LT(a.blockRelL1, 0.0);  // no reference, no error
+    ASSERT_EQ(a.radiance.width(), 48);
+    ASSERT_EQ(a.radiance.height(), 32);
+
+    // A "reference" twice as bright as the first render: the error is the dock's metric of
+    // the second render against it (compareImages, luminance blocks, over the mask).
+    ImageRgb ref = a.radiance;
+    for (Rgb& p : ref.pixels())
+        p = p * 2.f;
+    const std::vector<uint8_t> mask = bench::maskFromImage(ref);
+    opt.reference = &ref;
+    opt.mask = &mask;
+    opt.progress = nullptr;
+    const SceneMeasurement second = measureCandidates(scene, live, opt);
+    ASSERT_EQ(second.candidates.size(), 1u);
+    const CandidateMeasurement& b = second.candidates[0];
+    ASSERT_TRUE(b.ok()) << b.failed;
+    const double expected = bench::compareImages(b.radiance, ref, nullptr, nullptr, &mask)
+                                .blocks[bench::ErrorReport::LUMINANCE]
+                                .relL1;
+    EXPECT_DOUBLE_EQ(b.blockRelL1, expected);
+    // Were the two renders equal, |x − 2x| / 2x = 1/2 in every block; the preview methods'
+    // frames are deterministic, so they are within float rounding of it.
+    if (b.radiance.pixels() == a.radiance.pixels()) {
+        EXPECT_NEAR(b.blockRelL1, 0.5, 1e-5);
+    }
+
+    // The measured models predict the measurement on any features; the others are unchanged.
+    const Models measured = measuredModels(live, second);
+    ASSERT_EQ(measured.candidates.size(), live.candidates.size());
+    SceneFeatures f1, f2;
+    f2.pixelsCovered = 500.0;
+    f2.imagePixels = 1000.0;
+    f2.opticalSize = 30.0;
+    f2.backLitFraction = 0.8;
+    for (size_t i = 0; i < live.candidates.size(); ++i)
+        for (const SceneFeatures& f : {f1, f2}) {
+            if (i == opt.which[0]) {
+                EXPECT_NEAR(predictCost(measured.candidates[i], f), b.costRatio,
+                            1e-12 * b.costRatio);
+                EXPECT_NEAR(predictError(measured.candidates[i], f), b.blockRelL1,
+                            1e-12 * b.blockRelL1);
+            } else {
+                EXPECT_DOUBLE_EQ(predictCost(measured.candidates[i], f),
+                                 predictCost(live.candidates[i], f));
+                EXPECT_DOUBLE_EQ(predictError(measured.candidates[i], f),
+                                 predictError(live.candidates[i], f));
+            }
+        }
+}
+
+TEST(MeasureScene, CancelStopsBeforeTheNextRenderAndWrongSizesAreRefused) {
+    const Scene scene = smallScene();
+    const Models live = liveModels(defaultModels(), defaultLiveCosts());
+    std::atomic<bool> cancel{true};
+    MeasureOptions opt;
+    opt.cancel = &cancel;
+    opt.render.backend = methods::Backend::Gl;
+    const SceneMeasurement m = measureCandidates(scene, live, opt);
+    EXPECT_TRUE(m.cancelled);
+    EXPECT_TRUE(m.candidates.empty());
+    // Nothing measured: the models stay as they were.
+    const Models same = measuredModels(live, m);
+    EXPECT_EQ(same.candidates[0].cost, live.candidates[0].cost);
+
+    const ImageRgb wrong(47, 32);
+    MeasureOptions sized;
+    sized.reference = &wrong;
+    EXPECT_THROW(measureCandidates(scene, live, sized), ValueError);
+    MeasureOptions outOfRange;
+    outOfRange.which = {live.candidates.size()};
+    EXPECT_THROW(measureCandidates(scene, live, outOfRange), ValueError);
+}
