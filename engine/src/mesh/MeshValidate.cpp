@@ -663,16 +663,31 @@ std::optional<uint64_t> storedValues(const StoredArray& a, IntegerDecoder& decod
             fail("an array of " + std::to_string(bytes) + " bytes is larger than its data");
         if (!sink)
             return bytes / width;
-        std::string data;
-        if (a.base64) {
-            std::string decoded;
-            if (!decodeBase64(a.read(0, base64Chars(stored)), decoded) || decoded.size() < stored)
+        // In chunks (a multiple of the four characters of a base64 group), so that an offsets
+        // array of a large file is never held whole.
+        constexpr uint64_t CHUNK = uint64_t(1) << 16;
+        uint64_t skip = a.base64 ? a.word : 0, left = bytes;
+        const uint64_t total = a.base64 ? base64Chars(stored) : bytes;
+        std::string piece, decoded;
+        for (uint64_t at = 0; at < total && left > 0;) {
+            const uint64_t n = std::min(CHUNK, total - at);
+            piece = a.read(a.base64 ? at : a.word + at, n);
+            if (piece.size() < n)
+                fail("an array is past the end of its data");
+            if (a.base64 && !decodeBase64(piece, decoded))
                 fail("an array is not valid base64");
-            data = decoded.substr(a.word, size_t(bytes));
-        } else {
-            data = a.read(a.word, bytes);
+            const std::string& bytesRead = a.base64 ? decoded : piece;
+            const size_t from = size_t(std::min<uint64_t>(skip, bytesRead.size()));
+            skip -= from;
+            const size_t take = size_t(std::min<uint64_t>(bytesRead.size() - from, left));
+            left -= take;
+            at += n;
+            if (!decoder.feed(reinterpret_cast<const unsigned char*>(bytesRead.data()) + from, take,
+                              sink))
+                return decoder.count();
         }
-        decoder.feed(reinterpret_cast<const unsigned char*>(data.data()), data.size(), sink);
+        if (left > 0)
+            fail("an array is shorter than its header says (corrupt)");
         return decoder.count();
     }
     const uint64_t blocks = headerWords(a, 1, fail)[0];
