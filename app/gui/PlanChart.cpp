@@ -32,6 +32,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace lucent::app {
 
@@ -381,6 +382,19 @@ void PlanChart::measure() {
                            "cancelled)."));
                 } else {
                     showMeasurement(*result, *measuredChoice, withReference, directMs);
+                    if (withReference) {
+                        // The measured errors update Auto's live plan; the live costs stay
+                        // (the measured times are offline renders, another quantity).
+                        m_viewport->previewRenderer().setMeasuredModels(
+                            std::make_shared<const planner::Models>(
+                                planner::measuredModels(PreviewRenderer::liveModels(), *result,
+                                                        planner::MeasuredParts::ErrorsOnly)));
+                        m_measureLine->setText(
+                            m_measureLine->text() +
+                            tr(" Auto now plans with these errors (and its live costs) until "
+                               "the scene or the view changes."));
+                        m_viewport->update();
+                    }
                 }
                 redraw();
                 Q_EMIT measurementFinished();

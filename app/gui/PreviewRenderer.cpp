@@ -225,6 +225,9 @@ struct PreviewRenderer::Impl {
         std::vector<float> lights;    ///< lightsKey of the frame planned for
         float eta = 0.f;
         Timer sincePlan;
+        /// setMeasuredModels: plan with these until the scene changes (null: liveModels()).
+        std::shared_ptr<const planner::Models> measured;
+        bool planMeasured = false;  ///< the current choice was made with `measured`
     } autoPlan;
 
     /// One frame (PreviewRenderer::render).
@@ -290,6 +293,21 @@ const planner::Models& PreviewRenderer::liveModels() {
     static const planner::Models models =
         planner::liveModels(planner::defaultModels(), planner::defaultLiveCosts());
     return models;
+}
+
+void PreviewRenderer::setMeasuredModels(std::shared_ptr<const planner::Models> models) {
+    LUCENT_CHECK(!models || models->candidates.size() == liveModels().candidates.size(),
+                 "measured models must have the live candidates (", liveModels().candidates.size(),
+                 "), got ", models ? models->candidates.size() : 0);
+    m->autoPlan.measured = std::move(models);
+    m->autoPlan.planMeasured = false;
+    // Plan again at the next frame, from scratch: the measurements replace the predictions,
+    // and hysteresis would keep a choice made on predictions.
+    m->autoPlan.valid = false;
+}
+
+bool PreviewRenderer::usesMeasuredModels() const {
+    return m->autoPlan.valid && m->autoPlan.planMeasured;
 }
 
 const planner::AutoChoice* PreviewRenderer::autoChoice() const {
@@ -398,8 +416,10 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
         a.valid = false;
     }
     if (f.sceneReplaced || !f.dirtyBricks.empty() || lightKey != a.lights ||
-        f.scene->eta != a.eta || !sameCamera(f.camera, a.camera))
+        f.scene->eta != a.eta || !sameCamera(f.camera, a.camera)) {
         a.stale = true;
+        a.measured.reset();  // measured on a scene and view that are no longer shown
+    }
     const bool sized =
         a.directMs > 0.0 && a.directWidth == f.camera.width && a.directHeight == f.camera.height;
     if (sized && a.valid && (!a.stale || a.sincePlan.elapsedMs() < AUTO_REPLAN_MS) &&
@@ -432,9 +452,10 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
     // The previous plan of the same scene, for hysteresis (a new scene plans from scratch).
     const planner::Plan previous = a.choice.plan;
     const bool hasPrevious = a.valid && !f.sceneReplaced;
-    a.choice =
-        planner::chooseMethod(scene, PreviewRenderer::liveModels(), budget, /*glAvailable=*/true,
-                              hasPrevious ? &previous : nullptr, methods::Backend::Gl);
+    const planner::Models& models = a.measured ? *a.measured : PreviewRenderer::liveModels();
+    a.choice = planner::chooseMethod(scene, models, budget, /*glAvailable=*/true,
+                                     hasPrevious ? &previous : nullptr, methods::Backend::Gl);
+    a.planMeasured = a.measured != nullptr;
     a.valid = true;
     a.stale = false;
     a.camera = f.camera;
@@ -508,7 +529,8 @@ void PreviewRenderer::Impl::renderFrame(PreviewFrame& f) {
         if (const planner::AutoChoice* choice = r.planAuto(f, lights, key)) {
             name = choice->method;
             params = choice->params;
-            r.stats.autoReason = choice->plan.reason;
+            r.stats.autoReason = (r.autoPlan.planMeasured ? "errors measured on this view: " : "") +
+                                 choice->plan.reason;
             r.stats.autoChoice = choice->method +
                                  (choice->variant.empty() ? "" : ":" + choice->variant) + " " +
                                  choice->setting;

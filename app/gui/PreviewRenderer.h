@@ -153,6 +153,13 @@ public:
     /// The live preview's candidates Auto plans with: the shipped live costs (stroke → frame)
     /// with the shipped error models (planner/LiveCosts.h).
     [[nodiscard]] static const planner::Models& liveModels();
+    /// Auto plans with `models` instead of liveModels() from the next frame on (the same
+    /// candidates in the same order: liveModels() with this scene's measured errors,
+    /// planner::measuredModels with MeasuredParts::ErrorsOnly), until anything the plan
+    /// depends on changes (scene, paint, lights, η, view). Null: the shipped models again.
+    void setMeasuredModels(std::shared_ptr<const planner::Models> models);
+    /// Whether the last plan was made with measured models.
+    [[nodiscard]] bool usesMeasuredModels() const;
     [[nodiscard]] const PreviewStats& stats() const;
     /// The last frame's linear radiance at render resolution (camera width × height),
     /// W/(mm²·sr), before tone mapping and overlays, top row first (for EXR export). Reads the

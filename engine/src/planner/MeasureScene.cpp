@@ -75,9 +75,12 @@ SceneMeasurement measureCandidates(const Scene& scene, const Models& models,
     return out;
 }
 
-Models measuredModels(const Models& models, const SceneMeasurement& measurement) {
+Models measuredModels(const Models& models, const SceneMeasurement& measurement,
+                      MeasuredParts parts) {
     Models out = models;
-    out.source = models.source + "; measured on the scene";
+    out.source =
+        models.source + (parts == MeasuredParts::ErrorsOnly ? "; errors measured on the scene"
+                                                            : "; measured on the scene");
     // The models' smallest positive error: log-linear, so an exact 0 has no log.
     constexpr double MIN_ERROR = 1e-6;
     for (const CandidateMeasurement& m : measurement.candidates) {
@@ -88,9 +91,11 @@ Models measuredModels(const Models& models, const SceneMeasurement& measurement)
                 continue;
             // Intercept only (term 0 is the constant 1): the measurement on every scene
             // features this scene has, as liveModels does with a measured stroke cost.
-            std::fill(c.cost.begin(), c.cost.end(), 0.0);
-            c.cost[0] = std::log(m.costRatio);
-            c.costLogRms = 0.0;
+            if (parts == MeasuredParts::CostsAndErrors) {
+                std::fill(c.cost.begin(), c.cost.end(), 0.0);
+                c.cost[0] = std::log(m.costRatio);
+                c.costLogRms = 0.0;
+            }
             if (m.blockRelL1 >= 0 && std::isfinite(m.blockRelL1)) {
                 std::fill(c.error.begin(), c.error.end(), 0.0);
                 c.error[0] = std::log(std::max(m.blockRelL1, MIN_ERROR));

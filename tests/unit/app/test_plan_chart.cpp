@@ -31,6 +31,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <memory>
 
 namespace lucent::app {
@@ -169,6 +170,22 @@ TEST(AppPlanChart, MeasuringASmallSceneGivesMeasuredPointsAndAPlan) {
         EXPECT_GT(p.x(), 0.0);
         EXPECT_GT(p.y(), 0.0);
     }
+    // The measured errors update Auto's live plan (its costs stay the live ones): the next
+    // frames plan with them, so the chosen option's error is one of the measured errors, and
+    // the reason says so.
+    ASSERT_TRUE(renderUntil(vp, [&] { return vp->previewRenderer().usesMeasuredModels(); }));
+    const planner::AutoChoice* measuredLive = vp->previewRenderer().autoChoice();
+    ASSERT_NE(measuredLive, nullptr);
+    bool chosenErrorWasMeasured = false;
+    for (int i = 0; i < count(chart, "measuredSeries"); ++i)
+        chosenErrorWasMeasured |= std::abs(series(chart, "measuredSeries")->at(i).y() -
+                                           100.0 * measuredLive->plan.chosen.error) <=
+                                  1e-9 * series(chart, "measuredSeries")->at(i).y();
+    EXPECT_TRUE(chosenErrorWasMeasured) << measuredLive->plan.reason;
+    EXPECT_EQ(vp->stats().preview.autoReason.rfind("errors measured on this view: ", 0), 0u)
+        << vp->stats().preview.autoReason;
+    EXPECT_TRUE(line->text().contains(QStringLiteral("Auto now plans with these errors")))
+        << line->text().toStdString();
 
     // An edit makes the measurement stale: a new one is cancelled by it.
     chart->measure();
@@ -177,6 +194,10 @@ TEST(AppPlanChart, MeasuringASmallSceneGivesMeasuredPointsAndAPlan) {
     ASSERT_TRUE(QTest::qWaitFor([&] { return !chart->isMeasuring(); }, 120000));
     EXPECT_EQ(chart->measuredPoints(), 0);
     EXPECT_TRUE(line->text().contains(QStringLiteral("stopped"))) << line->text().toStdString();
+    // The edit also ends Auto's use of the measured errors: it plans with its models again.
+    EXPECT_TRUE(renderUntil(vp, [&] {
+        return vp->previewRenderer().autoChoice() && !vp->previewRenderer().usesMeasuredModels();
+    }));
 
     // The other page of the dock shown: it goes on; the dock closed: it stops.
     chart->measure();

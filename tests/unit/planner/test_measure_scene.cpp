@@ -115,6 +115,14 @@ TEST(MeasureScene, CostIsTheRatioToDirectAndErrorIsTheBlockMetric) {
                                  predictError(live.candidates[i], f));
             }
         }
+    // Errors only (the live preview's use): the cost models stay the live ones.
+    const Models errorsOnly = measuredModels(live, second, MeasuredParts::ErrorsOnly);
+    for (const SceneFeatures& f : {f1, f2}) {
+        const size_t i = opt.which[0];
+        EXPECT_DOUBLE_EQ(predictCost(errorsOnly.candidates[i], f),
+                         predictCost(live.candidates[i], f));
+        EXPECT_NEAR(predictError(errorsOnly.candidates[i], f), b.blockRelL1, 1e-12 * b.blockRelL1);
+    }
 }
 
 TEST(MeasureScene, CancelStopsBeforeTheNextRenderAndWrongSizesAreRefused) {

@@ -73,10 +73,21 @@ struct MeasureOptions {
 SceneMeasurement measureCandidates(const Scene& scene, const Models& models,
                                    const MeasureOptions& options = {});
 
+/// Which predictions measuredModels replaces.
+enum class MeasuredParts {
+    CostsAndErrors,  ///< both (an offline plan: the measured costs are offline renders)
+    /// The errors only: for the live preview, whose costs are stroke → frame times
+    /// (LiveCosts.h), another quantity than the offline render times measured here, while a
+    /// measured error is the error of the image the live method converges to.
+    ErrorsOnly,
+};
+
 /// `models` with every measured candidate's prediction replaced by the measurement: a cost
-/// model with only the intercept log(costRatio), and, when the error was measured, an error
-/// model with only log(blockRelL1) (a measured error of 0 is clamped to 1e-6: the log-linear
-/// model needs a positive value). Candidates not measured (or failed) keep their models.
-Models measuredModels(const Models& models, const SceneMeasurement& measurement);
+/// model with only the intercept log(costRatio) (CostsAndErrors), and, when the error was
+/// measured, an error model with only log(blockRelL1) (a measured error of 0 is clamped to
+/// 1e-6: the log-linear model needs a positive value). Candidates not measured (or failed)
+/// keep their models.
+Models measuredModels(const Models& models, const SceneMeasurement& measurement,
+                      MeasuredParts parts = MeasuredParts::CostsAndErrors);
 
 }  // namespace lucent::planner
