@@ -253,7 +253,7 @@ void PlanChart::refreshPlan() {
             planner::Budget budget;
             budget.directMs = shown.directMs;
             shown.choice =
-                planner::chooseMethod(m_reference->frozenScene(), models, budget,
+                planner::chooseMethod(m_reference->sceneAtView(), models, budget,
                                       /*glAvailable=*/true, nullptr, methods::Backend::Gl);
         }
     } catch (const Error& e) {

@@ -11,8 +11,8 @@
 #include <lucent/gpu/Shader.h>
 #include <lucent/methods/Registry.h>
 #include <lucent/planner/AutoMethod.h>
-#include <lucent/scene/LightReach.h>
 #include <lucent/planner/LiveCosts.h>
+#include <lucent/scene/LightReach.h>
 
 #include <epoxy/gl.h>
 

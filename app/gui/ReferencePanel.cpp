@@ -285,8 +285,13 @@ void ReferencePanel::showPage(int page) {
 }
 
 Scene ReferencePanel::frozenScene() const {
-    Scene scene = m_doc->scene();
+    Scene scene = sceneAtView();
     scene.objects[0].material = std::make_shared<MaterialVolume>(*m_doc->material());
+    return scene;
+}
+
+Scene ReferencePanel::sceneAtView() const {
+    Scene scene = m_doc->scene();
     const OrbitCamera& cam = m_viewport->camera();
     scene.camera.position = cam.eye();
     scene.camera.target = cam.target;

@@ -67,8 +67,12 @@ public:
     [[nodiscard]] double meanRatio() const { return m_meanRatio; }
 
     /// A frozen copy of the document's scene at the viewport's current view, `width` px wide
-    /// (the Image setting) with the viewport's aspect: what a reference render starts from.
+    /// (the Image setting) with the viewport's aspect: what a reference render starts from
+    /// (its own copy of the material, so painting may go on while a worker renders it).
     [[nodiscard]] Scene frozenScene() const;
+    /// The same scene sharing the document's material: for use on the UI thread only (the
+    /// chart's plan), without copying the volume.
+    [[nodiscard]] Scene sceneAtView() const;
     /// Whether a finished (not running, not cleared) reference of the viewport's current view
     /// exists: then referenceMean/Variance/Coverage are its images.
     [[nodiscard]] bool hasFinishedReferenceOfView() const;

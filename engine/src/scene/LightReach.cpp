@@ -18,10 +18,11 @@ namespace {
 /// [0.1°, 89.9°]); a narrower cone here would skip a spot the preview still shows.
 constexpr float MIN_SPOT_OUTER_DEG = 0.1f;
 
-/// I/d² for a distance interval [near, far] (near may be 0: no upper bound).
+/// I/d² for a distance interval [near, far] (near may be 0: no upper bound; far 0, a light at
+/// the centre of a point-sized object: no lower bound either).
 void inverseSquare(const Rgb& intensity, float near, float far, LightReach& out) {
     out.most = near > 0.f ? intensity / (near * near) : Rgb(INF);
-    out.least = intensity / (far * far);
+    out.least = far > 0.f ? intensity / (far * far) : Rgb(0.f);
 }
 
 }  // namespace
