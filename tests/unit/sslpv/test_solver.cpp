@@ -483,3 +483,104 @@ TEST(SslpvSolver, EarlyStopDropsAtMostTheFluxLeftInTheGrid) {
         EXPECT_LE(accFull[c] - accEarly[c], dropped * a.remaining[c] + ENERGY_TOL * accFull[c]);
     }
 }
+
+namespace {
+
+/// Flux-weighted spatial variance (cells², summed over x, y, z) of the propagation grid after
+/// `steps` steps of one texel injected at the centre of an N³ block of non-absorbing medium
+/// with σs′ = σt (mm⁻¹) and cells of 1 mm, no sinks, nothing accumulated. The light cannot
+/// reach the grid's border within N/2 steps.
+double spreadAfter(int steps, float sigma_s) {
+    constexpr int n = 48;
+    CoarseMaterial m = test::centredMaterial(n, 1.f, sigma_s, sigma_s, 0.f);
+    std::fill(m.insideFraction.begin(), m.insideFraction.end(), 1.f);
+    m.homogeneous = true;
+    SslpvOptions o;
+    o.maxSteps = steps;
+    o.removeExitant = false;
+    o.skipAccumulateSteps = 0;
+    o.attenuation = SslpvAttenuation::Absorption;
+    SslpvSolver s(o);
+    s.setMaterial(m, 1.f);
+    SslpvInjectionSample t;
+    t.position = Point3f(0.3f);
+    t.direction = Vector3f(0, 0, -1);
+    t.flux = Rgb(1.f);
+    s.setInjectionSamples({t});
+    s.solve();
+    double w = 0, mean[3] = {}, sq = 0;
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const double v = s.propagation().at({x, y, z}, 0, 0);
+                const double p[3] = {double(x), double(y), double(z)};
+                w += v;
+                for (int a = 0; a < 3; ++a) {
+                    mean[a] += v * p[a];
+                    sq += v * p[a] * p[a];
+                }
+            }
+    return sq / w - (mean[0] * mean[0] + mean[1] * mean[1] + mean[2] * mean[2]) / (w * w);
+}
+
+}  // namespace
+
+// The lattice's own transport (docs/methods/sslpv.md, "Numerical diffusion"): each step moves
+// light one cell to a face neighbour and re-projects it onto the SH basis, so the light keeps
+// little of its direction whatever the medium. The spread grows by d⟨r²⟩/dn cells² per step.
+// A memoryless nearest-neighbour walk grows by exactly 1 cell² per step; with σs′Δx = 8 Eq. 3
+// leaves e⁻⁸ of the dipole band, so the lattice must be that walk (to 1 %, the residual memory).
+// Without any scattering the propagation itself keeps a direction correlation r per step, and
+// the spread grows by (1 + r)/(1 − r): measured 1.352 (r = 0.15), i.e. a transport mean free
+// path of 0.68 cells however thin the medium is, against 1/σs′ in the medium it stands for.
+TEST(SslpvSolver, LatticeTransportMeanFreePathIsAboutHalfACell) {
+    const double memoryless = (spreadAfter(24, 8.f) - spreadAfter(8, 8.f)) / 16.0;
+    EXPECT_NEAR(memoryless, 1.0, 0.01);
+    const double unscattered = (spreadAfter(24, 1e-4f) - spreadAfter(8, 1e-4f)) / 16.0;
+    // Measured 1.352; any change of the propagation matrices or of Eq. 3's folding moves it.
+    EXPECT_NEAR(unscattered, 1.352, 0.01);
+}
+
+// The consequence (issue 14, the back-lit cases of docs/evaluation.md): the transmission of a
+// non-absorbing slab 5 mm thick (σs′ = 0.8 mm⁻¹, 4 mean free paths, η = 1, one texel at normal
+// incidence) falls as the grid is refined, because the lattice is optically 1/(0.68 σs′Δx)
+// times thicker than the medium: 0.222 / 0.143 / 0.080 of the light leaves through the back at
+// Δx = 1 / ½ / ¼ mm (diffusion theory: about 0.3, (z₀ + z_b)/(L + 2z_b) with z₀ = 1/σs′ and
+// Milne's z_b = 0.71/σs′). A convergent transport would give one value, within 10 %. Disabled while
+// it fails (run it with
+// --gtest_also_run_disabled_tests); the method change it needs is in docs/methods/sslpv.md.
+TEST(SslpvSolver, DISABLED_SlabTransmissionConvergesAsTheGridIsRefined) {
+    std::vector<double> transmitted;
+    for (float h : {1.f, 0.5f, 0.25f}) {
+        constexpr int n = 64;
+        const int cells = int(std::lround(5.f / h));
+        CoarseMaterial m = test::centredMaterial(n, h, 0.8f, 0.8f, 0.f);
+        const int z0 = (n - cells) / 2, z1 = z0 + cells - 1;
+        for (int z = z0; z <= z1; ++z)
+            for (int y = 0; y < n; ++y)
+                for (int x = 0; x < n; ++x)
+                    m.insideFraction[m.spec.linearIndex({x, y, z})] = 1.f;
+        m.homogeneous = true;
+        SslpvOptions o;
+        o.maxSteps = 4096;
+        o.stopEpsilon = 1e-4f;
+        o.attenuation = SslpvAttenuation::Absorption;
+        SslpvSolver s(o);
+        s.setMaterial(m, 1.f);
+        SslpvInjectionSample t;
+        t.position = Point3f(0.01f, 0.01f, m.spec.origin.z + float(z1 + 1) * h);
+        t.direction = Vector3f(0, 0, -1);
+        t.flux = Rgb(1.f);
+        s.setInjectionSamples({t});
+        s.solve();
+        double top = 0, bottom = 0;  // c00 removed in the sink layers above and below
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                top += s.exitant().at({x, y, z1 + 1}, 0, 0);
+                bottom += s.exitant().at({x, y, z0 - 1}, 0, 0);
+            }
+        transmitted.push_back(bottom / (top + bottom));
+    }
+    EXPECT_NEAR(transmitted[1], transmitted[0], 0.1 * transmitted[0]);
+    EXPECT_NEAR(transmitted[2], transmitted[0], 0.1 * transmitted[0]);
+}
