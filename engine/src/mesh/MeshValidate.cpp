@@ -746,6 +746,7 @@ private:
         const LegacyVtkType* t = dataType(type);
         if (t->kind != LegacyVtkType::INTEGER && t->kind != LegacyVtkType::REAL)
             fail("points of type " + quoted(type) + " (expected a number type such as float)");
+        checkFits(m_points, m_binary ? 3 * t->bytes : 3, 1, "points");
         readArray(*t, m_points, 3, {}, /*finite=*/true);
         m_hasPoints = true;
     }
@@ -1019,7 +1020,7 @@ private:
     void readArray(const LegacyVtkType& t, uint64_t tuples, uint64_t components,
                    const IntegerCheck& check = {}, bool finite = false, bool unitInterval = false) {
         if (tuples > 8 * m_size + 8)
-            checkFits(tuples, 1, 8, "values");
+            checkFits(tuples, 1, 8, "tuples");
         const uint64_t values = tuples * components;  // ≤ 2^40·2^16: no overflow
         const bool binary = m_binary;
         if (t.kind == LegacyVtkType::STRING) {
