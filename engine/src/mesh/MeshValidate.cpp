@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <cerrno>
 #include <cfloat>
 #include <cmath>
 #include <cstdlib>
@@ -48,15 +47,18 @@ public:
     bool token(std::string& out) {
         out.clear();
         int c;
-        while ((c = get()) != EOF && std::isspace(c))
-            ;
+        while ((c = peek()) != EOF && std::isspace(c))
+            get();
         if (c == EOF)
             return false;
-        out.push_back(char(c));
-        while ((c = peek()) != EOF && !std::isspace(c)) {
-            out.push_back(char(c));
-            get();
-        }
+        // The token's bytes straight from the buffer (no line ends among them).
+        do {
+            const size_t start = m_pos;
+            while (m_pos < m_len && !std::isspace(static_cast<unsigned char>(m_buf[m_pos])))
+                ++m_pos;
+            out.append(m_buf.data() + start, m_pos - start);
+            m_offset += m_pos - start;
+        } while (m_pos == m_len && fill());
         return true;
     }
     /// Like std::getline: the rest of the current line; false at the end of the file.
@@ -76,11 +78,16 @@ public:
     /// Reads `n` raw bytes; false if the file ends first.
     bool bytes(void* dst, size_t n) {
         auto* p = static_cast<char*>(dst);
-        for (size_t i = 0; i < n; ++i) {
-            const int c = get();
-            if (c == EOF)
+        while (n > 0) {
+            if (m_pos == m_len && !fill())
                 return false;
-            p[i] = char(c);
+            const size_t k = std::min(n, m_len - m_pos);
+            std::memcpy(p, m_buf.data() + m_pos, k);
+            m_line += uint64_t(std::count(p, p + k, '\n'));
+            m_pos += k;
+            m_offset += k;
+            p += k;
+            n -= k;
         }
         return true;
     }
@@ -142,19 +149,26 @@ private:
     uint64_t m_line = 1, m_offset = 0;
 };
 
-/// A plain decimal number as the readers' stream extraction accepts it (no nan/inf/hex).
-bool isNumber(const std::string& t) {
+/// A plain decimal number as the readers' stream extraction accepts it (no nan/inf/hex), into
+/// `v`.
+bool parseNumber(const std::string& t, double& v) {
     if (t.empty() || t.find_first_not_of("0123456789+-.eE") != std::string::npos)
         return false;
     char* end = nullptr;
-    const double v = std::strtod(t.c_str(), &end);
+    v = std::strtod(t.c_str(), &end);
     return end == t.c_str() + t.size() && std::isfinite(v);
+}
+
+bool isNumber(const std::string& t) {
+    double v;
+    return parseNumber(t, v);
 }
 
 /// A plain decimal number that also fits a float: OpenMesh extracts some values into a float,
 /// and an overflow fails its stream like a malformed word.
 bool isFloatNumber(const std::string& t) {
-    return isNumber(t) && std::abs(std::strtod(t.c_str(), nullptr)) <= double(FLT_MAX);
+    double v;
+    return parseNumber(t, v) && std::abs(v) <= double(FLT_MAX);
 }
 
 /// A non-negative integer (no sign: extracting "-3" into an unsigned gives 4294967293).
@@ -569,14 +583,16 @@ std::string lowerCase(std::string s) {
 /// a '-' only for signed types (extracting "-1" into an unsigned type wraps it around).
 bool parseInteger(const std::string& t, int64_t min, uint64_t max, int64_t& out) {
     const bool negative = !t.empty() && t[0] == '-';
-    const std::string digits = negative ? t.substr(1) : t;
-    if (digits.empty() || digits.size() > 20 ||
-        digits.find_first_not_of("0123456789") != std::string::npos || (negative && min >= 0))
+    size_t i = negative ? 1 : 0;
+    if (i == t.size() || t.size() - i > 20 || (negative && min >= 0))
         return false;
-    errno = 0;
-    const uint64_t magnitude = std::strtoull(digits.c_str(), nullptr, 10);
-    if (errno == ERANGE)
-        return false;
+    uint64_t magnitude = 0;
+    for (; i < t.size(); ++i) {
+        const unsigned digit = unsigned(t[i]) - unsigned('0');
+        if (digit > 9 || magnitude > (UINT64_MAX - digit) / 10)
+            return false;
+        magnitude = 10 * magnitude + digit;
+    }
     if (negative) {
         if (magnitude > uint64_t(INT64_MAX) + 1 || -int64_t(magnitude - 1) - 1 < min)
             return false;
@@ -765,10 +781,10 @@ private:
             fail("a second " + m_section + " section");
         const bool polygonal = keyword == "polygons" || keyword == "triangle_strips";
         const uint64_t maxCellSize = polygonal ? MAX_POLYGON : UINT64_MAX;
-        const auto checkId = [&](const std::string& where, int64_t id) {
+        const auto checkId = [&](const char* what, uint64_t index, int64_t id) {
             if (id < 0 || uint64_t(id) >= m_points)
-                fail(where + " refers to point " + std::to_string(id) + ", not one of the " +
-                     std::to_string(m_points) + " points (corrupt)");
+                fail(what + std::to_string(index) + " refers to point " + std::to_string(id) +
+                     ", not one of the " + std::to_string(m_points) + " points (corrupt)");
         };
         uint64_t cells = 0;
         if (!m_version5) {
@@ -784,7 +800,7 @@ private:
             for (uint64_t i = 0; i < entries; ++i) {
                 const int64_t v = legacyCellEntry(i, entries);
                 if (left > 0) {
-                    checkId("cell " + std::to_string(cell - 1), v);
+                    checkId("cell ", cell - 1, v);
                     --left;
                     continue;
                 }
@@ -841,9 +857,8 @@ private:
                 if (connectivityType != type)
                     fail("connectivity of type " + quoted(connectivityType) + ", offsets of type " +
                          quoted(type) + " (VTK needs one type for both)");
-                readArray(*dataType(type), ids, 1, [&](uint64_t i, int64_t id) {
-                    checkId("connectivity entry " + std::to_string(i), id);
-                });
+                readArray(*dataType(type), ids, 1,
+                          [&](uint64_t i, int64_t id) { checkId("connectivity entry ", i, id); });
                 cells = offsets - 1;
             }
         }
@@ -1042,31 +1057,41 @@ private:
             checkFits(values, t.bytes, 1, std::string(t.name) + " values");
             if (values > 0)  // vtkReadBinaryData reads nothing, not even the line end, if empty
                 endOfHeaderLine();
-            unsigned char b[8];
-            for (uint64_t i = 0; i < values; ++i) {
-                if (!m_in.bytes(b, t.bytes))
-                    fail("truncated: the file ends at value " + std::to_string(i) + " of " +
+            // In chunks: a large array costs a copy and, when checked, one decode per value.
+            constexpr uint64_t CHUNK_VALUES = 4096;
+            unsigned char chunk[CHUNK_VALUES * 8];
+            for (uint64_t first = 0; first < values; first += CHUNK_VALUES) {
+                const uint64_t n = std::min(CHUNK_VALUES, values - first);
+                const uint64_t start = m_in.offset();
+                if (!m_in.bytes(chunk, size_t(n * t.bytes)))
+                    fail("truncated: the file ends at value " +
+                         std::to_string(first + (m_in.offset() - start) / t.bytes) + " of " +
                          std::to_string(values));
-                uint64_t bits = 0;
-                for (uint32_t k = 0; k < t.bytes; ++k)
-                    bits = (bits << 8) | b[k];
-                if (t.kind == LegacyVtkType::REAL) {
-                    double v = 0;
-                    if (t.bytes == 4) {
-                        float f;
-                        const auto u = uint32_t(bits);
-                        std::memcpy(&f, &u, 4);
-                        v = f;
+                if (t.kind == LegacyVtkType::REAL ? !finite : !check)
+                    continue;
+                for (uint64_t j = 0; j < n; ++j) {
+                    const unsigned char* b = chunk + j * t.bytes;
+                    uint64_t bits = 0;
+                    for (uint32_t k = 0; k < t.bytes; ++k)
+                        bits = (bits << 8) | b[k];
+                    if (t.kind == LegacyVtkType::REAL) {
+                        double v = 0;
+                        if (t.bytes == 4) {
+                            float f;
+                            const auto u = uint32_t(bits);
+                            std::memcpy(&f, &u, 4);
+                            v = f;
+                        } else {
+                            std::memcpy(&v, &bits, 8);
+                        }
+                        if (!std::isfinite(v))
+                            fail("value " + std::to_string(first + j) +
+                                 " is not finite (NaN or infinity)");
                     } else {
-                        std::memcpy(&v, &bits, 8);
+                        const int shift = int(64 - 8 * t.bytes);  // sign-extends signed types
+                        check(first + j, t.min < 0 && shift > 0 ? int64_t(bits << shift) >> shift
+                                                                : int64_t(bits));
                     }
-                    if (finite && !std::isfinite(v))
-                        fail("value " + std::to_string(i) + " is not finite (NaN or infinity)");
-                } else if (check) {
-                    const int shift = int(64 - 8 * t.bytes);  // sign-extends signed types
-                    const int64_t v =
-                        t.min < 0 && shift > 0 ? int64_t(bits << shift) >> shift : int64_t(bits);
-                    check(i, v);
                 }
             }
         } else {
