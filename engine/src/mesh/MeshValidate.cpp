@@ -2,7 +2,8 @@
 /// @file
 /// @brief Checks of mesh files before the upstream readers (see MeshValidate.h). Each check
 /// mirrors what the reader will consume: OpenMesh 9's OFFReader::read_ascii, PLYReader,
-/// OBJReader and STLReader (ASCII/binary by file size).
+/// OBJReader and STLReader (ASCII/binary by file size), VTK 9.1's vtkPolyDataReader (legacy
+/// .vtk, LegacyVtkWalk) and the cell offsets vtkXMLPolyDataReader trusts (.vtp).
 
 #include "MeshValidate.h"
 
