@@ -4,7 +4,14 @@
 /// sphere, against a baseline measured in the same run: per-voxel parity, one Embree ray
 /// cast from every voxel centre (no column coherence, single direction).
 ///
+/// Also the legacy VTK walk (engine/src/mesh/MeshValidate.cpp) against VTK 9.1's own read of
+/// the same file, a 180 000-triangle torus written by vtkPolyDataWriter (saveMesh: version 5.1,
+/// with point normals), ASCII and binary: the walk runs before every legacy .vtk import.
+///
 ///     bench_mesh                       # prints ratios after the Google Benchmark table
+///     bench_mesh --benchmark_filter=LegacyVtk   # the walk only
+
+#include "MeshValidate.h"
 
 #include <lucent/core/Parallel.h>
 #include <lucent/mesh/MeshIO.h>
@@ -13,6 +20,9 @@
 
 #include <benchmark/benchmark.h>
 #include <embree3/rtcore.h>
+#include <vtkNew.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataReader.h>
 
 #include <chrono>
 #include <cstdio>
@@ -131,6 +141,36 @@ void BM_Naive128(benchmark::State& state, const TriangleMesh* (*mesh)(), const c
     timed(state, std::string("naive/") + name, [&] { return naivePerVoxel(*m, spec); });
 }
 
+/// The torus written once per encoding into the temporary folder (2 · 300 · 300 triangles).
+const std::string& torusFile(bool binary) {
+    static std::string paths[2];
+    std::string& path = paths[binary ? 1 : 0];
+    if (path.empty()) {
+        path = (std::filesystem::temp_directory_path() /
+                (std::string("lucent_bench_torus_") + (binary ? "binary" : "ascii") + ".vtk"))
+                   .string();
+        saveMesh(makeTorus(10.f, 4.f, /*majorSegments=*/300, /*minorSegments=*/300), path, binary);
+    }
+    return path;
+}
+
+void BM_LegacyVtkWalk(benchmark::State& state, bool binary) {
+    const std::string& path = torusFile(binary);
+    const uint64_t size = std::filesystem::file_size(path);
+    timed(state, std::string("walk/") + (binary ? "binary" : "ascii"),
+          [&] { return lucent::detail::validateMeshFile(path, ".vtk", size).polygons; });
+}
+
+void BM_LegacyVtkRead(benchmark::State& state, bool binary) {
+    const std::string& path = torusFile(binary);
+    timed(state, std::string("vtk/") + (binary ? "binary" : "ascii"), [&] {
+        vtkNew<vtkPolyDataReader> reader;
+        reader->SetFileName(path.c_str());
+        reader->Update();
+        return reader->GetOutput()->GetNumberOfPolys();
+    });
+}
+
 const TriangleMesh* bunnyPtr() {
     return &bunny();
 }
@@ -153,6 +193,11 @@ BENCHMARK_CAPTURE(BM_Naive128, sphere, spherePtr, "sphere")
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1);
 
+BENCHMARK_CAPTURE(BM_LegacyVtkWalk, ascii, false)->Unit(benchmark::kMillisecond)->Iterations(5);
+BENCHMARK_CAPTURE(BM_LegacyVtkRead, ascii, false)->Unit(benchmark::kMillisecond)->Iterations(5);
+BENCHMARK_CAPTURE(BM_LegacyVtkWalk, binary, true)->Unit(benchmark::kMillisecond)->Iterations(5);
+BENCHMARK_CAPTURE(BM_LegacyVtkRead, binary, true)->Unit(benchmark::kMillisecond)->Iterations(5);
+
 int main(int argc, char** argv) {
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv))
@@ -168,6 +213,18 @@ int main(int argc, char** argv) {
             continue;
         std::printf("  %-7s voxelizeSolid %8.1f ms   naive per-voxel %8.1f ms   speed-up x%.1f\n",
                     m, 1e3 * a->second, 1e3 * b->second, b->second / a->second);
+    }
+    std::printf(
+        "\nlegacy VTK, 180 000 triangles, best of 5 (walk before the import vs VTK's read):\n");
+    for (const bool binary : {false, true}) {
+        const char* encoding = binary ? "binary" : "ascii";
+        const auto walk = g_seconds.find(std::string("walk/") + encoding);
+        const auto vtk = g_seconds.find(std::string("vtk/") + encoding);
+        if (walk != g_seconds.end() && vtk != g_seconds.end())
+            std::printf("  %-6s %5.1f MB  walk %7.1f ms   VTK %7.1f ms   walk/VTK %.2f\n", encoding,
+                        double(std::filesystem::file_size(torusFile(binary))) / 1e6,
+                        1e3 * walk->second, 1e3 * vtk->second, walk->second / vtk->second);
+        std::filesystem::remove(torusFile(binary));
     }
     return 0;
 }

@@ -2,7 +2,8 @@
 /// @file
 /// @brief Checks of mesh files before the upstream readers (see MeshValidate.h). Each check
 /// mirrors what the reader will consume: OpenMesh 9's OFFReader::read_ascii, PLYReader,
-/// OBJReader and STLReader (ASCII/binary by file size).
+/// OBJReader and STLReader (ASCII/binary by file size), VTK 9.1's vtkPolyDataReader (legacy
+/// .vtk, LegacyVtkWalk) and the cell offsets vtkXMLPolyDataReader trusts (.vtp).
 
 #include "MeshValidate.h"
 
@@ -11,6 +12,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cfloat>
 #include <cmath>
 #include <cstdlib>
@@ -46,15 +48,18 @@ public:
     bool token(std::string& out) {
         out.clear();
         int c;
-        while ((c = get()) != EOF && std::isspace(c))
-            ;
+        while ((c = peek()) != EOF && std::isspace(c))
+            get();
         if (c == EOF)
             return false;
-        out.push_back(char(c));
-        while ((c = peek()) != EOF && !std::isspace(c)) {
-            out.push_back(char(c));
-            get();
-        }
+        // The token's bytes straight from the buffer (no line ends among them).
+        do {
+            const size_t start = m_pos;
+            while (m_pos < m_len && !std::isspace(static_cast<unsigned char>(m_buf[m_pos])))
+                ++m_pos;
+            out.append(m_buf.data() + start, m_pos - start);
+            m_offset += m_pos - start;
+        } while (m_pos == m_len && fill());
         return true;
     }
     /// Like std::getline: the rest of the current line; false at the end of the file.
@@ -74,13 +79,31 @@ public:
     /// Reads `n` raw bytes; false if the file ends first.
     bool bytes(void* dst, size_t n) {
         auto* p = static_cast<char*>(dst);
-        for (size_t i = 0; i < n; ++i) {
-            const int c = get();
-            if (c == EOF)
+        while (n > 0) {
+            if (m_pos == m_len && !fill())
                 return false;
-            p[i] = char(c);
+            const size_t k = std::min(n, m_len - m_pos);
+            std::memcpy(p, m_buf.data() + m_pos, k);
+            m_line += uint64_t(std::count(p, p + k, '\n'));
+            m_pos += k;
+            m_offset += k;
+            p += k;
+            n -= k;
         }
         return true;
+    }
+    /// The byte `k` places ahead (0: the next one) without consuming it; EOF past the end.
+    /// `k` must be below the buffer's size.
+    int peekAt(size_t k) {
+        while (m_pos + k >= m_len)
+            if (!fill())
+                return EOF;
+        return static_cast<unsigned char>(m_buf[m_pos + k]);
+    }
+    /// Consumes `n` bytes already seen by peekAt.
+    void skip(size_t n) {
+        for (size_t i = 0; i < n; ++i)
+            get();
     }
     [[nodiscard]] uint64_t lineNumber() const { return m_line; }
     [[nodiscard]] uint64_t offset() const { return m_offset; }
@@ -105,11 +128,19 @@ private:
         }
         return c;
     }
+    /// Reads more of the file behind the unread bytes (kept for peekAt); false at the end.
     bool fill() {
-        m_in.read(m_buf.data(), std::streamsize(m_buf.size()));
-        m_len = size_t(m_in.gcount());
-        m_pos = 0;
-        return m_len > 0;
+        if (m_pos > 0) {
+            std::memmove(m_buf.data(), m_buf.data() + m_pos, m_len - m_pos);
+            m_len -= m_pos;
+            m_pos = 0;
+        }
+        if (m_len == m_buf.size() || !m_in)
+            return false;
+        m_in.read(m_buf.data() + m_len, std::streamsize(m_buf.size() - m_len));
+        const size_t added = size_t(m_in.gcount());
+        m_len += added;
+        return added > 0;
     }
 
     std::string m_path;
@@ -119,19 +150,26 @@ private:
     uint64_t m_line = 1, m_offset = 0;
 };
 
-/// A plain decimal number as the readers' stream extraction accepts it (no nan/inf/hex).
-bool isNumber(const std::string& t) {
+/// A plain decimal number as the readers' stream extraction accepts it (no nan/inf/hex), into
+/// `v`.
+bool parseNumber(const std::string& t, double& v) {
     if (t.empty() || t.find_first_not_of("0123456789+-.eE") != std::string::npos)
         return false;
     char* end = nullptr;
-    const double v = std::strtod(t.c_str(), &end);
+    v = std::strtod(t.c_str(), &end);
     return end == t.c_str() + t.size() && std::isfinite(v);
+}
+
+bool isNumber(const std::string& t) {
+    double v;
+    return parseNumber(t, v);
 }
 
 /// A plain decimal number that also fits a float: OpenMesh extracts some values into a float,
 /// and an overflow fails its stream like a malformed word.
 bool isFloatNumber(const std::string& t) {
-    return isNumber(t) && std::abs(std::strtod(t.c_str(), nullptr)) <= double(FLT_MAX);
+    double v;
+    return parseNumber(t, v) && std::abs(v) <= double(FLT_MAX);
 }
 
 /// A non-negative integer (no sign: extracting "-3" into an unsigned gives 4294967293).
@@ -492,29 +530,745 @@ void validatePly(const std::string& path, uint64_t size) {
 
 // ------------------------------------------------------------------------------------ VTK
 
-/// Legacy .vtk: the POINTS and POLYGONS counts (version 5 writes the number of offsets, one
-/// more than the number of polygons).
-ClaimedCounts legacyVtkClaims(const std::string& path, uint64_t size) {
-    Reader in(path);
-    std::string line;
-    ClaimedCounts c;
-    bool version5 = false;
-    for (uint64_t n = 0; in.line(line); ++n) {
-        if (n == 0)
-            version5 = line.find("Version 5") != std::string::npos;
-        std::istringstream words(line);
-        std::string key, t;
-        words >> key >> t;
-        uint64_t v = 0;
-        if (key == "POINTS" && parseCount(t, v))
-            c.points += v;
-        else if (key == "POLYGONS" && parseCount(t, v))
-            c.polygons += version5 && v > 0 ? v - 1 : v;
-    }
-    checkClaim(path, c.points, 1, size, "points");
-    checkClaim(path, c.polygons, 1, size, "polygons");
-    return c;
+// The legacy walk mirrors VTK 9.1's vtkDataReader/vtkPolyDataReader (IO/Legacy), which reads
+// on from a failed stream after any read error and crashes in-process on nearly every
+// malformed file (top frames vtkDataReader::ReadString, vtkPolyDataReader::ReadMeshSimple,
+// vtkCellArray::AppendLegacyFormat), and which trusts every count it reads.
+
+/// Most components of one array value (SCALARS, FIELD arrays): far above VTK's 1-16, far below
+/// a count that would make an array's size overflow.
+constexpr uint64_t MAX_COMPONENTS = 1u << 16;
+/// VTK reads a word into a char[256] (vtkDataReader::ReadString: width 256).
+constexpr size_t MAX_WORD = 255;
+/// VTK reads a line into a char[256] (vtkDataReader::ReadLine): longer lines are cut.
+constexpr size_t MAX_LINE = 255;
+
+/// A data type of the legacy format as vtkDataReader::ReadArray reads it: bytes per value in a
+/// binary file (big-endian), and the range of what its stream extraction accepts in an ASCII
+/// file (char and unsigned_char are read as int; vtkIdType as a 32-bit int; bit as vtkIdType).
+struct LegacyVtkType {
+    const char* name;
+    enum Kind { INTEGER, REAL, BIT, STRING } kind;
+    uint32_t bytes;
+    int64_t min;
+    uint64_t max;
+};
+
+constexpr LegacyVtkType LEGACY_VTK_TYPES[] = {
+    {"bit", LegacyVtkType::BIT, 0, INT64_MIN, INT64_MAX},
+    {"char", LegacyVtkType::INTEGER, 1, INT32_MIN, INT32_MAX},
+    {"signed_char", LegacyVtkType::INTEGER, 1, INT32_MIN, INT32_MAX},
+    {"unsigned_char", LegacyVtkType::INTEGER, 1, INT32_MIN, INT32_MAX},
+    {"short", LegacyVtkType::INTEGER, 2, INT16_MIN, INT16_MAX},
+    {"unsigned_short", LegacyVtkType::INTEGER, 2, 0, UINT16_MAX},
+    {"vtkidtype", LegacyVtkType::INTEGER, 4, INT32_MIN, INT32_MAX},
+    {"int", LegacyVtkType::INTEGER, 4, INT32_MIN, INT32_MAX},
+    {"unsigned_int", LegacyVtkType::INTEGER, 4, 0, UINT32_MAX},
+    {"long", LegacyVtkType::INTEGER, 8, INT64_MIN, INT64_MAX},
+    {"unsigned_long", LegacyVtkType::INTEGER, 8, 0, UINT64_MAX},
+    {"vtktypeint64", LegacyVtkType::INTEGER, 8, INT64_MIN, INT64_MAX},
+    {"vtktypeuint64", LegacyVtkType::INTEGER, 8, 0, UINT64_MAX},
+    {"float", LegacyVtkType::REAL, 4, 0, 0},
+    {"double", LegacyVtkType::REAL, 8, 0, 0},
+    {"string", LegacyVtkType::STRING, 0, 0, 0},
+    {"utf8_string", LegacyVtkType::STRING, 0, 0, 0},
+};
+
+std::string lowerCase(std::string s) {
+    for (char& c : s)
+        c = char(std::tolower(static_cast<unsigned char>(c)));
+    return s;
 }
+
+/// An integer as stream extraction reads it into a type of range [min, max]: decimal digits,
+/// a '-' only for signed types (extracting "-1" into an unsigned type wraps it around).
+bool parseInteger(const std::string& t, int64_t min, uint64_t max, int64_t& out) {
+    const bool negative = !t.empty() && t[0] == '-';
+    size_t i = negative ? 1 : 0;
+    if (i == t.size() || t.size() - i > 20 || (negative && min >= 0))
+        return false;
+    uint64_t magnitude = 0;
+    for (; i < t.size(); ++i) {
+        const unsigned digit = unsigned(t[i]) - unsigned('0');
+        if (digit > 9 || magnitude > (UINT64_MAX - digit) / 10)
+            return false;
+        magnitude = 10 * magnitude + digit;
+    }
+    if (negative) {
+        if (magnitude > uint64_t(INT64_MAX) + 1 || -int64_t(magnitude - 1) - 1 < min)
+            return false;
+        out = -int64_t(magnitude - 1) - 1;
+        return true;
+    }
+    if (magnitude > max)
+        return false;
+    out = int64_t(magnitude);  // wraps above INT64_MAX: only unsigned 64-bit data, unchecked
+    return true;
+}
+
+/// The walk of a legacy VTK polydata file (`# vtk DataFile Version x.y`, ASCII or BINARY) in
+/// the order vtkPolyDataReader reads it, with every count checked against the file size and
+/// the import limits before VTK would allocate by it, every value present and readable by
+/// VTK's stream extraction, and every cell's point ids within the points. Accepts the subset
+/// VTK 9.1's vtkPolyDataWriter writes (docs/file-formats.md, "Legacy VTK"), in a single pass.
+class LegacyVtkWalk {
+public:
+    LegacyVtkWalk(const std::string& path, uint64_t size)
+        : m_path(path), m_size(size), m_in(path) {}
+
+    ClaimedCounts run() {
+        readHeader();
+        std::string word;
+        while (nextWord(word)) {
+            const std::string keyword = lowerCase(word);
+            if (keyword == "field") {
+                m_section = "FIELD";
+                readField(std::nullopt);
+            } else if (keyword == "points") {
+                readPoints();
+            } else if (keyword == "vertices" || keyword == "lines" || keyword == "polygons" ||
+                       keyword == "triangle_strips") {
+                readCells(keyword);
+            } else if (keyword == "point_data" || keyword == "cell_data") {
+                readAttributes(keyword);  // to the end of the file, as vtkPolyDataReader
+            } else {
+                m_section = "DATASET POLYDATA";
+                fail("unknown keyword " + quoted(word) +
+                     " (expected FIELD, POINTS, VERTICES, LINES, POLYGONS, TRIANGLE_STRIPS, "
+                     "POINT_DATA or CELL_DATA)");
+            }
+        }
+        if (!m_hasPoints) {
+            m_section = "DATASET POLYDATA";
+            fail("the file has no POINTS");
+        }
+        return {m_points, m_polygons};
+    }
+
+private:
+    /// Receives the integer values of an array one by one (index, value).
+    using IntegerCheck = std::function<void(uint64_t, int64_t)>;
+
+    [[noreturn]] void fail(const std::string& what) const {
+        LUCENT_THROW(IoError, "mesh file '", m_path, "': legacy VTK, ", m_section, ": ", what,
+                     " (line ", m_in.lineNumber(), ", byte ", m_in.offset(), ")");
+    }
+    [[nodiscard]] uint64_t bytesLeft() const {
+        return m_size > m_in.offset() ? m_size - m_in.offset() : 0;
+    }
+
+    /// The next word as vtkDataReader::ReadString reads it; false at the end of the file.
+    bool nextWord(std::string& word) {
+        if (!m_in.token(word))
+            return false;
+        if (word.size() > MAX_WORD)
+            fail("a word of more than 255 characters (" + quoted(word) +
+                 "): VTK would cut it in two");
+        return true;
+    }
+    std::string word(const std::string& what) {
+        std::string w;
+        if (!nextWord(w))
+            fail("truncated: the file ends where " + what + " should be");
+        return w;
+    }
+    void expectWord(const char* keyword) {
+        const std::string w = word(std::string("'") + keyword + "'");
+        if (lowerCase(w) != lowerCase(keyword))
+            fail(std::string("expected '") + keyword + "', found " + quoted(w));
+    }
+    /// An integer word within [min, max] (a count, a number of components...).
+    int64_t integer(const std::string& what, int64_t min, int64_t max) {
+        const std::string w = word(what);
+        int64_t v = 0;
+        if (!parseInteger(w, INT64_MIN, INT64_MAX, v) || v < min || v > max)
+            fail(what + " " + quoted(w) + " is not an integer in [" + std::to_string(min) + ", " +
+                 std::to_string(max) + "]");
+        return v;
+    }
+    /// A count VTK reads into a vtkIdType.
+    uint64_t count(const std::string& what) { return uint64_t(integer(what, 0, INT64_MAX)); }
+
+    /// Fails unless `values` values of at least `bytesEach` bytes (numerator/denominator) fit
+    /// in the rest of the file: no claim makes VTK allocate more than the file could fill.
+    void checkFits(uint64_t values, uint64_t bytesEachNum, uint64_t bytesEachDen,
+                   const std::string& noun) {
+        const uint64_t left = bytesLeft();
+        // values * num / den > left, without overflow (values ≤ 2^63, num ≤ 8).
+        if (values / bytesEachDen > left / std::max<uint64_t>(bytesEachNum, 1) + 1 ||
+            (values * bytesEachNum + bytesEachDen - 1) / bytesEachDen > left)
+            fail("claims " + std::to_string(values) + " " + noun + ", more than the " +
+                 std::to_string(left) + " bytes left in the file hold (truncated or corrupt)");
+    }
+
+    /// Binary data starts after the end of the header line: VTK discards the rest of that line
+    /// with getline into 256 characters, which fails on 255 or more.
+    void endOfHeaderLine() {
+        for (size_t n = 0;; ++n) {
+            const int c = m_in.peekAt(0);
+            if (c == EOF)
+                fail("truncated: the file ends before the binary data");
+            m_in.skip(1);
+            if (c == '\n')
+                return;
+            if (!std::isspace(c) || n >= 254)
+                fail("unexpected text before the binary data");
+        }
+    }
+
+    // ------------------------------------------------------------------------- header
+
+    void readHeader() {
+        m_section = "header";
+        std::string line;
+        if (!m_in.line(line))
+            fail("empty file");
+        static const std::string PREFIX = "# vtk DataFile Version ";
+        if (line.compare(0, PREFIX.size(), PREFIX) != 0)
+            fail("the first line must be '# vtk DataFile Version x.y', not " + quoted(line));
+        // "major.minor", as VTK writes it (4.2 or 5.1 for VTK 9.1; 2.0-4.1 for older VTK).
+        std::istringstream version(line.substr(PREFIX.size()));
+        std::string rest;
+        version >> rest;
+        const size_t dot = rest.find('.');
+        int64_t major = 0, minor = 0;
+        if (dot == std::string::npos || !parseInteger(rest.substr(0, dot), 0, 9, major) ||
+            !parseInteger(rest.substr(dot + 1), 0, 9, minor) || (version >> rest) || major < 1 ||
+            major > 5 || (major == 5 && minor > 1))
+            fail("version " + quoted(line.substr(PREFIX.size())) +
+                 " is not one VTK 9.1 reads (1.0 to 5.1)");
+        m_version5 = major >= 5;  // OFFSETS/CONNECTIVITY cells (vtkPolyDataReader::ReadMeshSimple)
+        if (!m_in.line(line))
+            fail("truncated: no title line");
+        const std::string encoding = lowerCase(word("ASCII or BINARY"));
+        if (encoding != "ascii" && encoding != "binary")
+            fail("the third line must be ASCII or BINARY, not " + quoted(encoding));
+        m_binary = encoding == "binary";
+        expectWord("DATASET");
+        const std::string type = word("the dataset type");
+        if (lowerCase(type) != "polydata")
+            fail("only POLYDATA datasets are read, not " + quoted(type) +
+                 " (save the surface as polydata, or as .vtp)");
+    }
+
+    // -------------------------------------------------------------------- geometry
+
+    void readPoints() {
+        m_section = "POINTS";
+        if (m_hasPoints)
+            fail("a second POINTS section");
+        m_points = count("the number of points");
+        checkElementCount(m_points, "mesh file", m_path, "points");
+        const std::string type = word("the point type");
+        const LegacyVtkType* t = dataType(type);
+        if (t->kind != LegacyVtkType::INTEGER && t->kind != LegacyVtkType::REAL)
+            fail("points of type " + quoted(type) + " (expected a number type such as float)");
+        checkFits(m_points, m_binary ? 3 * t->bytes : 3, 1, "points");
+        readArray(*t, m_points, 3, {}, /*finite=*/true);
+        m_hasPoints = true;
+    }
+
+    /// VERTICES, LINES, POLYGONS or TRIANGLE_STRIPS: before version 5, "n size" then n cells
+    /// as [count, ids...] (vtkCellArray::ImportLegacyFormat trusts the counts); from version 5,
+    /// "offsets+1 connectivity" then OFFSETS and CONNECTIVITY arrays of one integer type
+    /// (vtkCellArray::SetData trusts the offsets).
+    void readCells(const std::string& keyword) {
+        m_section = lowerCase(keyword);
+        for (char& c : m_section)
+            c = char(std::toupper(static_cast<unsigned char>(c)));
+        if (!m_hasPoints)
+            fail("cells before POINTS");
+        if (!m_cellSections.insert(keyword).second)
+            fail("a second " + m_section + " section");
+        const bool polygonal = keyword == "polygons" || keyword == "triangle_strips";
+        const uint64_t maxCellSize = polygonal ? MAX_POLYGON : UINT64_MAX;
+        const auto checkId = [&](const char* what, uint64_t index, int64_t id) {
+            if (id < 0 || uint64_t(id) >= m_points)
+                fail(what + std::to_string(index) + " refers to point " + std::to_string(id) +
+                     ", not one of the " + std::to_string(m_points) + " points (corrupt)");
+        };
+        uint64_t cells = 0;
+        if (!m_version5) {
+            cells = count("the number of cells");
+            const uint64_t entries = count("the size of the cell list");
+            checkFits(entries, m_binary ? 4 : 1, 1, "cell list entries");
+            if (cells > entries)
+                fail("claims " + std::to_string(cells) + " cells in a list of " +
+                     std::to_string(entries) + " entries");
+            if (m_binary)
+                endOfHeaderLine();        // vtkDataReader::ReadCellsLegacy, even for an empty list
+            uint64_t cell = 0, left = 0;  // ids left in the current cell
+            for (uint64_t i = 0; i < entries; ++i) {
+                const int64_t v = legacyCellEntry(i, entries);
+                if (left > 0) {
+                    checkId("cell ", cell - 1, v);
+                    --left;
+                    continue;
+                }
+                if (v < 0 || uint64_t(v) > maxCellSize || uint64_t(v) >= entries - i)
+                    fail("cell " + std::to_string(cell) + " claims " + std::to_string(v) +
+                         " points, " +
+                         (v < 0 || uint64_t(v) > maxCellSize
+                              ? std::string("an invalid count")
+                              : "more than the " + std::to_string(entries - i - 1) +
+                                    " entries left in the list of " + std::to_string(entries)) +
+                         " (corrupt)");
+                left = uint64_t(v);
+                ++cell;
+            }
+            if (cell != cells)
+                fail("the list holds " + std::to_string(cell) + " cells, the header claims " +
+                     std::to_string(cells) + " (corrupt)");
+        } else {
+            const uint64_t offsets = count("the number of offsets");
+            const uint64_t ids = count("the size of the connectivity array");
+            if (offsets == 0) {
+                if (ids != 0)
+                    fail("no offsets for " + std::to_string(ids) + " point ids");
+            } else {
+                expectWord("OFFSETS");
+                const std::string type = lowerCase(word("the offsets type"));
+                if (type != "int" && type != "vtktypeint64" && type != "long" &&
+                    type != "vtkidtype")
+                    fail("offsets of type " + quoted(type) +
+                         " (VTK reads cells of type vtktypeint64, int, long or vtkIdType)");
+                int64_t previous = 0;
+                readArray(*dataType(type), offsets, 1, [&](uint64_t i, int64_t v) {
+                    if (i == 0 && v != 0)
+                        fail("the first offset is " + std::to_string(v) + ", not 0 (corrupt)");
+                    if (v < previous)
+                        fail("cell " + std::to_string(i - 1) + " ends at offset " +
+                             std::to_string(v) + ", before its start " + std::to_string(previous) +
+                             ": offsets must not decrease (corrupt)");
+                    if (uint64_t(v) > ids)
+                        fail("cell " + std::to_string(i - 1) + " ends at offset " +
+                             std::to_string(v) + ", past the " + std::to_string(ids) +
+                             " point ids of the connectivity array (corrupt)");
+                    if (i > 0 && uint64_t(v - previous) > maxCellSize)
+                        fail("cell " + std::to_string(i - 1) + " has " +
+                             std::to_string(v - previous) + " points");
+                    if (i + 1 == offsets && uint64_t(v) != ids)
+                        fail("the last offset is " + std::to_string(v) + ", not the " +
+                             std::to_string(ids) + " point ids of the connectivity array " +
+                             "(corrupt)");
+                    previous = v;
+                });
+                expectWord("CONNECTIVITY");
+                const std::string connectivityType = lowerCase(word("the connectivity type"));
+                if (connectivityType != type)
+                    fail("connectivity of type " + quoted(connectivityType) + ", offsets of type " +
+                         quoted(type) + " (VTK needs one type for both)");
+                readArray(*dataType(type), ids, 1,
+                          [&](uint64_t i, int64_t id) { checkId("connectivity entry ", i, id); });
+                cells = offsets - 1;
+            }
+        }
+        checkElementCount(cells, "mesh file", m_path, "cells");
+        m_cells += cells;
+        if (keyword == "polygons")
+            m_polygons = cells;
+    }
+
+    /// Entry `i` of a legacy cell list (a 32-bit int in both encodings).
+    int64_t legacyCellEntry(uint64_t i, uint64_t entries) {
+        if (m_binary) {
+            unsigned char b[4];
+            if (!m_in.bytes(b, 4))
+                fail("truncated: the file ends at entry " + std::to_string(i) + " of " +
+                     std::to_string(entries));
+            return int32_t((uint32_t(b[0]) << 24) | (uint32_t(b[1]) << 16) | (uint32_t(b[2]) << 8) |
+                           uint32_t(b[3]));
+        }
+        std::string w;
+        if (!nextWord(w))
+            fail("truncated: the file ends at entry " + std::to_string(i) + " of " +
+                 std::to_string(entries));
+        int64_t v = 0;
+        if (!parseInteger(w, INT32_MIN, INT32_MAX, v))
+            fail("entry " + std::to_string(i) + " " + quoted(w) + " is not a 32-bit integer");
+        return v;
+    }
+
+    // ------------------------------------------------------------------- attributes
+
+    /// POINT_DATA and CELL_DATA, each at most once (VTK nests one reader in the other on each
+    /// switch: alternating sections would recurse without bound), to the end of the file.
+    void readAttributes(std::string keyword) {
+        bool seenPoint = false, seenCell = false;
+        while (true) {
+            const bool point = keyword == "point_data";
+            m_section = point ? "POINT_DATA" : "CELL_DATA";
+            if (point ? seenPoint : seenCell)
+                fail("a second " + m_section + " section");
+            (point ? seenPoint : seenCell) = true;
+            const uint64_t tuples = count("the number of values");
+            const uint64_t expected = point ? m_points : m_cells;
+            if (tuples != expected)
+                fail("claims " + std::to_string(tuples) + " values for the " +
+                     std::to_string(expected) + (point ? " points" : " cells"));
+            std::string w;
+            while (true) {
+                if (!nextWord(w))
+                    return;
+                const std::string k = lowerCase(w);
+                if (k == "point_data" || k == "cell_data") {
+                    keyword = k;
+                    break;
+                }
+                readAttribute(k, w, point, tuples);
+            }
+        }
+    }
+
+    void readAttribute(const std::string& k, const std::string& w, bool point, uint64_t tuples) {
+        const auto numeric = [&](const std::string& type) -> const LegacyVtkType& {
+            const LegacyVtkType* t = dataType(type);
+            if (t->kind == LegacyVtkType::STRING)
+                fail(quoted(w) + " of type " + quoted(type) + " (expected a number type)");
+            return *t;
+        };
+        if (k == "scalars") {
+            word("the scalars' name");
+            const std::string type = word("the scalars' type");
+            std::string key = word("LOOKUP_TABLE");
+            uint64_t components = 1;
+            if (lowerCase(key) != "lookup_table") {
+                int64_t n = 0;
+                if (!parseInteger(key, 1, MAX_COMPONENTS, n))
+                    fail("the scalars' number of components " + quoted(key) + " is invalid");
+                components = uint64_t(n);
+                key = word("LOOKUP_TABLE");
+            }
+            if (lowerCase(key) != "lookup_table")
+                fail("expected 'LOOKUP_TABLE <name>' after SCALARS, found " + quoted(key));
+            word("the lookup table's name");
+            readArray(numeric(type), tuples, components);
+        } else if (k == "vectors" || k == "normals" || k == "tensors" || k == "tensors6") {
+            word("the array's name");
+            const uint64_t components = k == "tensors" ? 9 : k == "tensors6" ? 6 : 3;
+            readArray(numeric(word("the array's type")), tuples, components);
+        } else if (k == "texture_coordinates") {
+            word("the texture coordinates' name");
+            const auto dim = uint64_t(integer("the texture coordinates' dimension", 1, 3));
+            readArray(numeric(word("the texture coordinates' type")), tuples, dim);
+        } else if (k == "global_ids") {
+            word("the array's name");
+            readArray(numeric(word("the array's type")), tuples, 1);
+        } else if (k == "pedigree_ids" || (k == "edge_flags" && point)) {
+            word("the array's name");
+            readArray(*dataType(word("the array's type")), tuples, 1);
+        } else if (k == "color_scalars") {
+            word("the colour scalars' name");
+            const auto components =
+                uint64_t(integer("the colour scalars' number of components", 1, MAX_COMPONENTS));
+            // Bytes in binary files, floats in [0, 1] in ASCII ones (VTK scales them to bytes;
+            // a value outside the range would overflow that conversion).
+            readArray(*dataType(m_binary ? "unsigned_char" : "float"), tuples, components, {},
+                      /*finite=*/false, /*unitInterval=*/!m_binary);
+        } else if (k == "lookup_table") {
+            readLookupTable();
+        } else if (k == "field") {
+            readField(tuples);
+        } else {
+            fail("unknown attribute " + quoted(w) +
+                 " (expected SCALARS, COLOR_SCALARS, LOOKUP_TABLE, VECTORS, NORMALS, "
+                 "TEXTURE_COORDINATES, TENSORS, TENSORS6, GLOBAL_IDS, PEDIGREE_IDS, " +
+                 (point ? "EDGE_FLAGS, " : "") + "FIELD, POINT_DATA or CELL_DATA)");
+        }
+    }
+
+    /// LOOKUP_TABLE name size: size RGBA entries (bytes in binary files, floats in ASCII ones).
+    void readLookupTable() {
+        word("the lookup table's name");
+        const auto entries = uint64_t(integer("the lookup table's size", 0, INT32_MAX));
+        checkFits(entries, 4, 1, "lookup table entries");
+        if (m_binary) {
+            endOfHeaderLine();  // vtkDataReader::ReadLutData, even for an empty table
+            unsigned char rgba[4];
+            for (uint64_t i = 0; i < entries; ++i)
+                if (!m_in.bytes(rgba, 4))
+                    fail("truncated: the file ends in lookup table entry " + std::to_string(i));
+            return;
+        }
+        std::string w;
+        for (uint64_t i = 0; i < 4 * entries; ++i)
+            if (!nextWord(w) || !isFloatNumber(w))
+                fail("lookup table entry " + std::to_string(i / 4) + ": " +
+                     (w.empty() ? std::string("truncated") : quoted(w) + " is not a number"));
+    }
+
+    /// FIELD name n, then n arrays "name components tuples type" (or NULL_ARRAY); in
+    /// POINT_DATA/CELL_DATA every array has one tuple per point/cell.
+    void readField(std::optional<uint64_t> tuplesRequired) {
+        const std::string section = m_section;
+        word("the field's name");
+        const auto arrays = uint64_t(integer("the field's number of arrays", 0, INT32_MAX));
+        checkFits(arrays, 2, 1, "field arrays");  // vtkFieldData::AllocateArrays
+        for (uint64_t i = 0; i < arrays; ++i) {
+            m_section = section + " FIELD array " + std::to_string(i);
+            const std::string name = word("the array's name");
+            if (name == "NULL_ARRAY")
+                continue;
+            const uint64_t components =
+                uint64_t(integer("the number of components", 1, MAX_COMPONENTS));
+            const uint64_t tuples = count("the number of tuples");
+            if (tuplesRequired && tuples != *tuplesRequired)
+                fail("array " + quoted(name) + " has " + std::to_string(tuples) +
+                     " tuples in a section of " + std::to_string(*tuplesRequired));
+            readArray(*dataType(word("the array's type")), tuples, components);
+        }
+        m_section = section;
+    }
+
+    // ----------------------------------------------------------------------- arrays
+
+    const LegacyVtkType* dataType(const std::string& name) {
+        const std::string lower = lowerCase(name);
+        for (const LegacyVtkType& t : LEGACY_VTK_TYPES)
+            if (lower == t.name)
+                return &t;
+        fail("unknown data type " + quoted(name));
+    }
+
+    /// An array of `tuples`·`components` values of type `t`, as vtkDataReader::ReadArray reads
+    /// it, then the blank lines and METADATA block it reads after it. `check` sees integer
+    /// values; `finite` rejects non-finite reals (binary; ASCII cannot hold them).
+    void readArray(const LegacyVtkType& t, uint64_t tuples, uint64_t components,
+                   const IntegerCheck& check = {}, bool finite = false, bool unitInterval = false) {
+        if (tuples > 8 * m_size + 8)
+            checkFits(tuples, 1, 8, "tuples");
+        const uint64_t values = tuples * components;  // ≤ 2^40·2^16: no overflow
+        const bool binary = m_binary;
+        if (t.kind == LegacyVtkType::STRING) {
+            checkFits(values, 1, 1, "strings");
+            readStrings(values);
+        } else if (t.kind == LegacyVtkType::BIT) {
+            checkFits(values, 1, binary ? 8 : 1, "bits");
+            if (binary && values > 0) {
+                endOfHeaderLine();
+                unsigned char skipped;
+                for (uint64_t i = 0; i < (values + 7) / 8; ++i)
+                    if (!m_in.bytes(&skipped, 1))
+                        fail("truncated: the file ends in the bits of the array");
+            } else {
+                for (uint64_t i = 0; i < values; ++i)
+                    asciiInteger(t, i, values);
+            }
+        } else if (binary) {
+            checkFits(values, t.bytes, 1, std::string(t.name) + " values");
+            if (values > 0)  // vtkReadBinaryData reads nothing, not even the line end, if empty
+                endOfHeaderLine();
+            // In chunks: a large array costs a copy and, when checked, one decode per value.
+            constexpr uint64_t CHUNK_VALUES = 4096;
+            unsigned char chunk[CHUNK_VALUES * 8];
+            for (uint64_t first = 0; first < values; first += CHUNK_VALUES) {
+                const uint64_t n = std::min(CHUNK_VALUES, values - first);
+                const uint64_t start = m_in.offset();
+                if (!m_in.bytes(chunk, size_t(n * t.bytes)))
+                    fail("truncated: the file ends at value " +
+                         std::to_string(first + (m_in.offset() - start) / t.bytes) + " of " +
+                         std::to_string(values));
+                if (t.kind == LegacyVtkType::REAL ? !finite : !check)
+                    continue;
+                for (uint64_t j = 0; j < n; ++j) {
+                    const unsigned char* b = chunk + j * t.bytes;
+                    uint64_t bits = 0;
+                    for (uint32_t k = 0; k < t.bytes; ++k)
+                        bits = (bits << 8) | b[k];
+                    if (t.kind == LegacyVtkType::REAL) {
+                        double v = 0;
+                        if (t.bytes == 4) {
+                            float f;
+                            const auto u = uint32_t(bits);
+                            std::memcpy(&f, &u, 4);
+                            v = f;
+                        } else {
+                            std::memcpy(&v, &bits, 8);
+                        }
+                        if (!std::isfinite(v))
+                            fail("value " + std::to_string(first + j) +
+                                 " is not finite (NaN or infinity)");
+                    } else {
+                        const int shift = int(64 - 8 * t.bytes);  // sign-extends signed types
+                        check(first + j, t.min < 0 && shift > 0 ? int64_t(bits << shift) >> shift
+                                                                : int64_t(bits));
+                    }
+                }
+            }
+        } else {
+            checkFits(values, 1, 1, std::string(t.name) + " values");
+            std::string w;
+            for (uint64_t i = 0; i < values; ++i) {
+                if (t.kind == LegacyVtkType::INTEGER) {
+                    const int64_t v = asciiInteger(t, i, values);
+                    if (check)
+                        check(i, v);
+                    continue;
+                }
+                if (!nextWord(w))
+                    fail("truncated: the file ends at value " + std::to_string(i) + " of " +
+                         std::to_string(values));
+                if (!(t.bytes == 4 ? isFloatNumber(w) : isNumber(w)))
+                    fail("value " + std::to_string(i) + " " + quoted(w) + " is not a " + t.name);
+                if (unitInterval) {
+                    const double v = std::strtod(w.c_str(), nullptr);
+                    if (v < 0 || v > 1)
+                        fail("colour value " + std::to_string(i) + " " + quoted(w) +
+                             " is outside [0, 1]");
+                }
+            }
+        }
+        afterArray(components);
+    }
+
+    int64_t asciiInteger(const LegacyVtkType& t, uint64_t i, uint64_t values) {
+        std::string w;
+        if (!nextWord(w))
+            fail("truncated: the file ends at value " + std::to_string(i) + " of " +
+                 std::to_string(values));
+        int64_t v = 0;
+        if (!parseInteger(w, t.min, t.max, v))
+            fail("value " + std::to_string(i) + " " + quoted(w) + " is not a " + t.name);
+        return v;
+    }
+
+    /// String arrays: binary, each with a big-endian length header of 1, 2, 4 or 8 bytes (the
+    /// two high bits of the first byte say which); ASCII, one (percent-encoded) string a line.
+    void readStrings(uint64_t values) {
+        if (m_binary) {
+            endOfHeaderLine();
+            for (uint64_t i = 0; i < values; ++i) {
+                unsigned char b[8];
+                if (!m_in.bytes(b, 1))
+                    fail("truncated: the file ends at string " + std::to_string(i));
+                const int kind = b[0] >> 6;
+                const uint32_t headerBytes = kind == 3 ? 1 : kind == 2 ? 2 : kind == 1 ? 4 : 8;
+                if (headerBytes > 1 && !m_in.bytes(b + 1, headerBytes - 1))
+                    fail("truncated: the file ends at string " + std::to_string(i));
+                uint64_t length = kind == 0 ? b[0] : b[0] & 0x3f;
+                for (uint32_t k = 1; k < headerBytes; ++k)
+                    length = (length << 8) | b[k];
+                if (length > bytesLeft())
+                    fail("string " + std::to_string(i) + " claims " + std::to_string(length) +
+                         " bytes, more than the file holds (corrupt)");
+                unsigned char skipped;
+                for (uint64_t k = 0; k < length; ++k)
+                    m_in.bytes(&skipped, 1);
+            }
+            return;
+        }
+        std::string line;
+        if (!m_in.line(line) || line.find_first_not_of(" \t\r") != std::string::npos)
+            fail("unexpected text after the string array's header");
+        for (uint64_t i = 0; i < values; ++i)
+            if (!m_in.line(line))
+                fail("truncated: the file ends at string " + std::to_string(i) + " of " +
+                     std::to_string(values));
+    }
+
+    /// After each array VTK pops lines of spaces (peeking 256 bytes at a time: a run of 256
+    /// spaces makes VTK 9.1 loop forever), then reads a METADATA block if one starts exactly
+    /// where it stopped.
+    void afterArray(uint64_t components) {
+        while (true) {
+            size_t k = 0;
+            int c;
+            while ((c = m_in.peekAt(k)) == ' ' || c == '\r')
+                if (++k >= 256)
+                    fail("256 spaces after the data: VTK 9.1's reader loops forever on them");
+            if (c != '\n')
+                break;
+            m_in.skip(k + 1);
+        }
+        std::string head;
+        for (size_t k = 0; k < 8; ++k) {
+            const int c = m_in.peekAt(k);
+            if (c == EOF)
+                return;
+            head.push_back(char(c));
+        }
+        if (lowerCase(head) == "metadata")
+            readMetadata(components);
+    }
+
+    /// METADATA, then COMPONENT_NAMES (one line per component) and INFORMATION n (n keys), to a
+    /// blank line. VTK reads an information key's DATA by the key's type, with stream
+    /// extraction that fails on anything else, so only the keys VTK writes for arrays are
+    /// accepted: L2_NORM_RANGE and L2_NORM_FINITE_RANGE of vtkDataArray, "DATA n v1 .. vn".
+    void readMetadata(uint64_t components) {
+        const std::string section = m_section;
+        m_section += " METADATA";
+        std::string line;
+        m_in.line(line);
+        if (lowerCase(line) != "metadata")
+            fail("expected 'METADATA' on its own line, found " + quoted(line));
+        const auto nextLine = [&](const char* what) {
+            if (!m_in.line(line))
+                fail(std::string("truncated: the file ends where ") + what + " should be");
+            if (line.size() > MAX_LINE)
+                fail("a line of more than 255 characters: VTK would cut it");
+        };
+        while (m_in.line(line)) {
+            if (line.size() > MAX_LINE)
+                fail("a line of more than 255 characters: VTK would cut it");
+            if (line.empty())
+                break;
+            std::istringstream words(lowerCase(line));
+            std::string w0, w1, w2;
+            words >> w0 >> w1 >> w2;
+            int64_t keys = 0;
+            if (w0 == "component_names" && w1.empty()) {
+                for (uint64_t i = 0; i < components; ++i)
+                    nextLine("a component name");
+            } else if (w0 == "information" && w2.empty() &&
+                       parseInteger(w1, 0, MAX_COMPONENTS, keys)) {
+                for (int64_t key = 0; key < keys; ++key) {
+                    do
+                        nextLine("an information key");
+                    while (line.empty());
+                    std::istringstream nameLine(line);
+                    std::string nameWord, name, locationWord, location, extra;
+                    nameLine >> nameWord >> name >> locationWord >> location >> extra;
+                    if (nameWord != "NAME" || locationWord != "LOCATION" || location.empty() ||
+                        !extra.empty() || line.compare(0, 5, "NAME ") != 0)
+                        fail("expected 'NAME <key> LOCATION <class>', found " + quoted(line));
+                    if (location != "vtkDataArray" ||
+                        (name != "L2_NORM_RANGE" && name != "L2_NORM_FINITE_RANGE"))
+                        fail("information key " + quoted(location + "::" + name) +
+                             " is not one the import reads (L2_NORM_RANGE, L2_NORM_FINITE_RANGE)");
+                    nextLine("the key's DATA");
+                    std::istringstream data(line);
+                    std::string dataWord, lengthWord, value;
+                    data >> dataWord >> lengthWord;
+                    int64_t length = 0;
+                    if (dataWord != "DATA" || !parseInteger(lengthWord, 1, 64, length))
+                        fail("expected 'DATA <length> <values>', found " + quoted(line));
+                    int64_t read = 0;
+                    while (data >> value) {
+                        if (!isNumber(value))
+                            fail("information value " + quoted(value) + " is not a number");
+                        ++read;
+                    }
+                    if (read != length)
+                        fail("DATA claims " + std::to_string(length) + " values and has " +
+                             std::to_string(read));
+                }
+            } else {
+                fail("unknown line " + quoted(line) +
+                     " (expected COMPONENT_NAMES, INFORMATION <n> or a blank line)");
+            }
+        }
+        m_section = section;
+    }
+
+    std::string m_path;
+    uint64_t m_size;
+    Reader m_in;
+    std::string m_section;
+    bool m_binary = false, m_version5 = false, m_hasPoints = false;
+    uint64_t m_points = 0, m_cells = 0, m_polygons = 0;
+    std::set<std::string> m_cellSections;
+};
 
 /// The value of attribute `name` in the XML text `tag` ("" when absent).
 std::string xmlAttribute(const std::string& tag, const std::string& name) {
@@ -990,7 +1744,7 @@ ClaimedCounts validateMeshFile(const std::string& path, const std::string& ext, 
     else if (ext == ".ply")
         validatePly(path, size);
     else if (ext == ".vtk")
-        return legacyVtkClaims(path, size);
+        return LegacyVtkWalk(path, size).run();
     else if (ext == ".vtp")
         return xmlVtkClaims(path, size);
     return {};

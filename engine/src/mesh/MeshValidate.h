@@ -7,8 +7,11 @@
 /// from a failed stream for minutes and gigabytes), so the whole body of every OpenMesh format
 /// is walked here first: every count within the import limits and the file size, every
 /// element present (a truncated file is an error, not a smaller mesh), every index in range.
-/// The work is one pass over the file. VTK formats are read in a child process instead
-/// (VtkBackend.cpp); what their headers claim is parsed here to compare with what VTK read.
+/// Legacy .vtk files are walked in full too: VTK 9.1's legacy reader reads on from a failed
+/// stream and crashed in-process on nearly every malformed file. The work is one pass over the
+/// file. VTK formats are then read in a child process (VtkBackend.cpp); for .vtp only the
+/// header and the cell offsets are checked here, and what the headers claim is compared with
+/// what VTK read.
 
 #include <cstdint>
 #include <string>
@@ -22,7 +25,8 @@ struct ClaimedCounts {
 };
 
 /// Checks the file named `path` (extension `ext`, lower case, with the dot; `size` bytes) in
-/// full for the OpenMesh formats (.obj .ply .off .stl) and its header for .vtk/.vtp.
+/// full for the OpenMesh formats (.obj .ply .off .stl) and legacy .vtk, its header and cell
+/// offsets for .vtp.
 /// @return what a VTK header claims (zero for the other formats).
 /// @throw IoError naming the file, the line or byte and the problem.
 ClaimedCounts validateMeshFile(const std::string& path, const std::string& ext, uint64_t size);

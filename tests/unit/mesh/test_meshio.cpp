@@ -206,7 +206,8 @@ std::string robustInput(const std::string& name) {
 }
 
 /// Expects loadMesh(path) to throw IoError naming the file and containing `fragment`.
-void expectLoadError(const std::string& path, const std::string& fragment) {
+/// @return the message ("" when there was none).
+std::string expectLoadError(const std::string& path, const std::string& fragment) {
     try {
         loadMesh(path);
         ADD_FAILURE() << "no error for " << path;
@@ -214,14 +215,19 @@ void expectLoadError(const std::string& path, const std::string& fragment) {
         const std::string msg = e.what();
         EXPECT_NE(msg.find(path), std::string::npos) << msg;
         EXPECT_NE(msg.find(fragment), std::string::npos) << "lacks '" << fragment << "': " << msg;
+        return msg;
     }
+    return {};
 }
 
 TEST(MeshIO, HalfTruncatedFilesAreErrorsNotSmallerMeshes) {
     // Regression (issue 18 §4): files cut in half (at a line end) loaded as a few faces and
     // exported a few voxels with exit 0; the legacy VTK reader crashed the process.
     expectLoadError(robustInput("off_half_truncated.off"), "claims 224 faces");
-    expectLoadError(robustInput("vtk_half_truncated.vtk"), "VTK");
+    // Before the legacy walk, the VTK reader's child process contained the crash ("VTK reader:
+    // crashed"); now the walk refuses the file before VTK reads it.
+    expectLoadError(robustInput("vtk_half_truncated.vtk"),
+                    "legacy VTK, POLYGONS: claims 896 cell list entries, more than the 512 bytes");
     expectLoadError(robustInput("stl_truncated.stl"), "binary STL");
     // OBJ has no counts: a file cut at a line end is a valid, open mesh. It is reported as
     // open (and `lucent-cli export` refuses open meshes unless --allow-open).
@@ -294,6 +300,113 @@ TEST(MeshIO, CellOffsetsAreCheckedInEveryVtkXmlEncoding) {
     }
 }
 
+/// Expects loadMesh(path) to be refused by the legacy VTK walk (MeshValidate.cpp), before VTK
+/// reads the file: its messages start "legacy VTK, <section>:"; the reader's child process
+/// would say "VTK reader".
+void expectWalkError(const std::string& path, const std::string& fragment) {
+    const std::string msg = expectLoadError(path, fragment);
+    EXPECT_NE(msg.find("mesh file '" + path + "': legacy VTK, "), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("VTK reader"), std::string::npos) << msg;
+}
+
+std::string readBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// Issue 16: legacy .vtk files are walked completely before VTK 9.1's reader, which crashes
+// in-process on nearly every malformed file. The tetrahedra were written by vtkPolyDataWriter
+// (tests/data/robust/make_vtk_tetra.cpp) in versions 4.2 (cells as counts and ids) and 5.1
+// (OFFSETS/CONNECTIVITY), ASCII and BINARY, with normals, a cell scalar and a METADATA block;
+// each has four corrupt twins that the walk must refuse naming the problem.
+TEST(MeshIO, LegacyVtkIsWalkedInEveryVersionAndEncoding) {
+    for (const char* version : {"v42", "v51"}) {
+        for (const char* encoding : {"ascii", "binary"}) {
+            const std::string stem = std::string("vtk_tetra_") + version + "_" + encoding;
+            SCOPED_TRACE(stem);
+            const bool v5 = std::string(version) == "v51";
+            const bool binary = std::string(encoding) == "binary";
+            MeshReport report;
+            const TriangleMesh tetra = loadMesh(robustInput(stem + ".vtk"), 1.f, &report);
+            EXPECT_EQ(tetra.triangleCount(), 4u);
+            EXPECT_EQ(tetra.vertexCount(), 4u);
+            EXPECT_TRUE(report.isClosedManifold());
+            EXPECT_FALSE(report.normalsComputed);  // the file's NORMALS were read
+            EXPECT_GT(test::signedVolume(tetra), 0.0);
+            expectWalkError(robustInput(stem + "_id_past_points.vtk"),
+                            std::string(v5 ? "connectivity entry 11" : "cell 3") +
+                                " refers to point 1000, not one of the 4 points");
+            expectWalkError(robustInput(stem + "_count_past_end.vtk"),
+                            "POINTS: claims 400000 points, more than the");
+            // Cut 20 bytes into the cell data: a binary file is shorter than the claimed
+            // cells, an ASCII one ends in the middle of them.
+            expectWalkError(robustInput(stem + "_truncated.vtk"),
+                            binary ? (v5 ? "claims 12 vtktypeint64 values, more than the 21 bytes"
+                                         : "claims 16 cell list entries, more than the 21 bytes")
+                                   : (v5 ? "truncated: the file ends at value 10 of 12"
+                                         : "truncated: the file ends at entry 9 of 16"));
+            if (v5)
+                expectWalkError(robustInput(stem + "_offsets_decreasing.vtk"),
+                                "POLYGONS: cell 2 ends at offset 6, before its start 9");
+            else
+                expectWalkError(robustInput(stem + "_cell_size_past_list.vtk"),
+                                "POLYGONS: cell 0 claims 16 points, more than the 15 entries left");
+        }
+    }
+}
+
+// Inputs on which VTK 9.1's legacy reader hangs, recurses or misreads without failing, found
+// by reading vtkDataReader: each one is the valid ASCII 5.1 tetrahedron with one change.
+TEST(MeshIO, LegacyVtkReaderTrapsAreRefused) {
+    const std::string valid = readBytes(robustInput("vtk_tetra_v51_ascii.vtk"));
+    const auto variant = [&](const std::string& name, const std::string& from,
+                             const std::string& to) {
+        std::string text = valid;
+        const size_t at = text.find(from);
+        EXPECT_NE(at, std::string::npos) << from;
+        text.replace(at, from.size(), to);
+        const std::string path = outPath("legacy_" + name + ".vtk");
+        writeText(path, text);
+        return path;
+    };
+    // After each array VTK pops blank lines by peeking 256 bytes: 256 spaces make it loop
+    // forever (checked with the system VTK 9.1).
+    expectWalkError(variant("spaces", "0 0 1 \n", "0 0 1" + std::string(300, ' ') + "\n"),
+                    "256 spaces after the data");
+    // 255 spaces are popped like a blank line: the file loads.
+    EXPECT_EQ(loadMesh(variant("spaces_255", "0 0 1 \n", "0 0 1" + std::string(255, ' ') + "\n"))
+                  .triangleCount(),
+              4u);
+    // Each switch between POINT_DATA and CELL_DATA nests one more reader call in VTK.
+    expectWalkError(variant("nested", "POINT_DATA 4\n", "POINT_DATA 4\nCELL_DATA 4\n"),
+                    "CELL_DATA: a second CELL_DATA section");
+    // An information key VTK would read by another type (a failed stream read, then an
+    // endless loop over empty lines).
+    expectWalkError(variant("info_key", "L2_NORM_RANGE", "GUI_HIDE"),
+                    "information key 'vtkDataArray::GUI_HIDE' is not one the import reads");
+    // A word longer than VTK's 256-character buffers is cut in two by its reader.
+    expectWalkError(variant("long_name", "NORMALS Normals", "NORMALS " + std::string(300, 'n')),
+                    "a word of more than 255 characters");
+    // Attribute arrays must have one value per point / cell (VTK checks only the first
+    // section's count).
+    expectWalkError(variant("cell_count", "CELL_DATA 4", "CELL_DATA 5"),
+                    "CELL_DATA: claims 5 values for the 4 cells");
+    // An ASCII number VTK's stream cannot extract ("nan", a float beyond its range).
+    expectWalkError(variant("nan", "0 0 1 \n", "0 0 nan \n"), "value 11 'nan' is not a float");
+    expectWalkError(variant("overflow", "0 0 1 \n", "0 0 1e39 \n"), "'1e39' is not a float");
+    // Binary: a NaN coordinate, refused like the ASCII one.
+    std::string binary = readBytes(robustInput("vtk_tetra_v51_binary.vtk"));
+    const size_t points = binary.find("POINTS 4 float\n") + 15;
+    binary.replace(points, 4, std::string("\x7f\xc0\0\0", 4));
+    const std::string nanPath = outPath("legacy_binary_nan.vtk");
+    writeText(nanPath, binary);
+    expectWalkError(nanPath, "POINTS: value 0 is not finite");
+    // Unknown keywords and dataset types.
+    expectWalkError(variant("grid", "POLYDATA", "UNSTRUCTURED_GRID"),
+                    "only POLYDATA datasets are read");
+    expectWalkError(variant("version", "Version 5.1", "Version 6.0"), "is not one VTK 9.1 reads");
+}
+
 TEST(MeshIO, ImportLimitsApplyBeforeAllocation) {
     const std::string sphere = robustInput("sphere_closed.off");
     EXPECT_EQ(loadMesh(sphere).triangleCount(), 224u);
@@ -320,9 +433,8 @@ TEST(MeshIO, CorruptedFilesFailCleanly) {
     // Deterministic byte mutations and truncations of valid files of every format: each load
     // must either succeed or throw lucent::Error (never crash). This found crashes inside
     // OpenMesh (OBJ normals, PLY headers, a dangling error-log stream after a reader threw)
-    // and VTK (cell ids) that loadMesh now guards against. Known upstream limitation left:
-    // VTK 9.1's legacy .vtk reader can still crash on some corrupted binary files (other
-    // seeds); prefer .vtp.
+    // and VTK (cell ids) that loadMesh now guards against; the legacy .vtk walk (issue 16)
+    // keeps VTK 9.1's legacy reader away from every corrupt file.
     const TriangleMesh src = makeSphere(5.f, 2);
     std::vector<std::pair<std::string, std::string>> originals;  // extension, bytes
     for (const Format f :
