@@ -27,8 +27,9 @@
 ///     QImage frame = vp->grabFramebuffer();   // renders a frame offscreen and reads it back
 
 #include "BrushTool.h"
-#include "MeshPicker.h"
 #include "PreviewRenderer.h"
+
+#include <lucent/mesh/MeshPicker.h>
 
 #include <QElapsedTimer>
 #include <QPixmap>
