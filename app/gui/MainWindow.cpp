@@ -238,6 +238,13 @@ MainWindow::~MainWindow() {
     // The document outlives this destructor's body (QObject deletes it with the other
     // children): nothing it emits from now on may reach the half-destroyed window.
     disconnect(m_doc, nullptr, this, nullptr);
+    // A calibration still measuring: stop it and wait (its thread must not outlive the window;
+    // its finished handler, connected to this window, will not run any more).
+    if (m_calibrationThread) {
+        m_calibrationCancel->store(true);
+        m_calibrationThread->wait();
+        delete m_calibrationThread;
+    }
 }
 
 QString MainWindow::readableMessage(const std::string& text) {
@@ -1058,6 +1065,7 @@ bool MainWindow::calibrateLiveCosts(const planner::LiveCalibrationOptions& optio
     // Idle refinement of a progressive preview would take CPU from the measurement.
     m_viewport->setRefinementPaused(true);
     auto cancel = std::make_shared<std::atomic<bool>>(false);
+    m_calibrationCancel = cancel;
     auto result = std::make_shared<planner::LiveCalibration>();
     auto error = std::make_shared<std::string>();
     auto* progress = new QProgressDialog(tr("Measuring the live preview on this machine…"),
@@ -1095,10 +1103,12 @@ bool MainWindow::calibrateLiveCosts(const planner::LiveCalibrationOptions& optio
             *error = ex.what();
         }
     });
+    m_calibrationThread = worker;
     auto ok = std::make_shared<bool>(false);
     connect(worker, &QThread::finished, this, [this, worker, progress, result, error, path, ok] {
         worker->deleteLater();
         progress->deleteLater();
+        m_calibrationThread = nullptr;
         m_calibrating = false;
         m_viewport->setRefinementPaused(false);
         if (!error->empty()) {

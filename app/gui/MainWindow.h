@@ -10,12 +10,15 @@
 #include <QStringList>
 #include <QTimer>
 
+#include <atomic>
+#include <memory>
 #include <string>
 #include <vector>
 
 class QAction;
 class QLabel;
 class QMenu;
+class QThread;
 
 namespace lucent::planner {
 struct LiveCalibrationOptions;
@@ -212,6 +215,8 @@ private:
     bool m_useSettings;
     bool m_exporting = false;
     bool m_calibrating = false;
+    QThread* m_calibrationThread = nullptr;  ///< the calibration's worker while it runs
+    std::shared_ptr<std::atomic<bool>> m_calibrationCancel;
     QString m_liveCostsWarning;
     int m_exportSteps = 0;
     VdbExportChoice m_vdbChoice;

@@ -67,7 +67,7 @@ std::string utcNow(const char* format) {
 /// surface, its subsurface pass, and the tone map into a framebuffer of the viewport's size.
 class LivePreview {
 public:
-    LivePreview(const LiveCalibrationOptions& o)
+    explicit LivePreview(const LiveCalibrationOptions& o)
         : m_scene(makeDefaultScene()),
           m_volume(*m_scene.objects[0].material),
           m_mesh(m_scene.objects[0].mesh),
