@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: MIT
 /// @file
 /// @brief `lucent-cli bench sslpv`: timing of the SSLPV propagation (docs/benchmarks.md, SSLPV)
-/// next to a memory-bandwidth floor measured in the same run.
+/// next to a memory-bandwidth floor measured in the same run; `bench sslpv-fit`: the calibrated
+/// SSLPV mode's fit; `bench calibrate`: the Auto planner's live costs measured on this machine
+/// (lucent/planner/LiveCalibration.h, docs/planner.md "Live costs").
 
 #include "CliCommon.h"
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Parallel.h>
+#include <lucent/planner/LiveCalibration.h>
 #include <lucent/sslpv/SslpvBench.h>
 #include <lucent/sslpv/SslpvCalibrationFit.h>
 #include <lucent/sslpv/SslpvSolver.h>
@@ -289,18 +292,118 @@ void addSslpvFit(CLI::App& bench) {
     sub->callback([args] { runFit(*args); });
 }
 
+struct CalibrateOptions {
+    std::string output;  // empty: planner::userLiveCostsPath()
+    std::string viewport = "640x360";
+    planner::LiveCalibrationOptions calibration;
+};
+
+void runCalibrate(const CalibrateOptions& args) {
+    planner::LiveCalibrationOptions o = args.calibration;
+    int w = 0, h = 0;
+    char tail = 0;
+    if (std::sscanf(args.viewport.c_str(), "%dx%d%c", &w, &h, &tail) != 2)
+        LUCENT_THROW(ValueError, "bench calibrate: --viewport expects WxH (e.g. 640x360), got '",
+                     args.viewport, "'");
+    o.viewportWidth = w;
+    o.viewportHeight = h;
+    const std::string path = args.output.empty() ? planner::userLiveCostsPath() : args.output;
+    if (path.empty())
+        LUCENT_THROW(ValueError, "bench calibrate: neither ", planner::LIVE_COSTS_ENV,
+                     ", XDG_CONFIG_HOME nor HOME is set: give the file with -o PATH");
+    o.progress = [](const planner::LiveCalibrationProgress& p) {
+        printProgressBar(p.total > 0 ? double(p.done) / p.total : 1.0,
+                         p.next.empty() ? "done" : p.next);
+    };
+    const planner::LiveCalibration c = planner::calibrateLiveCosts(o);
+    std::fprintf(stderr, "\n");
+    const planner::LiveCosts& shipped = planner::defaultLiveCosts();
+    std::printf(
+        "%s\nunit: a Direct frame, %.2f ms (median of %zu runs; shipped: %.2f ms on %s)\n\n",
+        c.costs.source.c_str(), c.costs.directMs, c.rows.size() * size_t(o.rounds),
+        shipped.directMs,
+        shipped.renderer.empty() ? "the shipped table's machine" : shipped.renderer.c_str());
+    std::printf(
+        "| candidate | stroke → frame (ms) | ratio | ratio per round | shipped ratio | "
+        "ratio / shipped |\n|---|---:|---:|---|---:|---:|\n");
+    for (const planner::LiveCalibrationRow& r : c.rows) {
+        double shippedRatio = 0.0;
+        for (const planner::LiveCost& s : shipped.entries)
+            if (s.method == r.cost.method && s.setting == r.cost.setting)
+                shippedRatio = s.strokeRatio;
+        std::string rounds;
+        for (double x : r.roundRatios) {
+            char v[32];
+            std::snprintf(v, sizeof v, "%s%.2f", rounds.empty() ? "" : " ", x);
+            rounds += v;
+        }
+        std::printf("| %s %s | %.1f | %.2f | %s | ", r.cost.method.c_str(), r.cost.setting.c_str(),
+                    r.strokeMs, r.cost.strokeRatio, rounds.c_str());
+        if (shippedRatio > 0)
+            std::printf("%.2f | %.2f |\n", shippedRatio, r.cost.strokeRatio / shippedRatio);
+        else
+            std::printf("– | – |\n");
+    }
+    planner::saveLiveCosts(c.costs, path);
+    std::printf(
+        "\nwritten %s (the app's Auto plans with it from its next start, or at once "
+        "after Edit ▸ Preferences ▸ Calibrate Live Costs)\n",
+        path.c_str());
+}
+
+void addCalibrate(CLI::App& bench) {
+    CLI::App* sub = addCommand(
+        bench, "calibrate", "measure the Auto planner's live costs on this machine",
+        "usage: lucent-cli bench calibrate [-o PATH] [--viewport WxH] [--strokes N]\n"
+        "                                  [--rounds R] [--scale S]\n",
+        "Measures what Auto plans the live preview with (docs/planner.md, \"Live costs\"): for\n"
+        "each candidate of the shipped table, on the default scene at the app's default preview\n"
+        "settings, the stroke -> frame time of the live method (paint strokes as the app's\n"
+        "latency harness paints them, on a headless OpenGL context) over the render time of a\n"
+        "Direct frame measured just before it; the median of R rounds. Prints them next to the\n"
+        "shipped ratios and writes the file atomically, by default to the user's calibration\n"
+        "file ($LUCENT_LIVE_COSTS, else $XDG_CONFIG_HOME/lucent/live_costs.json, else\n"
+        "~/.config/lucent/live_costs.json), which the app's Auto then plans with.\n");
+    auto args = std::make_shared<CalibrateOptions>();
+    sub->add_option("-o,--output", args->output,
+                    "the live costs file to write (default: the user's calibration file)")
+        ->type_name("PATH");
+    sub->add_option("--viewport", args->viewport,
+                    "the viewport in widget pixels, rendered at --scale (default 640x360, the "
+                    "shipped table's)")
+        ->type_name("WxH");
+    sub->add_option("--strokes", args->calibration.strokes,
+                    "timed strokes per run, after one warm-up stroke (default 8)")
+        ->type_name("N")
+        ->check(CLI::Range(1, 1000));
+    sub->add_option("--rounds", args->calibration.rounds,
+                    "runs of every candidate, each after its own Direct run; the ratio is their "
+                    "median (default 3)")
+        ->type_name("R")
+        ->check(CLI::Range(1, 100));
+    sub->add_option("--scale", args->calibration.resolutionScale,
+                    "rendered pixels per viewport pixel per axis (default 0.5, the app's half "
+                    "resolution)")
+        ->type_name("S")
+        ->check(finiteRange(0.05, 1));
+    sub->callback([args] { runCalibrate(*args); });
+}
+
 }  // namespace
 
 void addBenchCommand(CLI::App& cli, const CommandContext&) {
     CLI::App* bench = addCommand(
         cli, "bench",
-        "time the SSLPV propagation against a bandwidth floor; fit its calibrated mode",
+        "time the SSLPV propagation against a bandwidth floor; fit its calibrated mode; "
+        "calibrate Auto's live costs",
         "usage: lucent-cli bench sslpv [options]       (lucent-cli bench sslpv --help)\n"
-        "       lucent-cli bench sslpv-fit [options]   (lucent-cli bench sslpv-fit --help)\n",
+        "       lucent-cli bench sslpv-fit [options]   (lucent-cli bench sslpv-fit --help)\n"
+        "       lucent-cli bench calibrate [options]   (lucent-cli bench calibrate --help)\n",
         "");
     bench->require_subcommand(1);
     addSslpvBench(*bench);
     addSslpvFit(*bench);
+    addCalibrate(*bench);
 }
 
 }  // namespace lucent::cli

@@ -16,6 +16,8 @@
 #include <lucent/io/MitsubaIO.h>
 #include <lucent/io/VdbIO.h>
 #include <lucent/mesh/MeshIO.h>
+#include <lucent/planner/LiveCalibration.h>
+#include <lucent/planner/LiveCosts.h>
 #include "ReferencePanel.h"
 
 #include <QAction>
@@ -39,6 +41,7 @@
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QMimeData>
+#include <QPointer>
 #include <QProgressDialog>
 #include <QRadioButton>
 #include <QScreen>
@@ -58,6 +61,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 /// The docs resource lives in the static library lucent_gui: registered explicitly, since the
@@ -220,6 +224,10 @@ MainWindow::MainWindow(bool restoreSettings, QWidget* parent)
     statusBar()->showMessage(
         tr("Default scene. LMB paints, Alt+LMB / MMB orbits, Shift+MMB / RMB "
            "pans, wheel zooms, F frames the object."));
+    // This machine's live-cost calibration, if any (after the greeting: a warning about a bad
+    // calibration file must stay visible).
+    if (m_useSettings)
+        loadLiveCosts();
 }
 
 bool MainWindow::setRenderMethod(const QString& method) {
@@ -230,6 +238,13 @@ MainWindow::~MainWindow() {
     // The document outlives this destructor's body (QObject deletes it with the other
     // children): nothing it emits from now on may reach the half-destroyed window.
     disconnect(m_doc, nullptr, this, nullptr);
+    // A calibration still measuring: stop it and wait (its thread must not outlive the window;
+    // its finished handler, connected to this window, will not run any more).
+    if (m_calibrationThread) {
+        m_calibrationCancel->store(true);
+        m_calibrationThread->wait();
+        delete m_calibrationThread;
+    }
 }
 
 QString MainWindow::readableMessage(const std::string& text) {
@@ -486,6 +501,22 @@ void MainWindow::createActions() {
         {QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence(Qt::CTRL | Qt::Key_Y)});
     redo->setObjectName(QStringLiteral("actionRedo"));
     edit->addAction(redo);
+    edit->addSeparator();
+    // Preferences of this machine rather than of a project.
+    QMenu* preferences = edit->addMenu(tr("&Preferences"));
+    preferences->setObjectName(QStringLiteral("menuPreferences"));
+    a = preferences->addAction(tr("&Calibrate Live Costs…"), this,
+                               [this] { calibrateLiveCosts(); });
+    a->setObjectName(QStringLiteral("actionCalibrateLiveCosts"));
+    a->setToolTip(
+        tr("Measure what each preview method costs after a paint stroke on this "
+           "machine (about a minute), so that Auto plans with it."));
+    a = preferences->addAction(tr("Use &Shipped Live Costs"), this,
+                               [this] { useShippedLiveCosts(); });
+    a->setObjectName(QStringLiteral("actionUseShippedLiveCosts"));
+    a->setToolTip(
+        tr("Forget this machine's calibration: Auto plans with the costs shipped "
+           "with Lucent."));
 
     // Brush shortcuts as in painting tools: [ and ] resize, B paints, I picks.
     QMenu* brush = menuBar()->addMenu(tr("&Brush"));
@@ -996,6 +1027,146 @@ bool MainWindow::exportVdbTo(const QString& path, const VdbExportChoice& choice,
             QApplication::processEvents(QEventLoop::AllEvents, 50);
         return *ok;
     }
+    return true;
+}
+
+void MainWindow::loadLiveCosts() {
+    const planner::LiveCostsInUse inUse = planner::loadLiveCosts(planner::userLiveCostsPath());
+    PreviewRenderer::useLiveCosts(inUse);
+    m_liveCostsWarning = QString::fromStdString(inUse.warning);
+    if (!m_liveCostsWarning.isEmpty()) {
+        statusBar()->showMessage(tr("Auto: %1").arg(m_liveCostsWarning), 30000);
+        std::fprintf(stderr, "lucent: %s\n", qPrintable(m_liveCostsWarning));
+    }
+    m_viewport->update();  // Auto plans again with them
+}
+
+bool MainWindow::calibrateLiveCosts(bool wait) {
+    planner::LiveCalibrationOptions options;
+    // The viewport as it is rendered: its device pixels at the Render dock's scale.
+    const qreal dpr = m_viewport->devicePixelRatioF();
+    options.viewportWidth = std::max(16, int(std::lround(m_viewport->width() * dpr)));
+    options.viewportHeight = std::max(16, int(std::lround(m_viewport->height() * dpr)));
+    options.resolutionScale = std::clamp(m_viewport->renderSettings().resolutionScale, 0.125f, 1.f);
+    return calibrateLiveCosts(options, wait);
+}
+
+bool MainWindow::calibrateLiveCosts(const planner::LiveCalibrationOptions& options, bool wait) {
+    if (m_calibrating)
+        return false;
+    const std::string path = planner::userLiveCostsPath();
+    if (path.empty()) {
+        reportError(tr("Calibrate live costs"),
+                    ValueError("neither XDG_CONFIG_HOME nor HOME is set: there is no folder "
+                               "for the calibration"));
+        return false;
+    }
+    m_calibrating = true;
+    // Idle refinement of a progressive preview would take CPU from the measurement.
+    m_viewport->setRefinementPaused(true);
+    auto cancel = std::make_shared<std::atomic<bool>>(false);
+    m_calibrationCancel = cancel;
+    auto result = std::make_shared<planner::LiveCalibration>();
+    auto error = std::make_shared<std::string>();
+    auto* progress = new QProgressDialog(tr("Measuring the live preview on this machine…"),
+                                         tr("Cancel"), 0, 1, this);
+    progress->setObjectName(QStringLiteral("calibrationProgress"));
+    progress->setWindowTitle(tr("Calibrate live costs"));
+    progress->setWindowModality(Qt::WindowModal);
+    progress->setMinimumDuration(0);
+    progress->setAutoClose(false);
+    progress->setAutoReset(false);
+    progress->setValue(0);
+    connect(progress, &QProgressDialog::canceled, this, [cancel] { cancel->store(true); });
+    planner::LiveCalibrationOptions o = options;
+    o.command = "lucent Calibrate Live Costs";
+    o.cancel = cancel.get();  // the worker's lambda holds `cancel`
+    const QPointer<QProgressDialog> dialog(progress);
+    o.progress = [dialog](const planner::LiveCalibrationProgress& p) {
+        QMetaObject::invokeMethod(QCoreApplication::instance(), [dialog, p] {
+            if (!dialog || dialog->wasCanceled())
+                return;
+            dialog->setMaximum(p.total);
+            dialog->setValue(p.done);
+            if (!p.next.empty())
+                dialog->setLabelText(tr("Measuring the live preview on this machine: %1 (%2 of "
+                                        "%3)…")
+                                         .arg(QString::fromStdString(p.next))
+                                         .arg(p.done + 1)
+                                         .arg(p.total));
+        });
+    };
+    QThread* worker = QThread::create([o, cancel, result, error] {
+        try {
+            *result = planner::calibrateLiveCosts(o);
+        } catch (const std::exception& ex) {
+            *error = ex.what();
+        }
+    });
+    m_calibrationThread = worker;
+    auto ok = std::make_shared<bool>(false);
+    connect(worker, &QThread::finished, this, [this, worker, progress, result, error, path, ok] {
+        worker->deleteLater();
+        progress->deleteLater();
+        m_calibrationThread = nullptr;
+        m_calibrating = false;
+        m_viewport->setRefinementPaused(false);
+        if (!error->empty()) {
+            reportError(tr("Calibrate live costs"), GpuError(*error));
+            return;
+        }
+        if (result->cancelled) {
+            statusBar()->showMessage(
+                tr("Calibration cancelled: Auto keeps planning with live costs %1.")
+                    .arg(QString::fromStdString(PreviewRenderer::liveCostTable().label)),
+                10000);
+            return;
+        }
+        try {
+            planner::saveLiveCosts(result->costs, path);
+        } catch (const std::exception& ex) {
+            reportError(tr("Calibrate live costs"), ex);
+            return;
+        }
+        loadLiveCosts();  // the file just written, through the same checks as at start-up
+        *ok = PreviewRenderer::liveCostTable().inUse.calibrated;
+        if (*ok)
+            statusBar()->showMessage(
+                tr("Auto now plans with live costs %1 (%2).")
+                    .arg(QString::fromStdString(PreviewRenderer::liveCostTable().label),
+                         QString::fromStdString(path)),
+                15000);
+    });
+    worker->start();
+    if (wait) {
+        while (m_calibrating)
+            QApplication::processEvents(QEventLoop::AllEvents, 50);
+        return *ok;
+    }
+    return true;
+}
+
+bool MainWindow::useShippedLiveCosts() {
+    const std::string path = planner::userLiveCostsPath();
+    std::error_code ec;
+    if (!path.empty() && std::filesystem::exists(path, ec)) {
+        if (m_useSettings &&
+            QMessageBox::question(this, tr("Use shipped live costs"),
+                                  tr("Delete this machine's live-cost calibration (%1)? Auto "
+                                     "then plans with the costs shipped with Lucent.")
+                                      .arg(QString::fromStdString(path))) != QMessageBox::Yes)
+            return false;
+        if (!std::filesystem::remove(path, ec) && ec) {
+            reportError(tr("Use shipped live costs"),
+                        IoError("cannot delete '" + path + "': " + ec.message()));
+            return false;
+        }
+    }
+    loadLiveCosts();
+    statusBar()->showMessage(
+        tr("Auto plans with live costs %1.")
+            .arg(QString::fromStdString(PreviewRenderer::liveCostTable().label)),
+        10000);
     return true;
 }
 

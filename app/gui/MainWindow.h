@@ -10,12 +10,19 @@
 #include <QStringList>
 #include <QTimer>
 
+#include <atomic>
+#include <memory>
 #include <string>
 #include <vector>
 
 class QAction;
 class QLabel;
 class QMenu;
+class QThread;
+
+namespace lucent::planner {
+struct LiveCalibrationOptions;
+}  // namespace lucent::planner
 
 namespace lucent::app {
 
@@ -96,6 +103,31 @@ public:
     /// image at the viewport's size. EXR: the linear radiance W/(mm²·sr) at render resolution
     /// (Viewport::linearImage), independent of the exposure.
     bool exportRenderTo(const QString& path);
+    //! @}
+
+    //! @{ \name Live costs: what Auto expects a preview frame to cost (planner/LiveCosts.h)
+    /// Makes Auto plan with the user's calibration (planner::userLiveCostsPath) when it exists
+    /// and can be used, else with the shipped table; a file that cannot be used is reported
+    /// (status bar, and stderr in scripted runs) and ignored. Called at start-up of an
+    /// interactive session (restoreSettings), so scripted runs and tests plan with the shipped
+    /// table unless they call it.
+    void loadLiveCosts();
+    /// Why the last loadLiveCosts did not use the user's file ("" when it did or there is none).
+    [[nodiscard]] const QString& liveCostsWarning() const { return m_liveCostsWarning; }
+    /// Edit ▸ Preferences ▸ Calibrate Live Costs: planner::calibrateLiveCosts on a worker thread
+    /// (the viewport's size and render scale, the preview's idle refinement paused) with a
+    /// progress dialog and Cancel; then writes the user's calibration file and plans with it.
+    /// @param wait run the event loop until it has finished.
+    /// @return false when it cannot start (one is running, no config location); with `wait`,
+    ///         also when it failed or was cancelled.
+    bool calibrateLiveCosts(bool wait = false);
+    /// The same with the calibration's options given (tests: a small viewport, few strokes).
+    bool calibrateLiveCosts(const planner::LiveCalibrationOptions& options, bool wait);
+    [[nodiscard]] bool isCalibrating() const { return m_calibrating; }
+    /// Edit ▸ Preferences ▸ Use Shipped Live Costs: deletes the user's calibration file (an
+    /// interactive session asks first) and plans with the shipped table. @return false when
+    /// the file could not be deleted or the user declined.
+    bool useShippedLiveCosts();
     //! @}
 
     /// Message of the last failed operation (also shown to the user).
@@ -182,6 +214,10 @@ private:
     QTimer m_autosave;
     bool m_useSettings;
     bool m_exporting = false;
+    bool m_calibrating = false;
+    QThread* m_calibrationThread = nullptr;  ///< the calibration's worker while it runs
+    std::shared_ptr<std::atomic<bool>> m_calibrationCancel;
+    QString m_liveCostsWarning;
     int m_exportSteps = 0;
     VdbExportChoice m_vdbChoice;
     MeshEditParams m_meshEdit;  ///< last values asked by the Mesh menu

@@ -1173,8 +1173,9 @@ void StatsPanel::refresh() {
     for (const std::string& skipped : s.preview.skippedLights)
         t += tr("skipped %1<br>").arg(QString::fromStdString(skipped).toHtmlEscaped());
     if (!s.preview.autoReason.empty())
-        t += tr("<b>Auto</b>: %1<br>")
-                 .arg(QString::fromStdString(s.preview.autoReason).toHtmlEscaped());
+        t += tr("<b>Auto</b>: %1<br>live costs: %2<br>")
+                 .arg(QString::fromStdString(s.preview.autoReason).toHtmlEscaped(),
+                      QString::fromStdString(s.preview.liveCosts).toHtmlEscaped());
     if (!s.preview.method.empty()) {
         t += tr("<b>%1</b><br>")
                  .arg(RenderPanel::methodTitle(QString::fromStdString(s.preview.method)));

@@ -46,14 +46,14 @@ struct ShownPlan {
     bool fromViewport = false;
 };
 
-/// The Direct frame to scale costs with: Auto's timed one, else the shipped table's
-/// (the machine the live costs were measured on), else the planner's default.
+/// The Direct frame to scale costs with: Auto's timed one, else the live cost table's (the
+/// machine the live costs were measured on), else the planner's default.
 double directFrameMs(Viewport& viewport) {
     const double timed = viewport.previewRenderer().autoDirectMs();
     if (timed > 0)
         return timed;
-    const double shipped = planner::defaultLiveCosts().directMs;
-    return shipped > 0 ? shipped : planner::Budget().directMs;
+    const double measured = PreviewRenderer::liveCostTable().inUse.costs.directMs;
+    return measured > 0 ? measured : planner::Budget().directMs;
 }
 
 QString candidateLabel(const planner::CandidateModel& c) {

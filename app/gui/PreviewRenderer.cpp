@@ -19,7 +19,10 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <deque>
+#include <mutex>
 
 namespace lucent::app {
 
@@ -227,7 +230,8 @@ struct PreviewRenderer::Impl {
         Timer sincePlan;
         /// setMeasuredModels: plan with these until the scene changes (null: liveModels()).
         std::shared_ptr<const planner::Models> measured;
-        bool planMeasured = false;  ///< the current choice was made with `measured`
+        const LiveCostTable* liveCosts = nullptr;  ///< the table the last plan used
+        bool planMeasured = false;                 ///< the current choice was made with `measured`
     } autoPlan;
 
     /// One frame (PreviewRenderer::render).
@@ -289,10 +293,50 @@ bool PreviewRenderer::wantsAnotherFrame() const {
     return m->created && ((m->method && !m->method->converged()) || isPlanning());
 }
 
+namespace {
+
+/// Every table installed in this process, the current one last. Kept to exit (each a few kB; a
+/// calibration is a rare manual act) so that a reference handed out stays valid on any thread.
+struct LiveCostTables {
+    std::mutex mutex;
+    std::deque<LiveCostTable> all;
+    std::atomic<const LiveCostTable*> current{nullptr};
+
+    const LiveCostTable& add(const planner::LiveCostsInUse& inUse) {
+        const std::lock_guard lock(mutex);
+        LiveCostTable& t = all.emplace_back();
+        t.inUse = inUse;
+        t.models = planner::liveModels(planner::defaultModels(), inUse.costs);
+        t.label = planner::describeLiveCosts(inUse);
+        current = &t;  // deque::emplace_back keeps references to the others valid
+        return t;
+    }
+};
+
+LiveCostTables& liveCostTables() {
+    static LiveCostTables tables;
+    static const bool shipped = [] {
+        planner::LiveCostsInUse inUse;
+        inUse.costs = planner::defaultLiveCosts();
+        tables.add(inUse);
+        return true;
+    }();
+    (void)shipped;
+    return tables;
+}
+
+}  // namespace
+
+const LiveCostTable& PreviewRenderer::liveCostTable() {
+    return *liveCostTables().current.load();
+}
+
 const planner::Models& PreviewRenderer::liveModels() {
-    static const planner::Models models =
-        planner::liveModels(planner::defaultModels(), planner::defaultLiveCosts());
-    return models;
+    return liveCostTable().models;
+}
+
+void PreviewRenderer::useLiveCosts(const planner::LiveCostsInUse& inUse) {
+    liveCostTables().add(inUse);
 }
 
 void PreviewRenderer::setMeasuredModels(std::shared_ptr<const planner::Models> models) {
@@ -415,6 +459,12 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
         a.directSamples.clear();
         a.valid = false;
     }
+    const LiveCostTable& table = PreviewRenderer::liveCostTable();
+    if (a.liveCosts != &table) {  // other live costs: plan from scratch with them
+        a.liveCosts = &table;
+        a.valid = false;
+        a.measured.reset();  // measured errors sit in a copy of the old live models
+    }
     if (f.sceneReplaced || !f.dirtyBricks.empty() || lightKey != a.lights ||
         f.scene->eta != a.eta || !sameCamera(f.camera, a.camera)) {
         a.stale = true;
@@ -452,7 +502,7 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
     // The previous plan of the same scene, for hysteresis (a new scene plans from scratch).
     const planner::Plan previous = a.choice.plan;
     const bool hasPrevious = a.valid && !f.sceneReplaced;
-    const planner::Models& models = a.measured ? *a.measured : PreviewRenderer::liveModels();
+    const planner::Models& models = a.measured ? *a.measured : table.models;
     a.choice = planner::chooseMethod(scene, models, budget, /*glAvailable=*/true,
                                      hasPrevious ? &previous : nullptr, methods::Backend::Gl);
     a.planMeasured = a.measured != nullptr;
@@ -525,12 +575,14 @@ void PreviewRenderer::Impl::renderFrame(PreviewFrame& f) {
     methods::ParamSet params = canRender ? s.params : methods::ParamSet();
     r.stats.autoReason.clear();
     r.stats.autoChoice.clear();
+    r.stats.liveCosts.clear();
     if (name == AUTO_METHOD) {
         if (const planner::AutoChoice* choice = r.planAuto(f, lights, key)) {
             name = choice->method;
             params = choice->params;
             r.stats.autoReason = (r.autoPlan.planMeasured ? "errors measured on this view: " : "") +
                                  choice->plan.reason;
+            r.stats.liveCosts = r.autoPlan.liveCosts ? r.autoPlan.liveCosts->label : "";
             r.stats.autoChoice = choice->method +
                                  (choice->variant.empty() ? "" : ":" + choice->variant) + " " +
                                  choice->setting;

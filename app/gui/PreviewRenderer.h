@@ -15,7 +15,9 @@
 /// a one-fetch shading pass and the tone map (RenderSettings::reusePasses).
 ///
 /// Auto (AUTO_METHOD): the planner chooses the method from the scene's features, the shipped
-/// error models and the live preview's measured stroke → frame costs (planner/LiveCosts.h).
+/// error models and the live preview's measured stroke → frame costs (planner/LiveCosts.h):
+/// the shipped table, or the user's calibration once useLiveCosts installs it (the app does at
+/// start-up and after Edit ▸ Preferences ▸ Calibrate Live Costs).
 /// The unit of those costs, the render of a Direct frame, is timed here on the viewport's own
 /// passes: once per scene and render size, the preview shows Direct for four frames and
 /// plans with the median of the last three. It re-plans when the scene changes (a new scene,
@@ -33,6 +35,8 @@
 #include <lucent/mesh/TriangleMesh.h>
 #include <lucent/methods/Method.h>
 #include <lucent/methods/Params.h>
+#include <lucent/planner/LiveCosts.h>
+#include <lucent/planner/Models.h>
 #include <lucent/scene/Scene.h>
 
 #include <memory>
@@ -45,7 +49,6 @@ class ShaderLibrary;
 }
 namespace lucent::planner {
 struct AutoChoice;
-struct Models;
 }  // namespace lucent::planner
 
 namespace lucent::app {
@@ -94,6 +97,8 @@ struct PreviewStats {
     /// With Auto: the planner's one-line reason for its choice (planner::Plan::reason), and
     /// the choice ("dipole 32 spp"); empty otherwise.
     std::string autoReason, autoChoice;
+    /// With Auto: which live costs the plan used (LiveCostTable::label).
+    std::string liveCosts;
     methods::Stats methodStats;  ///< its Method::stats() (SSLPV timings, dipole progress)
     /// Lights the frame left out, and why (cullLights, lucent/scene/LightReach.h).
     std::vector<std::string> skippedLights;
@@ -120,6 +125,13 @@ struct PreviewFrame {
     float brushRadius = 0.f;        ///< mm
     unsigned framebuffer = 0;       ///< destination (Qt: defaultFramebufferObject())
     int framebufferWidth = 0, framebufferHeight = 0;
+};
+
+/// The live costs Auto plans with, and the live models made from them.
+struct LiveCostTable {
+    planner::LiveCostsInUse inUse;  ///< the costs, whether calibrated, the file and any warning
+    planner::Models models;         ///< planner::liveModels(defaultModels(), inUse.costs)
+    std::string label;              ///< planner::describeLiveCosts(inUse)
 };
 
 class PreviewRenderer {
@@ -150,9 +162,17 @@ public:
     [[nodiscard]] const planner::AutoChoice* autoChoice() const;
     /// The Direct frame Auto last planned with, ms (0 before one was timed or pinned).
     [[nodiscard]] double autoDirectMs() const;
-    /// The live preview's candidates Auto plans with: the shipped live costs (stroke → frame)
-    /// with the shipped error models (planner/LiveCosts.h).
+    /// The live preview's candidates Auto plans with: the live costs in use (stroke → frame)
+    /// with the shipped error models (planner/LiveCosts.h). Thread-safe; the reference stays
+    /// valid for the process's life (a plan or a measurement on a worker thread may hold it
+    /// while useLiveCosts installs another table).
     [[nodiscard]] static const planner::Models& liveModels();
+    /// The live costs in use (the shipped table until useLiveCosts), with the same guarantees.
+    [[nodiscard]] static const LiveCostTable& liveCostTable();
+    /// Every PreviewRenderer's Auto plans with `inUse`'s costs from its next frame on, from
+    /// scratch (hysteresis does not keep a choice made with other costs, and measured errors
+    /// made against the old models are dropped). Call on the UI thread.
+    static void useLiveCosts(const planner::LiveCostsInUse& inUse);
     /// Auto plans with `models` instead of liveModels() from the next frame on (the same
     /// candidates in the same order: liveModels() with this scene's measured errors,
     /// planner::measuredModels with MeasuredParts::ErrorsOnly), until anything the plan

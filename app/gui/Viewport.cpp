@@ -1066,7 +1066,7 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
     ++m_stats.frames;
     // Progressive methods (dipoles) refine while the user is idle, and Auto times a few Direct
     // frames before its first plan.
-    if (m_preview.wantsAnotherFrame())
+    if (m_preview.wantsAnotherFrame() && !m_refinementPaused)
         QTimer::singleShot(0, this, [this] { update(); });
     Q_EMIT frameRendered();
 }

@@ -27,8 +27,9 @@
 ///     QImage frame = vp->grabFramebuffer();   // renders a frame offscreen and reads it back
 
 #include "BrushTool.h"
-#include "MeshPicker.h"
 #include "PreviewRenderer.h"
+
+#include <lucent/mesh/MeshPicker.h>
 
 #include <QElapsedTimer>
 #include <QPixmap>
@@ -97,6 +98,14 @@ public:
     [[nodiscard]] const ViewportStats& stats() const { return m_stats; }
     /// The renderer behind the GL window (its shader library, for tests and live editing).
     PreviewRenderer& previewRenderer() { return m_preview; }
+    /// While paused, a progressive method does not refine in idle frames (a frame is drawn only
+    /// when something asks for one): the live-cost calibration then has the machine to itself.
+    /// Resuming asks for a frame.
+    void setRefinementPaused(bool paused) {
+        m_refinementPaused = paused;
+        if (!paused)
+            update();
+    }
 
     /// Frames the object (F key): target at its centre, distance to fit its bounds.
     void frameObject();
@@ -231,7 +240,8 @@ private:
     // Light gizmos.
     int m_selectedLight = -1;
     bool m_gizmosVisible = true;
-    bool m_hideOverlays = false;  ///< grabRender(): the bare render
+    bool m_hideOverlays = false;      ///< grabRender(): the bare render
+    bool m_refinementPaused = false;  ///< setRefinementPaused
     std::vector<Light> m_lightsBeforeDrag;
     Point3f m_dragPlanePoint{0.f};  ///< point/spot: the view-aligned plane of the drag
     Vector3f m_dragPlaneNormal{0.f};

@@ -39,6 +39,7 @@
 #include <memory>
 #include <utility>
 #include <cstdio>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -253,6 +254,12 @@ void measureLiveCosts(MainWindow& w, const QString& path) {
                 "stroke_ratio", "ratios (rounds)");
     lucent::planner::LiveCosts measured;
     measured.directMs = lucent::medianMs(unitMs);
+    measured.date =
+        QDateTime::currentDateTimeUtc().toString(QStringLiteral("yyyy-MM-dd")).toStdString();
+    // GL_RENDERER of the viewport's "GL_RENDERER — GL_VERSION" line.
+    measured.renderer =
+        vp->stats().glRenderer.section(QStringLiteral(" — "), 0, 0).trimmed().toStdString();
+    measured.cpuThreads = int(std::thread::hardware_concurrency());
     for (size_t i = 0; i < entries.size(); ++i) {
         lucent::planner::LiveCost m = entries[i];
         m.strokeRatio = lucent::medianMs(ratios[i]);

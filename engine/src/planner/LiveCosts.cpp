@@ -8,9 +8,15 @@
 #include "ModelData.h"
 #include "PlannerJson.h"
 
+#include <lucent/core/FileIO.h>
+
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 
 namespace lucent::planner {
 
@@ -30,6 +36,11 @@ LiveCosts parseLiveCosts(const std::string& text, const std::string& origin) {
         c.directMs = j.value("direct_ms", 0.0);
         if (!(c.directMs >= 0) || !std::isfinite(c.directMs))
             LUCENT_THROW(ValueError, origin, ": direct_ms must be a finite number ≥ 0");
+        c.date = j.value("date", "");
+        c.renderer = j.value("renderer", "");
+        c.cpuThreads = j.value("cpu_threads", 0);
+        if (c.cpuThreads < 0)
+            LUCENT_THROW(ValueError, origin, ": cpu_threads must be ≥ 0");
         for (const nlohmann::json& e : j["entries"]) {
             LiveCost l;
             l.method = e.value("method", "");
@@ -57,6 +68,12 @@ std::string formatLiveCosts(const LiveCosts& costs) {
     j["version"] = LiveCosts::VERSION;
     j["source"] = costs.source;
     j["direct_ms"] = std::round(costs.directMs * 100) / 100;
+    if (!costs.date.empty())
+        j["date"] = costs.date;
+    if (!costs.renderer.empty())
+        j["renderer"] = costs.renderer;
+    if (costs.cpuThreads > 0)
+        j["cpu_threads"] = costs.cpuThreads;
     nlohmann::ordered_json list = nlohmann::ordered_json::array();
     for (const LiveCost& l : costs.entries) {
         nlohmann::ordered_json o;
@@ -73,6 +90,103 @@ const LiveCosts& defaultLiveCosts() {
     static const LiveCosts costs = parseLiveCosts(detail::PLANNER_LIVE_COSTS_JSON,
                                                   "resources/planner/live_costs.json (embedded)");
     return costs;
+}
+
+std::string userLiveCostsPath() {
+    const auto env = [](const char* name) {
+        const char* v = std::getenv(name);
+        return std::string(v ? v : "");
+    };
+    if (std::string given = env(LIVE_COSTS_ENV); !given.empty())
+        return given;
+    // The XDG Base Directory Specification: $XDG_CONFIG_HOME when set to an absolute path,
+    // else $HOME/.config.
+    std::filesystem::path config = env("XDG_CONFIG_HOME");
+    if (config.empty() || !config.is_absolute()) {
+        const std::string home = env("HOME");
+        if (home.empty())
+            return {};
+        config = std::filesystem::path(home) / ".config";
+    }
+    return (config / "lucent" / "live_costs.json").string();
+}
+
+void saveLiveCosts(const LiveCosts& costs, const std::string& path) {
+    const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+    std::error_code ec;
+    if (!folder.empty())
+        std::filesystem::create_directories(folder, ec);
+    if (ec)
+        LUCENT_THROW(IoError, "cannot create the folder '", folder.string(), "' for '", path,
+                     "': ", ec.message());
+    writeFileAtomically(path, formatLiveCosts(costs));
+}
+
+LiveCostsInUse loadLiveCosts(const std::string& path) {
+    LiveCostsInUse out;
+    out.costs = defaultLiveCosts();
+    out.path = path;
+    std::error_code ec;
+    if (path.empty() || !std::filesystem::exists(path, ec))
+        return out;
+    const std::string again =
+        " (Edit ▸ Preferences ▸ Calibrate Live Costs, or lucent-cli bench "
+        "calibrate); planning with the shipped live costs";
+    try {
+        std::ifstream in(path, std::ios::binary);
+        if (!in)
+            LUCENT_THROW(IoError, "cannot read '", path, "'");
+        std::ostringstream text;
+        text << in.rdbuf();
+        const LiveCosts user = parseLiveCosts(text.str(), path);
+        // The shipped candidates in the shipped order, each with the user's ratio: the planner's
+        // candidates stay those of this build, and a file made by another version that lacks
+        // one says so instead of leaving a method out of Auto.
+        LiveCosts aligned = user;
+        aligned.entries.clear();
+        std::string missing;
+        for (const LiveCost& shipped : defaultLiveCosts().entries) {
+            const LiveCost* found = nullptr;
+            for (const LiveCost& u : user.entries)
+                if (u.method == shipped.method && u.setting == shipped.setting)
+                    found = &u;
+            if (found)
+                aligned.entries.push_back(*found);
+            else
+                missing += (missing.empty() ? "" : ", ") + shipped.method + " " + shipped.setting;
+        }
+        if (!missing.empty())
+            LUCENT_THROW(ValueError, path, ": no ratio for ", missing,
+                         " (measured by another version of Lucent)");
+        out.costs = std::move(aligned);
+        out.calibrated = true;
+    } catch (const std::exception& e) {
+        out.warning = std::string("the live-cost calibration cannot be used: ") + e.what() +
+                      "; calibrate again" + again;
+    }
+    return out;
+}
+
+std::string describeLiveCosts(const LiveCostsInUse& inUse) {
+    const LiveCosts& c = inUse.costs;
+    // The renderer's name without its details: "llvmpipe (LLVM 15.0.6, 256 bits)" → "llvmpipe".
+    const std::string renderer = c.renderer.substr(0, c.renderer.find(" ("));
+    std::string details;
+    const auto add = [&details](const std::string& part) {
+        if (!part.empty())
+            details += (details.empty() ? "" : ", ") + part;
+    };
+    if (inUse.calibrated) {
+        std::string line = "calibrated on this machine";
+        if (!c.date.empty())
+            line += " " + c.date;
+        return renderer.empty() ? line : line + " (" + renderer + ")";
+    }
+    add(renderer);
+    if (c.cpuThreads > 0)
+        add(std::to_string(c.cpuThreads) + (c.cpuThreads == 1 ? " thread" : " threads"));
+    add(c.date);
+    return details.empty() ? "shipped" : "shipped (" + details + ")";
 }
 
 Models liveModels(const Models& offline, const LiveCosts& live, std::vector<std::string>* missing) {

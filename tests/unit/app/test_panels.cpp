@@ -3,7 +3,10 @@
 /// @brief Qt Tests (under Xvfb) of the app's docks and menus beyond test_app.cpp: light types
 /// (change, add, fields shown per type, colour) as undo steps that reach the renderer; VDB
 /// export options (native / renderer-ready / Mitsuba); preferences remembered in QSettings;
-/// drag-and-drop filtering; conventional shortcuts; brush radius on screen and its keys.
+/// drag-and-drop filtering; conventional shortcuts; brush radius on screen and its keys; the
+/// live-cost calibration (Edit ▸ Preferences): a calibration file in the config location is
+/// planned with, a bad one falls back to the shipped costs with a warning, calibrating writes
+/// one and Cancel stops it, "Use Shipped Live Costs" deletes it.
 
 #include "Document.h"
 #include "MainWindow.h"
@@ -17,6 +20,8 @@
 #include <lucent/core/Error.h>
 #include <lucent/material/Procedural.h>
 #include <lucent/io/VdbIO.h>
+#include <lucent/planner/LiveCalibration.h>
+#include <lucent/planner/LiveCosts.h>
 
 #include <QAction>
 #include <QApplication>
@@ -35,6 +40,7 @@
 #include <QStatusBar>
 #include <QUrl>
 #include <QDoubleSpinBox>
+#include <QProgressDialog>
 #include <QPushButton>
 #include <QTest>
 #include <QTextBrowser>
@@ -42,6 +48,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <set>
 
@@ -785,6 +793,166 @@ TEST(BrushPanelTest, ScatteringCannotExceedExtinctionAndProblemsAreInWords) {
     // No channel: said in words too.
     b.engine.channels = 0;
     EXPECT_TRUE(brushProblem(b.engine).contains(QStringLiteral("at least one channel")));
+}
+
+// ---- Live costs: Edit ▸ Preferences ▸ Calibrate Live Costs -----------------------------------
+
+namespace {
+
+/// A fresh config folder as XDG_CONFIG_HOME (LUCENT_LIVE_COSTS unset) and Qt's test locations for
+/// the window's own settings; on leaving, the environment and the shipped live costs again.
+class AppLiveCosts : public ::testing::Test {
+protected:
+    void SetUp() override {
+        m_config = std::filesystem::temp_directory_path() / "lucent_app_live_costs_config";
+        std::filesystem::remove_all(m_config);
+        std::filesystem::create_directories(m_config);
+        m_hadXdg = qEnvironmentVariableIsSet("XDG_CONFIG_HOME");
+        m_oldXdg = qgetenv("XDG_CONFIG_HOME");
+        m_hadGiven = qEnvironmentVariableIsSet(planner::LIVE_COSTS_ENV);
+        m_oldGiven = qgetenv(planner::LIVE_COSTS_ENV);
+        qputenv("XDG_CONFIG_HOME", QByteArray::fromStdString(m_config.string()));
+        qunsetenv(planner::LIVE_COSTS_ENV);
+        QStandardPaths::setTestModeEnabled(true);  // the window's QSettings go to ~/.qttest
+        qputenv(MainWindow::RECOVERY_ENV, "discard");
+    }
+    void TearDown() override {
+        if (m_hadXdg)
+            qputenv("XDG_CONFIG_HOME", m_oldXdg);
+        else
+            qunsetenv("XDG_CONFIG_HOME");
+        if (m_hadGiven)
+            qputenv(planner::LIVE_COSTS_ENV, m_oldGiven);
+        QStandardPaths::setTestModeEnabled(false);
+        PreviewRenderer::useLiveCosts(planner::loadLiveCosts(""));  // the shipped table
+        std::filesystem::remove_all(m_config);
+    }
+    /// The user's calibration file under the test's config folder.
+    [[nodiscard]] std::string calibrationPath() const {
+        return (m_config / "lucent" / "live_costs.json").string();
+    }
+    /// The shipped table with every ratio tripled, "measured" on a GPU on 2026-12-03.
+    static planner::LiveCosts tripledShipped() {
+        planner::LiveCosts c = planner::defaultLiveCosts();
+        c.source = "test";
+        c.date = "2026-12-03";
+        c.renderer = "Test GPU (fake)";
+        for (planner::LiveCost& e : c.entries)
+            e.strokeRatio *= 3.0;
+        return c;
+    }
+
+private:
+    std::filesystem::path m_config;
+    QByteArray m_oldXdg, m_oldGiven;
+    bool m_hadXdg = false, m_hadGiven = false;
+};
+
+/// Renders frames (at least one, at most 10) until Auto's plan says it used the live costs
+/// `expected`, with its Direct frame pinned so that it plans at once; returns what the last
+/// frame's plan said.
+std::string plannedLiveCosts(MainWindow& w, const std::string& expected) {
+    Viewport* vp = w.viewport();
+    vp->previewRenderer().pinAutoDirectMs(PreviewRenderer::liveCostTable().inUse.costs.directMs);
+    for (int i = 0; i < 10; ++i) {
+        const long long f = vp->stats().frames;
+        vp->update();
+        if (!QTest::qWaitFor([&] { return vp->stats().frames > f; }, test::kWindowWaitMs))
+            break;
+        if (vp->stats().preview.liveCosts == expected)
+            break;
+    }
+    return vp->stats().preview.liveCosts;
+}
+
+}  // namespace
+
+TEST_F(AppLiveCosts, ACalibrationInTheConfigFolderIsPlannedWithAndABadOneIsNot) {
+    ASSERT_EQ(planner::userLiveCostsPath(), calibrationPath());
+    planner::saveLiveCosts(tripledShipped(), calibrationPath());
+    {
+        MainWindow w(/*restoreSettings=*/true);
+        w.show();
+        ASSERT_TRUE(QTest::qWaitForWindowExposed(&w, test::kWindowWaitMs));
+        EXPECT_TRUE(w.liveCostsWarning().isEmpty()) << w.liveCostsWarning().toStdString();
+        const LiveCostTable& t = PreviewRenderer::liveCostTable();
+        EXPECT_TRUE(t.inUse.calibrated);
+        EXPECT_EQ(t.label, "calibrated on this machine 2026-12-03 (Test GPU)");
+        ASSERT_FALSE(t.models.candidates.empty());
+        EXPECT_NEAR(std::exp(t.models.candidates[0].cost[0]),
+                    3.0 * planner::defaultLiveCosts().entries[0].strokeRatio, 1e-3);
+        // The plan says which costs it used (the Statistics dock shows it).
+        EXPECT_EQ(plannedLiveCosts(w, t.label), t.label);
+        ASSERT_TRUE(w.close());
+    }
+    {
+        // Cut short: the shipped costs, and the user is told why, naming the file.
+        std::ofstream(calibrationPath(), std::ios::trunc) << "{\"format\": \"lucent-planner-li";
+        MainWindow w(/*restoreSettings=*/true);
+        w.show();
+        ASSERT_TRUE(QTest::qWaitForWindowExposed(&w, test::kWindowWaitMs));
+        const QString warning = w.liveCostsWarning();
+        EXPECT_TRUE(warning.contains(QString::fromStdString(calibrationPath())))
+            << warning.toStdString();
+        EXPECT_TRUE(warning.contains(QStringLiteral("shipped"))) << warning.toStdString();
+        EXPECT_TRUE(w.statusBar()->currentMessage().contains(warning))
+            << w.statusBar()->currentMessage().toStdString();
+        EXPECT_FALSE(PreviewRenderer::liveCostTable().inUse.calibrated);
+        EXPECT_EQ(plannedLiveCosts(w, PreviewRenderer::liveCostTable().label),
+                  PreviewRenderer::liveCostTable().label);
+        EXPECT_EQ(PreviewRenderer::liveCostTable().label.rfind("shipped", 0), 0u);
+        ASSERT_TRUE(w.close());
+    }
+}
+
+TEST_F(AppLiveCosts, CalibratingWritesTheFileCancelStopsAndShippedDeletesIt) {
+    MainWindow w(/*restoreSettings=*/false);
+    w.show();
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(&w, test::kWindowWaitMs));
+    ASSERT_NE(findAction(w, "actionCalibrateLiveCosts"), nullptr);
+    ASSERT_NE(findAction(w, "actionUseShippedLiveCosts"), nullptr);
+    // Every shipped candidate (a file must cover them to be used), on a small viewport.
+    planner::LiveCalibrationOptions o;
+    o.viewportWidth = 96;
+    o.viewportHeight = 64;
+    o.strokes = 1;
+    o.warmupStrokes = 0;
+    o.idleFrames = 0;
+    o.rounds = 1;
+
+    // Cancelled from its progress dialog: no file, the costs in use unchanged.
+    ASSERT_TRUE(w.calibrateLiveCosts(o, /*wait=*/false));
+    EXPECT_TRUE(w.isCalibrating());
+    EXPECT_FALSE(w.calibrateLiveCosts(o, false));  // one at a time
+    auto* dialog = w.findChild<QProgressDialog*>(QStringLiteral("calibrationProgress"));
+    ASSERT_NE(dialog, nullptr);
+    auto* cancelButton = dialog->findChild<QPushButton*>();  // its only button
+    ASSERT_NE(cancelButton, nullptr);
+    cancelButton->click();
+    ASSERT_TRUE(QTest::qWaitFor([&] { return !w.isCalibrating(); }, 60000));
+    EXPECT_FALSE(std::filesystem::exists(calibrationPath()));
+    EXPECT_FALSE(PreviewRenderer::liveCostTable().inUse.calibrated);
+    EXPECT_TRUE(w.statusBar()->currentMessage().contains(QStringLiteral("cancelled")))
+        << w.statusBar()->currentMessage().toStdString();
+
+    // To the end: the file is written, parses, and Auto plans with it.
+    ASSERT_TRUE(w.calibrateLiveCosts(o, /*wait=*/true)) << w.lastError().toStdString();
+    ASSERT_TRUE(std::filesystem::exists(calibrationPath()));
+    const planner::LiveCostsInUse onDisk = planner::loadLiveCosts(calibrationPath());
+    EXPECT_TRUE(onDisk.calibrated) << onDisk.warning;
+    const LiveCostTable& t = PreviewRenderer::liveCostTable();
+    EXPECT_TRUE(t.inUse.calibrated);
+    EXPECT_EQ(t.inUse.costs.source, onDisk.costs.source);
+    EXPECT_NE(t.inUse.costs.source.find("96x64"), std::string::npos) << t.inUse.costs.source;
+    EXPECT_EQ(t.label.rfind("calibrated on this machine", 0), 0u) << t.label;
+    EXPECT_EQ(plannedLiveCosts(w, t.label), t.label);
+
+    // Use Shipped Live Costs: the file goes, the shipped table comes back.
+    findAction(w, "actionUseShippedLiveCosts")->trigger();
+    EXPECT_FALSE(std::filesystem::exists(calibrationPath()));
+    EXPECT_FALSE(PreviewRenderer::liveCostTable().inUse.calibrated);
+    EXPECT_EQ(PreviewRenderer::liveCostTable().label.rfind("shipped", 0), 0u);
+    ASSERT_TRUE(w.close());
 }
 
 }  // namespace lucent::app

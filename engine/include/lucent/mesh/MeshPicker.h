@@ -3,13 +3,14 @@
 /// @file
 /// @brief CPU ray picking against a triangle mesh (Möller & Trumbore 1997), for the brush
 /// cursor and painting: a brute-force O(triangles) loop behind a bounding-box test, run once
-/// per mouse event (the stroke latency in docs/benchmarks.md includes it).
+/// per mouse event (the stroke latency in docs/benchmarks.md includes it). In the engine so that
+/// the live-cost calibration (lucent/planner/LiveCalibration.h) strokes as the app does.
 
 #include <lucent/mesh/TriangleMesh.h>
 
 #include <optional>
 
-namespace lucent::app {
+namespace lucent {
 
 struct PickHit {
     float t = 0.f;          ///< ray parameter (mm when the direction is unit)
@@ -22,4 +23,4 @@ struct PickHit {
 std::optional<PickHit> pickMesh(const TriangleMesh& mesh, const Point3f& origin,
                                 const Vector3f& direction);
 
-}  // namespace lucent::app
+}  // namespace lucent

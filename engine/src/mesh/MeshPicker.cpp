@@ -3,9 +3,12 @@
 /// @brief Ray–triangle picking (Möller & Trumbore 1997, "Fast, minimum storage ray-triangle
 /// intersection", Sec. 2) and slab ray–box rejection (Kay & Kajiya 1986).
 
-#include "MeshPicker.h"
+#include <lucent/mesh/MeshPicker.h>
 
-namespace lucent::app {
+#include <algorithm>
+#include <cmath>
+
+namespace lucent {
 
 namespace {
 
@@ -74,4 +77,4 @@ std::optional<PickHit> pickMesh(const TriangleMesh& mesh, const Point3f& origin,
     return best;
 }
 
-}  // namespace lucent::app
+}  // namespace lucent
