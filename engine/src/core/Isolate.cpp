@@ -23,17 +23,20 @@ namespace lucent {
 
 namespace {
 
-// GCC defines __SANITIZE_ADDRESS__, clang answers __has_feature.
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool ADDRESS_SANITIZER = true;
+// AddressSanitizer and ThreadSanitizer reserve terabytes of shadow memory and replace the
+// allocator: an address-space limit would stop them, and their allocator reports an allocation
+// past it and aborts where the real one throws std::bad_alloc. GCC defines __SANITIZE_ADDRESS__
+// and __SANITIZE_THREAD__, clang answers __has_feature.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool SANITIZER_ALLOCATOR = true;
 #elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool ADDRESS_SANITIZER = true;
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+constexpr bool SANITIZER_ALLOCATOR = true;
 #else
-constexpr bool ADDRESS_SANITIZER = false;
+constexpr bool SANITIZER_ALLOCATOR = false;
 #endif
 #else
-constexpr bool ADDRESS_SANITIZER = false;
+constexpr bool SANITIZER_ALLOCATOR = false;
 #endif
 
 /// Virtual size of this process in bytes (/proc/self/statm, first field, in pages).
@@ -87,7 +90,7 @@ bool runWork(const ImportLimits& limits, const std::function<std::string()>& wor
         std::signal(sig, SIG_DFL);
     const rlimit cpu{rlim_t(limits.maxReaderCpuSeconds), rlim_t(limits.maxReaderCpuSeconds) + 1};
     ::setrlimit(RLIMIT_CPU, &cpu);
-    if (!ADDRESS_SANITIZER) {
+    if (!SANITIZER_ALLOCATOR) {
         const rlimit as{rlim_t(baseBytes + limits.maxDecodedBytes),
                         rlim_t(baseBytes + limits.maxDecodedBytes)};
         ::setrlimit(RLIMIT_AS, &as);

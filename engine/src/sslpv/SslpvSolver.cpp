@@ -59,6 +59,17 @@ struct AttenuationModel {
     float perStepTransport = 0.f;  ///< weight of σ_tr/σt = √(3(1 − α′)) (likewise)
 };
 
+// The two hot kernels below are compiled for x86-64-v4, v3 and baseline, one picked at load
+// time by an ifunc resolver. ThreadSanitizer instruments that resolver, which the dynamic
+// loader runs before TSan's runtime is initialised (a segfault at start-up, GCC 12): the
+// `tsan` preset compiles the baseline only.
+#if defined(__SANITIZE_THREAD__)
+#define LUCENT_ISA_CLONES
+#else
+#define LUCENT_ISA_CLONES \
+    __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#endif
+
 AttenuationModel attenuationModel(const SslpvOptions& o) {
     if (o.mode == SslpvMode::Calibrated)
         return {1.f,
@@ -73,10 +84,10 @@ AttenuationModel attenuationModel(const SslpvOptions& o) {
 /// Per-cell factors of one row (§3.2.1 and Eq. 3): f_l = a·((1 − s′) + s′ g^l) with
 /// a = exp(−β) (AttenuationModel), s′ = 1 − exp(−σs′ Δx). Cloned like the propagation kernel
 /// so the polynomial exp vectorises (16 cells per AVX-512 instruction).
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void foldFactorRow(
-    const float* __restrict st, const float* __restrict ssIn, const float* __restrict gg,
-    float* __restrict f0, float* __restrict f1, float* __restrict f2, int n, float dx,
-    AttenuationModel model) {
+LUCENT_ISA_CLONES void foldFactorRow(const float* __restrict st, const float* __restrict ssIn,
+                                     const float* __restrict gg, float* __restrict f0,
+                                     float* __restrict f1, float* __restrict f2, int n, float dx,
+                                     AttenuationModel model) {
     const float scatterLoss = model.scatterLoss;  // σatt = σt − scatterLoss·σs′
     const float lin = model.linear * dx;
     const float quad = model.diffusion * dx * dx;
@@ -169,8 +180,8 @@ typedef int32_t Vec16i __attribute__((vector_size(2 * VEC * sizeof(int32_t))));
 // One call computes the run of `len` cells starting at (xStart, y, z) and writes into nz[x]
 // (x relative to xStart, len entries) a non-zero lane mask of the cell's new propagation
 // values, from which the caller derives the bricks lit after this step.
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void processRun(
-    const StepCtx& ctx, int z, int y, int xStart, int len, SliceSums& sums, int32_t* nz) {
+LUCENT_ISA_CLONES void processRun(const StepCtx& ctx, int z, int y, int xStart, int len,
+                                  SliceSums& sums, int32_t* nz) {
     const size_t p = size_t(ctx.padded);
     constexpr int BLOCK = 4 * VEC;  // 32 cells
     alignas(64) float out[SSLPV_MAX_COEFFS][BLOCK];

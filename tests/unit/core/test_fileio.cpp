@@ -309,7 +309,8 @@ TEST(Isolate, ResultsErrorsCrashesAndRunawaysOfTheChild) {
             << e.what();
     }
     EXPECT_THROW(runIsolated("chatty", [] { return std::string(65 << 20, 'x'); }), IoError);
-#if !defined(__SANITIZE_ADDRESS__)  // AddressSanitizer needs the whole address space
+// AddressSanitizer and ThreadSanitizer need the whole address space (Isolate.cpp).
+#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
     try {
         runIsolated("glutton", [] {
             std::vector<char> big(size_t(1) << 30, 1);  // 1 GiB over a 64 MiB limit
