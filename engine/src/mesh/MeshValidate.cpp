@@ -1663,12 +1663,10 @@ ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
         return c;
     }
     const size_t tagEnd = text.find('>', appendedTag);
-    const size_t underscore = tagEnd == std::string::npos ? tagEnd : text.find('_', tagEnd);
-    if (underscore == std::string::npos)
-        fail("AppendedData without its '_' marker");
+    if (tagEnd == std::string::npos)
+        fail("the AppendedData tag has no end");
     const bool base64 =
         xmlAttribute(text.substr(appendedTag, tagEnd - appendedTag), "encoding") != "raw";
-    const uint64_t dataStart = uint64_t(underscore) + 1;
     const uint64_t limit = importLimits().maxDecodedBytes;
     const ReadBytes readFile = [&](uint64_t pos, uint64_t n) {
         if (pos >= size)
@@ -1680,6 +1678,26 @@ ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
         bytes.resize(size_t(f.gcount()));
         return bytes;
     };
+    // Where the appended data start for VTK (vtkXMLDataParser::FindAppendedDataPosition): past
+    // the tag's '>' and the white space after it (isspace), the next character is taken as the
+    // '_' marker and the data follow it; if that character is not '_', VTK warns and the data
+    // start at it. Looking for the first '_' instead let bytes before the marker shift every
+    // header VTK reads away from the one checked here: a fuzzed file of 831 bytes then made VTK
+    // allocate 16 GiB for a block count of 0xFFFFFFF2 (tests/data/fuzz/README.md).
+    uint64_t dataStart = uint64_t(tagEnd) + 1;
+    for (bool found = false; !found;) {
+        const std::string chunk = readFile(dataStart, 4096);
+        if (chunk.empty())
+            fail("the AppendedData section holds no data");
+        size_t i = 0;
+        while (i < chunk.size() && std::isspace(static_cast<unsigned char>(chunk[i])))
+            ++i;
+        dataStart += i;
+        if (i < chunk.size()) {
+            dataStart += chunk[i] == '_' ? 1 : 0;
+            found = true;
+        }
+    }
     // An appended array's storage: from dataStart + its offset (bytes, or base64 characters)
     // to the end of the file.
     const auto appended = [&](const std::string& tag) -> std::optional<StoredArray> {
