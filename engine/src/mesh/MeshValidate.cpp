@@ -1403,6 +1403,40 @@ std::vector<uint64_t> headerWords(const StoredArray& a, uint64_t count, const Fa
     return words;
 }
 
+/// The block sizes of a zlib compression header as VTK 9.1 can read them
+/// (vtkXMLDataParser::ReadCompressedData): a full block of at least one byte (VTK divides by
+/// it) and a partial last block no larger than a full one. A larger last block makes VTK count
+/// one block more than the header has and read that block's compressed size past the end of
+/// its array: a fuzzed file then made it allocate 0x60200024C070 bytes (2026-12-04).
+template <class Fail>
+void checkBlockSizes(uint64_t blocks, uint64_t blockSize, uint64_t lastSize,
+                     const std::string& where, const Fail& fail) {
+    if (blocks > 0 && blockSize == 0)
+        fail("the compression header" + where + " claims blocks of 0 bytes (corrupt)");
+    if (blocks > 0 && lastSize > blockSize)
+        fail("the compression header" + where + " claims a last block of " +
+             std::to_string(lastSize) + " bytes, larger than its blocks of " +
+             std::to_string(blockSize) + " (corrupt)");
+}
+
+/// Where an inline base64 array (format "binary") is stored: the element's text without white
+/// space.
+StoredArray inlineBinaryArray(const std::string& body, uint32_t word, bool compressed) {
+    std::string text;
+    for (char c : body)
+        if (!std::isspace(static_cast<unsigned char>(c)))
+            text.push_back(c);
+    StoredArray a;
+    a.available = text.size();
+    a.read = [text = std::move(text)](uint64_t pos, uint64_t n) {
+        return pos < text.size() ? text.substr(size_t(pos), size_t(n)) : std::string();
+    };
+    a.base64 = true;
+    a.compressed = compressed;
+    a.word = word;
+    return a;
+}
+
 /// The values of array `a` into `decoder`/`sink`; `sink` empty: only their number, from the
 /// header. @return the number of values; nullopt when the array is not checked here (a
 /// compressed array beyond MAX_CHECKED_INFLATE).
@@ -1449,6 +1483,7 @@ std::optional<uint64_t> storedValues(const StoredArray& a, IntegerDecoder& decod
         fail("the compression header claims " + std::to_string(blocks) +
              " blocks, more than the file holds (corrupt)");
     const std::vector<uint64_t> header = headerWords(a, 3 + blocks, fail);
+    checkBlockSizes(blocks, header[1], header[2], "", fail);
     const uint64_t blockSize = header[1], lastSize = header[2] ? header[2] : header[1];
     const uint64_t limit = importLimits().maxDecodedBytes;
     if (blockSize > limit || lastSize > limit)
@@ -1546,21 +1581,8 @@ void checkCellOffsets(const std::string& xml, uint32_t word, bool compressed,
         // The element's text: up to the next tag (VTK may write InformationKey children).
         const size_t end = xml.find('<', close);
         const std::string body = xml.substr(close + 1, end - close - 1);
-        if (format == "binary") {
-            std::string text;
-            for (char c : body)
-                if (!std::isspace(static_cast<unsigned char>(c)))
-                    text.push_back(c);
-            StoredArray a;
-            a.read = [text](uint64_t pos, uint64_t n) {
-                return pos < text.size() ? text.substr(size_t(pos), size_t(n)) : std::string();
-            };
-            a.available = text.size();
-            a.base64 = true;
-            a.compressed = compressed;
-            a.word = word;
-            return storedValues(a, decoder, sink, fail);
-        }
+        if (format == "binary")
+            return storedValues(inlineBinaryArray(body, word, compressed), decoder, sink, fail);
         if (format != "ascii")
             return std::nullopt;
         std::istringstream text(body);
@@ -1656,6 +1678,50 @@ ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
     const bool compressed = !compressor.empty();
     // Other compressors (LZ4, LZMA): their arrays are left to VTK in the child process.
     const bool zlib = !compressed || compressor == "vtkZLibDataCompressor";
+    const uint64_t limit = importLimits().maxDecodedBytes;
+    // The header of one binary array (appended, or inline base64) checked against what it is
+    // stored in: VTK allocates by it before it reads the data.
+    const auto checkHeader = [&](const StoredArray& a, const std::string& where) {
+        if (!compressed) {
+            const uint64_t bytes = headerWords(a, 1, fail)[0];
+            const uint64_t stored = a.word + std::min(bytes, a.available);  // no overflow
+            if (bytes > a.available || (a.base64 ? base64Chars(stored) : stored) > a.available)
+                fail("the size" + where + " is larger than the file");
+            return;
+        }
+        const uint64_t blocks = headerWords(a, 1, fail)[0];
+        if (blocks > a.available / a.word)
+            fail("the compression header" + where + " claims " + std::to_string(blocks) +
+                 " blocks, more than the file holds (corrupt)");
+        const std::vector<uint64_t> header = headerWords(a, 3 + blocks, fail);
+        const uint64_t blockSize = header[1], lastSize = header[2];
+        checkBlockSizes(blocks, blockSize, lastSize, where, fail);
+        const uint64_t decoded =
+            blocks == 0 ? 0 : (blocks - 1) * blockSize + (lastSize ? lastSize : blockSize);
+        if (blockSize > limit || decoded > limit)
+            fail("the compression header" + where + " claims " + std::to_string(decoded) +
+                 " bytes, more than the import limit of " + std::to_string(limit));
+        uint64_t stored = 0;
+        for (uint64_t b = 0; b < blocks; ++b) {
+            if (header[size_t(3 + b)] > a.available - stored)
+                fail("the compressed blocks" + where + " are larger than the file (corrupt)");
+            stored += header[size_t(3 + b)];
+        }
+    };
+    // Inline base64 arrays (format "binary"): their text, up to the next tag.
+    if (zlib)
+        for (size_t at = xml.find("<DataArray"); at != std::string::npos;
+             at = xml.find("<DataArray", at + 1)) {
+            const size_t close = xml.find('>', at);
+            if (close == std::string::npos || xml[close - 1] == '/')
+                continue;
+            const std::string tag = xml.substr(at, close - at);
+            if (xmlAttribute(tag, "format") != "binary")
+                continue;
+            const size_t end = xml.find('<', close);
+            checkHeader(inlineBinaryArray(xml.substr(close + 1, end - close - 1), word, compressed),
+                        " of the inline array '" + xmlAttribute(tag, "Name") + "'");
+        }
     const auto noAppendedArrays = [](const std::string&) { return std::optional<StoredArray>(); };
     if (appendedTag == std::string::npos) {
         if (zlib)
@@ -1667,7 +1733,6 @@ ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
         fail("the AppendedData tag has no end");
     const bool base64 =
         xmlAttribute(text.substr(appendedTag, tagEnd - appendedTag), "encoding") != "raw";
-    const uint64_t limit = importLimits().maxDecodedBytes;
     const ReadBytes readFile = [&](uint64_t pos, uint64_t n) {
         if (pos >= size)
             return std::string();
@@ -1718,32 +1783,8 @@ ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
         const std::string tag = xml.substr(at, xml.find('>', at) - at);
         if (xmlAttribute(tag, "format") != "appended" || !zlib)
             continue;
-        const StoredArray a = *appended(tag);
-        const std::string where = " of the appended array at offset " + xmlAttribute(tag, "offset");
-        if (!compressed) {
-            const uint64_t bytes = headerWords(a, 1, fail)[0];
-            const uint64_t stored = a.word + std::min(bytes, a.available);  // no overflow
-            if (bytes > a.available || (base64 ? base64Chars(stored) : stored) > a.available)
-                fail("the size" + where + " is larger than the file");
-            continue;
-        }
-        const uint64_t blocks = headerWords(a, 1, fail)[0];
-        if (blocks > a.available / a.word)
-            fail("the compression header" + where + " claims " + std::to_string(blocks) +
-                 " blocks, more than the file holds (corrupt)");
-        const std::vector<uint64_t> header = headerWords(a, 3 + blocks, fail);
-        const uint64_t blockSize = header[1], lastSize = header[2];
-        const uint64_t decoded =
-            blocks == 0 ? 0 : (blocks - 1) * blockSize + (lastSize ? lastSize : blockSize);
-        if (blockSize > limit || decoded > limit)
-            fail("the compression header" + where + " claims " + std::to_string(decoded) +
-                 " bytes, more than the import limit of " + std::to_string(limit));
-        uint64_t stored = 0;
-        for (uint64_t b = 0; b < blocks; ++b) {
-            if (header[size_t(3 + b)] > a.available - stored)
-                fail("the compressed blocks" + where + " are larger than the file (corrupt)");
-            stored += header[size_t(3 + b)];
-        }
+        checkHeader(*appended(tag),
+                    " of the appended array at offset " + xmlAttribute(tag, "offset"));
     }
     if (zlib)
         checkCellOffsets(xml, word, compressed, appended, fail);

@@ -291,6 +291,16 @@ TEST(MeshIO, FuzzFindingsAreClearErrors) {
     expectLoadError(fuzzFinding("vtp_appended_bytes_before_marker.vtp"),
                     "the compression header of the appended array at offset 0 claims 4294967282 "
                     "blocks, more than the file holds");
+    // A compression header whose partial last block (64 bytes) is larger than its full blocks
+    // (36): VTK then counts one block more than the header has and reads that block's
+    // compressed size past the end of its array (the fuzz build's VTK allocated 0x60200024C070
+    // bytes, a heap address). Refused before VTK.
+    expectLoadError(fuzzFinding("vtp_last_block_larger_than_blocks.vtp"),
+                    "claims a last block of 64 bytes, larger than its blocks of 36 (corrupt)");
+    // The same header fault in an inline base64 array, whose headers were not checked at all.
+    expectLoadError(robustInput("vtp_last_block_larger_inline_binary_zlib.vtp"),
+                    "the compression header of the inline array 'Points' claims a last block of "
+                    "32780 bytes, larger than its blocks of 32768");
 }
 
 // Issue 16: the cell offsets of a VTK XML file are checked before VTK reads them in every
