@@ -110,13 +110,13 @@ BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
     m_eyedropTool->setObjectName(QStringLiteral("brushToolEyedropper"));
     m_paintTool->setChecked(true);
     form->addRow(tr("Tool"), row({m_paintTool, m_eyedropTool}));
-    const BrushSettings defaults;
-    m_radius = spin(0.01, 500.0, 3.0, 2, tr(" mm"), 0.5);
+    const BrushSettings defaults = startingBrush();
+    m_radius = spin(0.01, 500.0, double(defaults.radius), 2, tr(" mm"), 0.5);
     m_depth = spin(0.0, 500.0, 0.0, 2, tr(" mm"), 0.5);
     m_falloff = new QComboBox;
     m_falloff->addItems({tr("Constant"), tr("Linear"), tr("Smooth"), tr("Gaussian")});
     m_falloff->setCurrentIndex(int(defaults.falloff));
-    m_strength = spin(0.0, 1.0, 0.5, 2, QString(), 0.05);
+    m_strength = spin(0.0, 1.0, double(defaults.strength), 2, QString(), 0.05);
     m_spacing = spin(BrushSettings::MIN_SPACING, BrushSettings::MAX_SPACING, defaults.spacing, 2,
                      tr(" × radius"), 0.05);
     m_mode = new QComboBox;
@@ -153,8 +153,10 @@ BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
         c->setChecked(true);
     form->addRow(tr("Channels"), row({m_chSigmaT, m_chSigmaS, m_chG}));
     for (int c = 0; c < 3; ++c) {
-        m_sigmaT[size_t(c)] = spin(0.0, 1000.0, 1.0, 3, QString(), 0.1);
-        m_sigmaS[size_t(c)] = spin(0.0, 1000.0, 0.8, 3, QString(), 0.1);
+        m_sigmaT[size_t(c)] =
+            spin(0.0, 1000.0, double(defaults.value.sigma_t[c]), 3, QString(), 0.1);
+        m_sigmaS[size_t(c)] =
+            spin(0.0, 1000.0, double(defaults.value.sigma_s[c]), 3, QString(), 0.1);
     }
     form->addRow(tr("σt R G B (mm⁻¹)"), row({m_sigmaT[0], m_sigmaT[1], m_sigmaT[2]}));
     form->addRow(tr("σs′ R G B (mm⁻¹)"), row({m_sigmaS[0], m_sigmaS[1], m_sigmaS[2]}));
@@ -166,7 +168,7 @@ BrushPanel::BrushPanel(Document* doc, Viewport* viewport, QWidget* parent)
             tr("Scattering σs′: the part of σt that is scattered rather than absorbed; it cannot "
                "exceed σt when the brush sets both."));
     }
-    m_g = spin(-double(G_MAX), double(G_MAX), 0.0, 2, QString(), 0.05);
+    m_g = spin(-double(G_MAX), double(G_MAX), double(defaults.value.g[0]), 2, QString(), 0.05);
     form->addRow(tr("g"), m_g);
     m_swatch = new QPushButton(tr("Albedo colour…"));
     m_swatch->setToolTip(

@@ -302,6 +302,12 @@ struct LiveCostTables {
     std::deque<LiveCostTable> all;
     std::atomic<const LiveCostTable*> current{nullptr};
 
+    LiveCostTables() {  // the shipped table until useLiveCosts installs another
+        planner::LiveCostsInUse shipped;
+        shipped.costs = planner::defaultLiveCosts();
+        add(shipped);
+    }
+
     const LiveCostTable& add(const planner::LiveCostsInUse& inUse) {
         const std::lock_guard lock(mutex);
         LiveCostTable& t = all.emplace_back();
@@ -315,13 +321,6 @@ struct LiveCostTables {
 
 LiveCostTables& liveCostTables() {
     static LiveCostTables tables;
-    static const bool shipped = [] {
-        planner::LiveCostsInUse inUse;
-        inUse.costs = planner::defaultLiveCosts();
-        tables.add(inUse);
-        return true;
-    }();
-    (void)shipped;
     return tables;
 }
 

@@ -18,6 +18,17 @@ using detail::sampleComponent;
 using detail::sanitizeVoxel;
 using detail::selectedComponents;
 
+BrushSettings startingBrush() {
+    BrushSettings b;
+    b.radius = 3.f;
+    b.falloff = Falloff::Smooth;
+    b.strength = 0.5f;
+    b.mode = BrushMode::Set;
+    b.channels = ALL_CHANNELS;
+    b.value = {Rgb(1.f), Rgb(0.8f), Rgb(0.f)};
+    return b;
+}
+
 namespace {
 
 constexpr int BRICK = MaterialVolume::BRICK;

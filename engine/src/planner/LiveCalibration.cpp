@@ -39,19 +39,6 @@ constexpr int STROKE_ROWS = 8;
 /// RenderSettings::exposureStops' default (the tone map is part of every frame).
 constexpr float PREVIEW_EXPOSURE_STOPS = 2.f;
 
-/// The Tools dock's brush as the app starts (app/gui/Panels.cpp BrushPanel: radius 3 mm, depth 0,
-/// smooth, strength 0.5, Set σt 1 and σs′ 0.8 mm⁻¹, g 0, every channel) at mouse pressure 1.
-BrushSettings appDefaultBrush() {
-    BrushSettings b;
-    b.radius = 3.f;
-    b.falloff = Falloff::Smooth;
-    b.strength = 0.5f;
-    b.mode = BrushMode::Set;
-    b.channels = ALL_CHANNELS;
-    b.value = {Rgb(1.f), Rgb(0.8f), Rgb(0.f)};
-    return b;
-}
-
 std::string utcNow(const char* format) {
     const std::time_t now = std::time(nullptr);
     std::tm utc{};
@@ -199,7 +186,7 @@ private:
     int m_viewportW, m_viewportH;
     Camera m_pickCamera;
     std::vector<Light> m_lights;
-    BrushSettings m_brush = appDefaultBrush();
+    BrushSettings m_brush = startingBrush();  // the Tools dock's, at mouse pressure 1
     History m_history;
     gpu::ShaderLibrary m_library;
     gpu::SceneRenderer m_renderer;

@@ -15,8 +15,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 namespace lucent::planner {
 
@@ -133,12 +131,10 @@ LiveCostsInUse loadLiveCosts(const std::string& path) {
         " (Edit ▸ Preferences ▸ Calibrate Live Costs, or lucent-cli bench "
         "calibrate); planning with the shipped live costs";
     try {
-        std::ifstream in(path, std::ios::binary);
-        if (!in)
-            LUCENT_THROW(IoError, "cannot read '", path, "'");
-        std::ostringstream text;
-        text << in.rdbuf();
-        const LiveCosts user = parseLiveCosts(text.str(), path);
+        // A regular file of at most 1 MiB (a table is a few kB): a FIFO or a device at the
+        // path must not hang the app's start-up.
+        const LiveCosts user =
+            parseLiveCosts(readInputFile(path, "live costs file", uint64_t(1) << 20), path);
         // The shipped candidates in the shipped order, each with the user's ratio: the planner's
         // candidates stay those of this build, and a file made by another version that lacks
         // one says so instead of leaving a method out of Auto.

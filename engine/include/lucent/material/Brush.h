@@ -67,6 +67,12 @@ struct BrushSettings {
     static constexpr size_t MAX_STAMPS_PER_STROKE = 100000;
 };
 
+/// The brush a painting session starts with: the app's Tools dock shows it at start-up, and the
+/// live-cost calibration (lucent/planner/LiveCalibration.h) strokes with it to time what the
+/// artist's first strokes cost. Radius 3 mm, smooth falloff, strength 0.5, Set σt = 1 mm⁻¹,
+/// σs′ = 0.8 mm⁻¹ and g = 0 on every channel, the default spacing.
+BrushSettings startingBrush();
+
 /// Falloff weight at t = distance / radius; 0 for t ≥ 1. Precondition: t ≥ 0.
 float falloffWeight(Falloff falloff, float t);
 
