@@ -23,7 +23,7 @@ esac
 packages=(build-essential cmake ninja-build pkg-config ccache
     qt6-base-dev qt6-base-dev-tools libqt6opengl6-dev qt6-charts-dev
     libvtk9-dev libopenvdb-dev libopenvdb-tools libboost-iostreams-dev libopenmesh-dev libglm-dev
-    libtbb-dev libepoxy-dev libegl-dev libembree-dev libopenexr-dev libpng-dev zlib1g-dev nlohmann-json3-dev
+    libtbb-dev libepoxy-dev libegl-dev libembree-dev libopenexr-dev libpng-dev zlib1g-dev nlohmann-json3-dev libeigen3-dev
     libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev glslang-tools xvfb xauth clang-format)
 missing=()
 for p in "${packages[@]}"; do

@@ -9,6 +9,8 @@ find_package(PNG REQUIRED)
 # zlib: the mesh importer inflates compressed VTK XML arrays to check them (Debian zlib1g-dev).
 find_package(ZLIB REQUIRED)
 find_package(nlohmann_json 3 REQUIRED)
+# Eigen: the dense linear algebra of the half-space solver (lucent/dipole/HalfSpace.h).
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
 find_package(embree 3 REQUIRED)
 find_package(OpenMesh REQUIRED)
 find_package(PkgConfig REQUIRED)

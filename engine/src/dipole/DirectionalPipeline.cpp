@@ -68,7 +68,7 @@ DirectionalDipoleRenderer::DirectionalDipoleRenderer(const Scene& scene,
     m_impl->sceneCenter = b.center();
     m_impl->sceneRadius = 0.5f * glm::length(b.extent()) + 1.f;
     if (s.energyNormalised)
-        m_impl->energy = DirpoleEnergyTable(double(scene.eta));
+        m_impl->energy = DirpoleEnergyTable(double(scene.eta), s.energyTarget);
 }
 
 DirectionalDipoleRenderer::~DirectionalDipoleRenderer() = default;

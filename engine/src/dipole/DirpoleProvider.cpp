@@ -72,7 +72,8 @@ bool sameAccumulation(const DirpoleSettings& a, const DirpoleSettings& b) {
            a.gbufferShrink == b.gbufferShrink && a.shrink == b.shrink &&
            a.cubemapIntrusion == b.cubemapIntrusion && a.intrusion == b.intrusion &&
            a.shadowBias == b.shadowBias && a.bias == b.bias && a.slopeBias == b.slopeBias &&
-           a.energyNormalised == b.energyNormalised && a.seed == b.seed;
+           a.energyNormalised == b.energyNormalised && a.energyTarget == b.energyTarget &&
+           a.seed == b.seed;
 }
 
 /// Words of the frame statistics SSBO (DirpoleFrameStats in dirpole_common.glsl).
@@ -129,6 +130,7 @@ struct DirpoleSubsurfaceProvider::Impl {
     /// DirpoleEnergyTable nodes for `energyEta` (uniform in s = √(1 − α′)), as uniforms.
     std::vector<float> energyNodes;
     float energyEta = 0.f;
+    EnergyTarget energyTarget = EnergyTarget::ExactHalfSpace;
 
     // What the G-buffers and the accumulation were computed for.
     bool needGeometry = true;      ///< re-render the light and cube G-buffers
@@ -396,16 +398,19 @@ struct DirpoleSubsurfaceProvider::Impl {
         glUniform3f(p.uniformLocation("u_boundary"), float(bd.fdr), float(bd.c1), float(bd.c2));
         glUniform3f(p.uniformLocation("u_moments"), float(bd.c1), float(bd.c2),
                     float(fresnelMoment(1, 1.0 / settings.eta)));
-        if (settings.energyNormalised && energyEta != settings.eta) {
+        if (settings.energyNormalised &&
+            (energyEta != settings.eta || energyTarget != settings.energyTarget)) {
             // DirpoleEnergyTable::scale resampled at ENERGY_NODES nodes uniform in
             // s = √(1 − α′) (smooth in s; linear interpolation error < 1e-4 relative).
-            const DirpoleEnergyTable table(settings.eta);  // ≈ 40 ms, once per η
+            // ≈ 150 ms, once per η and target
+            const DirpoleEnergyTable table(settings.eta, settings.energyTarget);
             energyNodes.resize(ENERGY_NODES);
             for (int i = 0; i < ENERGY_NODES; ++i) {
                 const double si = double(i) / (ENERGY_NODES - 1);
                 energyNodes[size_t(i)] = float(table.scale(1.0 - si * si));
             }
             energyEta = settings.eta;
+            energyTarget = settings.energyTarget;
         }
         glUniform1i(p.uniformLocation("u_energyNormalised"), settings.energyNormalised ? 1 : 0);
         if (settings.energyNormalised)

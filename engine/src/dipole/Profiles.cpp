@@ -3,12 +3,13 @@
 /// @brief Dipole, better-dipole and directional-dipole profiles (see Profiles.h for sources).
 
 #include <lucent/core/Fresnel.h>
+#include <lucent/dipole/HalfSpace.h>
 #include <lucent/dipole/Profiles.h>
 
 #include <lucent/core/Error.h>
+#include <lucent/core/Quadrature.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 
 namespace lucent::dipole {
@@ -17,39 +18,17 @@ namespace {
 constexpr double PI_D = 3.14159265358979323846;
 constexpr double SIGMA_LIMIT = 1e6;  // mm⁻¹, the project's largest accepted coefficient
 
-/// Gauss–Legendre nodes/weights on [−1, 1] (Newton on P_n, Golub–Welsch-free classic).
+/// A Gauss–Legendre rule of N nodes (lucent/core/Quadrature.h) with ∫_a^b.
 template <int N>
 struct GaussLegendre {
-    std::array<double, N> x{}, w{};
-    GaussLegendre() {
-        for (int i = 0; i < (N + 1) / 2; ++i) {
-            double z = std::cos(PI_D * (i + 0.75) / (N + 0.5));
-            double dp = 0.0;
-            for (int it = 0; it < 100; ++it) {
-                double p0 = 1.0, p1 = 0.0;
-                for (int k = 1; k <= N; ++k) {
-                    const double p2 = p1;
-                    p1 = p0;
-                    p0 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p2) / k;
-                }
-                dp = N * (z * p0 - p1) / (z * z - 1.0);
-                const double dz = p0 / dp;
-                z -= dz;
-                if (std::abs(dz) < 1e-15)
-                    break;
-            }
-            x[i] = -z;
-            x[N - 1 - i] = z;
-            w[i] = w[N - 1 - i] = 2.0 / ((1.0 - z * z) * dp * dp);
-        }
-    }
+    QuadratureRule rule = gaussLegendre(N);
     /// ∫_a^b f.
     template <typename F>
     double integrate(double a, double b, const F& f) const {
         const double h = 0.5 * (b - a), m = 0.5 * (a + b);
         double s = 0.0;
         for (int i = 0; i < N; ++i)
-            s += w[i] * f(m + h * x[i]);
+            s += rule.w[size_t(i)] * f(m + h * rule.x[size_t(i)]);
         return s * h;
     }
 };
@@ -365,7 +344,19 @@ double integrateProfile(const DirectionalDipole& p) {
         &p, p.D());
 }
 
-double dirpoleEnergyScale(double alphaPrime, double eta) {
+EnergyTarget parseEnergyTarget(const std::string& name) {
+    if (name == "exact")
+        return EnergyTarget::ExactHalfSpace;
+    if (name == "better-dipole")
+        return EnergyTarget::BetterDipole;
+    throw ValueError("unknown energy target '" + name + "' (use exact or better-dipole)");
+}
+
+const char* energyTargetName(EnergyTarget t) {
+    return t == EnergyTarget::ExactHalfSpace ? "exact" : "better-dipole";
+}
+
+double dirpoleEnergyScale(double alphaPrime, double eta, EnergyTarget target) {
     LUCENT_CHECK(std::isfinite(alphaPrime) && alphaPrime >= 0.0 && alphaPrime <= 1.0,
                  "dirpoleEnergyScale: alpha' must be in [0, 1] (got ", alphaPrime, ")");
     LUCENT_CHECK(std::isfinite(eta) && eta >= 1.0 && eta <= 3.0,
@@ -373,36 +364,41 @@ double dirpoleEnergyScale(double alphaPrime, double eta) {
     // σt′ = 1 mm⁻¹: both totals are dimensionless functions of α′ and η only.
     const double a = std::max(alphaPrime, DIRPOLE_MIN_ALPHA);
     const ScalarMedium med{1.0 - a, a, eta};
-    // ρ_better: d'Eon 2012 closed form (§1 of docs/methods/dipole.md); ρ_dirpole: quadrature of
-    // the normal-incidence profile R(r) = S_d·4πC_φ(1/η) (Frisvad et al. 2014).
-    const double better = DipoleProfile::make(Model::BetterDipole, med).totalReflectance();
+    // ρ_dirpole: quadrature of the normal-incidence profile R(r) = S_d·4πC_φ(1/η) (Frisvad et
+    // al. 2014); ρ_target: the exact half-space (adding–doubling) or d'Eon 2012's closed form
+    // (§1 of docs/methods/dipole.md).
+    const double wanted = target == EnergyTarget::ExactHalfSpace
+                              ? halfSpaceReflectance(a, eta)
+                              : DipoleProfile::make(Model::BetterDipole, med).totalReflectance();
     const double dirpole = integrateProfile(DirectionalDipole(med.sigma_a, med.sigma_s, eta));
-    LUCENT_ASSERT(better > 0.0 && dirpole > 0.0);
-    return better / dirpole;
+    LUCENT_ASSERT(wanted > 0.0 && dirpole > 0.0);
+    return wanted / dirpole;
 }
 
 namespace {
 // DirpoleEnergyTable nodes: α′ ∈ [½, 1] uniform in s = √(1 − α′) (the totals are smooth in s,
 // e^{−√(3(1−α′))} terms), α′ ∈ [DIRPOLE_MIN_ALPHA, ½] uniform in log α′ (the scale falls
 // like α′ there); the table stores log s(α′), interpolated linearly in each variable.
-constexpr int HALF_NODES = DirpoleEnergyTable::NODES / 2;
+constexpr int LOW_NODES = DirpoleEnergyTable::LOW_ALBEDO_NODES;
 double tableAlpha(int i) {
-    if (i < HALF_NODES) {  // low albedos, log-spaced
-        const double t = double(i) / HALF_NODES;
+    if (i < LOW_NODES) {  // low albedos, log-spaced
+        const double t = double(i) / LOW_NODES;
         return std::exp(std::log(DIRPOLE_MIN_ALPHA) * (1.0 - t) + std::log(0.5) * t);
     }
     const double s = std::sqrt(0.5) *
-                     (1.0 - double(i - HALF_NODES) / (DirpoleEnergyTable::NODES - 1 - HALF_NODES));
+                     (1.0 - double(i - LOW_NODES) / (DirpoleEnergyTable::NODES - 1 - LOW_NODES));
     return 1.0 - s * s;
 }
 }  // namespace
 
-DirpoleEnergyTable::DirpoleEnergyTable(double eta) : m_eta(eta) {
+DirpoleEnergyTable::DirpoleEnergyTable(double eta, EnergyTarget target)
+    : m_eta(eta), m_target(target) {
     LUCENT_CHECK(std::isfinite(eta) && eta >= 1.0 && eta <= 3.0,
                  "DirpoleEnergyTable: eta must be in [1, 3] (got ", eta, ")");
     m_scale.resize(NODES);
     for (int i = 0; i < NODES; ++i)
-        m_scale[size_t(i)] = std::log(dirpoleEnergyScale(std::clamp(tableAlpha(i), 0.0, 1.0), eta));
+        m_scale[size_t(i)] =
+            std::log(dirpoleEnergyScale(std::clamp(tableAlpha(i), 0.0, 1.0), eta, target));
 }
 
 double DirpoleEnergyTable::scale(double alphaPrime) const {
@@ -412,10 +408,10 @@ double DirpoleEnergyTable::scale(double alphaPrime) const {
     double x;  // continuous node index
     if (a < 0.5) {
         x = (std::log(a) - std::log(DIRPOLE_MIN_ALPHA)) /
-            (std::log(0.5) - std::log(DIRPOLE_MIN_ALPHA)) * HALF_NODES;
+            (std::log(0.5) - std::log(DIRPOLE_MIN_ALPHA)) * LOW_NODES;
     } else {
         const double s = std::sqrt(1.0 - a);
-        x = HALF_NODES + (1.0 - s / std::sqrt(0.5)) * (NODES - 1 - HALF_NODES);
+        x = LOW_NODES + (1.0 - s / std::sqrt(0.5)) * (NODES - 1 - LOW_NODES);
     }
     const int i = std::clamp(int(x), 0, NODES - 2);
     const double t = std::clamp(x - i, 0.0, 1.0);

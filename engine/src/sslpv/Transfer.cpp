@@ -5,6 +5,7 @@
 #include <lucent/sslpv/Transfer.h>
 
 #include <lucent/core/Error.h>
+#include <lucent/core/Quadrature.h>
 #include <lucent/core/SphericalHarmonics.h>
 
 #include <cmath>
@@ -32,32 +33,6 @@ void shEvalD(const double w[3], double* out) {
     out[8] = k22 * (x * x - y * y);
 }
 
-/// Gauss–Legendre nodes/weights on [−1, 1] by Newton iteration on P_n (Numerical Recipes §4.6).
-void gaussLegendre(int n, std::vector<double>& x, std::vector<double>& w) {
-    x.assign(n, 0.0);
-    w.assign(n, 0.0);
-    for (int i = 0; i < (n + 1) / 2; ++i) {
-        double z = std::cos(M_PI * (i + 0.75) / (n + 0.5));
-        double pp = 0.0;
-        for (int it = 0; it < 100; ++it) {
-            double p1 = 1.0, p2 = 0.0;
-            for (int j = 1; j <= n; ++j) {
-                const double p3 = p2;
-                p2 = p1;
-                p1 = ((2.0 * j - 1.0) * z * p2 - (j - 1.0) * p3) / j;
-            }
-            pp = n * (z * p1 - p2) / (z * z - 1.0);
-            const double dz = p1 / pp;
-            z -= dz;
-            if (std::abs(dz) < 1e-15)
-                break;
-        }
-        x[i] = -z;
-        x[n - 1 - i] = z;
-        w[i] = w[n - 1 - i] = 2.0 / ((1.0 - z * z) * pp * pp);
-    }
-}
-
 }  // namespace
 
 PropagationMatrix computePropagationMatrix(int order, int axis, int sign, int nodes) {
@@ -67,8 +42,9 @@ PropagationMatrix computePropagationMatrix(int order, int axis, int sign, int no
     LUCENT_CHECK(nodes >= 2 && nodes <= 512, "SSLPV: quadrature nodes must be in [2, 512], got ",
                  nodes);
     const int count = shCount(order);
-    std::vector<double> gx, gw;
-    gaussLegendre(nodes, gx, gw);
+    const QuadratureRule rule = gaussLegendre(nodes);
+    const std::vector<double>& gx = rule.x;
+    const std::vector<double>& gw = rule.w;
 
     // Destination cell d: unit cube centred at the origin; source centre s = sign·e_axis.
     double s[3] = {0.0, 0.0, 0.0};

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include <lucent/core/Error.h>
 #include <lucent/core/Fresnel.h>
+#include <lucent/dipole/HalfSpace.h>
 #include <lucent/dipole/Profiles.h>
 
 #include <gtest/gtest.h>
@@ -298,40 +299,52 @@ TEST(Profiles, BadInputIsAClearError) {
 // ---------------------------------------------------------------------------------------------
 // Energy-normalised directional dipole (docs/methods/dipole.md §1)
 
-TEST(DirpoleEnergy, NormalisedTotalEqualsBetterDipole) {
+TEST(DirpoleEnergy, NormalisedTotalEqualsItsTarget) {
     // The scale is computed at σt′ = 1 mm⁻¹; applied to media of other σt′ it must still give
-    // ρ_better, since both totals depend on α′ and η only. Tolerance 1e-4: the quadrature's
-    // agreement with closed forms (§1, "Quadrature"); with the table, + 5e-4 interpolation.
-    for (double eta : {1.0, 1.3, 1.5, 2.5}) {
-        const DirpoleEnergyTable table(eta);
-        for (double a : {0.02, 0.3, 0.5, 0.8, 0.9, 0.99, 1.0}) {
-            const double sigmaT = 7.3;  // mm⁻¹
-            const double ss = a * sigmaT, sa = sigmaT - ss;
-            const double better = totalReflectance(Model::BetterDipole, {sa, ss, eta});
-            const double exact =
-                integrateProfile(DirectionalDipole(sa, ss, eta, dirpoleEnergyScale(a, eta)));
-            EXPECT_NEAR(exact, better, 1e-4 * better) << "alpha' " << a << " eta " << eta;
-            const double tabulated =
-                integrateProfile(DirectionalDipole(sa, ss, eta, table.scale(a)));
-            EXPECT_NEAR(tabulated, better, 6e-4 * better) << "alpha' " << a << " eta " << eta;
+    // the target's total (the exact half-space's or the better dipole's), since both totals
+    // depend on α′ and η only. Tolerance 1e-4: the quadrature's agreement with closed forms
+    // (§1, "Quadrature"); with the table, + 5e-4 interpolation.
+    for (EnergyTarget target : {EnergyTarget::ExactHalfSpace, EnergyTarget::BetterDipole})
+        for (double eta : {1.0, 1.3, 1.5, 2.5}) {
+            const DirpoleEnergyTable table(eta, target);
+            for (double a : {0.02, 0.3, 0.5, 0.8, 0.9, 0.99, 1.0}) {
+                const double sigmaT = 7.3;  // mm⁻¹
+                const double ss = a * sigmaT, sa = sigmaT - ss;
+                const double wanted = target == EnergyTarget::ExactHalfSpace
+                                          ? halfSpaceReflectance(a, eta)
+                                          : totalReflectance(Model::BetterDipole, {sa, ss, eta});
+                const double normalised = integrateProfile(
+                    DirectionalDipole(sa, ss, eta, dirpoleEnergyScale(a, eta, target)));
+                EXPECT_NEAR(normalised, wanted, 1e-4 * wanted)
+                    << energyTargetName(target) << " alpha' " << a << " eta " << eta;
+                const double tabulated =
+                    integrateProfile(DirectionalDipole(sa, ss, eta, table.scale(a)));
+                EXPECT_NEAR(tabulated, wanted, 6e-4 * wanted)
+                    << energyTargetName(target) << " alpha' " << a << " eta " << eta;
+            }
         }
-    }
+    EXPECT_EQ(parseEnergyTarget("exact"), EnergyTarget::ExactHalfSpace);
+    EXPECT_EQ(parseEnergyTarget("better-dipole"), EnergyTarget::BetterDipole);
+    EXPECT_THROW(parseEnergyTarget("published"), ValueError);
 }
 
 TEST(DirpoleEnergy, TableMatchesExactScaleBetweenNodes) {
-    // Dense sweep (between and on nodes, both segments of the table).
-    double worst = 0.0;
-    for (double eta : {1.0, 1.4, 2.5}) {
-        const DirpoleEnergyTable table(eta);
-        for (int i = 0; i <= 200; ++i) {
-            const double a = i < 100 ? std::exp(std::log(1e-3) * (1.0 - (i + 0.37) / 100.0))
-                                     : 1.0 - std::pow((200 - i + 0.37) / 100.0, 2) * 0.5;
-            const double exact = dirpoleEnergyScale(std::clamp(a, 0.0, 1.0), eta);
-            worst = std::max(worst, std::abs(table.scale(a) / exact - 1.0));
+    // Dense sweep (between and on nodes, both segments of the table), for both targets.
+    for (EnergyTarget target : {EnergyTarget::ExactHalfSpace, EnergyTarget::BetterDipole}) {
+        double worst = 0.0;
+        for (double eta : {1.0, 1.4, 2.5}) {
+            const DirpoleEnergyTable table(eta, target);
+            for (int i = 0; i <= 200; ++i) {
+                const double a = i < 100 ? std::exp(std::log(1e-3) * (1.0 - (i + 0.37) / 100.0))
+                                         : 1.0 - std::pow((200 - i + 0.37) / 100.0, 2) * 0.5;
+                const double exact = dirpoleEnergyScale(std::clamp(a, 0.0, 1.0), eta, target);
+                worst = std::max(worst, std::abs(table.scale(a) / exact - 1.0));
+            }
         }
+        std::printf("dirpole energy table (%s): worst interpolation error %.2e\n",
+                    energyTargetName(target), worst);
+        EXPECT_LT(worst, 5e-4);
     }
-    std::printf("dirpole energy table: worst interpolation error %.2e\n", worst);
-    EXPECT_LT(worst, 5e-4);
 }
 
 TEST(DirpoleEnergy, ScaleIsFiniteForAllAlbedosAndIndices) {
@@ -345,8 +358,10 @@ TEST(DirpoleEnergy, ScaleIsFiniteForAllAlbedosAndIndices) {
         }
     std::printf("dirpole energy scale over alpha' in [0,1], eta in [1,2.5]: [%.4f, %.4f]\n", lo,
                 hi);
-    // The published total at σa = 0, η = 1 is 1.3395 (§1): the scale there is its inverse.
+    // The published total at σa = 0, η = 1 is 1.3395 (§1); both targets are 1 there (no
+    // absorption: all light returns), so the scale is its inverse.
     EXPECT_NEAR(dirpoleEnergyScale(1.0, 1.0), 1.0 / 1.3395, 1e-3);
+    EXPECT_NEAR(dirpoleEnergyScale(1.0, 1.0, EnergyTarget::BetterDipole), 1.0 / 1.3395, 1e-3);
     EXPECT_THROW(dirpoleEnergyScale(-0.1, 1.3), ValueError);
     EXPECT_THROW(dirpoleEnergyScale(1.1, 1.3), ValueError);
     EXPECT_THROW(dirpoleEnergyScale(NAN, 1.3), ValueError);

@@ -15,6 +15,7 @@
 
 #include <lucent/core/Image.h>
 #include <lucent/dipole/ImageSpace.h>
+#include <lucent/dipole/Profiles.h>
 #include <lucent/scene/Scene.h>
 
 #include <memory>
@@ -27,9 +28,10 @@ struct DirectionalSettings {
     float shrink = 0.05f;        ///< ε_g of the dirpole thesis §4.3.1, mm
     uint32_t seed = 1;
     /// Scale S_d per channel by DirpoleEnergyTable::scale(α′) so that its normal-incidence
-    /// total equals the better dipole's ρ(α′, η) (docs/methods/dipole.md §1); false: the
+    /// total equals the energy target's ρ(α′, η) (docs/methods/dipole.md §1); false: the
     /// published model (total 1.34 at σa = 0, η = 1).
     bool energyNormalised = true;
+    EnergyTarget energyTarget = EnergyTarget::ExactHalfSpace;  ///< when energyNormalised
 };
 
 class DirectionalDipoleRenderer {

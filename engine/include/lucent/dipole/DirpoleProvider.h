@@ -52,6 +52,7 @@
 /// Units: mm, mm⁻¹, irradiance W/mm², intensity W/sr, radiance W/(mm²·sr).
 
 #include <lucent/dipole/DipoleProvider.h>
+#include <lucent/dipole/Profiles.h>
 #include <lucent/gpu/GpuTimer.h>
 #include <lucent/gpu/SceneRenderer.h>
 
@@ -89,9 +90,10 @@ struct DirpoleSettings {
     /// more than 84° never count), [0, 64].
     float slopeBias = 1.f;
     /// Scale S_d per channel by DirpoleEnergyTable::scale(α′) (normal-incidence total = the
-    /// better dipole's ρ(α′, η), docs/methods/dipole.md §1), as DirectionalSettings; false: the
+    /// energy target's ρ(α′, η), docs/methods/dipole.md §1), as DirectionalSettings; false: the
     /// published model.
     bool energyNormalised = true;
+    EnergyTarget energyTarget = EnergyTarget::ExactHalfSpace;  ///< when energyNormalised
     uint32_t seed = 1;  ///< sample sequence (per texel Cranley–Patterson offsets)
     /// Most texel-samples a frame adds (Σ over the texels it samples of k × lights), ≥ 0;
     /// 0 = unlimited. The frame's k = clamp(budget / (texels × lights), 1, samplesPerFrame).

@@ -166,35 +166,55 @@ private:
     double m_alphaP = 0.0;
 };
 
-/// Energy normalisation of the directional dipole (docs/methods/dipole.md §1, "Energy-normalised
-/// directional dipole"): the factor s(α′, η) = ρ_better(α′, η) / ρ_dirpole(α′, η) that makes
-/// the normal-incidence total ∫ R dA of the directional dipole equal the better dipole's closed
-/// form (d'Eon 2012). Both totals depend on α′ and η only (every length scales with 1/σt′), so
-/// the factor is computed once per (α′, η) at σt′ = 1 mm⁻¹ (quadrature of the dirpole, ≈ 0.5 ms).
-/// Below α′ = DIRPOLE_MIN_ALPHA both totals vanish (as α′²) and the factor is held at its value
-/// there. @param alphaPrime reduced albedo, [0, 1]; @param eta relative index, [1, 3].
+/// What the energy-normalised directional dipole's normal-incidence total ∫ R dA is made equal
+/// to (docs/methods/dipole.md §1, "Energy-normalised directional dipole").
+enum class EnergyTarget {
+    /// The exact total of an isotropically scattering half-space of albedo α′ behind the
+    /// smooth boundary (transport, not diffusion: halfSpaceReflectance, lucent/dipole/
+    /// HalfSpace.h). The default: the diffusion totals fall below it as α′ falls (the better
+    /// dipole's is 0.96 / 0.91 / 0.90 of it at skin1's α′, η 1.3).
+    ExactHalfSpace,
+    /// d'Eon 2012's closed form for the better dipole (the normalisation before 2026-12-04).
+    BetterDipole,
+};
+/// "exact" or "better-dipole". @throw ValueError naming the accepted values.
+EnergyTarget parseEnergyTarget(const std::string& name);
+const char* energyTargetName(EnergyTarget t);
+
+/// Energy normalisation of the directional dipole: the factor s(α′, η) = ρ_target(α′, η) /
+/// ρ_dirpole(α′, η) that makes the normal-incidence total ∫ R dA of the directional dipole equal
+/// the target's (EnergyTarget). Both totals depend on α′ and η only (every length scales with
+/// 1/σt′), so the factor is computed once per (α′, η) at σt′ = 1 mm⁻¹ (quadrature of the
+/// dirpole, ≈ 0.5 ms; the exact half-space, ≈ 0.25 ms). Below α′ = DIRPOLE_MIN_ALPHA the totals
+/// vanish (the diffusion ones as α′²) and the factor is held at its value there.
+/// @param alphaPrime reduced albedo, [0, 1]; @param eta relative index, [1, 3].
 /// @throw ValueError outside those ranges.
-double dirpoleEnergyScale(double alphaPrime, double eta);
+double dirpoleEnergyScale(double alphaPrime, double eta,
+                          EnergyTarget target = EnergyTarget::ExactHalfSpace);
 /// Smallest α′ at which dirpoleEnergyScale() is evaluated (below it the value is held).
 constexpr double DIRPOLE_MIN_ALPHA = 1e-3;
 
-/// dirpoleEnergyScale(α′, η) tabulated for one η: NODES nodes, half uniform in log α′ over
-/// [DIRPOLE_MIN_ALPHA, ½] (the scale falls like α′ there), half uniform in s = √(1 − α′) over
-/// [½, 1] (the totals are smooth in s); log s(α′) interpolated linearly. Built once per object
-/// (≈ 50 ms); lookups O(1). Interpolation error ≤ 5·10⁻⁴ relative (test
-/// `DirpoleEnergy.TableMatchesExactScaleBetweenNodes`).
+/// dirpoleEnergyScale(α′, η, target) tabulated for one η: LOW_ALBEDO_NODES nodes uniform in
+/// log α′ over [DIRPOLE_MIN_ALPHA, ½] (the scale falls like α′ there), the rest uniform in
+/// s = √(1 − α′) over [½, 1] (the totals are smooth in s, but the exact one falls steeply from
+/// 1 at α′ = 1 when η is high: ≈ 1 − 18 s at η 2.5, hence twice the nodes there); log s(α′)
+/// interpolated linearly. Built once per object (≈ 150 ms); lookups O(1). Interpolation error ≤
+/// 5·10⁻⁴ relative (test `DirpoleEnergy.TableMatchesExactScaleBetweenNodes`).
 class DirpoleEnergyTable {
 public:
-    static constexpr int NODES = 129;
+    static constexpr int NODES = 193;
+    static constexpr int LOW_ALBEDO_NODES = 64;
     DirpoleEnergyTable() = default;
     /// @throw ValueError for η ∉ [1, 3].
-    explicit DirpoleEnergyTable(double eta);
+    explicit DirpoleEnergyTable(double eta, EnergyTarget target = EnergyTarget::ExactHalfSpace);
     /// s(α′) for α′ ∈ [0, 1] (clamped). 1 for a default-constructed table.
     [[nodiscard]] double scale(double alphaPrime) const;
     [[nodiscard]] double eta() const { return m_eta; }
+    [[nodiscard]] EnergyTarget target() const { return m_target; }
 
 private:
     double m_eta = 1.0;
+    EnergyTarget m_target = EnergyTarget::ExactHalfSpace;
     std::vector<double> m_scale;  // log s(α′) at the nodes (Profiles.cpp, tableAlpha)
 };
 

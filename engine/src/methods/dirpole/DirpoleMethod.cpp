@@ -34,6 +34,7 @@ public:
         ds.samplesPerPass = spp;
         ds.seed = uint32_t(params().getInt("seed"));
         ds.energyNormalised = params().getBool("dirpole-normalise");
+        ds.energyTarget = dipole::parseEnergyTarget(params().getChoice("dirpole-energy"));
         // The CPU pipeline handles directional lights only: drop the others, loudly.
         Scene directional = scene;
         directional.lights.clear();
@@ -73,12 +74,14 @@ private:
             return;  // renderCpu reads the rest
         readSampleParams(p);
         m_normalised = p.getBool("dirpole-normalise");
+        m_energyTarget = dipole::parseEnergyTarget(p.getChoice("dirpole-energy"));
         if (m_provider && m_settingsSet)
             applySettings();
     }
 
     void fillSettings(dipole::DirpoleSettings& ds) const override {
         ds.energyNormalised = m_normalised;
+        ds.energyTarget = m_energyTarget;
         // Offline, the frame budgets are off: they bound interactive frames only, and the image
         // after N samples per texel is the same either way.
         if (!isLive())
@@ -86,6 +89,7 @@ private:
     }
 
     bool m_normalised = true;
+    dipole::EnergyTarget m_energyTarget = dipole::EnergyTarget::ExactHalfSpace;
     Stats m_cpuStats;
 };
 
@@ -123,17 +127,28 @@ MethodEntry dirpoleMethod() {
         {"seed", ParamType::Int, "sample sequence", 0, 1 << 30, {}, "1"},
         {"dirpole-normalise",
          ParamType::Bool,
-         "S_d scaled to the better dipole's normal-incidence total (docs/methods/dipole.md "
+         "S_d scaled to the normal-incidence total of dirpole-energy (docs/methods/dipole.md "
          "section 1); off: the published model",
          0,
          0,
          {},
          "on"},
+        {"dirpole-energy",
+         ParamType::Choice,
+         "the total S_d is normalised to: exact (the half-space's transport solution, "
+         "adding-doubling) or better-dipole (d'Eon 2012's closed form)",
+         0,
+         0,
+         {"exact", "better-dipole"},
+         "exact"},
     };
-    // Default: the GPU pipeline, energy-normalised; raw: the published S_d; cpu: the CPU
-    // pipeline (directional lights only).
-    i.variants = {{"raw", ParamSet::fromAssignments({"dirpole-normalise=off"}), Backend::Auto},
-                  {"cpu", {}, Backend::Cpu}};
+    // Default: the GPU pipeline, energy-normalised to the exact half-space; better: normalised
+    // to the better dipole (the default before 2026-12-04); raw: the published S_d; cpu: the
+    // CPU pipeline (directional lights only).
+    i.variants = {
+        {"raw", ParamSet::fromAssignments({"dirpole-normalise=off"}), Backend::Auto},
+        {"better", ParamSet::fromAssignments({"dirpole-energy=better-dipole"}), Backend::Auto},
+        {"cpu", {}, Backend::Cpu}};
     for (int spp : {8, 32, 128})
         i.quality.push_back({std::to_string(spp) + " spp",
                              ParamSet::fromAssignments({"spp=" + std::to_string(spp)}),

@@ -1,0 +1,34 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief The exact total diffuse reflectance of a homogeneous, isotropically scattering
+/// half-space behind a smooth dielectric boundary: plane-parallel radiative transfer solved by
+/// adding–doubling (van de Hulst 1980, "Multiple Light Scattering", Vol. 1 §5; Prahl 1995,
+/// "The adding–doubling method", in Welch & van Gemert, "Optical-Thermal Response of
+/// Laser-Irradiated Tissue", ch. 5). No diffusion approximation: this is the transport answer a
+/// diffusion profile's total should have, and it shares no code with the path tracer.
+///
+///     double rho = halfSpaceReflectance(/*albedo=*/0.84, /*eta=*/1.3);   // 0.213
+///
+/// Uses: the directional dipole's energy normalisation (DirpoleEnergyTable, Profiles.h) and the
+/// tests' closed-form checks (Chandrasekhar's H-function at η = 1).
+
+namespace lucent::dipole {
+
+/// Quadrature nodes per interval of the polar cosine (two intervals, split at the critical
+/// angle, when η > 1): 8 agree with 64 to 2.7·10⁻⁵ over η 1–3, albedo 0.05–0.9999, μ₀ 0.05–1
+/// (test HalfSpace.NodeCountConverges), at 0.24 ms a solve.
+constexpr int HALF_SPACE_NODES = 8;
+
+/// Exitance leaving the boundary per unit flux that has entered it, for a collimated beam
+/// travelling into the medium at cosine `mu0` to the inward normal (normal incidence: 1). The
+/// medium scatters isotropically with single-scattering albedo `albedo` (for a diffusion model,
+/// its reduced albedo α′ = σs′/σt′); its boundary is smooth with relative index η = n_medium /
+/// n_outside, so light inside meets the exact Fresnel reflectance, total internal reflection
+/// included. Dimensionless: the answer depends on albedo, η and μ₀ only (lengths scale with
+/// 1/σt).
+/// @throw ValueError for albedo ∉ [0, 1], η ∉ [1, 3], μ₀ ∉ (0, 1] or nodes ∉ [2, 256].
+double halfSpaceReflectance(double albedo, double eta, double mu0 = 1.0,
+                            int nodes = HALF_SPACE_NODES);
+
+}  // namespace lucent::dipole
