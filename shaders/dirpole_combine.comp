@@ -5,7 +5,9 @@
 //   L(x_o) = T₂₁(ω_o) · Σ_f V_f C̄^f(x_proj^f) / Σ_f V_f,
 // C̄^f the running mean (rgb / sample count a of the gather pass's accumulator; a face texel
 // without samples does not count) interpolated bilinearly between the texels of x_o's surface,
-// T₂₁ = 1 − F_r(η, n_o·ω_o) (Fresnel).
+// T₂₁ = 1 − F_r(η, n_o·ω_o) (Fresnel), and with the exact energy target the exit-angle
+// correction c(α′, t) of x_o's material per channel (lucent::dipole::DirpoleExitTable: the
+// half-space's angular distribution of the light leaving, t = n_o·ω_o).
 // Seed 001 §4.3.2 (cube-map intrusion): faces are looked up at x′_o = x_o − ε_c n_o.
 // Seed 001 §4.3.3 (shadow bias): the face's stored window depth z_tex becomes a world distance
 // along the face axis, z = z_near + (z_far − z_near) z_tex (the §4.3.3 formula for an
@@ -15,6 +17,7 @@
 // of the surface at less than 84° (n_o·(−axis) ≥ 0.1; an edge-on face holds other surfaces).
 #include "dipole_fresnel.glsl"
 #include "dirpole_common.glsl"
+#include "shared/DirpoleShared.h"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -24,6 +27,26 @@ layout(binding = 2) uniform sampler2DArray u_faceDepth;  // window depth per fac
 layout(binding = 3) uniform sampler2DArray u_accum;      // rgb Σ C^f over a samples
 
 layout(rgba32f, binding = 0) writeonly uniform image2D u_target;
+
+// DirpoleExitTable values: row-major [albedo node][cosine node] (shared/DirpoleShared.h).
+layout(std430, binding = LUCENT_DIRPOLE_BINDING_EXIT_TABLE) readonly buffer DirpoleExitValues {
+    float b_exit[];
+};
+uniform int u_exitCorrection;
+
+// c(α′, t), bilinear between the nodes as DirpoleExitTable::correction.
+float exitCorrection(float alphaP, float t) {
+    const int A = LUCENT_DIRPOLE_EXIT_ALBEDO_NODES, C = LUCENT_DIRPOLE_EXIT_COSINE_NODES;
+    float s = sqrt(clamp(1.0 - alphaP, 0.0, 1.0)) * float(A - 1);
+    int i = min(int(s), A - 2);
+    float fs = s - float(i);
+    float u = clamp(t, 0.0, 1.0) * float(C - 1);
+    int j = min(int(u), C - 2);
+    float fu = u - float(j);
+    float lo = mix(b_exit[i * C + j], b_exit[i * C + j + 1], fu);
+    float hi = mix(b_exit[(i + 1) * C + j], b_exit[(i + 1) * C + j + 1], fu);
+    return mix(lo, hi, fs);
+}
 
 uniform ivec2 u_size;
 uniform int u_faceSize;
@@ -98,6 +121,13 @@ void main() {
     }
     vec3 C = visible > 0 ? sum / float(visible) : vec3(0.0);
     vec3 toEye = u_ortho != 0 ? -normalize(u_viewDir) : normalize(u_eye - xo);
-    float T21 = 1.0 - dipoleFresnelReflectance(max(0.0, dot(no, toEye)), u_eta);
+    float cosO = max(0.0, dot(no, toEye));
+    float T21 = 1.0 - dipoleFresnelReflectance(cosO, u_eta);
+    if (u_exitCorrection != 0) {
+        vec3 sigT, sigS;
+        if (materialInside(xo, no, sigT, sigS))
+            for (int c = 0; c < 3; ++c)
+                if (sigS[c] > 0.0) C[c] *= exitCorrection(sigS[c] / max(sigT[c], sigS[c]), cosO);
+    }
     imageStore(u_target, xy, vec4(C * T21, 0.0));
 }

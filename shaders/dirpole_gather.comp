@@ -36,6 +36,7 @@
 #include "common/hash.glsl"
 #include "common/lighting.glsl"
 #include "dipole_fresnel.glsl"
+#include "shared/DirpoleShared.h"
 #include "dipole_profiles.glsl"
 #include "dirpole_common.glsl"
 
@@ -67,7 +68,7 @@ uniform float u_shrink;   // ε_g (mm), 0 when the fix is off
 uniform uint u_seed;
 // Energy-normalised S_d (DirpoleSettings::energyNormalised): lucent::DirpoleEnergyTable::scale
 // sampled at nodes uniform in s = √(1 − α′), interpolated linearly in s.
-const int ENERGY_NODES = 256;  // DirpoleProvider.cpp ENERGY_NODES
+const int ENERGY_NODES = LUCENT_DIRPOLE_ENERGY_NODES;
 uniform int u_energyNormalised;
 uniform float u_energyScale[ENERGY_NODES];
 

@@ -283,16 +283,26 @@ int referenceError(float eta) {
         "%+.1f%%, %+.1f%%)\n",
         "dirpole", dir.r, dir.g, dir.b, 100.f * (dir.r / ptMean.r - 1.f),
         100.f * (dir.g / ptMean.g - 1.f), 100.f * (dir.b / ptMean.b - 1.f));
-    // Energy-normalised directional dipole (the renderers' default, docs/methods/dipole.md §1):
-    // S_d × dirpoleEnergyScale(α′, η), α′ = σs′/σt′ (g = 0 here, so σs′ = σs).
-    Rgb dirN;
-    for (int c = 0; c < 3; ++c)
-        dirN[c] = dir[c] * float(dirpoleEnergyScale(double(m.sigma_s[c] / m.sigma_t[c]), eta));
-    std::printf(
-        "%-14s normalised:   L = (%.5f, %.5f, %.5f), relative error vs reference (%+.1f%%, "
-        "%+.1f%%, %+.1f%%)\n",
-        "dirpole", dirN.r, dirN.g, dirN.b, 100.f * (dirN.r / ptMean.r - 1.f),
-        100.f * (dirN.g / ptMean.g - 1.f), 100.f * (dirN.b / ptMean.b - 1.f));
+    // Energy-normalised directional dipole (docs/methods/dipole.md §1): S_d ×
+    // dirpoleEnergyScale(α′, η, target), α′ = σs′/σt′ (g = 0 here, so σs′ = σs); the exact
+    // target (the renderers' default) also applies the exit-angle correction along the view
+    // (the normal here, t = 1).
+    const DirpoleExitTable exit(eta);
+    for (EnergyTarget target : {EnergyTarget::ExactHalfSpace, EnergyTarget::BetterDipole}) {
+        Rgb dirN;
+        for (int c = 0; c < 3; ++c) {
+            const double alphaP = double(m.sigma_s[c] / m.sigma_t[c]);
+            const double correction =
+                target == EnergyTarget::ExactHalfSpace ? exit.correction(alphaP, 1.0) : 1.0;
+            dirN[c] = dir[c] * float(dirpoleEnergyScale(alphaP, eta, target) * correction);
+        }
+        std::printf(
+            "%-14s normalised (%s):   L = (%.5f, %.5f, %.5f), relative error vs reference "
+            "(%+.1f%%, %+.1f%%, %+.1f%%)\n",
+            "dirpole", energyTargetName(target), dirN.r, dirN.g, dirN.b,
+            100.f * (dirN.r / ptMean.r - 1.f), 100.f * (dirN.g / ptMean.g - 1.f),
+            100.f * (dirN.b / ptMean.b - 1.f));
+    }
     return 0;
 }
 

@@ -43,6 +43,8 @@ struct DirectionalDipoleRenderer::Impl {
     float sceneRadius = 1.f;
     Point3f sceneCenter{0.f};
     DirpoleEnergyTable energy;  ///< for scene.eta when settings.energyNormalised
+    /// With the exact target: the exit-angle correction (empty, c = 1, otherwise).
+    DirpoleExitTable exit;
 };
 
 DirectionalDipoleRenderer::DirectionalDipoleRenderer(const Scene& scene,
@@ -69,6 +71,8 @@ DirectionalDipoleRenderer::DirectionalDipoleRenderer(const Scene& scene,
     m_impl->sceneRadius = 0.5f * glm::length(b.extent()) + 1.f;
     if (s.energyNormalised)
         m_impl->energy = DirpoleEnergyTable(double(scene.eta), s.energyTarget);
+    if (s.energyNormalised && s.energyTarget == EnergyTarget::ExactHalfSpace)
+        m_impl->exit = DirpoleExitTable(double(scene.eta));
 }
 
 DirectionalDipoleRenderer::~DirectionalDipoleRenderer() = default;
@@ -93,6 +97,7 @@ void DirectionalDipoleRenderer::addPass() {
         std::array<DirectionalDipole, 3> dd;
         std::array<DipoleSampler, 3> samplers;
         std::array<int, 3> channels{};
+        std::array<double, 3> alphaPrime{};
         int channelCount = 0;
         float shrink = m.settings.shrink;
         for (int y = int(y0); y < int(y1); ++y)
@@ -110,6 +115,7 @@ void DirectionalDipoleRenderer::addPass() {
                         // table is empty (scale 1) when normalisation is off.
                         const double alphaP =
                             med.sigma_s > 0.0 ? med.sigma_s / (med.sigma_a + med.sigma_s) : 0.0;
+                        alphaPrime[size_t(c)] = alphaP;
                         dd[size_t(c)] = DirectionalDipole(med.sigma_a, med.sigma_s, med.eta,
                                                           m.energy.scale(alphaP));
                         // Importance function: the better dipole's exact sampler (same D and
@@ -185,6 +191,10 @@ void DirectionalDipoleRenderer::addPass() {
                         }
                     }
                 }
+                // The exact target's exit-angle correction (1 without it): the light leaves
+                // x_o with the half-space's angular distribution, not a diffuse one.
+                for (int c = 0; c < 3; ++c)
+                    L[c] *= m.exit.correction(alphaPrime[size_t(c)], cosO);
                 m.sum[idx] += L * t21;
             }
     });

@@ -14,6 +14,7 @@
 #include <lucent/gpu/GpuTimer.h>
 #include <lucent/gpu/Shader.h>
 #include <lucent/material/MaterialVolume.h>
+#include <shared/DirpoleShared.h>
 #include <shared/LightingShared.h>
 
 #include <epoxy/gl.h>
@@ -93,8 +94,8 @@ constexpr std::array<glm::vec3, 6> FACE_AXES = {glm::vec3(1, 0, 0), glm::vec3(-1
                                                 glm::vec3(0, 1, 0), glm::vec3(0, -1, 0),
                                                 glm::vec3(0, 0, 1), glm::vec3(0, 0, -1)};
 
-/// Nodes of the energy-normalisation table in dirpole_gather.comp (ENERGY_NODES there).
-constexpr int ENERGY_NODES = 256;
+/// Nodes of the energy-normalisation table in dirpole_gather.comp (shaders/shared/DirpoleShared.h).
+constexpr int ENERGY_NODES = LUCENT_DIRPOLE_ENERGY_NODES;
 
 Vector3f upFor(const Vector3f& forward) {
     return std::abs(forward.y) < 0.99f ? Vector3f(0, 1, 0) : Vector3f(1, 0, 0);
@@ -131,6 +132,9 @@ struct DirpoleSubsurfaceProvider::Impl {
     std::vector<float> energyNodes;
     float energyEta = 0.f;
     EnergyTarget energyTarget = EnergyTarget::ExactHalfSpace;
+    /// DirpoleExitTable for `exitEta` (the exact target's exit-angle correction), an SSBO.
+    gpu::GlObject exitTable;
+    float exitEta = 0.f;
 
     // What the G-buffers and the accumulation were computed for.
     bool needGeometry = true;      ///< re-render the light and cube G-buffers
@@ -548,6 +552,23 @@ struct DirpoleSubsurfaceProvider::Impl {
         glUniform1i(p.uniformLocation("u_ortho"), ortho ? 1 : 0);
         glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
         glUniform1i(p.uniformLocation("u_meshId"), settings.meshId);
+        // The exact target's exit-angle correction: c(α′, t) at x_o's material (docs/methods/
+        // dipole.md §1), so the light leaves with the half-space's angular distribution.
+        const bool exitCorrection =
+            settings.energyNormalised && settings.energyTarget == EnergyTarget::ExactHalfSpace;
+        if (exitCorrection && exitEta != settings.eta) {
+            const DirpoleExitTable table(settings.eta);  // ≈ 0.1 s, once per η
+            exitTable.destroy();
+            exitTable =
+                gpu::createBuffer(table.values().size() * sizeof(float), table.values().data(), 0);
+            exitEta = settings.eta;
+        }
+        glUniform1i(p.uniformLocation("u_exitCorrection"), exitCorrection ? 1 : 0);
+        if (exitCorrection) {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, LUCENT_DIRPOLE_BINDING_EXIT_TABLE,
+                             exitTable.id());
+            volume.bind(p, 6, 7);
+        }
         glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
         // The target (imageStore) is read by the shading pass (texture fetch) and cleared by
         // the renderer at the next frame (framebuffer clear or texture update, GL 4.5 §7.13.2).
@@ -583,8 +604,9 @@ void DirpoleSubsurfaceProvider::destroyGl() {
     for (gpu::GlProgram* p : {&m->gbufferProgram, &m->prepareProgram, &m->coverProgram,
                               &m->compactProgram, &m->gatherProgram, &m->combineProgram})
         p->destroy();
-    for (gpu::GlObject* o : {&m->fbo, &m->statsBuffer})
+    for (gpu::GlObject* o : {&m->fbo, &m->statsBuffer, &m->exitTable})
         o->destroy();
+    m->exitEta = 0.f;
     m->destroyMaps();
     m->profiler.destroy();
     m->needGeometry = true;

@@ -20,7 +20,8 @@
 /// until it transmits under 10⁻¹³ of any input: a half-space to double precision. The boundary
 /// then reflects the upgoing radiance u back with the exact internal Fresnel reflectance
 /// F(μ_i) (total internal reflection below the critical cosine), u = (I − R F)⁻¹ r_c, and what
-/// leaves is 2π Σ μ_i w_i (1 − F(μ_i)) u_i per unit entering flux.
+/// leaves is 2π Σ μ_i w_i (1 − F(μ_i)) u_i per unit entering flux; the radiance along an exit
+/// direction is (1 − F(μ)) u(μ) / η² outside (the n² law).
 
 #include <lucent/dipole/HalfSpace.h>
 
@@ -34,37 +35,53 @@
 
 namespace lucent::dipole {
 
-double halfSpaceReflectance(double albedo, double eta, double mu0, int nodes) {
+HalfSpaceExitance halfSpaceExitance(double albedo, double eta, double mu0,
+                                    const std::vector<double>& exitCosines, int nodes) {
     LUCENT_CHECK(std::isfinite(albedo) && albedo >= 0.0 && albedo <= 1.0,
-                 "halfSpaceReflectance: albedo must be in [0, 1] (got ", albedo, ")");
+                 "halfSpaceExitance: albedo must be in [0, 1] (got ", albedo, ")");
     LUCENT_CHECK(std::isfinite(eta) && eta >= 1.0 && eta <= 3.0,
-                 "halfSpaceReflectance: eta must be in [1, 3] (got ", eta, ")");
+                 "halfSpaceExitance: eta must be in [1, 3] (got ", eta, ")");
     LUCENT_CHECK(std::isfinite(mu0) && mu0 > 0.0 && mu0 <= 1.0,
-                 "halfSpaceReflectance: mu0 must be in (0, 1] (got ", mu0, ")");
-    LUCENT_CHECK(nodes >= 2 && nodes <= 256,
-                 "halfSpaceReflectance: nodes must be in [2, 256] (got ", nodes, ")");
+                 "halfSpaceExitance: mu0 must be in (0, 1] (got ", mu0, ")");
+    LUCENT_CHECK(nodes >= 2 && nodes <= 256, "halfSpaceExitance: nodes must be in [2, 256] (got ",
+                 nodes, ")");
+    for (double t : exitCosines)
+        LUCENT_CHECK(std::isfinite(t) && t > 0.0 && t <= 1.0,
+                     "halfSpaceExitance: exit cosines must be in (0, 1] (got ", t, ")");
+    HalfSpaceExitance out;
+    out.radiance.assign(exitCosines.size(), 0.0);
     if (albedo == 0.0)
-        return 0.0;
-    if (albedo == 1.0)
-        return 1.0;  // no absorption: a random walk in depth is recurrent, all light returns
+        return out;
+    // No absorption: all light returns. The radiance's shape is the limit's, solved just below.
+    const bool conservative = albedo == 1.0;
+    const double a = conservative ? 1.0 - 1e-10 : albedo;
 
     // Nodes on (0, 1], split at the critical cosine μ_c inside, below which F = 1 (total
     // internal reflection). Above it the transmittance is smooth in the outside cosine
     // t = η √(μ² − μ_c²), not in μ (it has a square-root edge at μ_c), so those nodes are
     // Gauss–Legendre in t: μ = √(μ_c² + t²/η²), dμ = t/(η² μ) dt. At η = 1 both are plain
-    // Gauss–Legendre in μ.
+    // Gauss–Legendre in μ. The requested exit directions follow with weight 0: they receive
+    // light but send none into the sums, so the solution is the same with or without them.
     const double muCritical = eta > 1.0 ? std::sqrt(1.0 - 1.0 / (eta * eta)) : 0.0;
+    const auto insideCosine = [&](double t) {
+        return std::sqrt(muCritical * muCritical + t * t / (eta * eta));
+    };
     const QuadratureRule unit = gaussLegendre(nodes);
     QuadratureRule rule = unit.mappedTo(0.0, 1.0);
     for (size_t k = 0; k < rule.x.size(); ++k) {
         const double t = rule.x[k];
-        rule.x[k] = std::sqrt(muCritical * muCritical + t * t / (eta * eta));
+        rule.x[k] = insideCosine(t);
         rule.w[k] *= t / (eta * eta * rule.x[k]);
     }
     if (muCritical > 0.0) {
         const QuadratureRule low = unit.mappedTo(0.0, muCritical);
         rule.x.insert(rule.x.begin(), low.x.begin(), low.x.end());
         rule.w.insert(rule.w.begin(), low.w.begin(), low.w.end());
+    }
+    const Eigen::Index weighted = Eigen::Index(rule.x.size());
+    for (double t : exitCosines) {
+        rule.x.push_back(insideCosine(t));
+        rule.w.push_back(0.0);
     }
     const Eigen::Index n = Eigen::Index(rule.x.size());
     const Eigen::Map<const Eigen::VectorXd> mu(rule.x.data(), n), w(rule.w.data(), n);
@@ -74,20 +91,21 @@ double halfSpaceReflectance(double albedo, double eta, double mu0, int nodes) {
     Eigen::VectorXd rc(n);
     for (Eigen::Index i = 0; i < n; ++i) {
         for (Eigen::Index j = 0; j < n; ++j)
-            R(i, j) = albedo * dtau * w(j) / (2.0 * mu(i));
-        rc(i) = albedo * dtau / (4.0 * M_PI * mu0 * mu(i));
+            R(i, j) = a * dtau * w(j) / (2.0 * mu(i));
+        rc(i) = a * dtau / (4.0 * M_PI * mu0 * mu(i));
     }
     T = R;
     T.diagonal() += (-dtau * mu.cwiseInverse()).array().exp().matrix();
     Eigen::VectorXd tc = rc;
     double d = std::exp(-dtau / mu0);
 
-    // Flux a layer passes on, per unit flux in: the largest over the diffuse input directions
-    // and the beam's (direct plus diffuse).
+    // Flux a layer passes on, per unit flux in: the largest over the (weighted) diffuse input
+    // directions and the beam's (direct plus diffuse).
     const Eigen::VectorXd fluxWeight = mu.cwiseProduct(w);
     const auto transmitted = [&] {
-        const Eigen::VectorXd columns =
-            (fluxWeight.transpose() * T).transpose().cwiseQuotient(fluxWeight);
+        const Eigen::VectorXd columns = (fluxWeight.transpose() * T.leftCols(weighted))
+                                            .transpose()
+                                            .cwiseQuotient(fluxWeight.head(weighted));
         return std::max(columns.maxCoeff(), d + 2.0 * M_PI * fluxWeight.dot(tc));
     };
     const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(n, n);
@@ -109,7 +127,17 @@ double halfSpaceReflectance(double albedo, double eta, double mu0, int nodes) {
     for (Eigen::Index i = 0; i < n; ++i)
         fresnel(i) = fresnelDielectric(mu(i), 1.0 / eta);
     const Eigen::VectorXd up = (identity - R * fresnel.asDiagonal()).partialPivLu().solve(rc);
-    return 2.0 * M_PI * fluxWeight.dot((Eigen::VectorXd::Ones(n) - fresnel).cwiseProduct(up));
+    const Eigen::VectorXd leaving = (Eigen::VectorXd::Ones(n) - fresnel).cwiseProduct(up);
+    const double reflectance = 2.0 * M_PI * fluxWeight.dot(leaving);
+    const double scale = conservative ? 1.0 / reflectance : 1.0;
+    out.reflectance = conservative ? 1.0 : reflectance;
+    for (size_t k = 0; k < exitCosines.size(); ++k)
+        out.radiance[k] = scale * leaving(weighted + Eigen::Index(k)) / (eta * eta);
+    return out;
+}
+
+double halfSpaceReflectance(double albedo, double eta, double mu0, int nodes) {
+    return halfSpaceExitance(albedo, eta, mu0, {}, nodes).reflectance;
 }
 
 }  // namespace lucent::dipole

@@ -418,6 +418,50 @@ double DirpoleEnergyTable::scale(double alphaPrime) const {
     return std::exp((1.0 - t) * m_scale[size_t(i)] + t * m_scale[size_t(i) + 1]);
 }
 
+double DirpoleExitTable::albedoNode(int i) {
+    const double s = double(i) / (ALBEDO_NODES - 1);
+    return 1.0 - s * s;
+}
+
+DirpoleExitTable::DirpoleExitTable(double eta) : m_eta(eta) {
+    LUCENT_CHECK(std::isfinite(eta) && eta >= 1.0 && eta <= 3.0,
+                 "DirpoleExitTable: eta must be in [1, 3] (got ", eta, ")");
+    std::vector<double> cosines(COSINE_NODES);
+    for (int j = 0; j < COSINE_NODES; ++j)
+        cosines[size_t(j)] = cosineNode(j);
+    // L_model(t) = T₂₁(t) ρ / (π(1 − 2C₁(1/η))), with the same ρ (the exact one) as L_exact.
+    const double diffuseToRadiance = 1.0 / (PI_D * (1.0 - 2.0 * fresnelMoment(1, 1.0 / eta)));
+    m_values.resize(size_t(ALBEDO_NODES) * COSINE_NODES);
+    for (int i = 0; i < ALBEDO_NODES; ++i) {
+        const double a = std::max(albedoNode(i), DIRPOLE_MIN_ALPHA);
+        const HalfSpaceExitance exact = halfSpaceExitance(a, eta, 1.0, cosines);
+        for (int j = 0; j < COSINE_NODES; ++j) {
+            const double t = cosines[size_t(j)];
+            const double model =
+                (1.0 - fresnelDielectric(t, eta)) * exact.reflectance * diffuseToRadiance;
+            LUCENT_ASSERT(model > 0.0);
+            m_values[size_t(i) * COSINE_NODES + size_t(j)] =
+                float(exact.radiance[size_t(j)] / model);
+        }
+    }
+}
+
+double DirpoleExitTable::correction(double alphaPrime, double cosOut) const {
+    if (m_values.empty())
+        return 1.0;
+    const double s = std::sqrt(std::clamp(1.0 - alphaPrime, 0.0, 1.0)) * (ALBEDO_NODES - 1);
+    const int i = std::min(int(s), ALBEDO_NODES - 2);
+    const double fs = s - i;
+    const double u = std::clamp(cosOut, 0.0, 1.0) * (COSINE_NODES - 1);
+    const int j = std::min(int(u), COSINE_NODES - 2);
+    const double fu = u - j;
+    const auto at = [&](int a, int b) {
+        return double(m_values[size_t(a) * COSINE_NODES + size_t(b)]);
+    };
+    return (1.0 - fs) * ((1.0 - fu) * at(i, j) + fu * at(i, j + 1)) +
+           fs * ((1.0 - fu) * at(i + 1, j) + fu * at(i + 1, j + 1));
+}
+
 double totalReflectance(Model m, const ScalarMedium& medium) {
     if (m == Model::Directional)
         return integrateProfile(DirectionalDipole(medium.sigma_a, medium.sigma_s, medium.eta));

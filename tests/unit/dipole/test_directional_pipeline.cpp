@@ -45,7 +45,8 @@ TEST(DirectionalPipeline, SlabAtNormalIncidenceMatchesQuadrature) {
     // T₂₁(0) T₁₂(0) E ∫ S_d dA must match the radial quadrature within 4 standard errors
     // (spread over the 256 pixels, which use independent sample offsets). Published model
     // (normalisation off) against its quadrature; normalised model (the default target) against
-    // the exact half-space's ρ (plus 5e-4: DirpoleEnergyTable's interpolation bound).
+    // the exact half-space's radiance along the normal (plus 6e-4: DirpoleEnergyTable's
+    // interpolation; the exit table's nodes include t = 1, so it adds none there).
     const float sa = 0.05f, ss = 1.5f;
     for (bool normalised : {false, true}) {
         DirectionalSettings ds;
@@ -68,10 +69,12 @@ TEST(DirectionalPipeline, SlabAtNormalIncidenceMatchesQuadrature) {
         // is ≫ the profile, so the plane integral is the quadrature of the radial profile.
         const DirectionalDipole d(sa, ss, 1.3);
         const double cPhiInv = 0.25 * (1.0 - 2.0 * fresnelMoment(1, 1.0 / 1.3));
-        const double rho =
-            normalised ? halfSpaceReflectance(ss / (sa + ss), 1.3) : integrateProfile(d);
+        // Normalised (exact target): the exact half-space's radiance along the normal, which
+        // the exit-angle correction gives the model, per unit flux entering (T₁₂ of it).
         const double t = 1.0 - fresnelDielectric(1.0, 1.3);
-        const double expected = t * t * rho / (4 * M_PI * cPhiInv);
+        const double expected =
+            normalised ? t * halfSpaceExitance(ss / (sa + ss), 1.3, 1.0, {1.0}).radiance[0]
+                       : t * t * integrateProfile(d) / (4 * M_PI * cPhiInv);
         std::printf("directional pipeline (%s): mean %.6g, expected %.6g, standard error %.2g\n",
                     normalised ? "normalised" : "published", mean, expected, se);
         EXPECT_NEAR(mean, expected, 4 * se + (normalised ? 6e-4 : 1e-4) * expected) << "se " << se;
@@ -80,7 +83,9 @@ TEST(DirectionalPipeline, SlabAtNormalIncidenceMatchesQuadrature) {
 
 TEST(DirectionalPipeline, EnergyNormalisationScalesEachChannelByTheTable) {
     // Same samples with and without the normalisation: every pixel's channel c is scaled by
-    // DirpoleEnergyTable(η).scale(α′_c) (float rounding: 1e-5 relative).
+    // DirpoleEnergyTable(η, target).scale(α′_c) and, with the exact target, by the exit-angle
+    // correction DirpoleExitTable(η).correction(α′_c, t) along the view (the slab's face is seen
+    // along its normal, t = 1). Float rounding: 1e-5 relative.
     Scene s = slab(0.f, 1.f);
     MaterialSample m;
     m.sigma_s = Rgb(1.5f, 1.2f, 0.9f);
@@ -89,22 +94,31 @@ TEST(DirectionalPipeline, EnergyNormalisationScalesEachChannelByTheTable) {
         std::make_shared<MaterialVolume>(GridSpec::around(s.objects[0].mesh.bounds(), 32), m);
     DirectionalSettings off;
     off.energyNormalised = false;
-    DirectionalSettings on;
-    DirectionalDipoleRenderer a(s, off), b(s, on);
+    DirectionalDipoleRenderer a(s, off);
     a.addPass();
-    b.addPass();
-    const DirpoleEnergyTable table(1.3);
-    int checked = 0;
-    for (size_t i = 0; i < a.radiance().pixels().size(); ++i)
-        for (int c = 0; c < 3; ++c) {
-            const float va = a.radiance().pixels()[i][c], vb = b.radiance().pixels()[i][c];
-            if (!(va > 0.f))
-                continue;
-            const double want = table.scale(double(m.sigma_s[c]) / double(m.sigma_t[c]));
-            ASSERT_NEAR(double(vb) / double(va), want, 1e-5 * want) << "pixel " << i << " c " << c;
-            ++checked;
-        }
-    EXPECT_GT(checked, 600);
+    const DirpoleExitTable exit(1.3);
+    for (EnergyTarget target : {EnergyTarget::ExactHalfSpace, EnergyTarget::BetterDipole}) {
+        DirectionalSettings on;
+        on.energyTarget = target;
+        DirectionalDipoleRenderer b(s, on);
+        b.addPass();
+        const DirpoleEnergyTable table(1.3, target);
+        int checked = 0;
+        for (size_t i = 0; i < a.radiance().pixels().size(); ++i)
+            for (int c = 0; c < 3; ++c) {
+                const float va = a.radiance().pixels()[i][c], vb = b.radiance().pixels()[i][c];
+                if (!(va > 0.f))
+                    continue;
+                const double alphaP = double(m.sigma_s[c]) / double(m.sigma_t[c]);
+                const double want =
+                    table.scale(alphaP) *
+                    (target == EnergyTarget::ExactHalfSpace ? exit.correction(alphaP, 1.0) : 1.0);
+                ASSERT_NEAR(double(vb) / double(va), want, 1e-5 * want)
+                    << energyTargetName(target) << " pixel " << i << " c " << c;
+                ++checked;
+            }
+        EXPECT_GT(checked, 600);
+    }
 }
 
 TEST(DirectionalPipeline, ProgressiveAndErrors) {

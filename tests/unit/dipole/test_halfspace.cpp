@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
 
 using namespace lucent;
 using namespace lucent::dipole;
@@ -75,6 +76,45 @@ TEST(HalfSpace, DielectricBoundaryAgreesWithAnIndependentMonteCarlo) {
     }
 }
 
+TEST(HalfSpace, EmergentRadianceEqualsChandrasekharsClosedForm) {
+    // η = 1: the radiance an isotropic half-space sends out along μ for a collimated beam at
+    // μ₀, per unit entering flux (unit flux per unit area of the surface), is
+    // a/(4π) · H(μ)H(μ₀)/(μ + μ₀) (Chandrasekhar 1950, §47, with πF = 1/μ₀). Relative 3·10⁻⁴:
+    // the exit directions are exact nodes, the rest is the quadrature's 3·10⁻⁵ on values
+    // ≥ 0.1 of the peak.
+    const std::vector<double> exits = {1.0, 0.8, 0.5, 0.2, 0.05};
+    for (double a : {0.3, 0.68, 0.96, 0.999})
+        for (double mu0 : {1.0, 0.5}) {
+            const HalfSpaceExitance e = halfSpaceExitance(a, 1.0, mu0, exits);
+            ASSERT_EQ(e.radiance.size(), exits.size());
+            for (size_t k = 0; k < exits.size(); ++k) {
+                const double mu = exits[k];
+                const double exact =
+                    a / (4.0 * M_PI) * chandrasekharH(a, mu) * chandrasekharH(a, mu0) / (mu + mu0);
+                EXPECT_NEAR(e.radiance[k], exact, 3e-4 * exact)
+                    << "a " << a << " mu0 " << mu0 << " mu " << mu;
+            }
+        }
+}
+
+TEST(HalfSpace, ExitRadianceIntegratesToTheReflectance) {
+    // 2π ∫₀¹ L(t) t dt over the outside cosine = the reflectance (the n² law and the Snell
+    // change of variables agree). 64-node Gauss–Legendre in t as the exit directions; the
+    // reflectance is the solver's own (8 nodes): 3·10⁻⁵ absolute, as above.
+    const QuadratureRule g = gaussLegendre(64).mappedTo(0.0, 1.0);
+    for (double eta : {1.0, 1.3, 2.0})
+        for (double a : {0.5, 0.9, 0.999, 1.0}) {
+            const HalfSpaceExitance e = halfSpaceExitance(a, eta, 1.0, g.x);
+            double flux = 0.0;
+            for (size_t k = 0; k < g.x.size(); ++k)
+                flux += 2.0 * M_PI * g.w[k] * g.x[k] * e.radiance[k];
+            EXPECT_NEAR(flux, e.reflectance, 3e-5) << "eta " << eta << " a " << a;
+            // Asking for exit directions does not change the solution (to round-off: the LU
+            // factors a larger matrix).
+            EXPECT_NEAR(e.reflectance, halfSpaceReflectance(a, eta), 1e-10);
+        }
+}
+
 TEST(HalfSpace, NodeCountConverges) {
     // The default rule against 64 nodes per interval: the difference bounds the quadrature
     // error; 3·10⁻⁵ as above.
@@ -105,4 +145,6 @@ TEST(HalfSpace, RefusesInvalidInput) {
     EXPECT_THROW(halfSpaceReflectance(0.5, 0.9), ValueError);
     EXPECT_THROW(halfSpaceReflectance(0.5, 1.3, 0.0), ValueError);
     EXPECT_THROW(halfSpaceReflectance(0.5, 1.3, 1.0, 1), ValueError);
+    EXPECT_THROW(halfSpaceExitance(0.5, 1.3, 1.0, {0.0}), ValueError);
+    EXPECT_THROW(halfSpaceExitance(0.5, 1.3, 1.0, {1.5}), ValueError);
 }

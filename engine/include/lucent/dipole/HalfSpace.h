@@ -13,6 +13,8 @@
 /// Uses: the directional dipole's energy normalisation (DirpoleEnergyTable, Profiles.h) and the
 /// tests' closed-form checks (Chandrasekhar's H-function at η = 1).
 
+#include <vector>
+
 namespace lucent::dipole {
 
 /// Quadrature nodes per interval of the polar cosine (two intervals, split at the critical
@@ -20,14 +22,32 @@ namespace lucent::dipole {
 /// (test HalfSpace.NodeCountConverges), at 0.24 ms a solve.
 constexpr int HALF_SPACE_NODES = 8;
 
+/// What a half-space sends back out for a collimated beam (halfSpaceExitance).
+struct HalfSpaceExitance {
+    double reflectance = 0.0;  ///< exitance per unit entering flux (dimensionless)
+    /// Radiance leaving along each requested outside cosine, per unit entering flux, sr⁻¹
+    /// (outside the boundary: divided by η², the n² law). 2π ∫₀¹ L(t) t dt = reflectance.
+    std::vector<double> radiance;
+};
+
 /// Exitance leaving the boundary per unit flux that has entered it, for a collimated beam
-/// travelling into the medium at cosine `mu0` to the inward normal (normal incidence: 1). The
-/// medium scatters isotropically with single-scattering albedo `albedo` (for a diffusion model,
-/// its reduced albedo α′ = σs′/σt′); its boundary is smooth with relative index η = n_medium /
-/// n_outside, so light inside meets the exact Fresnel reflectance, total internal reflection
-/// included. Dimensionless: the answer depends on albedo, η and μ₀ only (lengths scale with
-/// 1/σt).
-/// @throw ValueError for albedo ∉ [0, 1], η ∉ [1, 3], μ₀ ∉ (0, 1] or nodes ∉ [2, 256].
+/// travelling into the medium at cosine `mu0` to the inward normal (normal incidence: 1), and
+/// the radiance it leaves with along the outside cosines `exitCosines` (each in (0, 1]; they
+/// are carried through the solve as directions of zero quadrature weight, so their radiance is
+/// exact, not interpolated). The medium scatters isotropically with single-scattering albedo
+/// `albedo` (for a diffusion model, its reduced albedo α′ = σs′/σt′); its boundary is smooth
+/// with relative index η = n_medium / n_outside, so light inside meets the exact Fresnel
+/// reflectance, total internal reflection included. Dimensionless: the answer depends on
+/// albedo, η and μ₀ only (lengths scale with 1/σt). At albedo 1 the reflectance is 1 (nothing
+/// is absorbed: a random walk in depth is recurrent) and the radiance is the limit's shape
+/// (solved at 1 − 10⁻¹⁰ and scaled to a total of 1).
+/// @throw ValueError for albedo ∉ [0, 1], η ∉ [1, 3], μ₀ ∉ (0, 1], an exit cosine ∉ (0, 1] or
+/// nodes ∉ [2, 256].
+HalfSpaceExitance halfSpaceExitance(double albedo, double eta, double mu0,
+                                    const std::vector<double>& exitCosines,
+                                    int nodes = HALF_SPACE_NODES);
+
+/// halfSpaceExitance(albedo, eta, mu0, {}, nodes).reflectance.
 double halfSpaceReflectance(double albedo, double eta, double mu0 = 1.0,
                             int nodes = HALF_SPACE_NODES);
 

@@ -218,6 +218,45 @@ private:
     std::vector<double> m_scale;  // log s(α′) at the nodes (Profiles.cpp, tableAlpha)
 };
 
+/// The exit-angle correction of the exact target (EnergyTarget::ExactHalfSpace). Normalised, the
+/// directional dipole returns the exact total, but it sends it out as a diffuse source under the
+/// Fresnel boundary would: on a plane lit at normal incidence L_model(t) = T₂₁(t) ρ / (π(1 −
+/// 2C₁(1/η))) along outside cosine t (Frisvad et al. 2014's exitance-to-radiance factor). The
+/// exact half-space (halfSpaceExitance) leaves less along the normal and more at grazing angles
+/// at low albedo (skin1's blue at η 1: 0.87 of L_model along the normal, 1.20 at t = 0.2) and is
+/// limb-darkened near α′ = 1 (1.03 along the normal, 0.91 at t = 0.2, α′ = 0.998). The correction
+/// c(α′, t) = L_exact(t) / L_model(t) multiplies the radiance leaving x_o towards the eye; its
+/// flux-weighted mean over the hemisphere is 1 (both carry ρ_exact), so it moves light between
+/// directions, not the total. Tabulated per η at ALBEDO_NODES nodes uniform in s = √(1 − α′) on [0,
+/// 1] (α′ held ≥ DIRPOLE_MIN_ALPHA) and COSINE_NODES cosines t_j = j/(COSINE_NODES − 1) (t₀
+/// evaluated at 10⁻³: both radiances vanish at grazing exit, their ratio does not), bilinear
+/// between them. Built once per η (≈ 0.1 s). The layout is the GL table's
+/// (shaders/shared/DirpoleShared.h).
+class DirpoleExitTable {
+public:
+    static constexpr int ALBEDO_NODES = 64;
+    static constexpr int COSINE_NODES = 16;
+    DirpoleExitTable() = default;
+    /// @throw ValueError for η ∉ [1, 3].
+    explicit DirpoleExitTable(double eta);
+    /// c(α′, t) for α′ ∈ [0, 1] and outside cosine t ∈ [0, 1] (both clamped). 1 for a
+    /// default-constructed table.
+    [[nodiscard]] double correction(double alphaPrime, double cosOut) const;
+    /// The nodes' values, row-major: [albedo node][cosine node].
+    [[nodiscard]] const std::vector<float>& values() const { return m_values; }
+    [[nodiscard]] double eta() const { return m_eta; }
+    /// Outside cosine of cosine node j.
+    [[nodiscard]] static double cosineNode(int j) {
+        return j == 0 ? 1e-3 : double(j) / (COSINE_NODES - 1);
+    }
+    /// Albedo of albedo node i (before the DIRPOLE_MIN_ALPHA floor).
+    [[nodiscard]] static double albedoNode(int i);
+
+private:
+    double m_eta = 1.0;
+    std::vector<float> m_values;
+};
+
 /// Numerical ∫₀^∞ f(r) 2πr dr of a radial profile: composite Gauss–Legendre in log r over
 /// [1e-9·scale, 1e4·scale], plus the tail r > 1e4·scale by the substitution t = 1/r.
 /// @param scale a length (mm) of the profile's core, e.g. z_r.
