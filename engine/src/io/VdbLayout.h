@@ -7,7 +7,10 @@
 /// read and the import limits (lucent/core/FileIO.h). Run before OpenVDB sees a file: the
 /// system OpenVDB 10 trusts the sizes stored in a file (a block that claims more bytes than
 /// its buffer holds overflows the heap in io::bloscFromStream), so every size it will trust
-/// is verified here first. Also the integrity checksum of Lucent files.
+/// is verified here first. The compressed blocks of the topology (internal node values) are
+/// also decoded: OpenVDB 10's RootNode::readTopology leaks a root child whose readTopology
+/// throws on a block that decodes to another size (VdbLayout.cpp, internalTopology). Also the
+/// integrity checksum of Lucent files.
 ///
 /// Layout sources (OpenVDB 10.0, file format 222-224): io/Archive.cc (readHeader,
 /// readGridCompression, doReadGrid), MetaMap::readMeta and TypedMetadata::readValue,

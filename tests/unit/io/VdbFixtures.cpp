@@ -212,6 +212,8 @@ uint32_t openVdbFlags(VdbCompression c) {
             return vdb::io::COMPRESS_ACTIVE_MASK;
         case VdbCompression::BloscOnly:
             return vdb::io::COMPRESS_BLOSC;
+        case VdbCompression::ZipOnly:
+            return vdb::io::COMPRESS_ZIP;
     }
     throw std::invalid_argument("unknown VdbCompression");
 }

@@ -71,7 +71,16 @@ LUCENT_VDB_FIXTURES_API void writeForeignFogVdb(const std::string& path);
 LUCENT_VDB_FIXTURES_API void writeRandomLeavesVdb(const std::string& path, int leaves);
 
 /// How writeEveryKindVdb compresses (OpenVDB's io::COMPRESS_* flags).
-enum class VdbCompression { BloscActiveMask, ZipActiveMask, None, ActiveMaskOnly, BloscOnly };
+/// ZipOnly writes every value of an internal node (no active mask), so that its topology holds
+/// zip blocks that compress (stored blocks otherwise: zip keeps a block only when it shrinks).
+enum class VdbCompression {
+    BloscActiveMask,
+    ZipActiveMask,
+    None,
+    ActiveMaskOnly,
+    BloscOnly,
+    ZipOnly
+};
 
 /// Every grid kind OpenVDB writes, each with two voxels and tiles at every tree level: float,
 /// double, int32, int64, bool, mask, vec3s, vec3d, vec3i, float and vec3s saved as half, an
