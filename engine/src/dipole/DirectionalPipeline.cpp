@@ -70,9 +70,9 @@ DirectionalDipoleRenderer::DirectionalDipoleRenderer(const Scene& scene,
     m_impl->sceneCenter = b.center();
     m_impl->sceneRadius = 0.5f * glm::length(b.extent()) + 1.f;
     if (s.energyNormalised)
-        m_impl->energy = DirpoleEnergyTable(double(scene.eta), s.energyTarget);
+        m_impl->energy = *DirpoleEnergyTable::shared(double(scene.eta), s.energyTarget);
     if (s.energyNormalised && s.energyTarget == EnergyTarget::ExactHalfSpace)
-        m_impl->exit = DirpoleExitTable(double(scene.eta));
+        m_impl->exit = *DirpoleExitTable::shared(double(scene.eta));
 }
 
 DirectionalDipoleRenderer::~DirectionalDipoleRenderer() = default;

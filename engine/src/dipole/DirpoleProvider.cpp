@@ -406,8 +406,9 @@ struct DirpoleSubsurfaceProvider::Impl {
             (energyEta != settings.eta || energyTarget != settings.energyTarget)) {
             // DirpoleEnergyTable::scale resampled at ENERGY_NODES nodes uniform in
             // s = √(1 − α′) (smooth in s; linear interpolation error < 1e-4 relative).
-            // ≈ 150 ms, once per η and target
-            const DirpoleEnergyTable table(settings.eta, settings.energyTarget);
+            // ≈ 150 ms, once per η, target and process
+            const DirpoleEnergyTable& table =
+                *DirpoleEnergyTable::shared(settings.eta, settings.energyTarget);
             energyNodes.resize(ENERGY_NODES);
             for (int i = 0; i < ENERGY_NODES; ++i) {
                 const double si = double(i) / (ENERGY_NODES - 1);
@@ -557,7 +558,8 @@ struct DirpoleSubsurfaceProvider::Impl {
         const bool exitCorrection =
             settings.energyNormalised && settings.energyTarget == EnergyTarget::ExactHalfSpace;
         if (exitCorrection && exitEta != settings.eta) {
-            const DirpoleExitTable table(settings.eta);  // ≈ 0.1 s, once per η
+            // ≈ 0.1 s, once per η and process
+            const DirpoleExitTable& table = *DirpoleExitTable::shared(settings.eta);
             exitTable.destroy();
             exitTable =
                 gpu::createBuffer(table.values().size() * sizeof(float), table.values().data(), 0);

@@ -16,6 +16,7 @@
 
 #include <lucent/core/Types.h>
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -207,6 +208,9 @@ public:
     DirpoleEnergyTable() = default;
     /// @throw ValueError for η ∉ [1, 3].
     explicit DirpoleEnergyTable(double eta, EnergyTarget target = EnergyTarget::ExactHalfSpace);
+    /// The table for (η, target), built once per process and shared (thread-safe): renderers
+    /// and providers are created per render offline, and the table costs ≈ 150 ms.
+    static std::shared_ptr<const DirpoleEnergyTable> shared(double eta, EnergyTarget target);
     /// s(α′) for α′ ∈ [0, 1] (clamped). 1 for a default-constructed table.
     [[nodiscard]] double scale(double alphaPrime) const;
     [[nodiscard]] double eta() const { return m_eta; }
@@ -239,6 +243,9 @@ public:
     DirpoleExitTable() = default;
     /// @throw ValueError for η ∉ [1, 3].
     explicit DirpoleExitTable(double eta);
+    /// The table for η, built once per process and shared (thread-safe), as
+    /// DirpoleEnergyTable::shared.
+    static std::shared_ptr<const DirpoleExitTable> shared(double eta);
     /// c(α′, t) for α′ ∈ [0, 1] and outside cosine t ∈ [0, 1] (both clamped). 1 for a
     /// default-constructed table.
     [[nodiscard]] double correction(double alphaPrime, double cosOut) const;
