@@ -8,6 +8,7 @@
 #include <lucent/mesh/MeshIO.h>
 #include <lucent/mesh/Procedural.h>
 #include <lucent/mesh/Voxelize.h>
+#include <lucent/core/FileIO.h>
 #include <lucent/scene/SceneFile.h>
 
 #include <gtest/gtest.h>
@@ -127,6 +128,28 @@ TEST(SceneFile, VersionResolutionAndProceduralShapes) {
     EXPECT_NEAR(tt.objects[0].mesh.bounds().extent().y, 30.f, 1e-2f);
     expectErrorNaming(minimalWith([](json& j) { j["mesh"]["procedural"] = "teapot"; }),
                       "mesh.procedural");
+}
+
+TEST(SceneFile, ResolutionMeetsTheImportLimitBeforeVoxelising) {
+    // The voxel count a scene claims is checked like a mesh header's element count (issue 16):
+    // 64³ = 262 144 voxels against a limit of 2^18 passes, 65³ is refused before any
+    // voxelisation, with the numbers in the message. At the default limit every allowed
+    // resolution passes (256³ = 2^24 < 2^27).
+    ImportLimits limits = importLimits();
+    EXPECT_GE(limits.maxElements, uint64_t(GridSpec::MAX_RESOLUTION) * GridSpec::MAX_RESOLUTION *
+                                      GridSpec::MAX_RESOLUTION);
+    limits.maxElements = uint64_t(1) << 18;
+    const ScopedImportLimits scoped(limits);
+    EXPECT_NO_THROW(parseScene(minimalWith([](json& j) { j["resolution"] = 64; })));
+    try {
+        parseScene(minimalWith([](json& j) { j["resolution"] = 65; }));
+        ADD_FAILURE() << "resolution 65 was accepted under a limit of 2^18 elements";
+    } catch (const ValueError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("'resolution'"), std::string::npos) << what;
+        EXPECT_NE(what.find("274625 voxels"), std::string::npos) << what;
+        EXPECT_NE(what.find("262144"), std::string::npos) << what;
+    }
 }
 
 TEST(SceneFile, UnknownFieldsAreNamed) {
