@@ -72,6 +72,29 @@ const int ENERGY_NODES = LUCENT_DIRPOLE_ENERGY_NODES;
 uniform int u_energyNormalised;
 uniform float u_energyScale[ENERGY_NODES];
 
+// The exact target's incidence correction k(α′, μ₀) (lucent::dipole::DirpoleIncidenceTable):
+// row-major [albedo node][cosine node], cosines uniform over [u_incidenceMinCosine, 1].
+layout(std430, binding = LUCENT_DIRPOLE_BINDING_INCIDENCE_TABLE) readonly buffer
+    DirpoleIncidenceValues {
+    float b_incidence[];
+};
+uniform int u_incidenceCorrection;
+uniform float u_incidenceMinCosine;
+
+float incidenceCorrection(float alphaP, float mu0) {
+    const int A = LUCENT_DIRPOLE_INCIDENCE_ALBEDO_NODES, C = LUCENT_DIRPOLE_INCIDENCE_COSINE_NODES;
+    float s = sqrt(clamp(1.0 - alphaP, 0.0, 1.0)) * float(A - 1);
+    int i = min(int(s), A - 2);
+    float fs = s - float(i);
+    float u = clamp((mu0 - u_incidenceMinCosine) / (1.0 - u_incidenceMinCosine), 0.0, 1.0) *
+              float(C - 1);
+    int j = min(int(u), C - 2);
+    float fu = u - float(j);
+    float lo = mix(b_incidence[i * C + j], b_incidence[i * C + j + 1], fu);
+    float hi = mix(b_incidence[(i + 1) * C + j], b_incidence[(i + 1) * C + j + 1], fu);
+    return mix(lo, hi, fs);
+}
+
 float energyScale(float alphaP) {
     float s = sqrt(clamp(1.0 - alphaP, 0.0, 1.0)) * float(ENERGY_NODES - 1);
     int i = min(int(s), ENERGY_NODES - 2);
@@ -91,7 +114,7 @@ vec2 r2(uint n, uvec2 offset) {
 // Samples n = first … first + count − 1.
 vec3 gatherLight(int l, vec3 xo, vec3 no, Dirpole dd[3], Profile prof[3], int channels[3],
                  int channelCount, uint first, uint count, uvec2 offset, uint texelSeed,
-                 float shrink) {
+                 float shrink, vec3 alphaP) {
     GpuLight light = lights[l];
     bool directional = int(light.positionType.w) == LUCENT_LIGHT_DIRECTIONAL;
     vec3 wl, unusedE;
@@ -150,6 +173,8 @@ vec3 gatherLight(int l, vec3 xo, vec3 no, Dirpole dd[3], Profile prof[3], int ch
         vec3 w12 = normalize(wt / u_eta + (cosI / u_eta - cosT) * ni);
         float t12 = 1.0 - dipoleFresnelReflectance(cosI, u_eta);
         vec3 w = Ep * (cosP * t12 / denom);
+        if (u_incidenceCorrection != 0)
+            for (int c = 0; c < 3; ++c) w[c] *= incidenceCorrection(alphaP[c], cosT);
         for (int c = 0; c < 3; ++c) sum[c] += w[c] * dirpoleSd(dd[c], xi, ni, w12, xo, no);
     }
     return sum;
@@ -182,8 +207,10 @@ void main() {
         Profile prof[3];
         int channels[3];
         int channelCount = 0;
+        vec3 alphaP = vec3(0.0);
         for (int c = 0; c < 3; ++c) {
             float sa = max(sigT[c] - sigS[c], 0.0);
+            alphaP[c] = sigS[c] > 0.0 ? sigS[c] / (sa + sigS[c]) : 0.0;
             dd[c] = makeDirpole(sa, sigS[c], u_moments);
             if (u_energyNormalised != 0 && sigS[c] > 0.0)
                 dd[c].norm *= energyScale(sigS[c] / (sa + sigS[c]));
@@ -199,7 +226,7 @@ void main() {
             float shrink = densest > 0.0 ? min(u_shrink, 1.0 / densest) : u_shrink;
             for (int l = 0; l < u_lightCount; ++l)
                 C += gatherLight(l, xo, no, dd, prof, channels, channelCount, before, k, offset,
-                                 texelSeed, shrink);
+                                 texelSeed, shrink, alphaP);
         }
         vec3 oldMean = before > 0u ? acc.rgb / float(before) : vec3(0.0);
         vec3 sum = acc.rgb + C;

@@ -15,3 +15,11 @@
 #define LUCENT_DIRPOLE_EXIT_ALBEDO_NODES 64
 #define LUCENT_DIRPOLE_EXIT_COSINE_NODES 16
 #define LUCENT_DIRPOLE_BINDING_EXIT_TABLE 9
+
+/// The incidence correction of the exact target (lucent::dipole::DirpoleIncidenceTable): an SSBO
+/// of LUCENT_DIRPOLE_INCIDENCE_ALBEDO_NODES × LUCENT_DIRPOLE_INCIDENCE_COSINE_NODES floats, one
+/// row per albedo node (uniform in s = √(1 − α′)), one column per refracted cosine node (uniform
+/// over [μ_min, 1], μ_min a uniform of the gather pass).
+#define LUCENT_DIRPOLE_INCIDENCE_ALBEDO_NODES 24
+#define LUCENT_DIRPOLE_INCIDENCE_COSINE_NODES 8
+#define LUCENT_DIRPOLE_BINDING_INCIDENCE_TABLE 10

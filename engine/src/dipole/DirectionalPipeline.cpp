@@ -43,8 +43,9 @@ struct DirectionalDipoleRenderer::Impl {
     float sceneRadius = 1.f;
     Point3f sceneCenter{0.f};
     DirpoleEnergyTable energy;  ///< for scene.eta when settings.energyNormalised
-    /// With the exact target: the exit-angle correction (empty, c = 1, otherwise).
+    /// With the exact target: the exit-angle and incidence corrections (empty, 1, otherwise).
     DirpoleExitTable exit;
+    DirpoleIncidenceTable incidence;
 };
 
 DirectionalDipoleRenderer::DirectionalDipoleRenderer(const Scene& scene,
@@ -71,8 +72,10 @@ DirectionalDipoleRenderer::DirectionalDipoleRenderer(const Scene& scene,
     m_impl->sceneRadius = 0.5f * glm::length(b.extent()) + 1.f;
     if (s.energyNormalised)
         m_impl->energy = *DirpoleEnergyTable::shared(double(scene.eta), s.energyTarget);
-    if (s.energyNormalised && s.energyTarget == EnergyTarget::ExactHalfSpace)
+    if (s.energyNormalised && s.energyTarget == EnergyTarget::ExactHalfSpace) {
         m_impl->exit = *DirpoleExitTable::shared(double(scene.eta));
+        m_impl->incidence = *DirpoleIncidenceTable::shared(double(scene.eta));
+    }
 }
 
 DirectionalDipoleRenderer::~DirectionalDipoleRenderer() = default;
@@ -183,9 +186,11 @@ void DirectionalDipoleRenderer::addPass() {
                         const double t12 =
                             1.0 - fresnelDielectric(double(cosI), double(eta));  // T₁₂(ω_i)
                         for (int c = 0; c < 3; ++c) {
+                            // The exact target's incidence correction (1 without it).
                             const double sd =
                                 dd[size_t(c)].Sd(glm::dvec3(xi), glm::dvec3(ni), glm::dvec3(w12),
-                                                 glm::dvec3(xo), glm::dvec3(no));
+                                                 glm::dvec3(xo), glm::dvec3(no)) *
+                                m.incidence.correction(alphaPrime[size_t(c)], double(cosT));
                             // L = ∫ E⊥ T₁₂ S_d dA⊥ (dA⊥ = cos θ_i dA: light-plane area).
                             L[c] += double(light.intensity[c]) * t12 * sd / denom;
                         }

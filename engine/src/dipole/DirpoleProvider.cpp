@@ -96,6 +96,11 @@ constexpr std::array<glm::vec3, 6> FACE_AXES = {glm::vec3(1, 0, 0), glm::vec3(-1
 
 /// Nodes of the energy-normalisation table in dirpole_gather.comp (shaders/shared/DirpoleShared.h).
 constexpr int ENERGY_NODES = LUCENT_DIRPOLE_ENERGY_NODES;
+static_assert(DirpoleExitTable::ALBEDO_NODES == LUCENT_DIRPOLE_EXIT_ALBEDO_NODES &&
+                  DirpoleExitTable::COSINE_NODES == LUCENT_DIRPOLE_EXIT_COSINE_NODES &&
+                  DirpoleIncidenceTable::ALBEDO_NODES == LUCENT_DIRPOLE_INCIDENCE_ALBEDO_NODES &&
+                  DirpoleIncidenceTable::COSINE_NODES == LUCENT_DIRPOLE_INCIDENCE_COSINE_NODES,
+              "the dirpole tables' layout is shared with GLSL (shaders/shared/DirpoleShared.h)");
 
 Vector3f upFor(const Vector3f& forward) {
     return std::abs(forward.y) < 0.99f ? Vector3f(0, 1, 0) : Vector3f(1, 0, 0);
@@ -135,6 +140,9 @@ struct DirpoleSubsurfaceProvider::Impl {
     /// DirpoleExitTable for `exitEta` (the exact target's exit-angle correction), an SSBO.
     gpu::GlObject exitTable;
     float exitEta = 0.f;
+    /// DirpoleIncidenceTable for `incidenceEta` (its incidence correction), an SSBO.
+    gpu::GlObject incidenceTable;
+    float incidenceEta = 0.f, incidenceMinCosine = 0.f;
 
     // What the G-buffers and the accumulation were computed for.
     bool needGeometry = true;      ///< re-render the light and cube G-buffers
@@ -417,6 +425,23 @@ struct DirpoleSubsurfaceProvider::Impl {
             energyEta = settings.eta;
             energyTarget = settings.energyTarget;
         }
+        // The exact target's incidence correction k(α′, μ₀) per light sample.
+        const bool incidenceCorrection =
+            settings.energyNormalised && settings.energyTarget == EnergyTarget::ExactHalfSpace;
+        if (incidenceCorrection && incidenceEta != settings.eta) {
+            const DirpoleIncidenceTable& table = *DirpoleIncidenceTable::shared(settings.eta);
+            incidenceTable.destroy();
+            incidenceTable =
+                gpu::createBuffer(table.values().size() * sizeof(float), table.values().data(), 0);
+            incidenceEta = settings.eta;
+            incidenceMinCosine = float(table.minCosine());
+        }
+        glUniform1i(p.uniformLocation("u_incidenceCorrection"), incidenceCorrection ? 1 : 0);
+        if (incidenceCorrection) {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, LUCENT_DIRPOLE_BINDING_INCIDENCE_TABLE,
+                             incidenceTable.id());
+            glUniform1f(p.uniformLocation("u_incidenceMinCosine"), incidenceMinCosine);
+        }
         glUniform1i(p.uniformLocation("u_energyNormalised"), settings.energyNormalised ? 1 : 0);
         if (settings.energyNormalised)
             glUniform1fv(p.uniformLocation("u_energyScale"), GLsizei(energyNodes.size()),
@@ -606,9 +631,9 @@ void DirpoleSubsurfaceProvider::destroyGl() {
     for (gpu::GlProgram* p : {&m->gbufferProgram, &m->prepareProgram, &m->coverProgram,
                               &m->compactProgram, &m->gatherProgram, &m->combineProgram})
         p->destroy();
-    for (gpu::GlObject* o : {&m->fbo, &m->statsBuffer, &m->exitTable})
+    for (gpu::GlObject* o : {&m->fbo, &m->statsBuffer, &m->exitTable, &m->incidenceTable})
         o->destroy();
-    m->exitEta = 0.f;
+    m->exitEta = m->incidenceEta = 0.f;
     m->destroyMaps();
     m->profiler.destroy();
     m->needGeometry = true;

@@ -7,6 +7,7 @@
 #include <lucent/dipole/Profiles.h>
 
 #include <lucent/core/Error.h>
+#include <lucent/core/Parallel.h>
 #include <lucent/core/Quadrature.h>
 
 #include <algorithm>
@@ -495,6 +496,79 @@ std::shared_ptr<const DirpoleEnergyTable> DirpoleEnergyTable::shared(double eta,
 
 std::shared_ptr<const DirpoleExitTable> DirpoleExitTable::shared(double eta) {
     return cachedTable<DirpoleExitTable>(eta, [&] { return DirpoleExitTable(eta); });
+}
+
+double integrateSdOverPlane(const DirectionalDipole& d, double mu0) {
+    LUCENT_CHECK(std::isfinite(mu0) && mu0 > 0.0 && mu0 <= 1.0,
+                 "integrateSdOverPlane: mu0 must be in (0, 1] (got ", mu0, ")");
+    if (d.isZero())
+        return 0.0;
+    // x_i at the origin of the plane z = 0 (normal +z), ω₁₂ in the xz plane; S_d is symmetric
+    // in y, so the azimuth runs over [0, π] twice. Log r over [1e-7, 1e4]·D (the profile's
+    // core and its e^{−σ_tr r} tail; beyond, < 1e-12 of the total for the albedos tabulated).
+    const glm::dvec3 origin(0.0), normal(0.0, 0.0, 1.0);
+    const glm::dvec3 w12(std::sqrt(std::max(0.0, 1.0 - mu0 * mu0)), 0.0, -mu0);
+    static const QuadratureRule azimuth = gaussLegendre(32).mappedTo(0.0, PI_D);
+    const double lo = std::log(1e-7 * d.D()), hi = std::log(1e4 * d.D());
+    const int panels = 160;
+    const double h = (hi - lo) / panels;
+    double sum = 0.0;
+    for (int i = 0; i < panels; ++i) {
+        const double a = lo + i * h;
+        sum += gl8().integrate(a, a + h, [&](double s) {
+            const double r = std::exp(s);
+            double ring = 0.0;
+            for (size_t j = 0; j < azimuth.x.size(); ++j) {
+                const glm::dvec3 xo(r * std::cos(azimuth.x[j]), r * std::sin(azimuth.x[j]), 0.0);
+                ring += azimuth.w[j] * d.Sd(origin, normal, w12, xo, normal);
+            }
+            return 2.0 * ring * r * r;  // dA = r dr dφ, dr = r ds
+        });
+    }
+    return sum;
+}
+
+DirpoleIncidenceTable::DirpoleIncidenceTable(double eta) : m_eta(eta) {
+    LUCENT_CHECK(std::isfinite(eta) && eta >= 1.0 && eta <= 3.0,
+                 "DirpoleIncidenceTable: eta must be in [1, 3] (got ", eta, ")");
+    m_minCosine = std::max(eta > 1.0 ? std::sqrt(1.0 - 1.0 / (eta * eta)) : 0.0, 0.05);
+    m_values.assign(size_t(ALBEDO_NODES) * COSINE_NODES, 1.f);
+    parallelFor(0, ALBEDO_NODES, [&](int64_t i0, int64_t i1) {
+        for (int64_t i = i0; i < i1; ++i) {
+            const double s = double(i) / (ALBEDO_NODES - 1);
+            const double a = std::max(1.0 - s * s, DIRPOLE_MIN_ALPHA);
+            const DirectionalDipole d(1.0 - a, a, eta);  // σt′ = 1 mm⁻¹
+            const double modelNormal = integrateSdOverPlane(d, 1.0);
+            const double exactNormal = halfSpaceReflectance(a, eta, 1.0);
+            for (int j = 0; j + 1 < COSINE_NODES; ++j) {  // the last node is μ₀ = 1: k = 1
+                const double mu0 = m_minCosine + (1.0 - m_minCosine) * j / (COSINE_NODES - 1);
+                const double k = (halfSpaceReflectance(a, eta, mu0) / exactNormal) /
+                                 (integrateSdOverPlane(d, mu0) / modelNormal);
+                m_values[size_t(i) * COSINE_NODES + size_t(j)] = float(k);
+            }
+        }
+    });
+}
+
+std::shared_ptr<const DirpoleIncidenceTable> DirpoleIncidenceTable::shared(double eta) {
+    return cachedTable<DirpoleIncidenceTable>(eta, [&] { return DirpoleIncidenceTable(eta); });
+}
+
+double DirpoleIncidenceTable::correction(double alphaPrime, double mu0) const {
+    if (m_values.empty())
+        return 1.0;
+    const double s = std::sqrt(std::clamp(1.0 - alphaPrime, 0.0, 1.0)) * (ALBEDO_NODES - 1);
+    const int i = std::min(int(s), ALBEDO_NODES - 2);
+    const double fs = s - i;
+    const double u =
+        std::clamp((mu0 - m_minCosine) / (1.0 - m_minCosine), 0.0, 1.0) * (COSINE_NODES - 1);
+    const int j = std::min(int(u), COSINE_NODES - 2);
+    const double fu = u - j;
+    const auto at = [&](int a, int b) {
+        return double(m_values[size_t(a) * COSINE_NODES + size_t(b)]);
+    };
+    return (1.0 - fs) * ((1.0 - fu) * at(i, j) + fu * at(i, j + 1)) +
+           fs * ((1.0 - fu) * at(i + 1, j) + fu * at(i + 1, j + 1));
 }
 
 double totalReflectance(Model m, const ScalarMedium& medium) {

@@ -264,6 +264,38 @@ private:
     std::vector<float> m_values;
 };
 
+/// The incidence correction of the exact target (EnergyTarget::ExactHalfSpace). The energy
+/// scale matches the totals at normal incidence only; at oblique incidence the directional
+/// dipole's total follows the exact one badly at low albedo (skin1's blue at η 1.3, refracted
+/// cosine 0.64: 1.09× the exact; marble 0.97×). k(α′, μ₀) = [ρ_exact(μ₀)/ρ_exact(1)] /
+/// [ρ_model(μ₀)/ρ_model(1)] multiplies each light sample by the cosine μ₀ of its refracted
+/// direction, so the total is exact at every incidence on a plane. Tabulated per η at
+/// ALBEDO_NODES albedos uniform in s = √(1 − α′) and COSINE_NODES cosines uniform over
+/// [μ_min, 1], μ_min = max(√(1 − 1/η²), 0.05) (no refracted ray is shallower than the
+/// critical angle's), bilinear between them; k(α′, 1) = 1. Built once per η (≈ 0.3 s, both
+/// cores). Layout: shaders/shared/DirpoleShared.h.
+class DirpoleIncidenceTable {
+public:
+    static constexpr int ALBEDO_NODES = 24;
+    static constexpr int COSINE_NODES = 8;
+    DirpoleIncidenceTable() = default;
+    /// @throw ValueError for η ∉ [1, 3].
+    explicit DirpoleIncidenceTable(double eta);
+    /// The table for η, built once per process and shared (thread-safe).
+    static std::shared_ptr<const DirpoleIncidenceTable> shared(double eta);
+    /// k(α′, μ₀), both clamped to the table. 1 for a default-constructed table.
+    [[nodiscard]] double correction(double alphaPrime, double mu0) const;
+    [[nodiscard]] const std::vector<float>& values() const { return m_values; }
+    [[nodiscard]] double eta() const { return m_eta; }
+    /// Smallest tabulated refracted cosine μ_min.
+    [[nodiscard]] double minCosine() const { return m_minCosine; }
+
+private:
+    double m_eta = 1.0;
+    double m_minCosine = 0.05;
+    std::vector<float> m_values;  // [albedo node][cosine node]
+};
+
 /// Numerical ∫₀^∞ f(r) 2πr dr of a radial profile: composite Gauss–Legendre in log r over
 /// [1e-9·scale, 1e4·scale], plus the tail r > 1e4·scale by the substitution t = 1/r.
 /// @param scale a length (mm) of the profile's core, e.g. z_r.
@@ -272,6 +304,13 @@ double integrateRadial(double (*f)(const void*, double), const void* ctx, double
 double integrateProfile(const DipoleProfile& p);
 /// ∫ R dA of the directional dipole's normal-incidence radial profile by quadrature.
 double integrateProfile(const DirectionalDipole& p);
+
+/// ∫ S_d dA over a plane (sr⁻¹) for light refracted into it at cosine `mu0` to the inward
+/// normal, by quadrature in log r and azimuth. Times π(1 − 2C₁(1/η)) (the cosine integral of
+/// T₂₁, as in DirectionalDipole::radial) it is the model's total exitance per unit entering
+/// flux at that incidence; at mu0 = 1 that is integrateProfile(d) (test
+/// DirpoleIncidence.PlaneIntegralAtNormalIncidenceIsTheRadialOne). @param mu0 ∈ (0, 1].
+double integrateSdOverPlane(const DirectionalDipole& d, double mu0);
 
 /// Total diffuse reflectance of a model for one channel (closed form for the two dipoles;
 /// quadrature for the directional dipole, which has none).
