@@ -163,6 +163,17 @@ struct DirpoleSubsurfaceProvider::Impl {
         needMaterialPass = true;
     }
     /// Everything restarts at the next frame (settings, lights, meshes).
+    /// The exact target's tables apply (exit angle, incidence).
+    [[nodiscard]] bool exactTarget() const {
+        return settings.energyNormalised && settings.energyTarget == EnergyTarget::ExactHalfSpace;
+    }
+
+    /// `buffer` becomes an immutable SSBO holding `values`.
+    static void replaceTableBuffer(gpu::GlObject& buffer, const std::vector<float>& values) {
+        buffer.destroy();
+        buffer = gpu::createBuffer(values.size() * sizeof(float), values.data(), 0);
+    }
+
     void markFullRestart() {
         markRestart();
         needClear = true;
@@ -426,13 +437,10 @@ struct DirpoleSubsurfaceProvider::Impl {
             energyTarget = settings.energyTarget;
         }
         // The exact target's incidence correction k(α′, μ₀) per light sample.
-        const bool incidenceCorrection =
-            settings.energyNormalised && settings.energyTarget == EnergyTarget::ExactHalfSpace;
+        const bool incidenceCorrection = exactTarget();
         if (incidenceCorrection && incidenceEta != settings.eta) {
             const DirpoleIncidenceTable& table = *DirpoleIncidenceTable::shared(settings.eta);
-            incidenceTable.destroy();
-            incidenceTable =
-                gpu::createBuffer(table.values().size() * sizeof(float), table.values().data(), 0);
+            replaceTableBuffer(incidenceTable, table.values());
             incidenceEta = settings.eta;
             incidenceMinCosine = float(table.minCosine());
         }
@@ -580,14 +588,10 @@ struct DirpoleSubsurfaceProvider::Impl {
         glUniform1i(p.uniformLocation("u_meshId"), settings.meshId);
         // The exact target's exit-angle correction: c(α′, t) at x_o's material (docs/methods/
         // dipole.md §1), so the light leaves with the half-space's angular distribution.
-        const bool exitCorrection =
-            settings.energyNormalised && settings.energyTarget == EnergyTarget::ExactHalfSpace;
+        const bool exitCorrection = exactTarget();
         if (exitCorrection && exitEta != settings.eta) {
             // ≈ 0.1 s, once per η and process
-            const DirpoleExitTable& table = *DirpoleExitTable::shared(settings.eta);
-            exitTable.destroy();
-            exitTable =
-                gpu::createBuffer(table.values().size() * sizeof(float), table.values().data(), 0);
+            replaceTableBuffer(exitTable, DirpoleExitTable::shared(settings.eta)->values());
             exitEta = settings.eta;
         }
         glUniform1i(p.uniformLocation("u_exitCorrection"), exitCorrection ? 1 : 0);
