@@ -86,7 +86,7 @@ HalfSpaceExitance halfSpaceExitance(double albedo, double eta, double mu0,
     const Eigen::Index n = Eigen::Index(rule.x.size());
     const Eigen::Map<const Eigen::VectorXd> mu(rule.x.data(), n), w(rule.w.data(), n);
 
-    double dtau = std::ldexp(1.0, -32);
+    const double dtau = std::ldexp(1.0, -32);  // the start layer's optical thickness
     Eigen::MatrixXd R(n, n), T(n, n);
     Eigen::VectorXd rc(n);
     for (Eigen::Index i = 0; i < n; ++i) {
@@ -119,7 +119,6 @@ HalfSpaceExitance halfSpaceExitance(double albedo, double eta, double mu0,
         d *= d;
         R += T * interReflections.solve(R * T);
         T = T * interReflections.solve(T);
-        dtau *= 2.0;
     }
     LUCENT_ASSERT(doublings < 200);
 
