@@ -8,6 +8,7 @@
 ///
 ///     bench_skips [--repeats 7] [--only "combined SSLPV"]
 
+#include <lucent/bench/ErrorMetrics.h>
 #include <lucent/combined/Combined.h>
 #include <lucent/core/Fresnel.h>
 #include <lucent/core/Image.h>
@@ -19,6 +20,7 @@
 #include <lucent/material/Presets.h>
 #include <lucent/methods/RenderImage.h>
 #include <lucent/mesh/Procedural.h>
+#include <lucent/reference/PathTracer.h>
 #include <lucent/scene/LightReach.h>
 #include <lucent/scene/Scene.h>
 #include <lucent/sslpv/SslpvBench.h>
@@ -348,8 +350,21 @@ Row combinedFarSkip(int repeats) {
         }
     r.fired = a.plan.sslpvSkipped ? fmt("SSLPV skipped, far share %.2g", a.plan.farShare)
                                   : std::string("did not fire");
+    // Which answer is right: a path-traced reference (cheap in this absorbing medium).
+    reference::ReferenceOptions ro;
+    ro.spp = 256;
+    ro.subsurfaceOnly = true;
+    ro.seed = 7;
+    const reference::ReferenceImage ref = reference::renderReference(scene, ro);
+    const std::vector<uint8_t> mask = bench::maskFromImage(ref.coverage);
+    const auto relRmse = [&](const ImageRgb& img) {
+        return bench::compareImages(img, ref.mean, &ref.variance, nullptr, &mask).channels[3];
+    };
     r.error = fmt("largest pixel change %.2g of the peak, image sum %+.1f %%", moved / peak,
-                  100.0 * (sumA - sumC) / sumC);
+                  100.0 * (sumA - sumC) / sumC) +
+              fmt("; rel. RMSE vs %.0f spp path-traced (floor %.3f): ", double(ref.spp),
+                  relRmse(a.radiance).relRmseFloor) +
+              fmt("on %.3f, off %.3f", relRmse(a.radiance).relRmse, relRmse(c.radiance).relRmse);
     return r;
 }
 

@@ -856,6 +856,55 @@ TEST_F(CombinedGl, LimitsSelectOnePartAndMaterialSyncReachesBoth) {
     EXPECT_GE(provider.stats().dipole.lastUploadBricks, 1);
 }
 
+// The provider's automatic skip on the absorbing sphere: SSLPV, the kernel and the local
+// estimate are left out, so the frame is the windowed dipole alone, bit for bit a fresh provider
+// with the Steps split whose plan leaves SSLPV out (k = 4 ≥ 3 steps) at the same r_s and dipole
+// samples. A stroke that paints a translucent voxel brings SSLPV back (the far share is taken
+// over the whole volume).
+TEST_F(CombinedGl, FarSkipLeavesSslpvOutUntilAStrokeNeedsIt) {
+    scene.objects[0].material =
+        std::make_shared<MaterialVolume>(scene.objects[0].material->spec(), absorbingMaterial());
+    const ImageRgb skipped = frame(settings(-1.f));
+    ASSERT_TRUE(provider.stats().plan.sslpvSkipped);
+    EXPECT_FALSE(provider.stats().plan.sslpvOn);
+    EXPECT_EQ(provider.stats().localEstimates, 0);
+    // The same first frame of a fresh provider (the dipole's progressive state starts alike).
+    CombinedProviderSettings dipoleOnly =
+        settings(provider.stats().plan.splitRadius, SplitMode::Steps);
+    dipoleOnly.sslpv.render.solver.maxSteps = 3;
+    dipoleOnly.autoSkipSslpv = false;
+    CombinedSubsurfaceProvider fresh;
+    fresh.create();
+    fresh.setSettings(dipoleOnly);
+    fresh.setMesh(scene.objects[0].mesh);
+    fresh.setLights(scene.lights);
+    fresh.setMaterial(*scene.objects[0].material, scene.eta);
+    renderer.setSubsurfaceProvider(&fresh);
+    renderer.render();
+    const ImageRgb windowed = renderer.readRadiance();
+    ASSERT_FALSE(fresh.stats().plan.sslpvOn);
+    ASSERT_FALSE(fresh.stats().plan.sslpvSkipped);
+    renderer.setSubsurfaceProvider(&provider);
+    fresh.destroy();
+    expectImagesEqual(skipped, windowed, 0.f, "GL skip on = windowed dipole");
+    CombinedProviderSettings off = settings(-1.f);
+    off.autoSkipSslpv = false;
+    (void)frame(off);
+    EXPECT_TRUE(provider.stats().plan.sslpvOn);
+
+    (void)frame(settings(-1.f));
+    ASSERT_TRUE(provider.stats().plan.sslpvSkipped);
+    MaterialVolume& vol = *scene.objects[0].material;
+    vol.set(Coord(16, 16, 28), skinMaterial());
+    ASSERT_GE(provider.syncMaterial(vol), 1u);
+    EXPECT_TRUE(provider.stats().plan.sslpvOn);
+    EXPECT_FALSE(provider.stats().plan.sslpvSkipped);
+    EXPECT_GT(provider.stats().plan.farShare, double(DEFAULT_FAR_TOLERANCE));
+    const int before = provider.stats().localEstimates;
+    renderer.render();
+    EXPECT_GT(provider.stats().localEstimates, before);  // the Kernel split runs again in full
+}
+
 // A paint stroke changes only the material. The local SSLPV estimate L̂ (32 samples per pixel of
 // the irradiance image and the kernel) does not depend on it, so the stroke frame reuses it; the
 // kernel (mean material, a half-space SSLPV solve) is recomputed at the next frame, and only
