@@ -21,6 +21,9 @@
 ///    far is dropped, but SSLPV light of near sources that arrives late is counted twice
 ///    (20–40 % of the total on thick slabs, docs/methods/combined.md).
 ///
+/// Where the dipole's tail beyond r_s (within the object's extent) is negligible, SSLPV is left
+/// out (applyFarSkip, CombinedSettings::autoSkipSslpv).
+///
 ///     combined::CombinedSettings cs;  cs.splitRadius = 4.f;     // mm
 ///     combined::CombinedResult r = combined::renderCombined(scene, cs);
 ///     writeExr(r.radiance, "combined.exr");                     // W/(mm²·sr), subsurface only
