@@ -80,11 +80,14 @@ double dipoleFarShare(dipole::Model model, const MaterialSample& material, float
             dipole::fromReduced(material.sigma_t[c], material.sigma_s[c], eta);
         const dipole::DipoleProfile p =
             dipole::DipoleProfile::make(model, med.sigma_a, med.sigma_s, boundary);
-        const double total = p.totalReflectance();
-        if (!(total > 0.0))
+        // Relative to what the object can hold, ∫_0^{max(r_s, D)} R_d dA, not the infinite
+        // plane's total: an optically thin object (D ≪ 1/σt′) holds a flat, tiny part of the
+        // profile, most of it beyond r_s.
+        const double within = p.totalReflectance() - p.reflectanceBeyond(r1);
+        if (!(within > 0.0))
             continue;  // a black channel sends nothing anywhere
         const double far = p.reflectanceBeyond(r0) - p.reflectanceBeyond(r1);
-        share = std::max(share, std::clamp(far / total, 0.0, 1.0));
+        share = std::max(share, std::clamp(far / within, 0.0, 1.0));
     }
     return share;
 }

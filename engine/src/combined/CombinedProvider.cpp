@@ -288,7 +288,10 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
     ++m->stats.frames;
     m->stats.dipole = m->dipole.stats();
     m->stats.sslpv = m->sslpv.stats();
-    m->stats.converged = !plan.dipoleOn || (m->stats.dipole.converged && !m->kernelDirty);
+    // Only the Kernel split with SSLPV on has a kernel to wait for (a skipped SSLPV has none).
+    const bool kernelNeeded = plan.mode == SplitMode::Kernel && plan.sslpvOn;
+    m->stats.converged =
+        !plan.dipoleOn || (m->stats.dipole.converged && (!kernelNeeded || !m->kernelDirty));
 }
 
 void CombinedSubsurfaceProvider::updateLocalEstimate(const gpu::GBufferView& g) {

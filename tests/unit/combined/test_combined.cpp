@@ -502,7 +502,9 @@ TEST(CombinedSplit, FarShareIsTheDipoleTailBetweenSplitRadiusAndObjectExtent) {
         const MaterialSample m = absorbingMaterial();
         const double total = p.totalReflectance();
         EXPECT_NEAR(dipoleFarShare(model, m, eta, 0.5f, 2.f),
-                    (p.reflectanceBeyond(0.5) - p.reflectanceBeyond(2.0)) / total, 1e-12);
+                    (p.reflectanceBeyond(0.5) - p.reflectanceBeyond(2.0)) /
+                        (total - p.reflectanceBeyond(2.0)),
+                    1e-12);
         EXPECT_EQ(dipoleFarShare(model, m, eta, 2.f, 2.f), 0.0);  // r_s = D
         EXPECT_EQ(dipoleFarShare(model, m, eta, 5.f, 2.f), 0.0);  // r_s > D
         EXPECT_EQ(dipoleFarShare(model, m, eta, INF_F, 1e9f), 0.0);
@@ -515,6 +517,12 @@ TEST(CombinedSplit, FarShareIsTheDipoleTailBetweenSplitRadiusAndObjectExtent) {
             last = f;
         }
         EXPECT_LT(dipoleFarShare(model, m, eta, 3.f, INF_F), 1e-4);
+        // Optically thin (σt′ = 10⁻⁴ mm⁻¹, D = 35 mm ≪ 1/σt′): R_d is flat over the object, so
+        // the share beyond r_s is ≈ 1 − (r_s/D)² of what it holds, however small its total.
+        MaterialSample thin;
+        thin.sigma_t = Rgb(1e-4f);
+        thin.sigma_s = Rgb(0.9e-4f);
+        EXPECT_NEAR(dipoleFarShare(model, thin, eta, 5.f, 35.f), 1.0 - 25.0 / 1225.0, 1e-3);
     }
     EXPECT_THROW(
         dipoleFarShare(dipole::Model::Dipole, absorbingMaterial(), eta, std::nanf(""), 1.f),
@@ -868,6 +876,8 @@ TEST_F(CombinedGl, FarSkipLeavesSslpvOutUntilAStrokeNeedsIt) {
     ASSERT_TRUE(provider.stats().plan.sslpvSkipped);
     EXPECT_FALSE(provider.stats().plan.sslpvOn);
     EXPECT_EQ(provider.stats().localEstimates, 0);
+    // No kernel to wait for: converged with the dipole's one frame (renderers stop there).
+    EXPECT_TRUE(provider.stats().converged);
     // The same first frame of a fresh provider (the dipole's progressive state starts alike).
     CombinedProviderSettings dipoleOnly =
         settings(provider.stats().plan.splitRadius, SplitMode::Steps);

@@ -84,20 +84,23 @@ SplitPlan planSplit(float splitRadius, float cellSize, int baseSkip, int maxStep
                     SplitMode mode = SplitMode::Kernel);
 
 /// Default tolerance of the automatic SSLPV skip (CombinedSettings::farTolerance): the share of
-/// the dipole's total diffuse reflectance that may lie beyond r_s when SSLPV is left out.
+/// the dipole's reflectance within the object's reach that may lie beyond r_s when SSLPV is left
+/// out.
 constexpr float DEFAULT_FAR_TOLERANCE = 1e-3f;
 
-/// The far share of one homogeneous material: the part of the dipole's total diffuse
-/// reflectance that the split leaves to SSLPV and that the object can hold,
-///   F(r_s, D) = ∫_{r_s}^{max(r_s, D)} R_d 2πr dr / ∫_0^∞ R_d 2πr dr
+/// The far share of one homogeneous material: the part of the dipole's diffuse reflectance
+/// within the object's reach that the split leaves to SSLPV,
+///   F(r_s, D) = ∫_{r_s}^{max(r_s, D)} R_d 2πr dr / ∫_0^{max(r_s, D)} R_d 2πr dr
 /// (DipoleProfile::reflectanceBeyond, closed form), largest of the RGB channels. D bounds the
 /// distance between any two surface points of the object (objectExtent), so light cannot
 /// travel further than D between entering and leaving: F = 0 when r_s ≥ D (the window covers
 /// the object), and F ≤ e^{−σ_tr (r_s − z_v)}-small when r_s is a few diffusion lengths
 /// 1/σ_tr. Bound: for any x_o the transport from |x_i − x_o| > r_s is
-///   F_t/π ∫_{r_s<r≤D} R_d E dA ≤ F · (F_t/π · E_max · ∫ R_d dA),
-/// i.e. at most F times the radiance of the brightest irradiance spread uniformly (flat-surface
-/// measure dA = 2πr dr, the one the image-space gather integrates on). 0 for a black material.
+///   F_t/π ∫_{r_s<r≤D} R_d E dA ≤ F · (F_t/π · E_max · ∫_{r≤D} R_d dA),
+/// i.e. at most F times the radiance of the brightest irradiance spread uniformly over the
+/// object's reach (flat-surface measure dA = 2πr dr, the one the image-space gather integrates
+/// on; normalising by the reach, not the whole plane, keeps optically thin objects, D ≪ 1/σt′,
+/// from skipping). 0 for a black material.
 /// @param model Dipole or BetterDipole (the image-space gather's models); @param splitRadius,
 /// extent in mm (≥ 0; +∞ allowed). @throw ValueError for NaN radii or an invalid medium.
 double dipoleFarShare(dipole::Model model, const MaterialSample& material, float eta,
