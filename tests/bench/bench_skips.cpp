@@ -6,8 +6,10 @@
 /// "Skips". CPU paths only (SSLPV solver, image-space dipole, SSLPV's CPU renderImage), so it
 /// runs without GL.
 ///
-///     bench_skips [--repeats 7]
+///     bench_skips [--repeats 7] [--only "combined SSLPV"]
 
+#include <lucent/bench/ErrorMetrics.h>
+#include <lucent/combined/Combined.h>
 #include <lucent/core/Fresnel.h>
 #include <lucent/core/Image.h>
 #include <lucent/core/Timer.h>
@@ -18,6 +20,7 @@
 #include <lucent/material/Presets.h>
 #include <lucent/methods/RenderImage.h>
 #include <lucent/mesh/Procedural.h>
+#include <lucent/reference/PathTracer.h>
 #include <lucent/scene/LightReach.h>
 #include <lucent/scene/Scene.h>
 #include <lucent/sslpv/SslpvBench.h>
@@ -307,28 +310,96 @@ Row lightSkip(int repeats) {
     return r;
 }
 
+/// The combined method's automatic SSLPV skip (CombinedSettings::autoSkipSslpv): a strongly
+/// absorbing 10 mm sphere (σa = 2, σs′ = 1 mm⁻¹, 1/σ_tr = 0.24 mm) at the combined defaults
+/// (Kernel split, SSLPV 32³, r_s = 4 cells): the dipole's far share is ≈ 10⁻¹¹, so SSLPV, its
+/// kernel and the local estimate are left out.
+Row combinedFarSkip(int repeats) {
+    Scene scene;
+    MaterialSample absorbing;
+    absorbing.sigma_s = Rgb(1.f);
+    absorbing.sigma_t = Rgb(3.f);
+    scene.objects.push_back(makeObject(makeSphere(10.f, 4), 32, absorbing));
+    Light l;
+    l.position = {25.f, 20.f, 25.f};
+    l.intensity = Rgb(1000.f);
+    scene.lights.push_back(l);
+    scene.camera.position = {0.f, 0.f, 40.f};
+    scene.camera.width = scene.camera.height = 64;
+    combined::CombinedSettings on, off;
+    off.autoSkipSslpv = false;
+    combined::CombinedResult a, c;
+    Row r{"SSLPV part of the combined method when the dipole's far share <= 1e-3",
+          "absorbing sphere (σa 2, σs′ 1 mm⁻¹) 64², combined defaults (kernel split, 32³, "
+          "r_s 4 cells)",
+          0,
+          0,
+          "",
+          ""};
+    r.onMs = medianOf(repeats, [&] { a = combined::renderCombined(scene, on); });
+    r.offMs = medianOf(repeats, [&] { c = combined::renderCombined(scene, off); });
+    float moved = 0.f, peak = 0.f;
+    double sumA = 0.0, sumC = 0.0;
+    for (int y = 0; y < a.radiance.height(); ++y)
+        for (int x = 0; x < a.radiance.width(); ++x) {
+            moved = std::max(
+                moved, std::abs(luminance(a.radiance.at(x, y)) - luminance(c.radiance.at(x, y))));
+            peak = std::max(peak, luminance(c.radiance.at(x, y)));
+            sumA += double(luminance(a.radiance.at(x, y)));
+            sumC += double(luminance(c.radiance.at(x, y)));
+        }
+    r.fired = a.plan.sslpvSkipped ? fmt("SSLPV skipped, far share %.2g", a.plan.farShare)
+                                  : std::string("did not fire");
+    // Which answer is right: a path-traced reference (cheap in this absorbing medium).
+    reference::ReferenceOptions ro;
+    ro.spp = 256;
+    ro.subsurfaceOnly = true;
+    ro.seed = 7;
+    const reference::ReferenceImage ref = reference::renderReference(scene, ro);
+    const std::vector<uint8_t> mask = bench::maskFromImage(ref.coverage);
+    const auto relRmse = [&](const ImageRgb& img) {
+        return bench::compareImages(img, ref.mean, &ref.variance, nullptr, &mask).channels[3];
+    };
+    r.error = fmt("largest pixel change %.2g of the peak, image sum %+.1f %%", moved / peak,
+                  100.0 * (sumA - sumC) / sumC) +
+              fmt("; rel. RMSE vs %.0f spp path-traced (floor %.3f): ", double(ref.spp),
+                  relRmse(a.radiance).relRmseFloor) +
+              fmt("on %.3f, off %.3f", relRmse(a.radiance).relRmse, relRmse(c.radiance).relRmse);
+    return r;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     int repeats = 7;
+    std::string only;  // run only the rows whose skip name contains this
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--repeats" && i + 1 < argc)
             repeats = std::max(1, std::atoi(argv[++i]));
+        else if (a == "--only" && i + 1 < argc)
+            only = argv[++i];
         else {
-            std::fprintf(stderr, "usage: bench_skips [--repeats N]\n");
+            std::fprintf(stderr, "usage: bench_skips [--repeats N] [--only SUBSTRING]\n");
             return 2;
         }
     }
+    using Sslpv = sslpv::SslpvBenchScene;
+    const std::vector<std::pair<std::string, std::function<Row()>>> builders = {
+        {"empty bricks", [&] { return sslpvBricks(Sslpv::Sphere, 8, repeats); }},
+        {"empty bricks", [&] { return sslpvBricks(Sslpv::Sphere, 32, repeats); }},
+        {"empty bricks", [&] { return sslpvBricks(Sslpv::Spot, 8, repeats); }},
+        {"early stop", [&] { return sslpvEarlyStop(repeats); }},
+        {"unchanged inputs", [&] { return sslpvUnchanged(repeats); }},
+        {"light views", [&] { return dipoleLightViews(repeats); }},
+        {"max radius", [&] { return dipoleMaxRadius(repeats); }},
+        {"lights", [&] { return lightSkip(repeats); }},
+        {"combined SSLPV", [&] { return combinedFarSkip(repeats); }},
+    };
     std::vector<Row> rows;
-    rows.push_back(sslpvBricks(sslpv::SslpvBenchScene::Sphere, 8, repeats));
-    rows.push_back(sslpvBricks(sslpv::SslpvBenchScene::Sphere, 32, repeats));
-    rows.push_back(sslpvBricks(sslpv::SslpvBenchScene::Spot, 8, repeats));
-    rows.push_back(sslpvEarlyStop(repeats));
-    rows.push_back(sslpvUnchanged(repeats));
-    rows.push_back(dipoleLightViews(repeats));
-    rows.push_back(dipoleMaxRadius(repeats));
-    rows.push_back(lightSkip(repeats));
+    for (const auto& [name, build] : builders)
+        if (only.empty() || name.find(only) != std::string::npos)
+            rows.push_back(build());
     std::printf(
         "| skip | scene | on ms | off ms | off/on | fired | answer "
         "|\n|---|---|---|---|---|---|---|\n");

@@ -14,6 +14,7 @@
 #include <lucent/dipole/Profiles.h>
 #include <lucent/material/MaterialVolume.h>
 #include <lucent/material/Resample.h>
+#include <lucent/mesh/TriangleMesh.h>
 #include <lucent/sslpv/Transfer.h>
 
 #include <algorithm>
@@ -59,6 +60,75 @@ SplitPlan planSplit(float splitRadius, float cellSize, int baseSkip, int maxStep
     p.dipoleOn = p.splitRadius > 0.f;
     p.sslpvOn = p.skipSteps < maxSteps;
     return p;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The automatic SSLPV skip
+
+double dipoleFarShare(dipole::Model model, const MaterialSample& material, float eta,
+                      float splitRadius, float extent) {
+    LUCENT_CHECK(
+        !std::isnan(splitRadius) && splitRadius >= 0.f && !std::isnan(extent) && extent >= 0.f,
+        "combined: far share needs a split radius and an object extent >= 0 mm");
+    const dipole::Boundary boundary = dipole::Boundary::of(eta);
+    // Light leaves at most D from where it entered: the window [0, r_s] and the object's
+    // [0, D] overlap in everything when r_s ≥ D.
+    const double r0 = double(splitRadius), r1 = std::max(r0, double(extent));
+    double share = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        const dipole::ScalarMedium med =
+            dipole::fromReduced(material.sigma_t[c], material.sigma_s[c], eta);
+        const dipole::DipoleProfile p =
+            dipole::DipoleProfile::make(model, med.sigma_a, med.sigma_s, boundary);
+        // Relative to what the object can hold, ∫_0^{max(r_s, D)} R_d dA, not the infinite
+        // plane's total: an optically thin object (D ≪ 1/σt′) holds a flat, tiny part of the
+        // profile, most of it beyond r_s.
+        const double within = p.totalReflectance() - p.reflectanceBeyond(r1);
+        if (!(within > 0.0))
+            continue;  // a black channel sends nothing anywhere
+        const double far = p.reflectanceBeyond(r0) - p.reflectanceBeyond(r1);
+        share = std::max(share, std::clamp(far / within, 0.0, 1.0));
+    }
+    return share;
+}
+
+double volumeFarShare(dipole::Model model, const MaterialVolume& volume, float eta,
+                      float splitRadius, float extent) {
+    const int n = volume.resolution();
+    double share = 0.0;
+    bool any = false;
+    MaterialSample last;
+    // Painted volumes hold long runs of one material: a run costs one profile evaluation.
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const Coord c(x, y, z);
+                if (!volume.isInside(c))
+                    continue;
+                const MaterialSample v = volume.at(c);
+                if (any && v.sigma_t == last.sigma_t && v.sigma_s == last.sigma_s)
+                    continue;
+                share = std::max(share, dipoleFarShare(model, v, eta, splitRadius, extent));
+                last = v;
+                any = true;
+            }
+    LUCENT_CHECK(any, "combined: the material volume has no inside voxel");
+    return share;
+}
+
+float objectExtent(const TriangleMesh& mesh) {
+    return glm::length(mesh.bounds().extent());
+}
+
+void applyFarSkip(SplitPlan& plan, double farShare, float tolerance) {
+    LUCENT_CHECK(std::isfinite(tolerance) && tolerance >= 0.f,
+                 "CombinedSettings.farTolerance must be finite and >= 0 (got ", tolerance, ")");
+    plan.farShare = farShare;
+    // Without the dipole (r_s = 0) SSLPV carries all of the light: never skipped.
+    if (plan.dipoleOn && plan.sslpvOn && farShare <= double(tolerance)) {
+        plan.sslpvOn = false;
+        plan.sslpvSkipped = true;
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -336,11 +406,19 @@ CombinedResult renderCombined(const Scene& scene, const CombinedSettings& settin
     LUCENT_CHECK(settings.localSamples >= 1 && settings.localSamples <= 4096,
                  "CombinedSettings.localSamples must be in [1, 4096] (got ", settings.localSamples,
                  ")");
+    LUCENT_CHECK(std::isfinite(settings.farTolerance) && settings.farTolerance >= 0.f,
+                 "CombinedSettings.farTolerance must be finite and >= 0 (got ",
+                 settings.farTolerance, ")");
     const MaterialVolume& volume = *scene.objects[0].material;
     CombinedResult out;
     out.plan = planSplit(settings.splitRadius, sslpvCellSize(volume, settings.sslpv.gridResolution),
                          settings.sslpv.solver.skipAccumulateSteps, settings.sslpv.solver.maxSteps,
                          settings.mode);
+    if (settings.autoSkipSslpv && out.plan.dipoleOn && out.plan.sslpvOn)
+        applyFarSkip(out.plan,
+                     volumeFarShare(settings.dipole.model, volume, scene.eta, out.plan.splitRadius,
+                                    objectExtent(scene.objects[0].mesh)),
+                     settings.farTolerance);
     const int w = scene.camera.width, h = scene.camera.height;
     out.dipole = ImageRgb(w, h);
     out.sslpv = ImageRgb(w, h);
@@ -359,7 +437,7 @@ CombinedResult renderCombined(const Scene& scene, const CombinedSettings& settin
         so.solver.skipAccumulateSteps = out.plan.skipSteps;
         out.sslpv = sslpv::renderSslpv(scene, so);
     }
-    if (out.plan.mode == SplitMode::Kernel && out.plan.dipoleOn) {
+    if (out.plan.mode == SplitMode::Kernel && out.plan.dipoleOn && out.plan.sslpvOn) {
         const SslpvSurfaceKernel kernel =
             computeSslpvSurfaceKernel(meanInsideMaterial(volume), scene.eta, settings.sslpv.solver,
                                       out.plan.cellSize, out.plan.splitRadius);

@@ -29,6 +29,7 @@ struct CombinedSubsurfaceProvider::Impl {
     int scratchW = 0, scratchH = 0;
     const MaterialVolume* volume = nullptr;
     float cellSize = 0.f;            ///< SSLPV Δx of the attached volume, 0 before one
+    float extent = -1.f;             ///< objectExtent of the attached mesh, mm; < 0 before one
     std::vector<int> pendingBricks;  ///< dipole uploads waiting for a current context
     SslpvSurfaceKernel kernel;       ///< Kernel split: SSLPV's local kernel
     bool kernelDirty = true;         ///< material/split changed: recompute and re-upload
@@ -93,6 +94,9 @@ void CombinedSubsurfaceProvider::setSettings(const CombinedProviderSettings& set
     LUCENT_CHECK(settings.eta >= 1.f && settings.eta <= 3.f,
                  "CombinedProviderSettings.eta must be in [1, 3] (got ", settings.eta, ")");
     LUCENT_CHECK(settings.meshId >= -1, "CombinedProviderSettings.meshId must be >= -1");
+    LUCENT_CHECK(std::isfinite(settings.farTolerance) && settings.farTolerance >= 0.f,
+                 "CombinedProviderSettings.farTolerance must be finite and >= 0 (got ",
+                 settings.farTolerance, ")");
     const CombinedProviderSettings old = m->settings;
     m->settings = settings;
     try {
@@ -115,8 +119,14 @@ void CombinedSubsurfaceProvider::applySplit() {
     LUCENT_CHECK(s.localSamples >= 1 && s.localSamples <= 4096,
                  "CombinedProviderSettings.localSamples must be in [1, 4096] (got ", s.localSamples,
                  ")");
-    const SplitPlan plan = planSplit(s.splitRadius, m->cellSize > 0.f ? m->cellSize : 1.f,
-                                     so.skipAccumulateSteps, so.maxSteps, s.mode);
+    SplitPlan plan = planSplit(s.splitRadius, m->cellSize > 0.f ? m->cellSize : 1.f,
+                               so.skipAccumulateSteps, so.maxSteps, s.mode);
+    // The automatic skip needs the object: decided once both mesh and material are attached.
+    if (s.autoSkipSslpv && m->volume != nullptr && m->extent >= 0.f && plan.dipoleOn &&
+        plan.sslpvOn)
+        applyFarSkip(plan,
+                     volumeFarShare(s.dipole.model, *m->volume, s.eta, plan.splitRadius, m->extent),
+                     s.farTolerance);
     sslpv::SslpvProviderOptions lo = s.sslpv;
     lo.render.solver.skipAccumulateSteps = plan.skipSteps;
     lo.meshId = s.meshId;
@@ -133,6 +143,12 @@ void CombinedSubsurfaceProvider::applySplit() {
 void CombinedSubsurfaceProvider::setMesh(const TriangleMesh& mesh) {
     m->sslpv.setMesh(mesh);
     m->dipole.reset();  // the G-buffer changes in ways camera/lights/material do not reveal
+    const float extent = objectExtent(mesh);
+    if (extent != m->extent) {
+        m->extent = extent;
+        if (m->settings.autoSkipSslpv)
+            applySplit();  // the far share depends on the extent
+    }
 }
 
 void CombinedSubsurfaceProvider::setLights(const std::vector<Light>& lights) {
@@ -173,6 +189,25 @@ void CombinedSubsurfaceProvider::updateMaterial(const MaterialVolume& volume,
     if (!m->kernelDirty)
         m->kernelDeferred = true;  // the mean material may have changed: next frame
     m->kernelDirty = true;
+    if (m->settings.autoSkipSslpv && m->extent >= 0.f) {
+        // A stroke may paint a material whose light travels further (or less far): the skip is
+        // decided again over the whole volume (one profile per run of equal voxels).
+        SplitPlan& plan = m->stats.plan;
+        const bool was = plan.sslpvOn;
+        if (plan.sslpvSkipped || plan.sslpvOn) {
+            const sslpv::SslpvOptions& so = m->settings.sslpv.render.solver;
+            SplitPlan fresh = planSplit(m->settings.splitRadius, m->cellSize,
+                                        so.skipAccumulateSteps, so.maxSteps, m->settings.mode);
+            if (fresh.dipoleOn && fresh.sslpvOn)
+                applyFarSkip(fresh,
+                             volumeFarShare(m->settings.dipole.model, volume, m->settings.eta,
+                                            fresh.splitRadius, m->extent),
+                             m->settings.farTolerance);
+            plan = fresh;
+        }
+        if (was != plan.sslpvOn)
+            m->kernelDeferred = false;  // the split changed: the kernel is due this frame
+    }
 }
 
 void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
@@ -209,7 +244,8 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
         glClearTexImage(m->scratch.id(), 0, GL_RGBA, GL_FLOAT, zero);
         m->dipole.renderSubsurface(g, m->scratch.id());
         m->profiler.end();
-        const bool kernel = plan.mode == SplitMode::Kernel;
+        // Skipped SSLPV (applyFarSkip): nothing to subtract from, so no kernel either.
+        const bool kernel = plan.mode == SplitMode::Kernel && plan.sslpvOn;
         const bool deferKernel = m->kernelDeferred && m->kernelBuffer.isValid();
         m->kernelDeferred = false;
         if (kernel && (m->kernelDirty || !m->kernelBuffer.isValid()) && m->volume && !deferKernel) {
@@ -252,7 +288,10 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
     ++m->stats.frames;
     m->stats.dipole = m->dipole.stats();
     m->stats.sslpv = m->sslpv.stats();
-    m->stats.converged = !plan.dipoleOn || (m->stats.dipole.converged && !m->kernelDirty);
+    // Only the Kernel split with SSLPV on has a kernel to wait for (a skipped SSLPV has none).
+    const bool kernelNeeded = plan.mode == SplitMode::Kernel && plan.sslpvOn;
+    m->stats.converged =
+        !plan.dipoleOn || (m->stats.dipole.converged && (!kernelNeeded || !m->kernelDirty));
 }
 
 void CombinedSubsurfaceProvider::updateLocalEstimate(const gpu::GBufferView& g) {

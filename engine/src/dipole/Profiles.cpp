@@ -204,6 +204,25 @@ double DipoleProfile::totalReflectance() const {
     return rho;
 }
 
+double DipoleProfile::reflectanceBeyond(double R) const {
+    if (isZero())
+        return 0.0;
+    R = std::abs(R);
+    if (!(R < 1e100))
+        return 0.0;
+    const double s = m_sigmaTr;
+    const double dr = std::sqrt(R * R + m_zr * m_zr), dv = std::sqrt(R * R + m_zv * m_zv);
+    const double er = std::exp(-s * dr), ev = std::exp(-s * dv);
+    double tail = 0.5 * m_alphaP * m_cE * (m_zr * er / dr + m_zv * ev / dv);
+    if (m_cPhi != 0.0) {
+        // (e^{−σd_r} − e^{−σd_v})/σ with expm1, exact as σ → 0 (then d_v − d_r).
+        const double dd = dv - dr;
+        const double diff = s > 0.0 ? -er * std::expm1(-s * dd) / s : dd;
+        tail += 0.5 * m_alphaP * m_cPhi / m_D * diff;
+    }
+    return tail;
+}
+
 // ---------------------------------------------------------------------------------------------
 // DirectionalDipole
 

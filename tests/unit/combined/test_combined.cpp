@@ -453,6 +453,174 @@ TEST(CombinedCpu, RejectsSceneWithoutMaterialAndNanSplit) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// The automatic SSLPV skip (applyFarSkip, docs/methods/combined.md "Automatic skip")
+
+namespace {
+
+/// Strongly absorbing medium: σa = 2, σs′ = 1 mm⁻¹, σ_tr = √(3·2·3) = 4.2 mm⁻¹ (1/σ_tr = 0.24 mm).
+MaterialSample absorbingMaterial() {
+    MaterialSample m;
+    m.sigma_s = Rgb(1.f);
+    m.sigma_t = Rgb(3.f);
+    return m;
+}
+
+Scene absorbingSphere() {
+    Scene s = litSphere();
+    s.objects[0].material =
+        std::make_shared<MaterialVolume>(s.objects[0].material->spec(), absorbingMaterial());
+    return s;
+}
+
+/// Largest per-pixel |a − b| (luminance) over the peak luminance of `ref`.
+double maxChangeOverPeak(const ImageRgb& a, const ImageRgb& b, const ImageRgb& ref) {
+    double change = 0.0, peak = 0.0;
+    for (int y = 0; y < ref.height(); ++y)
+        for (int x = 0; x < ref.width(); ++x) {
+            change =
+                std::max(change, double(std::abs(luminance(a.at(x, y)) - luminance(b.at(x, y)))));
+            peak = std::max(peak, double(luminance(ref.at(x, y))));
+        }
+    return peak > 0.0 ? change / peak : 0.0;
+}
+
+}  // namespace
+
+// The tail in closed form against Simpson quadrature (both models), and the far share's two
+// regimes: 0 when the window covers the object, e^{−σ_tr r}-small a few diffusion lengths out.
+TEST(CombinedSplit, FarShareIsTheDipoleTailBetweenSplitRadiusAndObjectExtent) {
+    const float eta = 1.3f;
+    for (dipole::Model model : {dipole::Model::Dipole, dipole::Model::BetterDipole}) {
+        const dipole::ScalarMedium med = dipole::fromReduced(3.f, 1.f, eta);
+        const dipole::DipoleProfile p = dipole::DipoleProfile::make(model, med);
+        EXPECT_NEAR(p.reflectanceBeyond(0.0), p.totalReflectance(), 1e-12);
+        for (double R : {0.1, 0.5, 1.0, 2.0}) {
+            const double quad = p.totalReflectance() - dipole::testutil::radialIntegral(p, R);
+            // Simpson in r = R u² (200 panels): 1e-6 of the total.
+            EXPECT_NEAR(p.reflectanceBeyond(R), quad, 1e-6 * p.totalReflectance()) << R;
+        }
+        const MaterialSample m = absorbingMaterial();
+        const double total = p.totalReflectance();
+        EXPECT_NEAR(dipoleFarShare(model, m, eta, 0.5f, 2.f),
+                    (p.reflectanceBeyond(0.5) - p.reflectanceBeyond(2.0)) /
+                        (total - p.reflectanceBeyond(2.0)),
+                    1e-12);
+        EXPECT_EQ(dipoleFarShare(model, m, eta, 2.f, 2.f), 0.0);  // r_s = D
+        EXPECT_EQ(dipoleFarShare(model, m, eta, 5.f, 2.f), 0.0);  // r_s > D
+        EXPECT_EQ(dipoleFarShare(model, m, eta, INF_F, 1e9f), 0.0);
+        EXPECT_NEAR(dipoleFarShare(model, m, eta, 0.f, INF_F), 1.0, 1e-12);  // r_s = 0: all
+        // Decreasing in r_s, and below e^{−σ_tr(r_s − z_v)}·(1 + σ_tr·z_v) once r_s ≫ z_v.
+        double last = 1.0;
+        for (float rs = 0.25f; rs < 6.f; rs += 0.25f) {
+            const double f = dipoleFarShare(model, m, eta, rs, INF_F);
+            EXPECT_LE(f, last);
+            last = f;
+        }
+        EXPECT_LT(dipoleFarShare(model, m, eta, 3.f, INF_F), 1e-4);
+        // Optically thin (σt′ = 10⁻⁴ mm⁻¹, D = 35 mm ≪ 1/σt′): R_d is flat over the object, so
+        // the share beyond r_s is ≈ 1 − (r_s/D)² of what it holds, however small its total.
+        MaterialSample thin;
+        thin.sigma_t = Rgb(1e-4f);
+        thin.sigma_s = Rgb(0.9e-4f);
+        EXPECT_NEAR(dipoleFarShare(model, thin, eta, 5.f, 35.f), 1.0 - 25.0 / 1225.0, 1e-3);
+    }
+    EXPECT_THROW(
+        dipoleFarShare(dipole::Model::Dipole, absorbingMaterial(), eta, std::nanf(""), 1.f),
+        ValueError);
+    // Painted volumes: the largest share over the voxels (a translucent voxel among absorbing
+    // ones decides).
+    const Scene s = absorbingSphere();
+    MaterialVolume v = *s.objects[0].material;
+    const float D = objectExtent(s.objects[0].mesh);
+    EXPECT_NEAR(D, 20.f * std::sqrt(3.f), 0.05f);  // the r = 10 mm sphere's box diagonal
+    const double absorbing = volumeFarShare(dipole::Model::Dipole, v, s.eta, 2.f, D);
+    v.set(Coord(16, 16, 16), skinMaterial());
+    const double painted = volumeFarShare(dipole::Model::Dipole, v, s.eta, 2.f, D);
+    EXPECT_EQ(painted, dipoleFarShare(dipole::Model::Dipole, skinMaterial(), s.eta, 2.f, D));
+    EXPECT_GT(painted, absorbing);
+}
+
+// Fires on an absorbing sphere at the default split (r_s = 4 cells = 5.7 mm ≈ 24 diffusion
+// lengths, far share 5·10⁻¹¹): the image is the windowed dipole, bit for bit the skip-off run's
+// dipole part. The dipole bounds the light that truly arrives from beyond r_s by the far share
+// (dipoleFarShare); what the skip-off image adds there, SSLPV minus its local part, is 18–23 %
+// of the peak on this scene: SSLPV's error (its 1.4 mm cells are 6 diffusion lengths), not
+// transport. So the skip is checked against a path-traced reference: skip on must be closer.
+TEST(CombinedCpu, FarSkipDropsSslpvWhereTheDipoleTailIsNegligible) {
+    const Scene s = absorbingSphere();
+    reference::ReferenceOptions ro;
+    ro.spp = 128;
+    ro.subsurfaceOnly = true;
+    ro.seed = 7;
+    const reference::ReferenceImage ref = reference::renderReference(s, ro);
+    const std::vector<uint8_t> mask = bench::maskFromImage(ref.coverage);
+    for (SplitMode mode : {SplitMode::Kernel, SplitMode::Steps}) {
+        CombinedSettings cs = smallSettings(-1.f, mode);
+        const CombinedResult on = renderCombined(s, cs);
+        cs.autoSkipSslpv = false;
+        const CombinedResult off = renderCombined(s, cs);
+        EXPECT_TRUE(on.plan.sslpvSkipped);
+        EXPECT_FALSE(on.plan.sslpvOn);
+        EXPECT_TRUE(on.plan.dipoleOn);
+        EXPECT_LE(on.plan.farShare, double(DEFAULT_FAR_TOLERANCE));
+        EXPECT_TRUE(off.plan.sslpvOn && !off.plan.sslpvSkipped);
+        EXPECT_EQ(off.plan.farShare, 1.0);  // not evaluated with the switch off
+        // Same dipole gather (window and samples): the skip changes only the SSLPV term.
+        expectImagesEqual(on.dipole, off.dipole, 0.f, "dipole part");
+        expectImagesEqual(on.radiance, off.dipole, 0.f, "skip on = windowed dipole");
+        const bench::ErrorReport eOn =
+            bench::compareImages(on.radiance, ref.mean, &ref.variance, nullptr, &mask);
+        const bench::ErrorReport eOff =
+            bench::compareImages(off.radiance, ref.mean, &ref.variance, nullptr, &mask);
+        std::printf(
+            "absorbing sphere, %s split: far share %.3g, change %.3g of the peak; rel. "
+            "RMSE vs %d spp reference (floor %.3f): skip on %.3f, off %.3f\n",
+            mode == SplitMode::Kernel ? "kernel" : "steps", on.plan.farShare,
+            maxChangeOverPeak(on.radiance, off.radiance, off.radiance), ref.spp,
+            eOn.channels[3].relRmseFloor, eOn.channels[3].relRmse, eOff.channels[3].relRmse);
+        // Both against the same reference image: its noise (the floor) enters both alike.
+        EXPECT_LT(eOn.channels[3].relRmse, eOff.channels[3].relRmse) << int(mode);
+    }
+}
+
+// Fires because the window covers the object: r_s ≥ D (the box diagonal) leaves SSLPV nothing
+// to carry, whatever the material; far share exactly 0, so even tolerance 0 skips. Steps split
+// with r_s = 40 mm ≥ D = 34.6 mm and 64 steps (k = 28 < 64: the plan alone keeps SSLPV).
+TEST(CombinedCpu, FarSkipDropsSslpvWhenTheWindowCoversTheObject) {
+    const Scene s = litSphere();
+    CombinedSettings cs = smallSettings(40.f, SplitMode::Steps);
+    cs.sslpv.solver.maxSteps = 64;
+    cs.farTolerance = 0.f;
+    const CombinedResult on = renderCombined(s, cs);
+    EXPECT_TRUE(on.plan.sslpvSkipped);
+    EXPECT_EQ(on.plan.farShare, 0.0);
+    cs.autoSkipSslpv = false;
+    const CombinedResult off = renderCombined(s, cs);
+    ASSERT_TRUE(off.plan.sslpvOn);
+    expectImagesEqual(on.radiance, off.dipole, 0.f, "skip on = windowed dipole");
+    // What the skip leaves out is SSLPV's late steps of sources all within r_s: the Steps
+    // split's documented overlap (counted twice), not far light.
+    std::printf("window covers the sphere: SSLPV late steps held %.3g of the peak\n",
+                maxChangeOverPeak(on.radiance, off.radiance, off.radiance));
+}
+
+// Does not fire where SSLPV carries light: the skin-like sphere at the default split (far share
+// e^{−σ_tr r_s}-large in red, σ_tr = 0.27 mm⁻¹), r_s = 0 (SSLPV alone) or the switch off.
+TEST(CombinedCpu, FarSkipKeepsSslpvWhereLightTravelsBeyondTheWindow) {
+    const Scene s = litSphere();
+    const CombinedResult r = renderCombined(s, smallSettings(-1.f));
+    EXPECT_FALSE(r.plan.sslpvSkipped);
+    EXPECT_TRUE(r.plan.sslpvOn);
+    EXPECT_GT(r.plan.farShare, 0.1);
+    const CombinedResult zero = renderCombined(absorbingSphere(), smallSettings(0.f));
+    EXPECT_FALSE(zero.plan.sslpvSkipped);
+    EXPECT_TRUE(zero.plan.sslpvOn);
+    CombinedSettings bad = smallSettings(-1.f);
+    bad.farTolerance = -1.f;
+    EXPECT_THROW(renderCombined(absorbingSphere(), bad), ValueError);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Back-lit thin-thick scene against a small path-traced reference
 
 TEST(CombinedCpu, BacklitThinThickCloserToReferenceThanDipoleAlone) {
@@ -694,6 +862,57 @@ TEST_F(CombinedGl, LimitsSelectOnePartAndMaterialSyncReachesBoth) {
     EXPECT_EQ(provider.stats().sslpv.incrementalUpdates, incBefore + 1);
     EXPECT_GT(provider.stats().dipole.resets, resetsBefore);
     EXPECT_GE(provider.stats().dipole.lastUploadBricks, 1);
+}
+
+// The provider's automatic skip on the absorbing sphere: SSLPV, the kernel and the local
+// estimate are left out, so the frame is the windowed dipole alone, bit for bit a fresh provider
+// with the Steps split whose plan leaves SSLPV out (k = 4 ≥ 3 steps) at the same r_s and dipole
+// samples. A stroke that paints a translucent voxel brings SSLPV back (the far share is taken
+// over the whole volume).
+TEST_F(CombinedGl, FarSkipLeavesSslpvOutUntilAStrokeNeedsIt) {
+    scene.objects[0].material =
+        std::make_shared<MaterialVolume>(scene.objects[0].material->spec(), absorbingMaterial());
+    const ImageRgb skipped = frame(settings(-1.f));
+    ASSERT_TRUE(provider.stats().plan.sslpvSkipped);
+    EXPECT_FALSE(provider.stats().plan.sslpvOn);
+    EXPECT_EQ(provider.stats().localEstimates, 0);
+    // No kernel to wait for: converged with the dipole's one frame (renderers stop there).
+    EXPECT_TRUE(provider.stats().converged);
+    // The same first frame of a fresh provider (the dipole's progressive state starts alike).
+    CombinedProviderSettings dipoleOnly =
+        settings(provider.stats().plan.splitRadius, SplitMode::Steps);
+    dipoleOnly.sslpv.render.solver.maxSteps = 3;
+    dipoleOnly.autoSkipSslpv = false;
+    CombinedSubsurfaceProvider fresh;
+    fresh.create();
+    fresh.setSettings(dipoleOnly);
+    fresh.setMesh(scene.objects[0].mesh);
+    fresh.setLights(scene.lights);
+    fresh.setMaterial(*scene.objects[0].material, scene.eta);
+    renderer.setSubsurfaceProvider(&fresh);
+    renderer.render();
+    const ImageRgb windowed = renderer.readRadiance();
+    ASSERT_FALSE(fresh.stats().plan.sslpvOn);
+    ASSERT_FALSE(fresh.stats().plan.sslpvSkipped);
+    renderer.setSubsurfaceProvider(&provider);
+    fresh.destroy();
+    expectImagesEqual(skipped, windowed, 0.f, "GL skip on = windowed dipole");
+    CombinedProviderSettings off = settings(-1.f);
+    off.autoSkipSslpv = false;
+    (void)frame(off);
+    EXPECT_TRUE(provider.stats().plan.sslpvOn);
+
+    (void)frame(settings(-1.f));
+    ASSERT_TRUE(provider.stats().plan.sslpvSkipped);
+    MaterialVolume& vol = *scene.objects[0].material;
+    vol.set(Coord(16, 16, 28), skinMaterial());
+    ASSERT_GE(provider.syncMaterial(vol), 1u);
+    EXPECT_TRUE(provider.stats().plan.sslpvOn);
+    EXPECT_FALSE(provider.stats().plan.sslpvSkipped);
+    EXPECT_GT(provider.stats().plan.farShare, double(DEFAULT_FAR_TOLERANCE));
+    const int before = provider.stats().localEstimates;
+    renderer.render();
+    EXPECT_GT(provider.stats().localEstimates, before);  // the Kernel split runs again in full
 }
 
 // A paint stroke changes only the material. The local SSLPV estimate L̂ (32 samples per pixel of

@@ -21,6 +21,9 @@
 ///    far is dropped, but SSLPV light of near sources that arrives late is counted twice
 ///    (20–40 % of the total on thick slabs, docs/methods/combined.md).
 ///
+/// Where the dipole's tail beyond r_s (within the object's extent) is negligible, SSLPV is left
+/// out (applyFarSkip, CombinedSettings::autoSkipSslpv).
+///
 ///     combined::CombinedSettings cs;  cs.splitRadius = 4.f;     // mm
 ///     combined::CombinedResult r = combined::renderCombined(scene, cs);
 ///     writeExr(r.radiance, "combined.exr");                     // W/(mm²·sr), subsurface only
@@ -37,7 +40,8 @@
 
 namespace lucent {
 class MaterialVolume;
-}
+struct TriangleMesh;
+}  // namespace lucent
 
 namespace lucent::combined {
 
@@ -55,6 +59,11 @@ struct SplitPlan {
     int skipSteps = 0;        ///< k: SSLPV accumulates from step k + 1 on
     bool dipoleOn = false;    ///< r_s > 0: the dipole term is evaluated
     bool sslpvOn = false;     ///< the SSLPV term is evaluated (Steps: k < maxSteps)
+    /// The dipole's far share F(r_s, D) of the material (dipoleFarShare, largest over the
+    /// object's voxels and channels); 1 until applyFarSkip() has seen the scene.
+    double farShare = 1.0;
+    /// applyFarSkip() turned SSLPV off: the far share is within the tolerance.
+    bool sslpvSkipped = false;
     /// dipole::GatherSettings::maxRadius for this plan (0 = unlimited when r_s = +∞).
     [[nodiscard]] float dipoleMaxRadius() const;
 };
@@ -73,6 +82,45 @@ constexpr float MAX_KERNEL_SPLIT_CELLS = 24.f;
 /// @param maxSteps SSLPV propagation steps. @throw ValueError for NaN or Δx ≤ 0.
 SplitPlan planSplit(float splitRadius, float cellSize, int baseSkip, int maxSteps,
                     SplitMode mode = SplitMode::Kernel);
+
+/// Default tolerance of the automatic SSLPV skip (CombinedSettings::farTolerance): the share of
+/// the dipole's reflectance within the object's reach that may lie beyond r_s when SSLPV is left
+/// out.
+constexpr float DEFAULT_FAR_TOLERANCE = 1e-3f;
+
+/// The far share of one homogeneous material: the part of the dipole's diffuse reflectance
+/// within the object's reach that the split leaves to SSLPV,
+///   F(r_s, D) = ∫_{r_s}^{max(r_s, D)} R_d 2πr dr / ∫_0^{max(r_s, D)} R_d 2πr dr
+/// (DipoleProfile::reflectanceBeyond, closed form), largest of the RGB channels. D bounds the
+/// distance between any two surface points of the object (objectExtent), so light cannot
+/// travel further than D between entering and leaving: F = 0 when r_s ≥ D (the window covers
+/// the object), and F ≤ e^{−σ_tr (r_s − z_v)}-small when r_s is a few diffusion lengths
+/// 1/σ_tr. Bound: for any x_o the transport from |x_i − x_o| > r_s is
+///   F_t/π ∫_{r_s<r≤D} R_d E dA ≤ F · (F_t/π · E_max · ∫_{r≤D} R_d dA),
+/// i.e. at most F times the radiance of the brightest irradiance spread uniformly over the
+/// object's reach (flat-surface measure dA = 2πr dr, the one the image-space gather integrates
+/// on; normalising by the reach, not the whole plane, keeps optically thin objects, D ≪ 1/σt′,
+/// from skipping). 0 for a black material.
+/// @param model Dipole or BetterDipole (the image-space gather's models); @param splitRadius,
+/// extent in mm (≥ 0; +∞ allowed). @throw ValueError for NaN radii or an invalid medium.
+double dipoleFarShare(dipole::Model model, const MaterialSample& material, float eta,
+                      float splitRadius, float extent);
+
+/// dipoleFarShare over every distinct inside voxel of `volume` (the largest: a painted volume
+/// may hold its most translucent material anywhere). @throw ValueError if no voxel is inside.
+double volumeFarShare(dipole::Model model, const MaterialVolume& volume, float eta,
+                      float splitRadius, float extent);
+
+/// D for dipoleFarShare: the diagonal of the mesh's bounding box (mm), which bounds the
+/// distance between any two of its points; 0 for an empty mesh.
+float objectExtent(const TriangleMesh& mesh);
+
+/// The automatic SSLPV skip (docs/methods/combined.md, "Automatic skip"): records farShare and
+/// turns SSLPV off when the dipole is on and farShare ≤ tolerance; the dipole keeps its window
+/// r_s, so the image is the windowed dipole and the change is at most the bound of
+/// dipoleFarShare. A plan without the dipole (r_s = 0) or with SSLPV already off is unchanged
+/// apart from farShare. @param tolerance ≥ 0 (0: only when the window covers the object).
+void applyFarSkip(SplitPlan& plan, double farShare, float tolerance);
 
 /// SSLPV's radial surface kernel for one homogeneous material, in the units of a dipole profile
 /// R_d(r) (mm⁻², per unit Fresnel-transmitted irradiance): a unit flux is injected at normal
@@ -149,6 +197,11 @@ struct CombinedSettings {
     float splitRadius = -1.f;
     SplitMode mode = SplitMode::Kernel;
     int localSamples = 32;  ///< Kernel mode: disc samples of localSslpvEstimate, [1, 4096]
+    /// The automatic SSLPV skip (applyFarSkip): SSLPV is not run when the dipole's far share
+    /// dipoleFarShare(r_s, objectExtent) ≤ farTolerance. Off: SSLPV runs whenever the plan
+    /// says so (the reference the skip is tested and measured against).
+    bool autoSkipSslpv = true;
+    float farTolerance = DEFAULT_FAR_TOLERANCE;  ///< ≥ 0, see DEFAULT_FAR_TOLERANCE
     /// The dipole part's light-view irradiance images (dipole::LightViewSettings). Off by
     /// default: the local-part subtraction sees the camera image only, so light-view irradiance
     /// gathered by the dipole would be counted twice (docs/methods/combined.md).

@@ -45,8 +45,13 @@ struct CombinedProviderSettings {
     float splitRadius = -1.f;  ///< r_s, mm (CombinedSettings::splitRadius semantics)
     SplitMode mode = SplitMode::Kernel;
     int localSamples = 32;  ///< Kernel mode: disc samples of SSLPV's local estimate, [1, 4096]
-    float eta = 1.3f;       ///< relative index, [1, 3] (both providers)
-    int meshId = 0;         ///< SceneRenderer mesh id of the object (both providers)
+    /// The automatic SSLPV skip (CombinedSettings::autoSkipSslpv, applyFarSkip): decided from
+    /// the attached mesh's extent and material when either or the settings change, and again
+    /// after a stroke.
+    bool autoSkipSslpv = true;
+    float farTolerance = DEFAULT_FAR_TOLERANCE;  ///< ≥ 0 (CombinedSettings::farTolerance)
+    float eta = 1.3f;                            ///< relative index, [1, 3] (both providers)
+    int meshId = 0;  ///< SceneRenderer mesh id of the object (both providers)
     /// Dipole provider settings (model, samples per frame...); eta, meshId and maxRadius are
     /// overwritten from the fields above and the split. Light views are off by default: the
     /// local-part subtraction sees the camera image only, so light-view irradiance gathered by

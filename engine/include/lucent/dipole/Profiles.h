@@ -102,6 +102,11 @@ public:
     /// α′/2 [C_E (e^{−σ z_r} + e^{−σ z_v}) + C_φ/(Dσ) (e^{−σ z_r} − e^{−σ z_v})];
     /// the C_φ term → C_φ (z_v − z_r)/D as σ → 0.
     [[nodiscard]] double totalReflectance() const;
+    /// ∫_{r > R} R_d(r) 2πr dr in closed form (the tail beyond R mm; R = 0 gives
+    /// totalReflectance()): with d = √(R² + z²), ∫_R^∞ z(1+σd)e^{−σd}/d³ 2πr dr = 2π z e^{−σd}/d
+    /// and ∫_R^∞ e^{−σd}/d 2πr dr = 2π e^{−σd}/σ (r dr = d dd), so
+    /// α′/2 [C_E (z_r e^{−σd_r}/d_r + z_v e^{−σd_v}/d_v) + C_φ/(Dσ) (e^{−σd_r} − e^{−σd_v})].
+    [[nodiscard]] double reflectanceBeyond(double R) const;
 
     [[nodiscard]] bool isZero() const { return m_alphaP <= 0.0 || m_zr <= 0.0; }
     [[nodiscard]] Model model() const { return m_model; }

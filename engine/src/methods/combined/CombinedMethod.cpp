@@ -75,6 +75,8 @@ public:
         cs.splitRadius = m_settings.splitRadius;
         cs.mode = m_settings.mode;
         cs.dipoleLightViews = m_settings.dipole.lightViews;
+        cs.autoSkipSslpv = m_settings.autoSkipSslpv;
+        cs.farTolerance = m_settings.farTolerance;
         cs.sslpv = m_settings.sslpv.render;
         cs.dipole.model = m_settings.dipole.model;
         cs.dipole.uniformSamples = spp / 4;
@@ -106,6 +108,9 @@ private:
                 {"r_s cells", plan.cellSize > 0.f ? num(plan.splitRadius / plan.cellSize, "%.2f")
                                                   : std::string("0")},
                 {"cell mm", num(plan.cellSize, "%.3g")},
+                {"sslpv", plan.sslpvSkipped ? std::string("skipped (far share ") +
+                                                  num(float(plan.farShare), "%.2g") + ")"
+                                            : std::string(plan.sslpvOn ? "on" : "off")},
                 {"sslpv skips steps", std::to_string(plan.skipSteps) + " of " +
                                           std::to_string(m_settings.sslpv.render.solver.maxSteps)}};
     }
@@ -119,6 +124,7 @@ private:
                                                                  : dipole::Model::Dipole;
         s.dipole.seed = uint32_t(p.getInt("seed"));
         s.dipole.lightViews = p.getBool("light-views");
+        s.autoSkipSslpv = p.getBool("auto-skip");
         s.sslpv.render.gridResolution = p.getInt("grid");
         s.sslpv.render.solver.maxSteps = p.getInt("steps");
         s.sslpv.render.solver.order = p.getInt("sh");
@@ -148,6 +154,7 @@ private:
                              s.eta != o.eta || s.meshId != o.meshId ||
                              s.dipole.model != o.dipole.model || s.dipole.seed != o.dipole.seed ||
                              s.dipole.lightViews != o.dipole.lightViews ||
+                             s.autoSkipSslpv != o.autoSkipSslpv ||
                              s.dipole.samplesPerFrame != o.dipole.samplesPerFrame ||
                              s.dipole.maxFrames != o.dipole.maxFrames ||
                              s.sslpv.render.gridResolution != o.sslpv.render.gridResolution ||
@@ -230,6 +237,13 @@ MethodEntry combinedMethod() {
          0,
          {},
          "off"},
+        {"auto-skip",
+         ParamType::Bool,
+         "leave SSLPV out when the dipole's share beyond r_s (within the object) is <= 1e-3",
+         0,
+         0,
+         {},
+         "on"},
     };
     i.variants = {{"cpu", {}, Backend::Cpu}};
     for (int spp : {8, 32, 128})
