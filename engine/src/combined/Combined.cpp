@@ -66,6 +66,19 @@ SplitPlan planSplit(float splitRadius, float cellSize, int baseSkip, int maxStep
 // The automatic SSLPV skip
 
 namespace {
+/// Calls f(material) for every inside voxel of `volume`, in x-fastest order.
+template <typename F>
+void forEachInsideVoxel(const MaterialVolume& volume, F&& f) {
+    const int n = volume.resolution();
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const Coord c(x, y, z);
+                if (volume.isInside(c))
+                    f(volume.at(c));
+            }
+}
+
 /// dipoleFarShare with the boundary terms computed once by the caller: they cost 2×64 Fresnel
 /// evaluations, far more than the closed forms (volumeFarShare runs this per distinct voxel).
 double farShareWith(dipole::Model model, const MaterialSample& material,
@@ -108,24 +121,17 @@ double volumeFarShare(dipole::Model model, const MaterialVolume& volume, float e
                       float splitRadius, float extent) {
     checkFarShareArguments(splitRadius, extent);
     const dipole::Boundary boundary = dipole::Boundary::of(eta);
-    const int n = volume.resolution();
     double share = 0.0;
     bool any = false;
     MaterialSample last;
     // Painted volumes hold long runs of one material: a run costs one profile evaluation.
-    for (int z = 0; z < n; ++z)
-        for (int y = 0; y < n; ++y)
-            for (int x = 0; x < n; ++x) {
-                const Coord c(x, y, z);
-                if (!volume.isInside(c))
-                    continue;
-                const MaterialSample v = volume.at(c);
-                if (any && v.sigma_t == last.sigma_t && v.sigma_s == last.sigma_s)
-                    continue;
-                share = std::max(share, farShareWith(model, v, boundary, eta, splitRadius, extent));
-                last = v;
-                any = true;
-            }
+    forEachInsideVoxel(volume, [&](const MaterialSample& v) {
+        if (any && v.sigma_t == last.sigma_t && v.sigma_s == last.sigma_s)
+            return;
+        share = std::max(share, farShareWith(model, v, boundary, eta, splitRadius, extent));
+        last = v;
+        any = true;
+    });
     LUCENT_CHECK(any, "combined: the material volume has no inside voxel");
     return share;
 }
@@ -262,21 +268,14 @@ SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, flo
 }
 
 MaterialSample meanInsideMaterial(const MaterialVolume& volume) {
-    const int n = volume.resolution();
     glm::dvec3 st(0.0), ss(0.0), g(0.0);
     size_t count = 0;
-    for (int z = 0; z < n; ++z)
-        for (int y = 0; y < n; ++y)
-            for (int x = 0; x < n; ++x) {
-                const Coord c(x, y, z);
-                if (!volume.isInside(c))
-                    continue;
-                const MaterialSample v = volume.at(c);
-                st += glm::dvec3(v.sigma_t.r, v.sigma_t.g, v.sigma_t.b);
-                ss += glm::dvec3(v.sigma_s.r, v.sigma_s.g, v.sigma_s.b);
-                g += glm::dvec3(v.g.r, v.g.g, v.g.b);
-                ++count;
-            }
+    forEachInsideVoxel(volume, [&](const MaterialSample& v) {
+        st += glm::dvec3(v.sigma_t.r, v.sigma_t.g, v.sigma_t.b);
+        ss += glm::dvec3(v.sigma_s.r, v.sigma_s.g, v.sigma_s.b);
+        g += glm::dvec3(v.g.r, v.g.g, v.g.b);
+        ++count;
+    });
     LUCENT_CHECK(count > 0, "combined: the material volume has no inside voxel");
     const double inv = 1.0 / double(count);
     MaterialSample m;

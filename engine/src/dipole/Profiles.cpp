@@ -441,6 +441,26 @@ double DirpoleEnergyTable::scale(double alphaPrime) const {
     return std::exp((1.0 - t) * m_scale[size_t(i)] + t * m_scale[size_t(i) + 1]);
 }
 
+namespace {
+/// Bilinear lookup in a row-major [albedo node][cosine node] table: albedo nodes uniform in
+/// s = √(1 − α′) over [0, 1], cosine nodes uniform in `cosine01` ∈ [0, 1] (the tables of
+/// DirpoleExitTable and DirpoleIncidenceTable; their GLSL twins are in the dirpole shaders).
+double lookupAlbedoCosine(const std::vector<float>& values, int albedoNodes, int cosineNodes,
+                          double alphaPrime, double cosine01) {
+    const double s = std::sqrt(std::clamp(1.0 - alphaPrime, 0.0, 1.0)) * (albedoNodes - 1);
+    const int i = std::min(int(s), albedoNodes - 2);
+    const double fs = s - i;
+    const double u = cosine01 * (cosineNodes - 1);
+    const int j = std::min(int(u), cosineNodes - 2);
+    const double fu = u - j;
+    const auto at = [&](int a, int b) {
+        return double(values[size_t(a) * size_t(cosineNodes) + size_t(b)]);
+    };
+    return (1.0 - fs) * ((1.0 - fu) * at(i, j) + fu * at(i, j + 1)) +
+           fs * ((1.0 - fu) * at(i + 1, j) + fu * at(i + 1, j + 1));
+}
+}  // namespace
+
 double DirpoleExitTable::albedoNode(int i) {
     const double s = double(i) / (ALBEDO_NODES - 1);
     return 1.0 - s * s;
@@ -472,17 +492,8 @@ DirpoleExitTable::DirpoleExitTable(double eta) : m_eta(eta) {
 double DirpoleExitTable::correction(double alphaPrime, double cosOut) const {
     if (m_values.empty())
         return 1.0;
-    const double s = std::sqrt(std::clamp(1.0 - alphaPrime, 0.0, 1.0)) * (ALBEDO_NODES - 1);
-    const int i = std::min(int(s), ALBEDO_NODES - 2);
-    const double fs = s - i;
-    const double u = std::clamp(cosOut, 0.0, 1.0) * (COSINE_NODES - 1);
-    const int j = std::min(int(u), COSINE_NODES - 2);
-    const double fu = u - j;
-    const auto at = [&](int a, int b) {
-        return double(m_values[size_t(a) * COSINE_NODES + size_t(b)]);
-    };
-    return (1.0 - fs) * ((1.0 - fu) * at(i, j) + fu * at(i, j + 1)) +
-           fs * ((1.0 - fu) * at(i + 1, j) + fu * at(i + 1, j + 1));
+    return lookupAlbedoCosine(m_values, ALBEDO_NODES, COSINE_NODES, alphaPrime,
+                              std::clamp(cosOut, 0.0, 1.0));
 }
 
 namespace {
@@ -576,18 +587,8 @@ std::shared_ptr<const DirpoleIncidenceTable> DirpoleIncidenceTable::shared(doubl
 double DirpoleIncidenceTable::correction(double alphaPrime, double mu0) const {
     if (m_values.empty())
         return 1.0;
-    const double s = std::sqrt(std::clamp(1.0 - alphaPrime, 0.0, 1.0)) * (ALBEDO_NODES - 1);
-    const int i = std::min(int(s), ALBEDO_NODES - 2);
-    const double fs = s - i;
-    const double u =
-        std::clamp((mu0 - m_minCosine) / (1.0 - m_minCosine), 0.0, 1.0) * (COSINE_NODES - 1);
-    const int j = std::min(int(u), COSINE_NODES - 2);
-    const double fu = u - j;
-    const auto at = [&](int a, int b) {
-        return double(m_values[size_t(a) * COSINE_NODES + size_t(b)]);
-    };
-    return (1.0 - fs) * ((1.0 - fu) * at(i, j) + fu * at(i, j + 1)) +
-           fs * ((1.0 - fu) * at(i + 1, j) + fu * at(i + 1, j + 1));
+    return lookupAlbedoCosine(m_values, ALBEDO_NODES, COSINE_NODES, alphaPrime,
+                              std::clamp((mu0 - m_minCosine) / (1.0 - m_minCosine), 0.0, 1.0));
 }
 
 double totalReflectance(Model m, const ScalarMedium& medium) {

@@ -540,6 +540,17 @@ TEST(CombinedSplit, FarShareIsTheDipoleTailBetweenSplitRadiusAndObjectExtent) {
     EXPECT_GT(painted, absorbing);
 }
 
+namespace {
+/// The path-traced subsurface term of `s` (seed 7), the measuring stick of these tests.
+reference::ReferenceImage subsurfaceReference(const Scene& s, int spp) {
+    reference::ReferenceOptions ro;
+    ro.spp = spp;
+    ro.subsurfaceOnly = true;
+    ro.seed = 7;
+    return reference::renderReference(s, ro);
+}
+}  // namespace
+
 // Fires on an absorbing sphere at the default split (r_s = 4 cells = 5.7 mm ≈ 24 diffusion
 // lengths, far share 5·10⁻¹¹): the image is the windowed dipole, bit for bit the skip-off run's
 // dipole part. The dipole bounds the light that truly arrives from beyond r_s by the far share
@@ -548,11 +559,7 @@ TEST(CombinedSplit, FarShareIsTheDipoleTailBetweenSplitRadiusAndObjectExtent) {
 // transport. So the skip is checked against a path-traced reference: skip on must be closer.
 TEST(CombinedCpu, FarSkipDropsSslpvWhereTheDipoleTailIsNegligible) {
     const Scene s = absorbingSphere();
-    reference::ReferenceOptions ro;
-    ro.spp = 128;
-    ro.subsurfaceOnly = true;
-    ro.seed = 7;
-    const reference::ReferenceImage ref = reference::renderReference(s, ro);
+    const reference::ReferenceImage ref = subsurfaceReference(s, 128);
     const std::vector<uint8_t> mask = bench::maskFromImage(ref.coverage);
     for (SplitMode mode : {SplitMode::Kernel, SplitMode::Steps}) {
         CombinedSettings cs = smallSettings(-1.f, mode);
@@ -631,11 +638,7 @@ TEST(CombinedCpu, BacklitThinThickCloserToReferenceThanDipoleAlone) {
     Scene s = loadScene(path);
     s.camera.width = 48;
     s.camera.height = 36;
-    reference::ReferenceOptions ro;
-    ro.spp = 96;
-    ro.subsurfaceOnly = true;
-    ro.seed = 7;
-    const reference::ReferenceImage ref = reference::renderReference(s, ro);
+    const reference::ReferenceImage ref = subsurfaceReference(s, 96);
     const std::vector<uint8_t> mask = bench::maskFromImage(ref.coverage);
 
     // SSLPV at grid 64 (64 steps): at grid 32 its thick part is too dark (docs/methods/
