@@ -12,6 +12,9 @@
 #include <lucent/dipole/DipoleProvider.h>
 #include <lucent/dipole/GpuGather.h>
 #include <lucent/dipole/IrradiancePass.h>
+#include <lucent/dipole/LayeredMaterial.h>
+#include <lucent/material/Brush.h>
+#include <lucent/material/Procedural.h>
 #include <lucent/gpu/GlContext.h>
 #include <lucent/gpu/Shader.h>
 #include <lucent/dipole/Sampling.h>
@@ -198,6 +201,78 @@ BENCHMARK(BM_Gather)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(1);
+namespace {
+
+/// The evaluation suite's layer-over-core sphere (10 mm, a 1 mm layer over a core of α′ 0.5).
+const MaterialVolume& layeredSphere(int resolution) {
+    static std::map<int, SceneObject> cache;
+    auto it = cache.find(resolution);
+    if (it == cache.end()) {
+        SceneObject o = makeObject(makeSphere(10.f, 4), resolution,
+                                   MaterialSample{Rgb(1.f), Rgb(0.5f), Rgb(0.f)});
+        ProceduralFill fill;
+        fill.pattern = ProceduralPattern::Layered;
+        fill.amplitude = 0.f;
+        fill.layers = {{1.f, MaterialSample{Rgb(4.002f), Rgb(4.f), Rgb(0.f)}},
+                       {1.f, MaterialSample{Rgb(1.f), Rgb(0.5f), Rgb(0.f)}}};
+        fillProcedural(*o.material, fill);
+        it = cache.emplace(resolution, std::move(o)).first;
+    }
+    return *it->second.material;
+}
+
+/// Baseline: copying the volume (what the read-out does before it rewrites the surface band).
+void BM_VolumeCopy(benchmark::State& state) {
+    const MaterialVolume& v = layeredSphere(int(state.range(0)));
+    for (auto _ : state) {
+        MaterialVolume copy = v;
+        benchmark::DoNotOptimize(copy.brickData(0));
+    }
+}
+
+/// The layered read-out (LayeredMaterial.h): a full build, as when a method is given a volume.
+void BM_LayeredReadoutBuild(benchmark::State& state) {
+    const MaterialVolume& v = layeredSphere(int(state.range(0)));
+    LayeredReadoutSettings settings;
+    settings.maxDepthVoxels = int(state.range(1));
+    (void)layeredEquivalent(v, 1.3);  // the exact-total table, once per process
+    for (auto _ : state)
+        benchmark::DoNotOptimize(LayeredReadout(v, 1.3, settings).volume().brickData(0));
+}
+
+/// One live stroke: a 2 mm brush over 4 mm of the surface, then the read-out's update.
+void BM_LayeredReadoutStroke(benchmark::State& state) {
+    MaterialVolume v = layeredSphere(int(state.range(0)));
+    LayeredReadoutSettings settings;
+    settings.maxDepthVoxels = int(state.range(1));
+    LayeredReadout seen(v, 1.3, settings);
+    BrushSettings brush;
+    brush.radius = 2.f;
+    brush.value = MaterialSample{Rgb(3.f), Rgb(0.5f), Rgb(0.f)};
+    size_t bricks = 0;
+    for (auto _ : state) {
+        state.PauseTiming();
+        (void)v.takeDirtyBricks();
+        paintStroke(v, brush, {Point3f(-6.f, 0.f, 8.f), Point3f(-2.f, 3.f, 9.f)});
+        const std::vector<int> dirty = v.takeDirtyBricks();
+        state.ResumeTiming();
+        bricks = seen.update(v, dirty).size();
+    }
+    state.counters["bricks_rewritten"] = double(bricks);
+    state.counters["bricks_total"] = double(v.brickCount());
+}
+
+}  // namespace
+
+BENCHMARK(BM_VolumeCopy)->Arg(64)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_LayeredReadoutBuild)
+    ->ArgsProduct({{64, 128}, {16, 48}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_LayeredReadoutStroke)
+    ->ArgsProduct({{64, 128}, {8, 16, 48}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_GpuGather)
     ->ArgsProduct({{640, 1280}, {8, 32, 128, 256}, {CAMERA}})
     ->ArgsProduct({{640, 1280}, {32}, {WINDOW}})

@@ -51,4 +51,21 @@ HalfSpaceExitance halfSpaceExitance(double albedo, double eta, double mu0,
 double halfSpaceReflectance(double albedo, double eta, double mu0 = 1.0,
                             int nodes = HALF_SPACE_NODES);
 
+/// One homogeneous layer of a layered half-space: its reduced albedo α′ and its optical
+/// thickness τ = σt′ · thickness (dimensionless).
+struct HalfSpaceLayer {
+    double albedo = 0.0;
+    double opticalThickness = 0.0;  ///< ignored for the last layer (it is semi-infinite)
+};
+
+/// The exact total reflectance of a stack of homogeneous, isotropically scattering layers
+/// (top first; the last one semi-infinite) behind the smooth dielectric boundary, for a
+/// collimated beam at inward cosine `mu0`, per unit entering flux: the same transport as
+/// halfSpaceReflectance (which a one-layer stack equals), the layers index-matched to each
+/// other. The measuring stick for the layered-material read-out of the diffusion methods
+/// (LayeredMaterial.h). @throw ValueError as halfSpaceExitance, for no layers or a thickness
+/// that is negative or not finite.
+double layeredHalfSpaceReflectance(const std::vector<HalfSpaceLayer>& layers, double eta,
+                                   double mu0 = 1.0, int nodes = HALF_SPACE_NODES);
+
 }  // namespace lucent::dipole

@@ -42,7 +42,8 @@ public:
         lv.enabled = params().getBool("light-views");
         lv.resolution = params().getInt("light-view-res");
         std::vector<dipole::LightViewReport> reports;
-        const dipole::GatherResult g = dipole::renderImageSpaceDipole(scene, gs, lv, &reports);
+        const dipole::GatherResult g = dipole::renderImageSpaceDipole(
+            detail::withLayeredMaterial(scene, params()), gs, lv, &reports);
         const dipole::GatherStats& st = g.stats;
         m_cpuStats = {
             {"pixels", std::to_string(st.pixels)},
@@ -155,7 +156,12 @@ MethodEntry dipoleEntry(dipole::Model model) {
     i.caps.cpu = true;
     i.caps.progressive = true;
     i.params = dipoleParams();
-    i.variants = {{"cpu", {}, Backend::Cpu}, {"gl", {}, Backend::Gl}};
+    for (ParamDescriptor& d : detail::layeredParams())
+        i.params.push_back(std::move(d));
+    // surface: the surface voxel's medium instead of the layered read-out (the papers' model).
+    i.variants = {{"cpu", {}, Backend::Cpu},
+                  {"gl", {}, Backend::Gl},
+                  {"surface", ParamSet::fromAssignments({"layered=off"}), Backend::Auto}};
     for (int spp : {8, 32, 128})
         i.quality.push_back({std::to_string(spp) + " spp",
                              ParamSet::fromAssignments({"spp=" + std::to_string(spp)}),

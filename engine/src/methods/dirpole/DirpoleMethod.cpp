@@ -36,7 +36,7 @@ public:
         ds.energyNormalised = params().getBool("dirpole-normalise");
         ds.energyTarget = dipole::parseEnergyTarget(params().getChoice("dirpole-energy"));
         // The CPU pipeline handles directional lights only: drop the others, loudly.
-        Scene directional = scene;
+        Scene directional = detail::withLayeredMaterial(scene, params());
         directional.lights.clear();
         for (const Light& l : scene.lights) {
             if (l.type == Light::Type::Directional)
@@ -142,13 +142,17 @@ MethodEntry dirpoleMethod() {
          {"exact", "better-dipole"},
          "exact"},
     };
+    for (ParamDescriptor& d : detail::layeredParams())
+        i.params.push_back(std::move(d));
     // Default: the GPU pipeline, energy-normalised to the exact half-space; better: normalised
     // to the better dipole (the default before 2026-12-04); raw: the published S_d; cpu: the
-    // CPU pipeline (directional lights only).
+    // CPU pipeline (directional lights only); surface: the surface voxel's medium instead of
+    // the layered read-out.
     i.variants = {
         {"raw", ParamSet::fromAssignments({"dirpole-normalise=off"}), Backend::Auto},
         {"better", ParamSet::fromAssignments({"dirpole-energy=better-dipole"}), Backend::Auto},
-        {"cpu", {}, Backend::Cpu}};
+        {"cpu", {}, Backend::Cpu},
+        {"surface", ParamSet::fromAssignments({"layered=off"}), Backend::Auto}};
     for (int spp : {8, 32, 128})
         i.quality.push_back({std::to_string(spp) + " spp",
                              ParamSet::fromAssignments({"spp=" + std::to_string(spp)}),
