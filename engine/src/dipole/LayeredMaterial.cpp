@@ -237,6 +237,26 @@ void rewriteBand(const MaterialVolume& volume, MaterialVolume& seen, double eta,
         z = std::clamp(z, 0, n - 1);
         return smooth[spec.linearIndex(Coord(x, y, z))];
     };
+    // σt′ and σs′ of the voxel holding p (nearest voxel, as MaterialVolume::sample, reading
+    // only the two quantities); false outside the grid, the mask or the material.
+    const int per = volume.bricksPerAxis();
+    const auto sigmaAt = [&](const Point3f& p, MaterialSample& m) {
+        const Coord c = spec.cellOf(p);
+        if (!spec.contains(c) || !volume.isInside(c))
+            return false;
+        constexpr int B = MaterialVolume::BRICK;
+        const float* d = volume.brickData(((c.z / B) * per + c.y / B) * per + c.x / B);
+        const int v = MaterialVolume::voxelInBrick(c.x % B, c.y % B, c.z % B);
+        for (int ch = 0; ch < 3; ++ch) {
+            m.sigma_t[ch] =
+                d[MaterialVolume::component(Channel::SigmaT, ch) * MaterialVolume::BRICK_VOXELS +
+                  v];
+            m.sigma_s[ch] =
+                d[MaterialVolume::component(Channel::SigmaS, ch) * MaterialVolume::BRICK_VOXELS +
+                  v];
+        }
+        return m.sigma_t != Rgb(0.f);
+    };
     std::vector<int> todo;
     for (int b = 0; b < seen.brickCount(); ++b)
         if ((bricks.empty() || bricks[size_t(b)]) && volume.brickHasInside(b))
@@ -269,11 +289,9 @@ void rewriteBand(const MaterialVolume& volume, MaterialVolume& seen, double eta,
                             bool open[3] = {true, true, true};
                             const Point3f p0 = spec.cellCenter(c);
                             for (int k = 0; k < maxSteps; ++k) {
-                                const MaterialSample m =
-                                    k == 0 ? here
-                                           : volume.sample(
-                                                 p0 + inward * (float(k) * step * spec.voxelSize));
-                                if (m.sigma_t == Rgb(0.f))
+                                MaterialSample m = here;
+                                if (k > 0 &&
+                                    !sigmaAt(p0 + inward * (float(k) * step * spec.voxelSize), m))
                                     break;  // left the object: the medium is taken to continue
                                 bool any = false;
                                 for (int ch = 0; ch < 3; ++ch) {
@@ -338,10 +356,14 @@ LayeredReadout::LayeredReadout(const MaterialVolume& volume, double eta,
     checkEta(eta);
     m_settings.surfaceBandVoxels = std::max(1, m_settings.surfaceBandVoxels);
     m_settings.maxDepthVoxels = std::max(1, m_settings.maxDepthVoxels);
-    if (volume.resolution() == 0 || volume.isHomogeneous())
+    if (volume.resolution() == 0)
         return;
+    // Also for a homogeneous volume (its read-out is the volume): the first stroke on it then
+    // costs what any stroke does (the mask's blur is 85 ms of a 128³ volume's first stroke
+    // otherwise, docs/benchmarks.md "Layered read-out").
     m_smoothInside = smoothedInside(volume, m_settings.surfaceBandVoxels);
-    rewriteBand(volume, m_seen, m_eta, m_settings, m_smoothInside, {});
+    if (!volume.isHomogeneous())
+        rewriteBand(volume, m_seen, m_eta, m_settings, m_smoothInside, {});
 }
 
 std::vector<int> LayeredReadout::update(const MaterialVolume& volume,
@@ -353,8 +375,8 @@ std::vector<int> LayeredReadout::update(const MaterialVolume& volume,
                      " is out of range");
     if (dirtyBricks.empty())
         return {};
-    if (dirtyBricks.size() == size_t(volume.brickCount()) || m_smoothInside.empty()) {
-        // A new inside mask, or the first heterogeneous paint on a homogeneous volume.
+    if (dirtyBricks.size() == size_t(volume.brickCount())) {
+        // A new inside mask (setInsideMask marks every brick): everything again.
         *this = LayeredReadout(volume, m_eta, m_settings);
         std::vector<int> all(size_t(volume.brickCount()));
         for (size_t b = 0; b < all.size(); ++b)
@@ -390,6 +412,9 @@ std::vector<int> LayeredReadout::update(const MaterialVolume& volume,
 
 MaterialVolume layeredEquivalent(const MaterialVolume& volume, double eta,
                                  const LayeredReadoutSettings& settings) {
+    checkEta(eta);
+    if (volume.resolution() == 0 || volume.isHomogeneous())
+        return volume;  // read as it is; no updates will follow, so no mask to prepare
     return LayeredReadout(volume, eta, settings).volume();
 }
 

@@ -88,9 +88,10 @@ public:
 
     /// After the bricks `dirtyBricks` of `volume` (the one it was built from) changed:
     /// recomputes the bricks a column through a dirty brick can start in (within
-    /// maxDepthVoxels) and returns their indices, for the GL upload. Every brick dirty (a new
-    /// inside mask) rebuilds everything. @throw ValueError for another grid or a brick out of
-    /// range.
+    /// maxDepthVoxels) and returns their indices, for the GL upload. A volume that was
+    /// homogeneous is identical to its read-out outside that reach, so the first stroke on it
+    /// is incremental too. Every brick dirty (a new inside mask) rebuilds everything. @throw
+    /// ValueError for another grid or a brick out of range.
     std::vector<int> update(const MaterialVolume& volume, const std::vector<int>& dirtyBricks);
 
 private:
