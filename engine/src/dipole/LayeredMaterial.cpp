@@ -220,10 +220,13 @@ std::vector<float> smoothedInside(const MaterialVolume& volume, int r) {
 }
 
 /// Rewrites σs′ of the surface-band voxels of `seen` inside the bricks flagged in `bricks`
-/// (all when empty) from the columns of `volume`.
+/// (all when empty) from the columns of `volume`. With `changed` (per brick: its values in
+/// `volume` changed since `seen` was last brought up to date), a voxel outside a changed brick
+/// whose column passes through no changed brick keeps its value: what it reads is the same.
 void rewriteBand(const MaterialVolume& volume, MaterialVolume& seen, double eta,
                  const LayeredReadoutSettings& settings, const std::vector<float>& smooth,
-                 const std::vector<uint8_t>& bricks) {
+                 const std::vector<uint8_t>& bricks,
+                 const std::vector<uint8_t>* changed = nullptr) {
     const GridSpec& spec = volume.spec();
     const int n = spec.resolution;
     const ExactTotalTable& exact = *ExactTotalTable::shared(eta);
@@ -257,6 +260,20 @@ void rewriteBand(const MaterialVolume& volume, MaterialVolume& seen, double eta,
         }
         return m.sigma_t != Rgb(0.f);
     };
+    const auto brickOf = [&](const Coord& c) {
+        constexpr int B = MaterialVolume::BRICK;
+        return ((c.z / B) * per + c.y / B) * per + c.x / B;
+    };
+    // Whether the column from p0 along `inward` samples a voxel of a changed brick (the samples
+    // of the march below, to its longest; past the object's surface too: a superset).
+    const auto readsChanged = [&](const Point3f& p0, const Vector3f& inward) {
+        for (int k = 1; k < maxSteps; ++k) {
+            const Coord c = spec.cellOf(p0 + inward * (float(k) * step * spec.voxelSize));
+            if (spec.contains(c) && (*changed)[size_t(brickOf(c))])
+                return true;
+        }
+        return false;
+    };
     std::vector<int> todo;
     for (int b = 0; b < seen.brickCount(); ++b)
         if ((bricks.empty() || bricks[size_t(b)]) && volume.brickHasInside(b))
@@ -282,12 +299,14 @@ void rewriteBand(const MaterialVolume& volume, MaterialVolume& seen, double eta,
                             if (!(len > 1e-4f))
                                 continue;  // no defined inward direction (a thin sliver)
                             const Vector3f inward = grad / len;  // the mask rises inwards
+                            const Point3f p0 = spec.cellCenter(c);
+                            if (changed && !(*changed)[size_t(brick)] && !readsChanged(p0, inward))
+                                continue;  // reads nothing that changed: its value stands
                             const MaterialSample here = volume.at(c);
                             for (auto& col : column)
                                 col.clear();
                             double depth[3] = {0.0, 0.0, 0.0};
                             bool open[3] = {true, true, true};
-                            const Point3f p0 = spec.cellCenter(c);
                             for (int k = 0; k < maxSteps; ++k) {
                                 MaterialSample m = here;
                                 if (k > 0 &&
@@ -329,13 +348,18 @@ void rewriteBand(const MaterialVolume& volume, MaterialVolume& seen, double eta,
                             const int v = MaterialVolume::voxelInBrick(x - o.x, y - o.y, z - o.z);
                             for (int ch = 0; ch < 3; ++ch) {
                                 const std::vector<TwoFluxLayer>& col = column[size_t(ch)];
-                                if (col.size() < 2 || !(here.sigma_t[ch] > 0.f))
+                                float& out = data[MaterialVolume::component(Channel::SigmaS, ch) *
+                                                      MaterialVolume::BRICK_VOXELS +
+                                                  v];
+                                // Written either way: an update may find a column that was
+                                // layered homogeneous now.
+                                if (col.size() < 2 || !(here.sigma_t[ch] > 0.f)) {
+                                    out = here.sigma_s[ch];
                                     continue;
+                                }
                                 const double albedo =
                                     equivalentAlbedo(col.data(), col.size(), exact);
-                                data[MaterialVolume::component(Channel::SigmaS, ch) *
-                                         MaterialVolume::BRICK_VOXELS +
-                                     v] = std::min(float(albedo), 1.f) * here.sigma_t[ch];
+                                out = std::min(float(albedo), 1.f) * here.sigma_t[ch];
                             }
                         }
             }
@@ -396,17 +420,21 @@ std::vector<int> LayeredReadout::update(const MaterialVolume& volume,
                 for (int x = std::max(0, o.x - reach); x <= std::min(per - 1, o.x + reach); ++x)
                     flag[size_t((z * per + y) * per + x)] = 1;
     }
-    std::vector<int> changed;
-    for (int b = 0; b < volume.brickCount(); ++b) {
-        if (!flag[size_t(b)])
-            continue;
-        // Start from the volume's values, then rewrite the band.
-        std::copy_n(volume.brickData(b), MaterialVolume::BRICK_VOXELS * MaterialVolume::COMPONENTS,
-                    m_seen.brickData(b));
-        m_seen.markBrickDirty(b);
-        changed.push_back(b);
+    std::vector<uint8_t> dirty(size_t(volume.brickCount()), 0);
+    for (int d : dirtyBricks) {
+        dirty[size_t(d)] = 1;
+        // The painted bricks start from the volume's values; the band is rewritten below.
+        std::copy_n(volume.brickData(d), MaterialVolume::BRICK_VOXELS * MaterialVolume::COMPONENTS,
+                    m_seen.brickData(d));
     }
-    rewriteBand(volume, m_seen, m_eta, m_settings, m_smoothInside, flag);
+    // In the other bricks within reach, only voxels whose column reads a painted brick change.
+    rewriteBand(volume, m_seen, m_eta, m_settings, m_smoothInside, flag, &dirty);
+    std::vector<int> changed;
+    for (int b = 0; b < volume.brickCount(); ++b)
+        if (flag[size_t(b)]) {
+            m_seen.markBrickDirty(b);
+            changed.push_back(b);
+        }
     return changed;
 }
 

@@ -54,7 +54,7 @@ inline std::vector<ParamDescriptor> layeredParams() {
              0,
              {},
              "on"},
-            // Live: 8 voxels keep a stroke's update of a 128³ volume near 20 ms
+            // Live: 8 voxels keep a stroke's update of a 128³ volume near 11 ms
             // (docs/benchmarks.md, "Layered read-out").
             {"layered-depth",
              ParamType::Int,

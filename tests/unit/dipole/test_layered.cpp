@@ -251,6 +251,12 @@ TEST(LayeredMaterial, UpdateAfterAStrokeEqualsARebuild) {
         if (!startLayered) {  // the stroke put an absorbing patch under a bright surface
             EXPECT_NE(rebuilt.contentHash(), v.contentHash());
         }
+        // A second stroke over the first one's edge: still the rebuild's values.
+        brush.value = MaterialSample{Rgb(2.f), Rgb(1.9f), Rgb(0.f)};
+        paintStroke(v, brush, {Point3f(-3.f, 2.f, 9.f), Point3f(1.f, 5.f, 8.f)});
+        (void)seen.update(v, v.takeDirtyBricks());
+        EXPECT_EQ(seen.volume().contentHash(), layeredEquivalent(v, 1.3, settings).contentHash())
+            << (startLayered ? "layered" : "homogeneous") << " start, second stroke";
         EXPECT_THROW(seen.update(v, {v.brickCount()}), ValueError);
     }
 }

@@ -86,12 +86,13 @@ public:
     [[nodiscard]] const MaterialVolume& volume() const { return m_seen; }
     [[nodiscard]] double eta() const { return m_eta; }
 
-    /// After the bricks `dirtyBricks` of `volume` (the one it was built from) changed:
-    /// recomputes the bricks a column through a dirty brick can start in (within
-    /// maxDepthVoxels) and returns their indices, for the GL upload. A volume that was
-    /// homogeneous is identical to its read-out outside that reach, so the first stroke on it
-    /// is incremental too. Every brick dirty (a new inside mask) rebuilds everything. @throw
-    /// ValueError for another grid or a brick out of range.
+    /// After the bricks `dirtyBricks` of `volume` (the one it was built from) changed: looks at
+    /// the bricks a column through a dirty brick can start in (within maxDepthVoxels), recomputes
+    /// there the voxels in a dirty brick or whose column samples one (the others read what they
+    /// read before), and returns those bricks' indices, for the GL upload. The result is the
+    /// full rebuild's, bit for bit. A volume that was homogeneous is identical to its read-out,
+    /// so its first stroke is incremental too. Every brick dirty (a new inside mask) rebuilds
+    /// everything. @throw ValueError for another grid or a brick out of range.
     std::vector<int> update(const MaterialVolume& volume, const std::vector<int>& dirtyBricks);
 
 private:
