@@ -56,6 +56,15 @@ double layerOver(const KubelkaMunk& km, double thicknessMm, double rg) {
     return (t * (1.0 - rg * a) + rg * b) / (t * (a - rg) + b);
 }
 
+/// The two-flux reflectance of `count` layers, top first, the last semi-infinite: stacked from
+/// the bottom up (arguments unchecked).
+double stackedReflectance(const TwoFluxLayer* layers, size_t count) {
+    double r = reflectanceOfHalfSpace(kubelkaMunk(layers[count - 1]));
+    for (size_t i = count - 1; i-- > 0;)
+        r = layerOver(kubelkaMunk(layers[i]), layers[i].thicknessMm, r);
+    return r;
+}
+
 void checkLayer(const TwoFluxLayer& l, bool last) {
     LUCENT_CHECK(std::isfinite(l.sigmaA) && l.sigmaA >= 0.0 && std::isfinite(l.sigmaSp) &&
                      l.sigmaSp >= 0.0 && l.sigmaA + l.sigmaSp > 0.0,
@@ -133,10 +142,7 @@ double twoFluxReflectance(const std::vector<TwoFluxLayer>& layers) {
     LUCENT_CHECK(!layers.empty(), "twoFluxReflectance: no layers");
     for (size_t i = 0; i < layers.size(); ++i)
         checkLayer(layers[i], i + 1 == layers.size());
-    double r = reflectanceOfHalfSpace(kubelkaMunk(layers.back()));
-    for (size_t i = layers.size() - 1; i-- > 0;)
-        r = layerOver(kubelkaMunk(layers[i]), layers[i].thicknessMm, r);
-    return r;
+    return stackedReflectance(layers.data(), layers.size());
 }
 
 namespace {
@@ -150,9 +156,7 @@ double equivalentAlbedo(const TwoFluxLayer* column, size_t count, const ExactTot
         homogeneous = column[i].sigmaA == top.sigmaA && column[i].sigmaSp == top.sigmaSp;
     if (homogeneous)
         return albedoTop;
-    double r = reflectanceOfHalfSpace(kubelkaMunk(column[count - 1]));
-    for (size_t i = count - 1; i-- > 0;)
-        r = layerOver(kubelkaMunk(column[i]), column[i].thicknessMm, r);
+    const double r = stackedReflectance(column, count);
     const double rTop = reflectanceOfHalfSpace(kubelkaMunk(top));
     if (!(rTop > 0.0))
         return albedoTop;
@@ -243,12 +247,15 @@ void rewriteBand(const MaterialVolume& volume, MaterialVolume& seen, double eta,
     // σt′ and σs′ of the voxel holding p (nearest voxel, as MaterialVolume::sample, reading
     // only the two quantities); false outside the grid, the mask or the material.
     const int per = volume.bricksPerAxis();
+    constexpr int B = MaterialVolume::BRICK;
+    const auto brickOf = [&](const Coord& c) {
+        return ((c.z / B) * per + c.y / B) * per + c.x / B;
+    };
     const auto sigmaAt = [&](const Point3f& p, MaterialSample& m) {
         const Coord c = spec.cellOf(p);
         if (!spec.contains(c) || !volume.isInside(c))
             return false;
-        constexpr int B = MaterialVolume::BRICK;
-        const float* d = volume.brickData(((c.z / B) * per + c.y / B) * per + c.x / B);
+        const float* d = volume.brickData(brickOf(c));
         const int v = MaterialVolume::voxelInBrick(c.x % B, c.y % B, c.z % B);
         for (int ch = 0; ch < 3; ++ch) {
             m.sigma_t[ch] =
@@ -259,10 +266,6 @@ void rewriteBand(const MaterialVolume& volume, MaterialVolume& seen, double eta,
                   v];
         }
         return m.sigma_t != Rgb(0.f);
-    };
-    const auto brickOf = [&](const Coord& c) {
-        constexpr int B = MaterialVolume::BRICK;
-        return ((c.z / B) * per + c.y / B) * per + c.x / B;
     };
     // Whether the column from p0 along `inward` samples a voxel of a changed brick (the samples
     // of the march below, to its longest; past the object's surface too: a superset).
