@@ -162,10 +162,14 @@ double equivalentAlbedo(const TwoFluxLayer* column, size_t count, const ExactTot
         return albedoTop;
     // Behind the boundary: of the light that comes up, r_i goes back down for another pass
     // through the column, so what leaves per unit entering is R (1 − r_i) / (1 − r_i R). At
-    // η 1.3 (r_i ≈ 0.44) this weighs the core more than the bare two-flux ratio does.
+    // η 1.3 (r_i ≈ 0.44) this weighs the core more than the bare two-flux model does.
     const double ri = exact.internalReflectance();
     const auto behindBoundary = [ri](double rr) { return rr * (1.0 - ri) / (1.0 - ri * rr); };
-    return exact.albedo(exact.total(albedoTop) * behindBoundary(r) / behindBoundary(rTop));
+    // The column's two-flux excess over the top medium alone is added to the top medium's
+    // exact total. (A ratio instead diverges where the top medium's albedo is below 1/4, where
+    // its two-flux R is ~0 but its exact total is not: a dark coat over a bright core read
+    // as albedo 1, bright dots along the edges of dark strokes.)
+    return exact.albedo(exact.total(albedoTop) + behindBoundary(r) - behindBoundary(rTop));
 }
 
 }  // namespace

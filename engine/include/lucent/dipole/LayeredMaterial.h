@@ -15,10 +15,11 @@
 /// their reflectance is stacked in the two-flux (Kubelka–Munk) model with diffusion's decay
 /// constant, K = 2σa, S = (3σs′ − σa)/4, so √(K² + 2KS) = σ_tr = √(3σaσt′) (Kubelka 1954 for
 /// the layer over a background; the coefficients matched to diffusion as in Star, Marijnissen
-/// & van Gemert 1988). The two-flux ratio R_stack / R_∞(surface medium) then scales the exact
-/// half-space total of the surface medium (HalfSpace.h), and α′ is the albedo whose exact total
-/// is that: a homogeneous column returns its own albedo exactly, and the two-flux model's own
-/// error enters only through a ratio. Checked against the exact layered solver
+/// & van Gemert 1988). What the column returns beyond the surface medium alone, in that model
+/// and behind the boundary's internal reflection, is added to the exact half-space total of the
+/// surface medium (HalfSpace.h), and α′ is the albedo whose exact total is that: a homogeneous
+/// column returns its own albedo exactly, and the two-flux model's own error enters only
+/// through a difference. Checked against the exact layered solver
 /// (layeredHalfSpaceReflectance) in test LayeredMaterial.*; measured on the suite in
 /// docs/methods/dipole.md ("Layered material").
 ///
@@ -47,8 +48,9 @@ struct TwoFluxLayer {
 double twoFluxReflectance(const std::vector<TwoFluxLayer>& layers);
 
 /// The reduced albedo of the homogeneous half-space (behind the boundary of index `eta`) whose
-/// exact total reflectance is R_exact(α′_top) · R₂(column) / R₂(top medium as a half-space),
-/// R₂ the two-flux reflectance: the column's albedo as a half-space model should read it.
+/// exact total reflectance is R_exact(α′_top) + R_b(column) − R_b(top medium as a half-space),
+/// R_b the two-flux reflectance behind the boundary: the column's albedo as a half-space model
+/// should read it.
 /// Exactly α′_top for a homogeneous column. @throw ValueError as twoFluxReflectance, η ∉ [1, 3].
 double layeredEquivalentAlbedo(const std::vector<TwoFluxLayer>& column, double eta);
 
