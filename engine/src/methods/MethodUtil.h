@@ -116,6 +116,7 @@ public:
             m_provider->destroy();
         m_provider.reset();
         m_material = nullptr;
+        m_seen = dipole::LayeredReadout();  // a volume's worth of memory; rebuilt by setScene
     }
 
     void setScene(const SceneInputs& scene) override {
