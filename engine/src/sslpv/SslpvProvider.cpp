@@ -84,6 +84,7 @@ struct SslpvSubsurfaceProvider::Impl {
         SslpvRenderOptions ro = o.render;
         ro.gridResolution = 4;  // the RSM renderer's own grid is irrelevant: keep it tiny
         ro.solver.maxSteps = 0;
+        ro.solver.mode = SslpvMode::Paper;  // it only ray-casts the RSM: no diffusion solve
         rsm.setOptions(ro);
     }
 
@@ -344,7 +345,7 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
                         dst[0] = planes[0][pi];
                         dst[1] = planes[1][pi];
                         dst[2] = planes[2][pi];
-                        dst[3] = i == 0 && s.solver.isInside({x, y, z}) ? 1.f : 0.f;
+                        dst[3] = i == 0 && s.solver.isReadable({x, y, z}) ? 1.f : 0.f;
                     }
             glTextureSubImage3D(s.coeffTex[i].id(), 0, 0, 0, 0, N, N, N, GL_RGBA, GL_FLOAT,
                                 s.staging.data());

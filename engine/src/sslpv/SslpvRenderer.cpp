@@ -141,6 +141,7 @@ void SslpvRenderer::setOptions(const SslpvRenderOptions& o) {
         a.skipAccumulateSteps != b.skipAccumulateSteps || a.removeExitant != b.removeExitant ||
         a.attenuation != b.attenuation || a.stopEpsilon != b.stopEpsilon ||
         a.skipEmptySlices != b.skipEmptySlices || a.mode != b.mode ||
+        a.diffusionExactTotal != b.diffusionExactTotal ||
         a.calibration.linear != b.calibration.linear ||
         a.calibration.transport != b.calibration.transport ||
         a.calibration.diffusion != b.calibration.diffusion ||

@@ -16,6 +16,14 @@
 namespace lucent::sslpv {
 namespace {
 
+/// A texel that carries light into the object: front-facing (light hits the surface from
+/// outside), some flux, finite position and flux (skipped texels are counted, not injected).
+bool isInjectable(const SslpvInjectionSample& smp) {
+    const float cosI = -glm::dot(smp.direction, smp.normal);
+    return cosI > 0.f && (smp.flux.x > 0.f || smp.flux.y > 0.f || smp.flux.z > 0.f) &&
+           lucent::isFinite(smp.position) && lucent::isFinite(smp.flux);
+}
+
 constexpr double TWO_SQRT_PI = 3.544907701811032;  // ∫ y00 dω = 2√π: flux of c00 = 1
 constexpr float Y00 = 0.282094791773878f;          // 1/(2√π)
 constexpr float K1 = 0.488602511902920f;           // √(3/(4π))
@@ -422,12 +430,13 @@ void SslpvSolver::setOptions(const SslpvOptions& o) {
                      cal.gain[1] > 0.f,
                  "SSLPV option 'calibration.gain' must be finite and > 0, got ", cal.gain[0], ", ",
                  cal.gain[1]);
-    LUCENT_CHECK(o.mode == SslpvMode::Paper || o.mode == SslpvMode::Calibrated,
-                 "SSLPV option 'mode' is not Paper or Calibrated");
+    LUCENT_CHECK(o.mode == SslpvMode::Paper || o.mode == SslpvMode::Calibrated ||
+                     o.mode == SslpvMode::Diffusion,
+                 "SSLPV option 'mode' is not Paper, Calibrated or Diffusion");
     LUCENT_CHECK(std::isfinite(o.stopEpsilon) && o.stopEpsilon >= 0.f && o.stopEpsilon <= 1.f,
                  "SSLPV option 'stopEpsilon' must be in [0, 1], got ", o.stopEpsilon);
     // Order and sinks change where light is injected; everything changes propagation.
-    if (o.order != m_opt.order || o.removeExitant != m_opt.removeExitant)
+    if (o.order != m_opt.order || o.removeExitant != m_opt.removeExitant || o.mode != m_opt.mode)
         m_injectionDirty = true;
     m_opt = o;
     m_materialDirty = true;
@@ -481,6 +490,13 @@ void SslpvSolver::setMaterial(const CoarseMaterial& material, float eta) {
 void SslpvSolver::setInjectionSamples(std::vector<SslpvInjectionSample> samples) {
     m_samples = std::move(samples);
     m_injectionDirty = true;
+}
+
+bool SslpvSolver::isReadable(const Coord& c) const {
+    if (!isInside(c))
+        return false;
+    return m_opt.mode != SslpvMode::Diffusion ||
+           m_diffusion.isBoundary(m_material.spec.linearIndex(c));
 }
 
 bool SslpvSolver::isInside(const Coord& c) const {
@@ -664,12 +680,11 @@ void SslpvSolver::inject() {
     m_injBrickLit.assign(size_t(s.resolution) * bricksX * bricksY, 0);
     const float h = s.voxelSize;
     for (const SslpvInjectionSample& smp : m_samples) {
-        const float cosI = -glm::dot(smp.direction, smp.normal);
-        if (!(cosI > 0.f) || !(smp.flux.x > 0.f || smp.flux.y > 0.f || smp.flux.z > 0.f) ||
-            !lucent::isFinite(smp.position) || !lucent::isFinite(smp.flux)) {
+        if (!isInjectable(smp)) {
             ++skipped;
             continue;
         }
+        const float cosI = -glm::dot(smp.direction, smp.normal);
         // The texel's cell (§3.1): taken half a cell inside along −n so the virtual point light
         // lands in a boundary cell of the object; with sinks it must be an inside cell.
         Coord cell(-1);
@@ -1065,6 +1080,21 @@ void SslpvSolver::propagate() {
 const SslpvStats& SslpvSolver::solve() {
     LUCENT_CHECK(m_hasMaterial, "SSLPV: solve() called before setMaterial()");
     m_stats.reinjected = m_stats.repropagated = false;
+    if (m_opt.mode == SslpvMode::Diffusion) {
+        // The source depends on σt′ along each beam, so a material change re-injects too.
+        if (m_injectionDirty || m_materialDirty) {
+            injectDiffusionSources();
+            m_injectionDirty = false;
+            m_stats.reinjected = true;
+            if (m_factorsDirty)
+                m_diffusion.setMaterial(m_material, m_eta);
+            m_factorsDirty = false;
+            diffuse();
+            m_materialDirty = false;
+            m_stats.repropagated = true;
+        }
+        return m_stats;
+    }
     if (m_injectionDirty) {
         inject();
         m_injectionDirty = false;
@@ -1127,7 +1157,7 @@ Rgb SslpvSolver::radiance(const Point3f& p, const Normal3f& n) const {
         for (int corner = 0; corner < 8; ++corner) {
             const Coord o(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
             const Coord cell = i0 + o;
-            if (!isInside(cell))
+            if (!isReadable(cell))
                 continue;
             const float w =
                 (o.x ? f.x : 1.f - f.x) * (o.y ? f.y : 1.f - f.y) * (o.z ? f.z : 1.f - f.z);
@@ -1160,6 +1190,151 @@ Rgb SslpvSolver::radiance(const Point3f& p, const Normal3f& n) const {
         L[ch] = std::max(0.f, 2.f * invA * (Y00 * c[ch][0] + 0.5f * K1 * c10n));
     }
     return L;
+}
+
+void SslpvSolver::injectDiffusionSources() {
+    const Timer timer;
+    const GridSpec& s = m_material.spec;
+    const size_t count = s.voxelCount();
+    for (auto& q : m_diffusionSource)
+        q.assign(count, 0.f);
+    const float h = s.voxelSize;
+    constexpr float OPAQUE_DEPTH = 20.f;        // e^−20: nothing of the beam is left to scatter
+    const int maxSteps = 3 * s.resolution + 3;  // a ray crosses at most 3N cells of the grid
+    int used = 0, skipped = 0;
+    double injected[3] = {}, firstAbsorbed[3] = {};  // W; thousands of texels: sum in double
+    for (const SslpvInjectionSample& smp : m_samples) {
+        if (!isInjectable(smp)) {
+            ++skipped;
+            continue;
+        }
+        const float cosI = -glm::dot(smp.direction, smp.normal);
+        const float T = 1.f - fresnelDielectric(cosI, m_eta);
+        const Vector3f wt = refractInto(smp.direction, smp.normal, m_eta);
+        const Rgb beam = T * smp.flux;
+        // Walk the beam cell by cell (Amanatides & Woo 1987) so each cell gets the exact
+        // integral of the first-scattering source over the chord it holds: α′(e^−τ₀ − e^−τ₁).
+        // The chord in cells before the medium (the voxel staircase around x_p: cells the
+        // surface cuts with less than half inside, up to two cells) is medium too: it joins
+        // the first inside cell's chord, whose control volume reaches the surface (the Robin
+        // condition's δ counts it). After the medium, the beam is out.
+        const Vector3f u = (smp.position - s.origin) / h;  // grid units
+        Coord c(glm::floor(u));
+        Vector3f tMax, tDelta;
+        Coord stepDir;
+        for (int a = 0; a < 3; ++a) {
+            if (wt[a] > 0.f) {
+                stepDir[a] = 1;
+                tDelta[a] = h / wt[a];
+                tMax[a] = (float(c[a] + 1) - u[a]) * tDelta[a];
+            } else if (wt[a] < 0.f) {
+                stepDir[a] = -1;
+                tDelta[a] = -h / wt[a];
+                tMax[a] = (u[a] - float(c[a])) * tDelta[a];
+            } else {
+                stepDir[a] = 0;
+                tDelta[a] = tMax[a] = INF;
+            }
+        }
+        Rgb tau(0.f);
+        bool entered = false;
+        float t = 0.f, pending = 0.f;
+        for (int k = 0; k < maxSteps; ++k) {
+            const int axis =
+                tMax.x < tMax.y ? (tMax.x < tMax.z ? 0 : 2) : (tMax.y < tMax.z ? 1 : 2);
+            const float tNext = tMax[axis];
+            const float len = tNext - t + pending;
+            if (isInside(c)) {
+                pending = 0.f;
+                entered = true;
+                const size_t i = s.linearIndex(c);
+                for (int ch = 0; ch < 3; ++ch) {
+                    const float st = m_material.sigma_t[ch][i];
+                    const float interacting = std::exp(-tau[ch]) * -std::expm1(-st * len);
+                    const float albedo =
+                        st > 0.f ? std::min(1.f, m_material.sigma_s[ch][i] / st) : 0.f;
+                    const float power = beam[ch] * interacting;
+                    m_diffusionSource[size_t(ch)][i] += albedo * power;
+                    injected[ch] += double(power);
+                    firstAbsorbed[ch] += double((1.f - albedo) * power);
+                    tau[ch] += st * len;
+                }
+                if (tau.x > OPAQUE_DEPTH && tau.y > OPAQUE_DEPTH && tau.z > OPAQUE_DEPTH)
+                    break;
+            } else if (entered || t > 2.f * h) {
+                break;
+            } else {
+                pending = len;
+            }
+            t = tNext;
+            c[axis] += stepDir[axis];
+            tMax[axis] += tDelta[axis];
+            if (!s.contains(c))
+                break;
+        }
+        if (!entered) {
+            ++skipped;
+            continue;
+        }
+        ++used;
+    }
+    m_stats.injectedTexels = used;
+    m_stats.skippedTexels = skipped;
+    for (int ch = 0; ch < 3; ++ch) {
+        m_stats.injected[ch] = float(injected[ch]);
+        m_stats.absorbed[ch] = float(firstAbsorbed[ch]);  // diffuse() adds the diffusion's
+    }
+    m_stats.injectMs = timer.elapsedMs();
+}
+
+void SslpvSolver::diffuse() {
+    const Timer timer;
+    const GridSpec& s = m_material.spec;
+    GridDiffusionOptions o;
+    o.maxIterations = m_opt.maxSteps;
+    o.tolerance = m_opt.stopEpsilon;
+    const GridDiffusionStats& ds = m_diffusion.solve(m_diffusionSource, o);
+    // The read-out (radiance(), the GL shader) returns L_i = 2/(Δx²)·Y00·c00 and multiplies it
+    // by T(ω_o)/η² (exitScale). A Fresnel-weighted diffuse exit of the exitance J,
+    // L_o = T(ω_o)·J/(π(1 − F_dr(η))), has ∫ L_o cos θ_o dω_o = J, so c00 = η²·J·Δx²/(2·Y00·π(1 −
+    // F_dr(η))) per cell; the higher coefficients are 0.
+    const int n = s.resolution;
+    if (m_accum.resolution() != n || m_accum.order() != m_opt.order)
+        m_accum = SslpvGrid(n, m_opt.order);
+    else
+        m_accum.clear();
+    const float exitNorm =
+        float(double(m_eta) * m_eta / (PI * (1.0 - diffuseFresnelReflectance(double(m_eta)))));
+    const float toC00 = exitNorm * s.voxelSize * s.voxelSize / (2.f * Y00);
+    if (m_opt.diffusionExactTotal && (!m_exactRatio || m_exactRatio->eta() != double(m_eta)))
+        m_exactRatio = std::make_shared<const ExactReflectanceRatio>(double(m_eta));
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const Coord c(x, y, z);
+                const size_t k = s.linearIndex(c);
+                if (!m_diffusion.isBoundary(k))
+                    continue;  // only boundary cells are read (isReadable)
+                for (int ch = 0; ch < 3; ++ch) {
+                    float scale = toC00;
+                    if (m_opt.diffusionExactTotal) {
+                        const float st = m_material.sigma_t[ch][k];
+                        const float albedo = st > 0.f ? m_material.sigma_s[ch][k] / st : 0.f;
+                        scale *= (*m_exactRatio)(albedo);
+                    }
+                    m_accum.plane(ch, 0)[m_accum.index(c)] = scale * m_diffusion.exitance(k, ch);
+                }
+            }
+    m_stats.stepsUsed = std::max({ds.iterations[0], ds.iterations[1], ds.iterations[2]});
+    m_stats.activeBricksPerStep.clear();
+    m_stats.cellsComputed = int64_t(ds.cells) * m_stats.stepsUsed;
+    for (int ch = 0; ch < 3; ++ch) {
+        m_stats.absorbed[ch] += float(ds.absorbed[size_t(ch)]);
+        m_stats.exitant[ch] = float(ds.exitant[size_t(ch)]);
+        m_stats.remaining[ch] = float(ds.residual[size_t(ch)] * ds.source[size_t(ch)]);
+    }
+    m_stats.stepsMs = ds.ms;
+    m_stats.propagateMs = timer.elapsedMs();
 }
 
 }  // namespace lucent::sslpv

@@ -18,9 +18,12 @@
 #include <lucent/core/SphericalHarmonics.h>
 #include <lucent/core/Types.h>
 #include <lucent/material/Resample.h>
+#include <lucent/sslpv/GridDiffusion.h>
 #include <lucent/sslpv/Transfer.h>
 
+#include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace lucent::sslpv {
@@ -86,6 +89,12 @@ enum class SslpvAttenuation {
 enum class SslpvMode {
     Paper,       ///< §3.2.1 + Eq. 3 with `attenuation`; L_o = T·L_i/η² (Eq. 4 + refraction)
     Calibrated,  ///< fitted per-step absorption (SslpvCalibration); L_o = G·T·L_i/η²
+    /// Not propagation: the diffusion approximation solved on the same grid (GridDiffusion),
+    /// sourced by each refracted beam's first scattering along its path; the accumulation grid
+    /// holds the L_i that gives the boundary's exitance with a Fresnel-weighted diffuse exit.
+    /// maxSteps bounds the conjugate-gradient iterations, stopEpsilon the unbalanced power
+    /// (docs/methods/sslpv.md, "Diffusion mode").
+    Diffusion,
 };
 
 /// Constants of the calibrated mode (docs/methods/sslpv.md, "Calibrated mode"). Per step and
@@ -129,6 +138,9 @@ struct SslpvOptions {
     /// attenuation setting is ignored).
     SslpvMode mode = SslpvMode::Paper;
     SslpvCalibration calibration = defaultSslpvCalibration();
+    /// Mode Diffusion: scale each boundary cell's exitance by the exact half-space's total over
+    /// the diffusion model's at the cell's albedo (ExactReflectanceRatio); false: the model's.
+    bool diffusionExactTotal = true;
 };
 
 /// One injection texel of a reflective shadow map (§3.1).
@@ -211,11 +223,16 @@ public:
     [[nodiscard]] const SslpvGrid& propagation() const { return m_prop[m_cur]; }
     /// Cell c is part of the object (insideFraction ≥ ½).
     [[nodiscard]] bool isInside(const Coord& c) const;
+    /// Cell c is one radiance() (and the GL read-out) interpolates: an inside cell; in mode
+    /// Diffusion only those with a boundary face (GridDiffusion::isBoundary).
+    [[nodiscard]] bool isReadable(const Coord& c) const;
     /// Incident radiance estimate just inside the surface at p with outward unit normal n
     /// (Eq. 5–7: area light of cross-section A = Δx², L_i = Φ_hemisphere/(Aπ)), W/(mm²·sr),
     /// from the accumulation grid sampled half a cell inside along −n (trilinear over inside
-    /// cells only). Not multiplied by Fresnel T (the caller knows ω_o).
+    /// cells only: isReadable). Not multiplied by Fresnel T (the caller knows ω_o).
     [[nodiscard]] Rgb radiance(const Point3f& p, const Normal3f& n) const;
+    /// The diffusion solve of mode Diffusion (its stats: iterations, energy balance).
+    [[nodiscard]] const GridDiffusion& diffusion() const { return m_diffusion; }
     /// Factor from radiance() times Fresnel T(ω_o) to the exitant radiance: 1/η² in Paper mode
     /// (Eq. 4 with the radiance scaling at refraction the paper leaves out, docs/reference.md),
     /// gain[order − 1]/η² in Calibrated mode. L_o = exitScale()·T(ω_o)·radiance(p, n).
@@ -241,6 +258,14 @@ private:
     [[nodiscard]] Rgb interactingFraction(const Point3f& entry, const Vector3f& wt,
                                           const Coord& injectionCell) const;
     void propagate();
+    /// Mode Diffusion's injection: each texel's refracted beam T·Φ_p is followed through the
+    /// medium (half-cell midpoint steps, as interactingFraction) and the power of its first
+    /// scattering, α′·(e^−τ(s) − e^−τ(s+ds))·T·Φ_p, is deposited in the cell where it happens:
+    /// the collimated source of the diffusion equation with reduced coefficients.
+    void injectDiffusionSources();
+    /// Mode Diffusion's "propagation": the GridDiffusion solve and the accumulation grid it
+    /// writes for radiance() and the GL read-out.
+    void diffuse();
 
     SslpvOptions m_opt;
     CoarseMaterial m_material;
@@ -270,6 +295,9 @@ private:
     std::vector<uint8_t> m_accBrickLit;   ///< m_accum's brick may hold non-zero values
     std::vector<uint8_t> m_exitBrickLit;  ///< m_exitant's brick may hold non-zero values
     SslpvStats m_stats;
+    GridDiffusion m_diffusion;                                  ///< mode Diffusion's solver
+    std::shared_ptr<const ExactReflectanceRatio> m_exactRatio;  ///< built per η when needed
+    std::array<std::vector<float>, 3> m_diffusionSource;        ///< W per cell (spec layout)
 };
 
 }  // namespace lucent::sslpv

@@ -120,7 +120,22 @@ private:
         // offline: within −15 %…+22 % of diffusion on thick slabs for α′ ≥ 0.5, where the
         // paper's literal extinction is 5–50× too dark).
         const std::string& mode = p.getChoice("mode");
-        if (mode == "calibrated") {
+        if (mode == "diffusion") {
+            // Not propagation: conjugate-gradient iterations of the diffusion solve, warm-started
+            // from the last solution (a stroke re-solves from the picture before it). The
+            // propagation's live defaults (32 fixed steps, no stop) would leave the first frame
+            // unconverged, so unless given, both live and offline run to an unbalanced power of
+            // 10⁻³ of the source, at most 1024 iterations (docs/methods/sslpv.md, "Diffusion
+            // mode").
+            o.render.solver.mode = sslpv::SslpvMode::Diffusion;
+            o.render.solver.diffusionExactTotal = p.getBool("diffusion-normalise");
+            o.render.solver.maxSteps = p.isGiven("steps") ? p.getInt("steps") : 1024;
+            o.render.solver.stopEpsilon = p.isGiven("stop") ? float(p.getFloat("stop")) : 1e-3f;
+            LUCENT_CHECK(!p.isGiven("attenuation"),
+                         "sslpv: attenuation applies to mode paper only");
+            LUCENT_CHECK(backend() != Backend::Gl || p.getChoice("propagation") == "cpu",
+                         "sslpv: mode diffusion solves on the CPU (propagation=cpu)");
+        } else if (mode == "calibrated") {
             o.render.solver.mode = sslpv::SslpvMode::Calibrated;
             LUCENT_CHECK(!p.isGiven("attenuation"),
                          "sslpv: attenuation applies to mode paper only");
@@ -210,13 +225,22 @@ MethodEntry sslpvMethod() {
         {"mode",
          ParamType::Choice,
          "calibrated: fitted per-step absorption and gain; paper: the paper's transfer (section "
-         "3.2.1)",
+         "3.2.1); diffusion: the diffusion equation solved on the same grid instead of the "
+         "propagation (steps: CG iterations; stop: unbalanced power, default 0.001)",
          0,
          0,
-         {"calibrated", "paper"},
+         {"calibrated", "paper", "diffusion"},
          "calibrated",
          "",
          "paper"},
+        {"diffusion-normalise",
+         ParamType::Bool,
+         "mode diffusion: scale the exitance to the exact half-space's total at each surface "
+         "cell's albedo (off: the diffusion model's own; the other modes ignore it)",
+         0,
+         0,
+         {},
+         "on"},
         {"attenuation",
          ParamType::Choice,
          "mode paper only: per-step attenuation",
@@ -236,6 +260,7 @@ MethodEntry sslpvMethod() {
     };
     i.variants = {{"paper", ParamSet::fromAssignments({"mode=paper"}), Backend::Auto},
                   {"calibrated", ParamSet::fromAssignments({"mode=calibrated"}), Backend::Auto},
+                  {"diffusion", ParamSet::fromAssignments({"mode=diffusion"}), Backend::Auto},
                   {"gl", {}, Backend::Gl}};
     // Every level propagates to convergence (parameter stop; the step count is only a bound), so
     // the levels differ by the grid alone (docs/methods/sslpv.md, "Convergence").
@@ -243,7 +268,7 @@ MethodEntry sslpvMethod() {
         i.quality.push_back({"grid " + std::to_string(n),
                              ParamSet::fromAssignments({"grid=" + std::to_string(n)}),
                              Backend::Auto});
-    i.evaluate = {"paper", "calibrated"};
+    i.evaluate = {"paper", "calibrated", "diffusion"};
     e.create = detail::make<SslpvMethod>;
     return e;
 }

@@ -1,0 +1,157 @@
+// SPDX-License-Identifier: MIT
+#pragma once
+/// @file
+/// @brief The diffusion approximation solved on the LPV grid: a cell-centred finite-volume
+/// discretisation of −∇·(D ∇φ) + σa φ = Q over the object's cells, with the partial-current
+/// (Robin) condition of a smooth dielectric boundary, φ = 2AD ∂φ/∂n_in (Groenhuis et al. 1983;
+/// Haskell et al. 1994), solved per channel by Jacobi-preconditioned conjugate gradients. The
+/// grid-diffusion idea for heterogeneous translucent material is Stam 1995 ("Multiple scattering
+/// as a diffusion process") and Wang et al. 2010 ("Modeling and rendering of heterogeneous
+/// translucent materials using the diffusion equation").
+///
+/// SSLPV's mode `diffusion` (SslpvSolver, docs/methods/sslpv.md "Diffusion mode") runs it in
+/// place of the light propagation: unlike the LPV transfer it converges to one answer as the grid
+/// is refined, and it reaches the steady state of thin, back-lit, high-albedo parts in a number
+/// of iterations that grows with the grid's edge, not with the number of scattering events.
+///
+///     GridDiffusion d;
+///     d.setMaterial(coarse, /*eta=*/1.3f);          // the operator; keeps φ for a warm start
+///     d.solve(sources, {.maxIterations = 1024, .tolerance = 1e-3f});
+///     float J = d.exitance(cell, /*channel=*/1);    // W/mm² through a boundary half a cell out
+///
+/// Units: positions mm, σ and σa mm⁻¹, D = 1/(3σt′) mm, sources W per cell, fluence rate φ and
+/// exitance W/mm².
+
+#include <lucent/material/Resample.h>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace lucent::sslpv {
+
+/// Diffuse Fresnel reflectance F_dr(η) = 2∫₀¹ F(μ, η) μ dμ of a smooth boundary for a
+/// cosine-weighted (Lambertian) field arriving on the side of index 1, η the other side's index
+/// relative to it: F_dr(η) from outside the object, F_dr(1/η) from inside (64-node
+/// Gauss–Legendre in μ, exact Fresnel). @param eta in (0, 10].
+double diffuseFresnelReflectance(double eta);
+
+/// The boundary constant A = (1 + F_dr,int)/(1 − F_dr,int), F_dr,int = F_dr(1/η), of the
+/// partial-current condition (Groenhuis et al. 1983): the net flux out of the medium is
+/// J = φ/(2A). A = 1 at η = 1. @param eta in [1, 3].
+double diffusionBoundaryConstant(double eta);
+
+/// Total diffuse reflectance of a half-space lit at normal incidence in this model (per unit
+/// transmitted irradiance): the closed form of GridDiffusion's equation with the collimated
+/// source, R = α′/((1 + σtr)(1 + 2Aσtr/3)), σtr = √(3(1 − α′)) in units of σt′ = 1.
+/// @param albedo reduced albedo α′ ∈ [0, 1]. @param eta ∈ [1, 3].
+double diffusionHalfSpaceReflectance(double albedo, double eta);
+
+/// The exact half-space's total reflectance over this model's, R_exact(α′, η)/R_diffusion(α′, η)
+/// (R_exact: adding–doubling, lucent/dipole/HalfSpace.h), tabulated once per η on 65 nodes
+/// uniform in √(1 − α′) and interpolated linearly: the factor mode Diffusion scales each
+/// boundary cell's exitance by, as the directional dipole's total is normalised to the exact
+/// one (docs/methods/sslpv.md, "Diffusion mode"). 1 at α′ = 1 and where both vanish.
+class ExactReflectanceRatio {
+public:
+    /// @throw ValueError for eta ∉ [1, 3].
+    explicit ExactReflectanceRatio(double eta);
+    [[nodiscard]] double eta() const { return m_eta; }
+    /// The ratio at reduced albedo `albedo` (clamped to [0, 1]).
+    [[nodiscard]] float operator()(float albedo) const;
+
+private:
+    double m_eta;
+    std::vector<float> m_ratio;  ///< at u_i = i/64, α′ = 1 − u_i²
+};
+
+/// Stopping rule and bound of one solve.
+struct GridDiffusionOptions {
+    int maxIterations = 1024;  ///< conjugate-gradient iterations per channel, [0, 1000000]
+    /// Stop once the unbalanced power Σ|r| (W) is below tolerance × the channel's source power
+    /// Σ Q (W): the fraction of the injected light not yet accounted for. [0, 1]; 0: run
+    /// maxIterations (or until the residual vanishes).
+    double tolerance = 1e-3;
+};
+
+/// Energy bookkeeping and cost of the last solve (per channel, W).
+struct GridDiffusionStats {
+    std::array<int, 3> iterations{};   ///< CG iterations used
+    std::array<double, 3> residual{};  ///< final Σ|r| / Σ Q (0 when there is no source)
+    std::array<double, 3> source{};    ///< Σ Q, W
+    std::array<double, 3> absorbed{};  ///< Σ σa φ Δx³, W
+    std::array<double, 3> exitant{};   ///< Σ over boundary faces of the flux out, W
+    size_t cells = 0;                  ///< medium cells (unknowns per channel)
+    bool warmStart = false;            ///< started from the previous solution
+    double ms = 0.0;                   ///< the solve, wall time
+};
+
+/// The discretised operator and its solution (see file comment). The medium is the cells with
+/// insideFraction ≥ ½ (SslpvSolver::isInside); every face between a medium cell and anything
+/// else (another cell or the grid's edge) is a boundary face with the Robin condition applied
+/// where the surface is: δ = (f_i − ½ + f_j)Δx from the medium cell's centre (f the inside
+/// fractions; ½Δx, the cell face, for a full cell next to an empty one), and a partial cell's
+/// absorption is scaled by its fraction. The voxel staircase has more area than the surface
+/// it stands for (|n_x| + |n_y| + |n_z| times, for a plane of unit normal n), so each boundary
+/// face's conductance is scaled by 1/(|n_x| + |n_y| + |n_z|), n from the gradient of the inside
+/// fraction. Face diffusivities between medium cells are harmonic means (flux continuity).
+class GridDiffusion {
+public:
+    /// Builds the operator for `material` (σt′ and σs′ per cell and channel; σa = σt′ − σs′
+    /// clamped at 0, σt′ clamped below at 10⁻³ mm⁻¹) behind a boundary of relative index `eta`.
+    /// The previous solution is kept as the next solve's starting point when the medium cells
+    /// are the same (a stroke changes σ, not the shape).
+    /// @throw ValueError for array sizes that do not match spec, non-finite values or eta ∉ [1, 3].
+    void setMaterial(const CoarseMaterial& material, float eta);
+
+    /// Solves A φ = Q per channel. @param source W per cell, spec.voxelCount() values per channel
+    /// (x fastest); values at non-medium cells are ignored.
+    /// @throw ValueError before setMaterial, for a wrong size or a negative/non-finite source.
+    const GridDiffusionStats& solve(const std::array<std::vector<float>, 3>& source,
+                                    const GridDiffusionOptions& options);
+
+    [[nodiscard]] const GridDiffusionStats& stats() const { return m_stats; }
+    [[nodiscard]] const GridSpec& spec() const { return m_spec; }
+    /// True for a medium cell (linear index of spec).
+    [[nodiscard]] bool isMedium(size_t cell) const {
+        return cell < m_compact.size() && m_compact[cell] >= 0;
+    }
+    /// True for a medium cell with at least one boundary face: the cells whose exitance()
+    /// stands for the surface (the read-out interpolates these only).
+    [[nodiscard]] bool isBoundary(size_t cell) const {
+        return cell < m_boundary.size() && m_boundary[cell] != 0;
+    }
+    /// Fluence rate φ of the cell (W/mm²), 0 outside the medium.
+    [[nodiscard]] float fluence(size_t cell, int channel) const;
+    /// Net flux J = φ D/(2AD + δ) (W/mm²) leaving through the surface δ from the cell's centre
+    /// (δ: the mean over its boundary faces, ½Δx for an interior cell): the Robin condition
+    /// J = φ_b/(2A) with φ_b extrapolated along the flux. 0 outside the medium.
+    [[nodiscard]] float exitance(size_t cell, int channel) const;
+
+private:
+    GridSpec m_spec;
+    float m_eta = 1.f;
+    double m_boundaryA = 1.0;
+    std::vector<int32_t> m_compact;  ///< spec index → unknown index, −1 outside the medium
+    std::vector<uint32_t> m_cells;   ///< unknown index → spec index
+    /// Neighbour unknown per face (±x, ±y, ±z), structure of arrays; a boundary face points at
+    /// the zero sentinel m_cells.size().
+    std::array<std::vector<uint32_t>, 6> m_neighbour;
+    /// Per channel: conductance G = Δx·D_face (mm²) of each interior face, whose flux is
+    /// G (φ_i − φ_j) W, and the diagonal (every face's conductance, boundary ones included, plus
+    /// σa Δx³).
+    std::array<std::array<std::vector<float>, 6>, 3> m_conductance;
+    std::array<std::vector<float>, 3> m_diagonal;
+    std::array<std::vector<float>, 3> m_boundaryConductance;  ///< Σ boundary faces' conductance
+    std::array<std::vector<float>, 3> m_sigmaA;
+    std::array<std::vector<float>, 3> m_diffusivity;
+    std::array<std::vector<float>, 3> m_phi;  ///< solution per unknown (+ sentinel)
+    std::vector<float> m_depth;       ///< per unknown: its centre's depth under the surface, mm
+    std::vector<uint8_t> m_boundary;  ///< per spec cell: 1 for a boundary cell
+    bool m_hasMaterial = false;
+    bool m_phiValid = false;
+    GridDiffusionStats m_stats;
+};
+
+}  // namespace lucent::sslpv

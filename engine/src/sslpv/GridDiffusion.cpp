@@ -1,0 +1,380 @@
+// SPDX-License-Identifier: MIT
+/// @file
+/// @brief The diffusion approximation on the LPV grid (see GridDiffusion.h).
+
+#include <lucent/core/Error.h>
+#include <lucent/core/Fresnel.h>
+#include <lucent/core/Parallel.h>
+#include <lucent/core/Quadrature.h>
+#include <lucent/core/Timer.h>
+#include <lucent/dipole/HalfSpace.h>
+#include <lucent/sslpv/GridDiffusion.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace lucent::sslpv {
+
+namespace {
+
+/// Unknowns per parallel block of the CG's vector passes; per-block partial sums keep the dot
+/// products independent of the thread count (the result is bit-identical on 1 or 16 threads).
+constexpr int64_t BLOCK = 4096;
+/// Floor of σt′ (mm⁻¹): D = 1/(3σt′) stays finite in a painted vacuum.
+constexpr float MIN_SIGMA_T = 1e-3f;
+
+int64_t blockCount(size_t n) {
+    return (int64_t(n) + BLOCK - 1) / BLOCK;
+}
+
+}  // namespace
+
+double diffuseFresnelReflectance(double eta) {
+    LUCENT_CHECK(std::isfinite(eta) && eta > 0.0 && eta <= 10.0,
+                 "diffuse Fresnel reflectance: eta must be in (0, 10], got ", eta);
+    // Gauss–Legendre in μ on [0, 1]; under total internal reflection (η < 1) F = 1 beyond the
+    // critical angle, a kink: split the interval there so each piece is smooth.
+    const double muCrit = eta < 1.0 ? std::sqrt(1.0 - eta * eta) : 0.0;
+    double sum = muCrit * muCrit;  // 2∫₀^μc μ dμ with F = 1
+    const QuadratureRule g = gaussLegendre(64).mappedTo(muCrit, 1.0);
+    for (size_t i = 0; i < g.x.size(); ++i)
+        sum += 2.0 * g.w[i] * fresnelDielectric(g.x[i], eta) * g.x[i];
+    return sum;
+}
+
+double diffusionBoundaryConstant(double eta) {
+    LUCENT_CHECK(std::isfinite(eta) && eta >= 1.0 && eta <= 3.0,
+                 "diffusion boundary constant: eta must be in [1, 3], got ", eta);
+    const double fdr = diffuseFresnelReflectance(1.0 / eta);
+    return (1.0 + fdr) / (1.0 - fdr);
+}
+
+double diffusionHalfSpaceReflectance(double albedo, double eta) {
+    LUCENT_CHECK(std::isfinite(albedo) && albedo >= 0.0 && albedo <= 1.0,
+                 "diffusion half-space reflectance: albedo must be in [0, 1], got ", albedo);
+    // φ = C e^(−σtr z) + K e^(−z) with the Robin condition at z = 0; the removable singularity
+    // of K at σtr = 1 cancels in φ(0)/(2A) (σt′ = 1, D = 1/3).
+    const double A = diffusionBoundaryConstant(eta);
+    const double str = std::sqrt(3.0 * (1.0 - albedo));
+    return albedo / ((1.0 + str) * (1.0 + 2.0 * A * str / 3.0));
+}
+
+ExactReflectanceRatio::ExactReflectanceRatio(double eta) : m_eta(eta) {
+    LUCENT_CHECK(std::isfinite(eta) && eta >= 1.0 && eta <= 3.0,
+                 "exact reflectance ratio: eta must be in [1, 3], got ", eta);
+    constexpr int NODES = 64;
+    m_ratio.resize(NODES + 1);
+    for (int i = 0; i <= NODES; ++i) {
+        const double u = double(i) / NODES, albedo = 1.0 - u * u;
+        const double model = diffusionHalfSpaceReflectance(albedo, eta);
+        const double exact = dipole::halfSpaceReflectance(albedo, eta, 1.0);
+        m_ratio[size_t(i)] = model > 1e-9 ? float(exact / model) : 1.f;
+    }
+    // α′ = 0: both vanish; take the limit from the first node inside.
+    m_ratio[NODES] = m_ratio[NODES - 1];
+}
+
+float ExactReflectanceRatio::operator()(float albedo) const {
+    const float u = std::sqrt(1.f - std::clamp(albedo, 0.f, 1.f)) * float(m_ratio.size() - 1);
+    const size_t i = std::min(size_t(u), m_ratio.size() - 2);
+    const float f = u - float(i);
+    return (1.f - f) * m_ratio[i] + f * m_ratio[i + 1];
+}
+
+void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {
+    LUCENT_CHECK(std::isfinite(eta) && eta >= 1.f && eta <= 3.f,
+                 "grid diffusion: eta must be in [1, 3], got ", eta);
+    const GridSpec& s = m.spec;
+    LUCENT_CHECK(s.resolution >= 1 && std::isfinite(s.voxelSize) && s.voxelSize > 0.f,
+                 "grid diffusion: invalid grid (resolution ", s.resolution, ", voxel size ",
+                 s.voxelSize, " mm)");
+    const size_t count = s.voxelCount();
+    LUCENT_CHECK(m.insideFraction.size() == count, "grid diffusion: insideFraction has ",
+                 m.insideFraction.size(), " values, expected ", count);
+    for (int c = 0; c < 3; ++c)
+        LUCENT_CHECK(m.sigma_t[c].size() == count && m.sigma_s[c].size() == count,
+                     "grid diffusion: sigma_t/sigma_s of channel ", c, " have ",
+                     m.sigma_t[c].size(), "/", m.sigma_s[c].size(), " values, expected ", count);
+
+    const int n = s.resolution;
+    const float dx = s.voxelSize;
+    auto inside = [&](int x, int y, int z) {
+        return x >= 0 && y >= 0 && z >= 0 && x < n && y < n && z < n &&
+               m.insideFraction[s.linearIndex({x, y, z})] >= 0.5f;
+    };
+
+    // Unknowns: the medium cells in spec order.
+    std::vector<int32_t> compact(count, -1);
+    std::vector<uint32_t> cells;
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x)
+                if (inside(x, y, z)) {
+                    const size_t k = s.linearIndex({x, y, z});
+                    compact[k] = int32_t(cells.size());
+                    cells.push_back(uint32_t(k));
+                }
+    const bool sameMedium = m_hasMaterial && s == m_spec && compact == m_compact;
+    const size_t unknowns = cells.size();
+    const uint32_t sentinel = uint32_t(unknowns);
+
+    m_boundaryA = diffusionBoundaryConstant(eta);
+    const float twoA = float(2.0 * m_boundaryA);
+    for (int c = 0; c < 3; ++c) {
+        m_sigmaA[c].resize(unknowns);
+        m_diffusivity[c].resize(unknowns);
+        for (size_t u = 0; u < unknowns; ++u) {
+            const size_t k = cells[u];
+            const float st = m.sigma_t[c][k], ss = m.sigma_s[c][k];
+            LUCENT_CHECK(std::isfinite(st) && st >= 0.f && std::isfinite(ss) && ss >= 0.f,
+                         "grid diffusion: cell ", k, " channel ", c, " has sigma_t=", st,
+                         " sigma_s=", ss, " (need finite values >= 0 mm^-1)");
+            const float stc = std::max(st, MIN_SIGMA_T);
+            // σa times the cell's medium fraction: a partial cell at the surface holds only
+            // that much medium (its control volume ends at the surface, see δ below).
+            m_sigmaA[c][u] = std::max(0.f, st - ss) * std::clamp(m.insideFraction[k], 0.5f, 1.f);
+            m_diffusivity[c][u] = 1.f / (3.f * stc);
+        }
+    }
+
+    const int dirs[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (int f = 0; f < 6; ++f)
+        m_neighbour[f].assign(unknowns, sentinel);
+    for (int c = 0; c < 3; ++c) {
+        for (int f = 0; f < 6; ++f)
+            m_conductance[c][f].assign(unknowns, 0.f);
+        m_diagonal[c].assign(unknowns, 0.f);
+        m_boundaryConductance[c].assign(unknowns, 0.f);
+    }
+    auto fraction = [&](int x, int y, int z) {
+        if (x < 0 || y < 0 || z < 0 || x >= n || y >= n || z >= n)
+            return 0.f;
+        return m.insideFraction[s.linearIndex({x, y, z})];
+    };
+    // Depth of each boundary cell's centre under the surface (mm): the mean of its boundary
+    // faces' δ; exitance() extrapolates φ over it. (Interior cells are not read out: φ peaks
+    // under the surface where the source does, so a linear extrapolation from a cell 1.5Δx deep
+    // overestimated J by up to 25 % in the lit half-space test.)
+    m_depth.assign(unknowns, 0.5f * dx);
+    std::vector<int> boundaryFaces(unknowns, 0);
+    std::vector<float> depthSum(unknowns, 0.f);
+    for (size_t u = 0; u < unknowns; ++u) {
+        const size_t k = cells[u];
+        const int x = int(k % size_t(n)), y = int((k / size_t(n)) % size_t(n)),
+                  z = int(k / (size_t(n) * size_t(n)));
+        // Staircase area correction: 1/|n|₁ for the local normal (the inside fraction's
+        // gradient); 1 where the gradient vanishes (a shell thinner than the stencil).
+        const float gx = fraction(x + 1, y, z) - fraction(x - 1, y, z);
+        const float gy = fraction(x, y + 1, z) - fraction(x, y - 1, z);
+        const float gz = fraction(x, y, z + 1) - fraction(x, y, z - 1);
+        const float glen = std::sqrt(gx * gx + gy * gy + gz * gz);
+        const float areaScale =
+            glen > 1e-3f ? glen / (std::abs(gx) + std::abs(gy) + std::abs(gz)) : 1.f;
+        for (int f = 0; f < 6; ++f) {
+            const int nx = x + dirs[f][0], ny = y + dirs[f][1], nz = z + dirs[f][2];
+            const bool interior = inside(nx, ny, nz);
+            if (interior)
+                m_neighbour[f][u] = uint32_t(compact[s.linearIndex({nx, ny, nz})]);
+            for (int c = 0; c < 3; ++c) {
+                const float di = m_diffusivity[c][u];
+                float g;
+                if (interior) {
+                    const float dj = m_diffusivity[c][m_neighbour[f][u]];
+                    g = dx * (2.f * di * dj / (di + dj));  // Δx² · D_face / Δx
+                    m_conductance[c][f][u] = g;
+                } else {
+                    // Robin: J = φ_b/(2A) and J = D (φ − φ_b)/δ → J = φ/(2A + δ/D), δ the
+                    // distance from the centre to the surface along the face's axis: the
+                    // inside length in this cell beyond its centre, (f_i − ½)Δx, plus the
+                    // neighbour's, f_j Δx (exact for a surface perpendicular to the axis; ½Δx,
+                    // the cell face, when f_i = 1 and f_j = 0).
+                    const float delta =
+                        std::clamp(fraction(x, y, z) - 0.5f + fraction(nx, ny, nz), 0.05f, 1.5f) *
+                        dx;
+                    g = areaScale * dx * dx / (twoA + delta / di);
+                    m_boundaryConductance[c][u] += g;
+                    if (c == 0) {
+                        ++boundaryFaces[u];
+                        depthSum[u] += delta;
+                    }
+                }
+                m_diagonal[c][u] += g;
+            }
+        }
+        for (int c = 0; c < 3; ++c)
+            m_diagonal[c][u] += m_sigmaA[c][u] * dx * dx * dx;
+    }
+    m_boundary.assign(count, 0);
+    for (size_t u = 0; u < unknowns; ++u)
+        if (boundaryFaces[u] > 0) {
+            m_depth[u] = depthSum[u] / float(boundaryFaces[u]);
+            m_boundary[cells[u]] = 1;
+        }
+
+    m_phiValid = m_phiValid && sameMedium;
+    if (!m_phiValid)
+        for (int c = 0; c < 3; ++c)
+            m_phi[c].assign(unknowns + 1, 0.f);
+    m_spec = s;
+    m_eta = eta;
+    m_compact = std::move(compact);
+    m_cells = std::move(cells);
+    m_hasMaterial = true;
+}
+
+const GridDiffusionStats& GridDiffusion::solve(const std::array<std::vector<float>, 3>& source,
+                                               const GridDiffusionOptions& o) {
+    LUCENT_CHECK(m_hasMaterial, "grid diffusion: solve() before setMaterial()");
+    LUCENT_CHECK(o.maxIterations >= 0 && o.maxIterations <= 1000000,
+                 "grid diffusion: maxIterations must be in [0, 1000000], got ", o.maxIterations);
+    LUCENT_CHECK(std::isfinite(o.tolerance) && o.tolerance >= 0.0 && o.tolerance <= 1.0,
+                 "grid diffusion: tolerance must be in [0, 1], got ", o.tolerance);
+    const size_t count = m_spec.voxelCount();
+    for (int c = 0; c < 3; ++c)
+        LUCENT_CHECK(source[c].size() == count, "grid diffusion: source of channel ", c, " has ",
+                     source[c].size(), " values, expected ", count);
+    const Timer timer;
+    const size_t nu = m_cells.size();
+    const int64_t blocks = blockCount(nu);
+    m_stats = {};
+    m_stats.cells = nu;
+    m_stats.warmStart = m_phiValid;
+    const float dx3 = m_spec.voxelSize * m_spec.voxelSize * m_spec.voxelSize;
+
+    std::vector<float> b(nu), r(nu), z(nu), p(nu + 1, 0.f), ap(nu);
+    std::vector<double> partA(static_cast<size_t>(blocks)), partB(static_cast<size_t>(blocks));
+    for (int c = 0; c < 3; ++c) {
+        const float* __restrict diag = m_diagonal[c].data();
+        const float* cond[6];
+        const uint32_t* nbr[6];
+        for (int f = 0; f < 6; ++f) {
+            cond[f] = m_conductance[c][f].data();
+            nbr[f] = m_neighbour[f].data();
+        }
+        float* __restrict x = m_phi[c].data();
+        // A·v for v with a zero sentinel at index nu; per-block partial sums of w·(A·v).
+        auto applyA = [&](const float* v, float* out, const float* dotWith) {
+            parallelFor(0, blocks, [&](int64_t b0, int64_t b1) {
+                for (int64_t bl = b0; bl < b1; ++bl) {
+                    const int64_t i0 = bl * BLOCK, i1 = std::min<int64_t>(i0 + BLOCK, int64_t(nu));
+                    double dot = 0.0;
+                    for (int64_t i = i0; i < i1; ++i) {
+                        float s = diag[i] * v[i];
+                        for (int f = 0; f < 6; ++f)
+                            s -= cond[f][i] * v[nbr[f][i]];
+                        out[i] = s;
+                        dot += double(dotWith[i]) * double(s);
+                    }
+                    partA[size_t(bl)] = dot;
+                }
+            });
+            double sum = 0.0;
+            for (double d : partA)
+                sum += d;
+            return sum;
+        };
+
+        double sourceSum = 0.0;
+        for (size_t u = 0; u < nu; ++u) {
+            const float q = source[c][m_cells[u]];
+            LUCENT_CHECK(std::isfinite(q) && q >= 0.f, "grid diffusion: source at cell ",
+                         m_cells[u], " channel ", c, " is ", q, " (need finite, >= 0 W)");
+            b[u] = q;
+            sourceSum += q;
+        }
+        m_stats.source[c] = sourceSum;
+        if (nu == 0)
+            continue;
+        if (!(sourceSum > 0.0)) {
+            std::fill(m_phi[c].begin(), m_phi[c].end(), 0.f);
+            continue;
+        }
+        // Conjugate gradients with residual replacement: the recurrence r ← r − αAp drifts from
+        // the true b − Ax in float arithmetic, so each round starts from the true residual and
+        // the solve ends only when the true residual meets the target (or iterations run out).
+        const double target = o.tolerance * sourceSum;
+        x[nu] = 0.f;
+        int it = 0;
+        double rAbs = 0.0;
+        for (int round = 0; round < 8; ++round) {
+            applyA(x, ap.data(), x);  // A x (x: the warm start, 0, or the last round's answer)
+            double rz = 0.0;
+            rAbs = 0.0;
+            for (size_t u = 0; u < nu; ++u) {
+                r[u] = b[u] - ap[u];
+                z[u] = r[u] / diag[u];
+                p[u] = z[u];
+                rz += double(r[u]) * double(z[u]);
+                rAbs += std::abs(double(r[u]));
+            }
+            p[nu] = 0.f;
+            if (it >= o.maxIterations || rAbs <= target || !(rz > 0.0))
+                break;
+            // Within a round aim a little below the target so the true residual meets it.
+            while (it < o.maxIterations && rAbs > 0.5 * target && rz > 0.0) {
+                const double pAp = applyA(p.data(), ap.data(), p.data());
+                if (!(pAp > 0.0))
+                    break;
+                const float alpha = float(rz / pAp);
+                parallelFor(0, blocks, [&](int64_t b0, int64_t b1) {
+                    for (int64_t bl = b0; bl < b1; ++bl) {
+                        const int64_t i0 = bl * BLOCK,
+                                      i1 = std::min<int64_t>(i0 + BLOCK, int64_t(nu));
+                        double rzPart = 0.0, absPart = 0.0;
+                        for (int64_t i = i0; i < i1; ++i) {
+                            x[i] += alpha * p[i];
+                            r[i] -= alpha * ap[i];
+                            z[i] = r[i] / diag[i];
+                            rzPart += double(r[i]) * double(z[i]);
+                            absPart += std::abs(double(r[i]));
+                        }
+                        partA[size_t(bl)] = rzPart;
+                        partB[size_t(bl)] = absPart;
+                    }
+                });
+                double rzNew = 0.0;
+                rAbs = 0.0;
+                for (int64_t bl = 0; bl < blocks; ++bl) {
+                    rzNew += partA[size_t(bl)];
+                    rAbs += partB[size_t(bl)];
+                }
+                const float beta = float(rzNew / rz);
+                rz = rzNew;
+                for (size_t u = 0; u < nu; ++u)
+                    p[u] = z[u] + beta * p[u];
+                ++it;
+            }
+        }
+        // Negative φ can only come from an unconverged iterate; it has no physical meaning.
+        for (size_t u = 0; u < nu; ++u)
+            x[u] = std::max(0.f, x[u]);
+        m_stats.iterations[size_t(c)] = it;
+        m_stats.residual[size_t(c)] = rAbs / sourceSum;
+        double absorbed = 0.0, exitant = 0.0;
+        for (size_t u = 0; u < nu; ++u) {
+            absorbed += double(m_sigmaA[c][u]) * dx3 * double(x[u]);
+            exitant += double(m_boundaryConductance[c][u]) * double(x[u]);
+        }
+        m_stats.absorbed[size_t(c)] = absorbed;
+        m_stats.exitant[size_t(c)] = exitant;
+    }
+    m_phiValid = true;
+    m_stats.ms = timer.elapsedMs();
+    return m_stats;
+}
+
+float GridDiffusion::fluence(size_t cell, int channel) const {
+    if (!isMedium(cell) || channel < 0 || channel > 2)
+        return 0.f;
+    return m_phi[size_t(channel)][size_t(m_compact[cell])];
+}
+
+float GridDiffusion::exitance(size_t cell, int channel) const {
+    if (!isMedium(cell) || channel < 0 || channel > 2)
+        return 0.f;
+    const size_t u = size_t(m_compact[cell]);
+    const float d = m_diffusivity[size_t(channel)][u];
+    return m_phi[size_t(channel)][u] * d / (float(2.0 * m_boundaryA) * d + m_depth[u]);
+}
+
+}  // namespace lucent::sslpv
