@@ -295,6 +295,7 @@ void addSslpvFit(CLI::App& bench) {
 struct CalibrateOptions {
     std::string output;  // empty: planner::userLiveCostsPath()
     std::string viewport = "640x360";
+    std::vector<std::string> candidates;  // METHOD@SETTING; empty: the shipped table's
     planner::LiveCalibrationOptions calibration;
 };
 
@@ -307,6 +308,13 @@ void runCalibrate(const CalibrateOptions& args) {
                      args.viewport, "'");
     o.viewportWidth = w;
     o.viewportHeight = h;
+    for (const std::string& c : args.candidates) {
+        const size_t at = c.find('@');
+        if (at == std::string::npos || at == 0 || at + 1 == c.size())
+            LUCENT_THROW(ValueError, "bench calibrate: --candidate expects METHOD@SETTING (e.g. ",
+                         "'sslpv:diffusion@grid 32'), got '", c, "'");
+        o.candidates.push_back({c.substr(0, at), c.substr(at + 1), 0.0});
+    }
     const std::string path = args.output.empty() ? planner::userLiveCostsPath() : args.output;
     if (path.empty())
         LUCENT_THROW(ValueError, "bench calibrate: neither ", planner::LIVE_COSTS_ENV,
@@ -355,7 +363,8 @@ void addCalibrate(CLI::App& bench) {
     CLI::App* sub = addCommand(
         bench, "calibrate", "measure the Auto planner's live costs on this machine",
         "usage: lucent-cli bench calibrate [-o PATH] [--viewport WxH] [--strokes N]\n"
-        "                                  [--rounds R] [--scale S]\n",
+        "                                  [--rounds R] [--scale S]\n"
+        "                                  [--candidate METHOD@SETTING ...]\n",
         "Measures what Auto plans the live preview with (docs/planner.md, \"Live costs\"): for\n"
         "each candidate of the shipped table, on the default scene at the app's default preview\n"
         "settings, the stroke -> frame time of the live method (paint strokes as the app's\n"
@@ -381,6 +390,11 @@ void addCalibrate(CLI::App& bench) {
                     "median (default 3)")
         ->type_name("R")
         ->check(CLI::Range(1, 100));
+    sub->add_option("--candidate", args->candidates,
+                    "measure this candidate instead of the shipped table's, as METHOD@SETTING "
+                    "(a method variant of `lucent-cli methods` and one of its quality levels, "
+                    "e.g. 'sslpv:diffusion@grid 32'); repeatable")
+        ->type_name("METHOD@SETTING");
     sub->add_option("--scale", args->calibration.resolutionScale,
                     "rendered pixels per viewport pixel per axis (default 0.5, the app's half "
                     "resolution)")
