@@ -1199,84 +1199,121 @@ void SslpvSolver::injectDiffusionSources() {
     for (auto& q : m_diffusionSource)
         q.assign(count, 0.f);
     const float h = s.voxelSize;
-    constexpr float OPAQUE_DEPTH = 20.f;        // e^−20: nothing of the beam is left to scatter
+    constexpr float OPAQUE = 2.0611536e-9f;     // e^−20: nothing of the beam is left to scatter
     const int maxSteps = 3 * s.resolution + 3;  // a ray crosses at most 3N cells of the grid
-    int used = 0, skipped = 0;
-    double injected[3] = {}, firstAbsorbed[3] = {};  // W; thousands of texels: sum in double
-    for (const SslpvInjectionSample& smp : m_samples) {
-        if (!isInjectable(smp)) {
-            ++skipped;
-            continue;
-        }
-        const float cosI = -glm::dot(smp.direction, smp.normal);
-        const float T = 1.f - fresnelDielectric(cosI, m_eta);
-        const Vector3f wt = refractInto(smp.direction, smp.normal, m_eta);
-        const Rgb beam = T * smp.flux;
-        // Walk the beam cell by cell (Amanatides & Woo 1987) so each cell gets the exact
-        // integral of the first-scattering source over the chord it holds: α′(e^−τ₀ − e^−τ₁).
-        // The chord in cells before the medium (the voxel staircase around x_p: cells the
-        // surface cuts with less than half inside, up to two cells) is medium too: it joins
-        // the first inside cell's chord, whose control volume reaches the surface (the Robin
-        // condition's δ counts it). After the medium, the beam is out.
-        const Vector3f u = (smp.position - s.origin) / h;  // grid units
-        Coord c(glm::floor(u));
-        Vector3f tMax, tDelta;
-        Coord stepDir;
-        for (int a = 0; a < 3; ++a) {
-            if (wt[a] > 0.f) {
-                stepDir[a] = 1;
-                tDelta[a] = h / wt[a];
-                tMax[a] = (float(c[a] + 1) - u[a]) * tDelta[a];
-            } else if (wt[a] < 0.f) {
-                stepDir[a] = -1;
-                tDelta[a] = -h / wt[a];
-                tMax[a] = (u[a] - float(c[a])) * tDelta[a];
-            } else {
-                stepDir[a] = 0;
-                tDelta[a] = tMax[a] = INF;
-            }
-        }
-        Rgb tau(0.f);
-        bool entered = false;
-        float t = 0.f, pending = 0.f;
-        for (int k = 0; k < maxSteps; ++k) {
-            const int axis =
-                tMax.x < tMax.y ? (tMax.x < tMax.z ? 0 : 2) : (tMax.y < tMax.z ? 1 : 2);
-            const float tNext = tMax[axis];
-            const float len = tNext - t + pending;
-            if (isInside(c)) {
-                pending = 0.f;
-                entered = true;
-                const size_t i = s.linearIndex(c);
-                for (int ch = 0; ch < 3; ++ch) {
-                    const float st = m_material.sigma_t[ch][i];
-                    const float interacting = std::exp(-tau[ch]) * -std::expm1(-st * len);
-                    const float albedo =
-                        st > 0.f ? std::min(1.f, m_material.sigma_s[ch][i] / st) : 0.f;
-                    const float power = beam[ch] * interacting;
-                    m_diffusionSource[size_t(ch)][i] += albedo * power;
-                    injected[ch] += double(power);
-                    firstAbsorbed[ch] += double((1.f - albedo) * power);
-                    tau[ch] += st * len;
+
+    // The beams are walked in parallel over contiguous texel ranges, each range recording its
+    // deposits in walk order; the ranges are then applied in texel order, so every cell sums its
+    // deposits in the order a serial walk would: the source is bit-identical on any thread count.
+    struct Deposit {
+        uint32_t cell;
+        float q[3];
+    };
+    struct Part {
+        std::vector<Deposit> deposits;
+        double injected[3] = {}, firstAbsorbed[3] = {};  // W, summed in double
+        int used = 0, skipped = 0;
+    };
+    constexpr int64_t TEXELS_PER_PART = 1024;
+    const int64_t texels = int64_t(m_samples.size());
+    std::vector<Part> parts(size_t((texels + TEXELS_PER_PART - 1) / TEXELS_PER_PART));
+    parallelFor(0, int64_t(parts.size()), [&](int64_t p0, int64_t p1) {
+        for (int64_t p = p0; p < p1; ++p) {
+            Part& part = parts[size_t(p)];
+            const int64_t end = std::min(texels, (p + 1) * TEXELS_PER_PART);
+            for (int64_t j = p * TEXELS_PER_PART; j < end; ++j) {
+                const SslpvInjectionSample& smp = m_samples[size_t(j)];
+                if (!isInjectable(smp)) {
+                    ++part.skipped;
+                    continue;
                 }
-                if (tau.x > OPAQUE_DEPTH && tau.y > OPAQUE_DEPTH && tau.z > OPAQUE_DEPTH)
-                    break;
-            } else if (entered || t > 2.f * h) {
-                break;
-            } else {
-                pending = len;
+                const float cosI = -glm::dot(smp.direction, smp.normal);
+                const Rgb beam = (1.f - fresnelDielectric(cosI, m_eta)) * smp.flux;
+                const Vector3f wt = refractInto(smp.direction, smp.normal, m_eta);
+                // Walk the beam cell by cell (Amanatides & Woo 1987) so each cell gets the exact
+                // integral of the first-scattering source over the chord it holds:
+                // α′·T·(1 − e^(−σt′ℓ)), T the transmittance so far. The chord in cells before
+                // the medium (the voxel staircase around x_p: cells the surface cuts with less
+                // than half inside, up to two cells) is medium too: it joins the first inside
+                // cell's chord, whose control volume reaches the surface (the Robin condition's
+                // δ counts it). After the medium, the beam is out.
+                const Vector3f u = (smp.position - s.origin) / h;  // grid units
+                Coord c(glm::floor(u));
+                Vector3f tMax, tDelta;
+                Coord stepDir;
+                for (int a = 0; a < 3; ++a) {
+                    if (wt[a] > 0.f) {
+                        stepDir[a] = 1;
+                        tDelta[a] = h / wt[a];
+                        tMax[a] = (float(c[a] + 1) - u[a]) * tDelta[a];
+                    } else if (wt[a] < 0.f) {
+                        stepDir[a] = -1;
+                        tDelta[a] = -h / wt[a];
+                        tMax[a] = (u[a] - float(c[a])) * tDelta[a];
+                    } else {
+                        stepDir[a] = 0;
+                        tDelta[a] = tMax[a] = INF;
+                    }
+                }
+                Rgb transmitted(1.f);
+                bool entered = false;
+                float t = 0.f, pending = 0.f;
+                for (int k = 0; k < maxSteps; ++k) {
+                    const int axis =
+                        tMax.x < tMax.y ? (tMax.x < tMax.z ? 0 : 2) : (tMax.y < tMax.z ? 1 : 2);
+                    const float tNext = tMax[axis];
+                    const float len = tNext - t + pending;
+                    if (isInside(c)) {
+                        pending = 0.f;
+                        entered = true;
+                        const size_t i = s.linearIndex(c);
+                        Deposit d{uint32_t(i), {}};
+                        for (int ch = 0; ch < 3; ++ch) {
+                            const float st = m_material.sigma_t[ch][i];
+                            const float interacting =
+                                transmitted[ch] * -std::expm1(-st * len);  // one exp per cell
+                            transmitted[ch] -= interacting;
+                            const float albedo =
+                                st > 0.f ? std::min(1.f, m_material.sigma_s[ch][i] / st) : 0.f;
+                            const float power = beam[ch] * interacting;
+                            d.q[ch] = albedo * power;
+                            part.injected[ch] += double(power);
+                            part.firstAbsorbed[ch] += double((1.f - albedo) * power);
+                        }
+                        part.deposits.push_back(d);
+                        if (transmitted.x < OPAQUE && transmitted.y < OPAQUE &&
+                            transmitted.z < OPAQUE)
+                            break;
+                    } else if (entered || t > 2.f * h) {
+                        break;
+                    } else {
+                        pending = len;
+                    }
+                    t = tNext;
+                    c[axis] += stepDir[axis];
+                    tMax[axis] += tDelta[axis];
+                    if (!s.contains(c))
+                        break;
+                }
+                if (entered)
+                    ++part.used;
+                else
+                    ++part.skipped;
             }
-            t = tNext;
-            c[axis] += stepDir[axis];
-            tMax[axis] += tDelta[axis];
-            if (!s.contains(c))
-                break;
         }
-        if (!entered) {
-            ++skipped;
-            continue;
+    });
+    int used = 0, skipped = 0;
+    double injected[3] = {}, firstAbsorbed[3] = {};
+    for (const Part& part : parts) {
+        for (const Deposit& d : part.deposits)
+            for (int ch = 0; ch < 3; ++ch)
+                m_diffusionSource[size_t(ch)][d.cell] += d.q[ch];
+        for (int ch = 0; ch < 3; ++ch) {
+            injected[ch] += part.injected[ch];
+            firstAbsorbed[ch] += part.firstAbsorbed[ch];
         }
-        ++used;
+        used += part.used;
+        skipped += part.skipped;
     }
     m_stats.injectedTexels = used;
     m_stats.skippedTexels = skipped;

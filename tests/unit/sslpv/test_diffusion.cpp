@@ -10,6 +10,7 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Fresnel.h>
+#include <lucent/core/Parallel.h>
 #include <lucent/dipole/HalfSpace.h>
 
 #include "SslpvTestGrids.h"
@@ -190,6 +191,28 @@ TEST(GridDiffusion, PowerBalancesAndWarmStartsReachTheSameAnswer) {
     EXPECT_LT(s.diffusion().stats().iterations[1], coldIterations);
     EXPECT_NEAR(s.radiance(Point3f(0.f, 0.f, 3.f), Normal3f(0, 0, 1)).y, before.y,
                 1e-4f * before.y);
+}
+
+TEST(GridDiffusion, TheAnswerIsTheSameOnAnyThreadCount) {
+    // The beams are walked in parallel and the CG's dot products summed per block; both are
+    // ordered so that the result does not depend on the threads (docs/methods/sslpv.md).
+    LitBox box = litBox(24, 0.25f, 1.5f, 1.2f);
+    box.material.homogeneous = false;
+    for (size_t k = 0; k < box.material.spec.voxelCount(); k += 7)
+        box.material.sigma_t[0][k] = 3.f;  // heterogeneous, so each beam differs
+    auto solveWith = [&](int threads) {
+        const ThreadLimit limit(threads);
+        SslpvOptions o;
+        o.mode = SslpvMode::Diffusion;
+        SslpvSolver s(o);
+        s.setMaterial(box.material, 1.3f);
+        s.setInjectionSamples(box.texels);
+        s.solve();
+        return s.accumulation().raw();
+    };
+    const std::vector<float> one = solveWith(1);
+    EXPECT_EQ(one, solveWith(2));
+    EXPECT_EQ(one, solveWith(4));
 }
 
 TEST(GridDiffusion, ExtremeMaterialStaysFiniteAndBadInputIsRefused) {
