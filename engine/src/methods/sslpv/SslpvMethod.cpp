@@ -128,6 +128,11 @@ private:
             // 10⁻³ of the source, at most 1024 iterations (docs/methods/sslpv.md, "Diffusion
             // mode").
             o.render.solver.mode = sslpv::SslpvMode::Diffusion;
+            // The source is integrated over each beam's chord per cell, so a few texels per
+            // cell face carry it: 4 texels of RSM per grid cell across (≈ 5 per lit cell
+            // face) instead of the propagation's 256², which re-walked 25 beams per face on
+            // every stroke (docs/benchmarks.md, "Diffusion mode").
+            o.render.injectionResolution = std::clamp(4 * o.render.gridResolution, 64, 256);
             o.render.solver.diffusionExactTotal = p.getBool("diffusion-normalise");
             o.render.solver.maxSteps = p.isGiven("steps") ? p.getInt("steps") : 1024;
             o.render.solver.stopEpsilon = p.isGiven("stop") ? float(p.getFloat("stop")) : 1e-3f;
