@@ -258,6 +258,7 @@ const SslpvStats& SslpvSubsurfaceProvider::update() {
         s.solver.setMaterial(masked, s.eta);
         s.materialDirty = false;
     }
+    const bool rsmRebuilt = s.rsmDirty;
     if (s.rsmDirty) {
         // The internal renderer's tiny material only lets it run; its RSM texels are reused.
         SslpvRenderOptions ro = s.rsm.options();
@@ -282,7 +283,8 @@ const SslpvStats& SslpvSubsurfaceProvider::update() {
             s.glPropagateDirty = s.opt.backend == SslpvBackend::Gl;
         }
         s.uploadDirty = true;
-        s.timings.lastUpdateMs = s.timings.resampleMs + (st.reinjected ? s.timings.rsmMs : 0.0) +
+        // (Mode diffusion re-injects on every material change, from the RSM it already has.)
+        s.timings.lastUpdateMs = s.timings.resampleMs + (rsmRebuilt ? s.timings.rsmMs : 0.0) +
                                  (st.reinjected ? st.injectMs : 0.0) +
                                  (st.repropagated ? st.propagateMs : 0.0);
     }

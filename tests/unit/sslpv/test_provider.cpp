@@ -70,6 +70,10 @@ SslpvProviderOptions providerOptions(SslpvMode mode = SslpvMode::Paper) {
     o.render.gridResolution = 16;
     o.render.injectionResolution = 64;
     o.render.solver.maxSteps = 16;
+    if (mode == SslpvMode::Diffusion) {  // CG iterations to convergence, as the method runs it
+        o.render.solver.maxSteps = 1024;
+        o.render.solver.stopEpsilon = 1e-3f;
+    }
     o.render.subsurface = true;
     o.render.direct = false;
     return o;
@@ -188,8 +192,12 @@ TEST(SslpvProvider, RejectsBadInput) {
 }
 
 TEST_F(SslpvProviderGl, PixelsMatchCpuFormulaAndCpuImage) {
-    for (SslpvMode mode : {SslpvMode::Paper, SslpvMode::Calibrated}) {
-        SCOPED_TRACE(mode == SslpvMode::Paper ? "paper" : "calibrated");
+    // Mode diffusion too: its accumulation grid goes through the same upload and shader, with
+    // only boundary cells readable (SslpvSolver::isReadable, the texture's inside flag).
+    for (SslpvMode mode : {SslpvMode::Paper, SslpvMode::Calibrated, SslpvMode::Diffusion}) {
+        SCOPED_TRACE(mode == SslpvMode::Paper        ? "paper"
+                     : mode == SslpvMode::Calibrated ? "calibrated"
+                                                     : "diffusion");
         const TestScene s = makeScene();
         SslpvSubsurfaceProvider p(providerOptions(mode));
         p.create();
