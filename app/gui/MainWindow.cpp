@@ -234,6 +234,10 @@ bool MainWindow::setRenderMethod(const QString& method) {
     return m_render->setMethod(method);
 }
 
+bool MainWindow::setRenderParam(const QString& param, const QString& value) {
+    return m_render->setParam(param, value);
+}
+
 MainWindow::~MainWindow() {
     // The document outlives this destructor's body (QObject deletes it with the other
     // children): nothing it emits from now on may reach the half-destroyed window.

@@ -53,6 +53,8 @@ public:
     /// Selects the preview method `method` (registry name) through the Render settings dock.
     /// @return false (nothing changes) when it is not a preview method.
     bool setRenderMethod(const QString& method);
+    /// Sets a live parameter of the selected preview method (RenderPanel::setParam).
+    bool setRenderParam(const QString& param, const QString& value);
 
     //! @{ \name File operations; each reports errors in a message box and returns false
     bool openFile(const QString& path);

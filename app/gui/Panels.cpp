@@ -1138,6 +1138,41 @@ bool RenderPanel::setMethod(const QString& name) {
     return true;
 }
 
+bool RenderPanel::setParam(const QString& param, const QString& value) {
+    const auto it = m_paramFields.find(method().toStdString());
+    if (it == m_paramFields.end())
+        return false;
+    for (const ParamField& f : it->second) {
+        if (f.name != param.toStdString())
+            continue;
+        bool ok = true;
+        if (auto* c = qobject_cast<QComboBox*>(f.widget)) {
+            const int index = c->findData(value);
+            if (index < 0)
+                return false;
+            c->setCurrentIndex(index);
+        } else if (auto* b = qobject_cast<QCheckBox*>(f.widget)) {
+            if (value != QStringLiteral("on") && value != QStringLiteral("off"))
+                return false;
+            b->setChecked(value == QStringLiteral("on"));
+        } else if (auto* i = qobject_cast<QSpinBox*>(f.widget)) {
+            const int v = value.toInt(&ok);
+            if (!ok || v < i->minimum() || v > i->maximum())
+                return false;
+            i->setValue(v);
+        } else if (auto* d = qobject_cast<QDoubleSpinBox*>(f.widget)) {
+            const double v = value.toDouble(&ok);
+            if (!ok || v < d->minimum() || v > d->maximum())
+                return false;
+            d->setValue(v);
+        } else {
+            return false;
+        }
+        return true;
+    }
+    return false;
+}
+
 // ---- StatsPanel -----------------------------------------------------------------------------
 
 StatsPanel::StatsPanel(Document* doc, Viewport* viewport, QWidget* parent)

@@ -171,6 +171,10 @@ public:
     /// Selects the preview method `name` (AUTO_METHOD or a registry name) as the selector does.
     /// @return false (nothing changes) when `name` is not a preview method.
     bool setMethod(const QString& name);
+    /// Sets the selected method's field of parameter `param` to `value` as if typed (a choice's
+    /// value, on/off, a number), which applies it. @return false (nothing changes) when the
+    /// method has no such live field or the value does not fit it.
+    bool setParam(const QString& param, const QString& value);
     /// The selected method's registry name.
     [[nodiscard]] QString method() const;
     /// The selector's label of method `name` (its MethodInfo::title; `name` if unknown).

@@ -5,6 +5,7 @@
 ///     lucent [PROJECT|MESH|VDB] [--screenshot PATH] [--frames N] [--benchmark]
 ///            [--benchmark-json PATH] [--live-costs PATH] [--viewport WxH] [--window WxH]
 ///            [--method auto|NAME]   (NAME: a registry name with a GL pass, `lucent-cli methods`)
+///            [--param KEY=VALUE ...] (a live parameter of that method, as its field takes it)
 ///            [--paint-demo] [--reference SPP] [--reference-view reference|preview|error]
 ///            [--raise DOCKS] [--no-settings]
 ///            [--swap-interval N] [--crash-test-script]
@@ -429,12 +430,17 @@ int main(int argc, char** argv) {
         QStringLiteral("method"),
         QStringLiteral("Preview method: %1 (default auto).").arg(previewMethodNames()),
         QStringLiteral("M"));
+    QCommandLineOption param(
+        QStringLiteral("param"),
+        QStringLiteral("A live parameter of the --method, as KEY=VALUE (e.g. mode=diffusion for "
+                       "sslpv); repeatable."),
+        QStringLiteral("KEY=VALUE"));
     QCommandLineOption crashTest(
         QStringLiteral("crash-test-script"),
         QStringLiteral("Test-only: paint, autosave and save the opened project until killed, "
                        "printing each step (tests/unit/app/test_crash.cpp)."));
     parser.addOptions({shot, frames, bench, benchJson, liveCosts, viewportSize, windowSize,
-                       noSettings, paintDemo, raiseDock, method, reference, referenceView,
+                       noSettings, paintDemo, raiseDock, method, param, reference, referenceView,
                        swapInterval, crashTest});
     parser.process(app);
     if (parser.isSet(swapInterval)) {
@@ -480,6 +486,16 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "lucent: --method expects one of %s (got '%s')\n",
                      qPrintable(previewMethodNames()), qPrintable(parser.value(method)));
         return 2;
+    }
+    for (const QString& kv : parser.values(param)) {
+        const qsizetype eq = kv.indexOf(QLatin1Char('='));
+        if (eq <= 0 || !window.setRenderParam(kv.left(eq), kv.mid(eq + 1))) {
+            std::fprintf(stderr,
+                         "lucent: --param '%s' is not KEY=VALUE of a live parameter of the preview "
+                         "method (`lucent-cli methods` lists them)\n",
+                         qPrintable(kv));
+            return 2;
+        }
     }
     window.show();
     for (const QString& name : parser.value(raiseDock).split(QLatin1Char(','), Qt::SkipEmptyParts))

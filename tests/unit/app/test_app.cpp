@@ -1424,6 +1424,26 @@ TEST(AppRender, EverySettingChangesAtRunTimeForEveryMethod) {
     expectRendersWith(*w, "sslpv", "File > New at 64³");
 }
 
+// `lucent --method sslpv --param mode=diffusion` (the user guide's screenshot): a live parameter
+// set by name reaches the renderer, and names or values the method does not take are refused.
+TEST(AppRender, ParametersSetByNameReachTheRenderer) {
+    auto w = shownWindow(1);
+    Viewport* vp = w->viewport();
+    vp->setFixedSize(320, 180);
+    ASSERT_TRUE(w->setRenderMethod(QStringLiteral("sslpv")));
+    ASSERT_TRUE(w->setRenderParam(QStringLiteral("mode"), QStringLiteral("diffusion")));
+    ASSERT_TRUE(w->setRenderParam(QStringLiteral("grid"), QStringLiteral("16")));
+    renderOneFrame(vp);
+    expectRendersWith(*w, "sslpv", "mode diffusion");
+    const methods::ParamSet& p = vp->renderSettings().params;
+    ASSERT_NE(p.find("mode"), nullptr);
+    EXPECT_EQ(*p.find("mode"), "diffusion");
+    EXPECT_FALSE(w->setRenderParam(QStringLiteral("mode"), QStringLiteral("photons")));
+    EXPECT_FALSE(w->setRenderParam(QStringLiteral("grid"), QStringLiteral("100000")));
+    EXPECT_FALSE(w->setRenderParam(QStringLiteral("no-such-param"), QStringLiteral("1")));
+    EXPECT_EQ(*vp->renderSettings().params.find("mode"), "diffusion");
+}
+
 // A method whose frame fails (here SSLPV with a shader that does not compile) must not leave
 // the viewport blank: the frame is drawn with Direct, the dock shows Direct, the user is told
 // why, and the method works again when chosen after the cause is gone.
