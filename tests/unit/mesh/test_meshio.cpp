@@ -297,6 +297,12 @@ TEST(MeshIO, FuzzFindingsAreClearErrors) {
     // bytes, a heap address). Refused before VTK.
     expectLoadError(fuzzFinding("vtp_last_block_larger_than_blocks.vtp"),
                     "claims a last block of 64 bytes, larger than its blocks of 36 (corrupt)");
+    // The 10⁶-execution run of 2026-12-04 (evening): an array's offset moved into another
+    // array's base64 data, where its compression header reads 0 blocks of 0 bytes; VTK divides
+    // by the block size regardless (SIGFPE in vtkXMLDataParser::ReadCompressedData; in the app
+    // the child process died with "crashed (Floating point exception)"). Refused before VTK.
+    expectLoadError(fuzzFinding("vtp_compression_block_size_zero.vtp"),
+                    "claims blocks of 0 bytes (corrupt)");
     // The same header fault in an inline base64 array, whose headers were not checked at all.
     expectLoadError(robustInput("vtp_last_block_larger_inline_binary_zlib.vtp"),
                     "the compression header of the inline array 'Points' claims a last block of "
