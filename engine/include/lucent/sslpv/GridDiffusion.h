@@ -80,7 +80,7 @@ struct GridDiffusionStats {
     std::array<int, 3> iterations{};   ///< CG iterations used
     std::array<double, 3> residual{};  ///< final Σ|r| / Σ Q (0 when there is no source)
     std::array<double, 3> source{};    ///< Σ Q, W
-    std::array<double, 3> absorbed{};  ///< Σ σa φ Δx³, W
+    std::array<double, 3> absorbed{};  ///< Σ σa f φ Δx³ (f: the cell's inside fraction), W
     std::array<double, 3> exitant{};   ///< Σ over boundary faces of the flux out, W
     size_t cells = 0;                  ///< medium cells (unknowns per channel)
     bool warmStart = false;            ///< started from the previous solution
