@@ -12,6 +12,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <mutex>
 
 namespace lucent::sslpv {
 
@@ -72,6 +74,16 @@ ExactReflectanceRatio::ExactReflectanceRatio(double eta) : m_eta(eta) {
     }
     // α′ = 0: both vanish; take the limit from the first node inside.
     m_ratio[NODES] = m_ratio[NODES - 1];
+}
+
+std::shared_ptr<const ExactReflectanceRatio> exactReflectanceRatio(double eta) {
+    static std::mutex mutex;
+    static std::map<double, std::shared_ptr<const ExactReflectanceRatio>> cache;
+    const std::lock_guard<std::mutex> lock(mutex);
+    auto& entry = cache[eta];
+    if (!entry)
+        entry = std::make_shared<const ExactReflectanceRatio>(eta);
+    return entry;
 }
 
 float ExactReflectanceRatio::operator()(float albedo) const {

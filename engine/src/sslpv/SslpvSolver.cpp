@@ -1344,7 +1344,7 @@ void SslpvSolver::diffuse() {
         float(double(m_eta) * m_eta / (PI * (1.0 - diffuseFresnelReflectance(double(m_eta)))));
     const float toC00 = exitNorm * s.voxelSize * s.voxelSize / (2.f * Y00);
     if (m_opt.diffusionExactTotal && (!m_exactRatio || m_exactRatio->eta() != double(m_eta)))
-        m_exactRatio = std::make_shared<const ExactReflectanceRatio>(double(m_eta));
+        m_exactRatio = exactReflectanceRatio(double(m_eta));
     for (int z = 0; z < n; ++z)
         for (int y = 0; y < n; ++y)
             for (int x = 0; x < n; ++x) {

@@ -146,6 +146,9 @@ TEST(GridDiffusion, NormalisedExitanceReadsTheExactHalfSpace) {
     // Normalised, grid 64 reads the exact total less the discretisation's 0.75 %: within 1.5 %.
     const ExactReflectanceRatio ratio(1.3);
     EXPECT_NEAR(ratio(1.f), 1.f, 1e-3f);
+    // Built once per process and η: solvers share it.
+    EXPECT_EQ(exactReflectanceRatio(1.3).get(), exactReflectanceRatio(1.3).get());
+    EXPECT_EQ((*exactReflectanceRatio(1.3))(0.8f), ratio(0.8f));
     EXPECT_LT(ratio(0.8f), 0.96f);
     const double exact = dipole::halfSpaceReflectance(0.8, 1.3, 1.0) *
                          (1.0 - fresnelDielectric(1.0, 1.3));  // per unit incident

@@ -296,7 +296,7 @@ private:
     std::vector<uint8_t> m_exitBrickLit;  ///< m_exitant's brick may hold non-zero values
     SslpvStats m_stats;
     GridDiffusion m_diffusion;                                  ///< mode Diffusion's solver
-    std::shared_ptr<const ExactReflectanceRatio> m_exactRatio;  ///< built per η when needed
+    std::shared_ptr<const ExactReflectanceRatio> m_exactRatio;  ///< the process's table for η
     std::array<std::vector<float>, 3> m_diffusionSource;        ///< W per cell (spec layout)
 };
 
