@@ -5,9 +5,9 @@
 #include <lucent/core/Error.h>
 #include <lucent/core/Fresnel.h>
 #include <lucent/core/Parallel.h>
-#include <lucent/core/Quadrature.h>
 #include <lucent/core/Timer.h>
 #include <lucent/dipole/HalfSpace.h>
+#include <lucent/dipole/Profiles.h>
 #include <lucent/sslpv/GridDiffusion.h>
 
 #include <algorithm>
@@ -34,14 +34,9 @@ int64_t blockCount(size_t n) {
 double diffuseFresnelReflectance(double eta) {
     LUCENT_CHECK(std::isfinite(eta) && eta > 0.0 && eta <= 10.0,
                  "diffuse Fresnel reflectance: eta must be in (0, 10], got ", eta);
-    // Gauss–Legendre in μ on [0, 1]; under total internal reflection (η < 1) F = 1 beyond the
-    // critical angle, a kink: split the interval there so each piece is smooth.
-    const double muCrit = eta < 1.0 ? std::sqrt(1.0 - eta * eta) : 0.0;
-    double sum = muCrit * muCrit;  // 2∫₀^μc μ dμ with F = 1
-    const QuadratureRule g = gaussLegendre(64).mappedTo(muCrit, 1.0);
-    for (size_t i = 0; i < g.x.size(); ++i)
-        sum += 2.0 * g.w[i] * fresnelDielectric(g.x[i], eta) * g.x[i];
-    return sum;
+    // 2·C₁ of the light arriving at relative index η, i.e. leaving a medium of index 1/η
+    // (dipole::fresnelMoment's convention; d'Eon 2012 Sec. 2): the same exact quadrature.
+    return 2.0 * dipole::fresnelMoment(1, 1.0 / eta);
 }
 
 double diffusionBoundaryConstant(double eta) {

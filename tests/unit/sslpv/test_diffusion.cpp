@@ -90,7 +90,7 @@ TEST(GridDiffusion, DiffuseFresnelMomentsObeyTheirIdentities) {
     EXPECT_NEAR(diffusionBoundaryConstant(1.0), 1.0, 1e-12);
     for (double eta : {1.1, 1.3, 1.5, 2.5}) {
         // Reciprocity: what a Lambertian field loses into the medium from outside equals what
-        // leaves from inside, scaled by η²: 1 − F_dr(1/η) = (1 − F_dr(η))/η². (The 64-node
+        // leaves from inside, scaled by η²: 1 − F_dr(1/η) = (1 − F_dr(η))/η². (The quadrature
         // rule meets the square-root edge at the critical angle: 10⁻⁶, not machine precision.)
         EXPECT_NEAR(1.0 - diffuseFresnelReflectance(1.0 / eta),
                     (1.0 - diffuseFresnelReflectance(eta)) / (eta * eta), 1e-5)

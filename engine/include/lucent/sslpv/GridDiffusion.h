@@ -34,8 +34,8 @@ namespace lucent::sslpv {
 
 /// Diffuse Fresnel reflectance F_dr(η) = 2∫₀¹ F(μ, η) μ dμ of a smooth boundary for a
 /// cosine-weighted (Lambertian) field arriving on the side of index 1, η the other side's index
-/// relative to it: F_dr(η) from outside the object, F_dr(1/η) from inside (64-node
-/// Gauss–Legendre in μ, exact Fresnel). @param eta in (0, 10].
+/// relative to it: F_dr(η) from outside the object, F_dr(1/η) from inside (2·C₁ of
+/// dipole::fresnelMoment, exact Fresnel by quadrature). @param eta in (0, 10].
 double diffuseFresnelReflectance(double eta);
 
 /// The boundary constant A = (1 + F_dr,int)/(1 − F_dr,int), F_dr,int = F_dr(1/η), of the
