@@ -183,19 +183,18 @@ TEST(SslpvRender, RejectsMissingInputs) {
     EXPECT_THROW(renderSslpv(empty), ValueError);
 }
 
-// Issue 17, item 8 (open; docs/methods/sslpv.md "Known artefact"): at 64³ curved surfaces show
-// contour bands that follow the grid's cell layers. A uniformly lit slab tilted against the grid
-// shows the same thing in one dimension: its top face crosses a cell layer every Δx/sin θ along
-// x, and the exact radiance in the middle of the face is uniform, so the spread of the column
-// means there is the artefact. Disabled because it fails on the current code (column spread
-// 15.7 %; 11.3 % with the fractional-sink experiment of the docs page, 5.4 % with the painted
-// volume at 64³ instead of 128³): run it with --gtest_also_run_disabled_tests when working on
-// the fix, and enable it with the fix.
-TEST(SslpvRender, DISABLED_TiltedSlabShowsNoContourBands) {
+namespace {
+
+// Issue 17, item 8 (docs/methods/sslpv.md "Known artefact: contour bands"): at 64³ curved
+// surfaces show contour bands that follow the grid's cell layers. A uniformly lit slab tilted
+// against the grid shows the same thing in one dimension: its top face crosses a cell layer every
+// Δx/sin θ along x, and the exact radiance in the middle of the face is uniform, so the spread of
+// the column means there is the artefact. Returns that spread (relative to the mean).
+double tiltedSlabColumnSpread(SslpvMode mode, float tiltDeg, int grid = 64) {
     Scene scene;
     SceneObject obj;
     obj.mesh = makeBox(Vector3f(40.f, 40.f, 12.f));
-    const float tilt = glm::radians(20.f);  // about y: the top face's normal leans toward +x
+    const float tilt = glm::radians(tiltDeg);  // about y: the top face's normal leans toward +x
     const float c = std::cos(tilt), s = std::sin(tilt);
     for (Point3f& p : obj.mesh.positions)
         p = Point3f(c * p.x + s * p.z, p.y, -s * p.x + c * p.z);
@@ -205,7 +204,7 @@ TEST(SslpvRender, DISABLED_TiltedSlabShowsNoContourBands) {
     m.sigma_s = Rgb(1.1f, 1.15f, 1.2f);
     // The painted volume at 128³, as the app's default scene: the 64³ LPV cells then know how
     // much of them is inside (resample's fine-voxel overlap).
-    const GridSpec spec = GridSpec::around(obj.mesh.bounds(), 128);
+    const GridSpec spec = GridSpec::around(obj.mesh.bounds(), std::max(128, grid));
     obj.material = std::make_shared<MaterialVolume>(spec, m);
     obj.material->setInsideMask(voxelizeSolid(obj.mesh, spec));
     scene.objects.push_back(std::move(obj));
@@ -224,9 +223,15 @@ TEST(SslpvRender, DISABLED_TiltedSlabShowsNoContourBands) {
     scene.camera.width = scene.camera.height = 64;
     scene.eta = 1.3f;
     SslpvRenderOptions opt;
-    opt.gridResolution = 64;
+    opt.gridResolution = grid;
     opt.injectionResolution = 256;
-    opt.solver.maxSteps = 32;
+    opt.solver.mode = mode;
+    if (mode == SslpvMode::Diffusion) {
+        opt.solver.maxSteps = 1024;  // conjugate-gradient iterations, to the method's default stop
+        opt.solver.stopEpsilon = 1e-3f;
+    } else {
+        opt.solver.maxSteps = 32;  // the live preview's fixed steps
+    }
     opt.direct = false;
     const ImageRgb img = renderSslpv(scene, opt);
     // Column means (x runs across the cell layers), relative spread about their mean.
@@ -239,12 +244,40 @@ TEST(SslpvRender, DISABLED_TiltedSlabShowsNoContourBands) {
         mean += v / double(column.size());
     for (double v : column)
         sq += (v - mean) * (v - mean) / double(column.size());
-    const double spread = std::sqrt(sq) / mean;
+    std::printf("tilt %.0f°, column means / their mean:", double(tiltDeg));
     for (double v : column)
-        std::printf("%.3f ", v / mean);
+        std::printf(" %.3f", v / mean);
     std::printf("\n");
-    std::printf("tilted slab at 64³: column spread %.4f of the mean %.5g\n", spread, mean);
-    ASSERT_GT(mean, 0.0);
-    // A smooth answer: 1 % (the per-pixel float rounding and RSM texel edges are far below it).
+    EXPECT_GT(mean, 0.0);
+    return mean > 0.0 ? std::sqrt(sq) / mean : 1.0;
+}
+
+}  // namespace
+
+// In mode Diffusion the bands are discretisation error of the boundary (the staircase's faces
+// and the one-point extrapolation of φ to the surface, both first order in Δx): they must fade
+// at least at first order as the grid is refined, a factor 4 over two halvings of the cell
+// (measured 2026-12-04: 8.3 % → 3.9 % → 1.35 % at 20°, 6.7 % → 3.5 % → 1.5 % at 30°, for grids
+// 32 → 64 → 128). Paper mode does not (12.4 % → 12.5 % → 5.9 % at 20°; 32 fixed steps).
+TEST(SslpvRender, DiffusionModeContourBandsFadeAtFirstOrderAsTheGridIsRefined) {
+    for (float tilt : {20.f, 30.f}) {
+        double spread[3];
+        const int grids[3] = {32, 64, 128};
+        for (int i = 0; i < 3; ++i) {
+            spread[i] = tiltedSlabColumnSpread(SslpvMode::Diffusion, tilt, grids[i]);
+            std::printf("diffusion, tilt %.0f°, grid %d: column spread %.4f\n", double(tilt),
+                        grids[i], spread[i]);
+        }
+        EXPECT_LT(spread[2], 0.25 * spread[0]) << "tilt " << tilt << "°";
+    }
+}
+
+// The propagation modes carry the pattern each stair step of the voxelised surface sets deep
+// into the object (the six-face stencil's ray effect): Paper mode's spread is 12.5 % at 20°,
+// and mode Diffusion's 3.9 % at 64³ (1.35 % at 128³). Disabled because it fails: run it with
+// --gtest_also_run_disabled_tests when working on the fix, and enable it with the fix.
+TEST(SslpvRender, DISABLED_TiltedSlabShowsNoContourBands) {
+    const double spread = tiltedSlabColumnSpread(SslpvMode::Paper, 20.f);
+    std::printf("paper, tilt 20°: column spread %.4f\n", spread);
     EXPECT_LT(spread, 0.01);
 }
