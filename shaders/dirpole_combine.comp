@@ -28,25 +28,9 @@ layout(binding = 3) uniform sampler2DArray u_accum;      // rgb Σ C^f over a sa
 
 layout(rgba32f, binding = 0) writeonly uniform image2D u_target;
 
-// DirpoleExitTable values: row-major [albedo node][cosine node] (shared/DirpoleShared.h).
-layout(std430, binding = LUCENT_DIRPOLE_BINDING_EXIT_TABLE) readonly buffer DirpoleExitValues {
-    float b_exit[];
-};
+#define LUCENT_EXIT_TABLE_BINDING LUCENT_DIRPOLE_BINDING_EXIT_TABLE
+#include "common/exit_table.glsl"
 uniform int u_exitCorrection;
-
-// c(α′, t), bilinear between the nodes as DirpoleExitTable::correction.
-float exitCorrection(float alphaP, float t) {
-    const int A = LUCENT_DIRPOLE_EXIT_ALBEDO_NODES, C = LUCENT_DIRPOLE_EXIT_COSINE_NODES;
-    float s = sqrt(clamp(1.0 - alphaP, 0.0, 1.0)) * float(A - 1);
-    int i = min(int(s), A - 2);
-    float fs = s - float(i);
-    float u = clamp(t, 0.0, 1.0) * float(C - 1);
-    int j = min(int(u), C - 2);
-    float fu = u - float(j);
-    float lo = mix(b_exit[i * C + j], b_exit[i * C + j + 1], fu);
-    float hi = mix(b_exit[(i + 1) * C + j], b_exit[(i + 1) * C + j + 1], fu);
-    return mix(lo, hi, fs);
-}
 
 uniform ivec2 u_size;
 uniform int u_faceSize;

@@ -9,6 +9,10 @@
 // with the coefficients read at p − d·Δx·n, d = ½, 1, 3⁄2 (first depth whose inside weight
 // exceeds 1e-4), trilinear over the 8 nearest cell centres that are inside, renormalised.
 // Only bands 0 and 1 are read: band 2's hemisphere integral vanishes (Eq. 7).
+// Mode diffusion (u_diffusion): band 0 only; its band-1 slot holds each cell's reduced albedo
+// (shared/SslpvShared.h), read with the same weights, and with u_exitCorrection the light
+// leaves with the exact half-space's exit-angle distribution c(α′, cos θ_o)
+// (SslpvSolver::exitantRadiance).
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -20,6 +24,13 @@ layout(binding = 4) uniform sampler3D u_c2;  // rgb: Y10
 layout(binding = 5) uniform sampler3D u_c3;  // rgb: Y11
 
 layout(rgba32f, binding = 0) writeonly uniform image2D u_target;  // W/(mm²·sr)
+
+#include "shared/SslpvShared.h"
+#if LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF != 1
+#error "radianceInside reads the albedo from u_c1 (coefficient 1)"
+#endif
+#define LUCENT_EXIT_TABLE_BINDING LUCENT_SSLPV_BINDING_EXIT_TABLE
+#include "common/exit_table.glsl"
 
 uniform mat4 u_objectFromWorld;  // rigid: rest space of the object
 uniform vec3 u_eye;              // camera position, world (perspective)
@@ -34,6 +45,8 @@ uniform float u_eta;       // relative index of refraction
 uniform float u_exitScale; // SslpvSolver::exitScale()
 uniform float u_Y00;       // 1/(2√π)
 uniform float u_K1;        // √(3/(4π))
+uniform int u_diffusion;      // mode diffusion: band 0 only, band-1 slot = albedo
+uniform int u_exitCorrection; // mode diffusion: apply exitCorrection (table bound)
 
 // Exact unpolarised Fresnel reflectance (Born & Wolf §1.5), as lucent::sslpv::dielectricReflectance.
 float dielectricReflectance(float cosThetaI, float eta) {
@@ -52,7 +65,8 @@ bool isInside(ivec3 c) {
     return texelFetch(u_c0, c, 0).a >= 0.5;
 }
 
-vec3 radianceInside(vec3 p, vec3 n) {
+vec3 radianceInside(vec3 p, vec3 n, out vec3 albedo) {
+    albedo = vec3(0.0);
     const float depths[3] = float[3](0.5, 1.0, 1.5);
     for (int d = 0; d < 3; ++d) {
         vec3 u = (p - depths[d] * u_h * n - u_origin) / u_h - vec3(0.5);
@@ -79,7 +93,8 @@ vec3 radianceInside(vec3 p, vec3 n) {
             c2 /= wsum;
             c3 /= wsum;
             float invA = 1.0 / (u_h * u_h);
-            vec3 c10n = n.x * c3 + n.y * c1 + n.z * c2;
+            vec3 c10n = u_diffusion != 0 ? vec3(0.0) : n.x * c3 + n.y * c1 + n.z * c2;
+            if (u_diffusion != 0) albedo = c1;  // the LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF slot
             return max(vec3(0.0), 2.0 * invA * (u_Y00 * c0 + 0.5 * u_K1 * c10n));
         }
     }
@@ -100,7 +115,12 @@ void main() {
         if (cosO > 0.0) {
             vec3 p = (u_objectFromWorld * vec4(pos.xyz, 1.0)).xyz;
             vec3 n = normalize(mat3(u_objectFromWorld) * nw);
-            L = (u_exitScale * (1.0 - dielectricReflectance(cosO, u_eta))) * radianceInside(p, n);
+            vec3 albedo;
+            L = (u_exitScale * (1.0 - dielectricReflectance(cosO, u_eta))) *
+                radianceInside(p, n, albedo);
+            if (u_exitCorrection != 0)
+                for (int c = 0; c < 3; ++c)
+                    if (albedo[c] > 0.0) L[c] *= exitCorrection(albedo[c], cosO);
         }
     }
     imageStore(u_target, px, vec4(L, 1.0));

@@ -7,11 +7,13 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Timer.h>
+#include <lucent/dipole/Profiles.h>
 #include <lucent/gpu/GlResources.h>
 #include <lucent/gpu/Shader.h>
 #include <lucent/mesh/Voxelize.h>
 
 #include <epoxy/gl.h>
+#include <shared/SslpvShared.h>
 
 #include <algorithm>
 #include <cmath>
@@ -74,6 +76,9 @@ struct SslpvSubsurfaceProvider::Impl {
     int texRes = 0;
     gpu::GlObject timeQuery;
     bool queryPending = false;
+    /// The solver's exit-angle table as an SSBO (mode diffusion), and the table it was made of.
+    gpu::GlObject exitTableBuffer;
+    std::shared_ptr<const dipole::DirpoleExitTable> exitTableUploaded;
     std::unique_ptr<SslpvGlPropagator> gl;
     std::vector<float> staging;
 
@@ -134,6 +139,8 @@ void SslpvSubsurfaceProvider::destroy() {
         m->queryPending = false;
     }
     m->timeQuery.destroy();
+    m->exitTableBuffer.destroy();
+    m->exitTableUploaded.reset();
     if (m->gl) {
         m->gl->destroy();
         m->gl.reset();
@@ -401,6 +408,20 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
     glProgramUniform1f(p, s.program.uniformLocation("u_exitScale"), s.solver.exitScale());
     glProgramUniform1f(p, s.program.uniformLocation("u_Y00"), SH_Y00);
     glProgramUniform1f(p, s.program.uniformLocation("u_K1"), SH_K1);
+    const bool diffusion = s.solver.options().mode == SslpvMode::Diffusion;
+    const std::shared_ptr<const dipole::DirpoleExitTable>& table = s.solver.exitTable();
+    if (diffusion && table && table != s.exitTableUploaded) {
+        s.exitTableBuffer.destroy();
+        s.exitTableBuffer =
+            gpu::createBuffer(table->values().size() * sizeof(float), table->values().data(), 0);
+        s.exitTableUploaded = table;
+    }
+    const bool exitCorrection = diffusion && table != nullptr;
+    if (exitCorrection)
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, LUCENT_SSLPV_BINDING_EXIT_TABLE,
+                         s.exitTableBuffer.id());
+    glProgramUniform1i(p, s.program.uniformLocation("u_diffusion"), diffusion ? 1 : 0);
+    glProgramUniform1i(p, s.program.uniformLocation("u_exitCorrection"), exitCorrection ? 1 : 0);
     glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
     // The target is written with imageStore: visible to texture fetches (the shade pass), image
     // loads, framebuffer clears/draws (the next frame's clear) and glGetTexImage read-backs

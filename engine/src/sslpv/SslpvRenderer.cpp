@@ -142,6 +142,7 @@ void SslpvRenderer::setOptions(const SslpvRenderOptions& o) {
         a.attenuation != b.attenuation || a.stopEpsilon != b.stopEpsilon ||
         a.skipEmptySlices != b.skipEmptySlices || a.mode != b.mode ||
         a.diffusionExactTotal != b.diffusionExactTotal ||
+        a.diffusionExitTable != b.diffusionExitTable ||
         a.calibration.linear != b.calibration.linear ||
         a.calibration.transport != b.calibration.transport ||
         a.calibration.diffusion != b.calibration.diffusion ||
@@ -268,9 +269,9 @@ ImageRgb SslpvRenderer::render(const Camera& camera) {
                     Rgb L(0.f);
                     if (m_opt.subsurface) {
                         // Eq. 4/7: L_o = T(ω_i, ω_o) L_i with T = 1 − F_r(cos θ_o, η);
-                        // calibrated mode also scales by G/η² (SslpvSolver::exitScale).
-                        L += (m_solver.exitScale() * (1.f - fresnelDielectric(cosO, m_eta))) *
-                             m_solver.radiance(hit->position, n);
+                        // calibrated mode also scales by G/η² (SslpvSolver::exitScale), the
+                        // diffusion mode by the exact exit-angle distribution.
+                        L += m_solver.exitantRadiance(hit->position, n, cosO);
                     }
                     if (m_opt.direct) {
                         const Point3f p = hit->position + eps * hit->geometricNormal;

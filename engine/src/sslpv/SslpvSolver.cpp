@@ -5,6 +5,9 @@
 #include <lucent/core/Fresnel.h>
 #include <lucent/sslpv/SslpvSolver.h>
 
+#include <lucent/dipole/Profiles.h>
+#include <shared/SslpvShared.h>
+
 #include <lucent/core/Error.h>
 #include <lucent/core/Parallel.h>
 #include <lucent/core/Timer.h>
@@ -441,6 +444,7 @@ void SslpvSolver::setOptions(const SslpvOptions& o) {
     m_opt = o;
     m_materialDirty = true;
     m_factorsDirty = true;
+    m_exitTable = nullptr;  // the next diffusion solve sets it (its grid holds the albedo)
 }
 
 void SslpvSolver::validateMaterial(const CoarseMaterial& m) const {
@@ -1140,13 +1144,15 @@ float SslpvSolver::exitScale() const {
     return m_opt.calibration.gain[m_opt.order - 1] * refraction;
 }
 
-Rgb SslpvSolver::radiance(const Point3f& p, const Normal3f& n) const {
+bool SslpvSolver::interpolateCoefficients(const Point3f& p, const Normal3f& n,
+                                          float (&c)[3][SSLPV_MAX_COEFFS]) const {
+    for (auto& row : c)
+        std::fill(row, row + SSLPV_MAX_COEFFS, 0.f);
     if (!m_hasMaterial || m_accum.resolution() == 0)
-        return Rgb(0.f);
+        return false;
     const GridSpec& s = m_material.spec;
     const float h = s.voxelSize;
     const int count = m_accum.coeffCount();
-    float c[3][SSLPV_MAX_COEFFS] = {};
     bool found = false;
     for (float depth : {0.5f, 1.0f, 1.5f}) {
         // Trilinear over the eight nearest cell centres, inside cells only (renormalised).
@@ -1178,16 +1184,48 @@ Rgb SslpvSolver::radiance(const Point3f& p, const Normal3f& n) const {
         for (auto& row : c)
             std::fill(row, row + SSLPV_MAX_COEFFS, 0.f);
     }
-    if (!found)
-        return Rgb(0.f);
+    return found;
+}
+
+Rgb SslpvSolver::radianceFromCoefficients(const float (&c)[3][SSLPV_MAX_COEFFS],
+                                          const Normal3f& n) const {
     // Eq. 7 with the rotation of Eq. 6 (zyz Euler angles of n): c10^(n) = n·(c11, c1−1, c10);
     // hemisphere integrals ∫₀^{π/2} y_l0 sin θ dθ = 1/(2√π), ½√(3/4π), 0 (band 2: (3cos²−1)
-    // integrates to zero), so L_i = (2/A)(c00/(2√π) + ½√(3/4π) c10^(n)), A = Δx² (§4).
+    // integrates to zero), so L_i = (2/A)(c00/(2√π) + ½√(3/4π) c10^(n)), A = Δx² (§4). Mode
+    // Diffusion has band 0 only (its band-1 slot holds the albedo, shared/SslpvShared.h).
+    const float h = m_material.spec.voxelSize;
     const float invA = 1.f / (h * h);
+    const bool band1 = m_opt.mode != SslpvMode::Diffusion;
     Rgb L(0.f);
     for (int ch = 0; ch < 3; ++ch) {
-        const float c10n = n.x * c[ch][3] + n.y * c[ch][1] + n.z * c[ch][2];
+        const float c10n = band1 ? n.x * c[ch][3] + n.y * c[ch][1] + n.z * c[ch][2] : 0.f;
         L[ch] = std::max(0.f, 2.f * invA * (Y00 * c[ch][0] + 0.5f * K1 * c10n));
+    }
+    return L;
+}
+
+Rgb SslpvSolver::radiance(const Point3f& p, const Normal3f& n) const {
+    float c[3][SSLPV_MAX_COEFFS];
+    if (!interpolateCoefficients(p, n, c))
+        return Rgb(0.f);
+    return radianceFromCoefficients(c, n);
+}
+
+Rgb SslpvSolver::exitantRadiance(const Point3f& p, const Normal3f& n, float cosOut) const {
+    float c[3][SSLPV_MAX_COEFFS];
+    if (!(cosOut > 0.f) || !interpolateCoefficients(p, n, c))
+        return Rgb(0.f);
+    Rgb L = (exitScale() * (1.f - fresnelDielectric(std::min(cosOut, 1.f), m_eta))) *
+            radianceFromCoefficients(c, n);
+    if (m_exitTable) {
+        // The exact half-space's exit-angle distribution at the albedo the read-out sees
+        // (DirpoleExitTable: c = L_exact(t)/L_diffuse(t), flux-weighted mean 1 over the
+        // hemisphere, so it moves light between directions and keeps the total).
+        for (int ch = 0; ch < 3; ++ch) {
+            const float albedo = c[ch][LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF];
+            if (albedo > 0.f)
+                L[ch] *= float(m_exitTable->correction(double(albedo), double(cosOut)));
+        }
     }
     return L;
 }
@@ -1345,6 +1383,8 @@ void SslpvSolver::diffuse() {
     const float toC00 = exitNorm * s.voxelSize * s.voxelSize / (2.f * Y00);
     if (m_opt.diffusionExactTotal && (!m_exactRatio || m_exactRatio->eta() != double(m_eta)))
         m_exactRatio = exactReflectanceRatio(double(m_eta));
+    m_exitTable =
+        m_opt.diffusionExitTable ? dipole::DirpoleExitTable::shared(double(m_eta)) : nullptr;
     for (int z = 0; z < n; ++z)
         for (int y = 0; y < n; ++y)
             for (int x = 0; x < n; ++x) {
@@ -1353,13 +1393,15 @@ void SslpvSolver::diffuse() {
                 if (!m_diffusion.isBoundary(k))
                     continue;  // only boundary cells are read (isReadable)
                 for (int ch = 0; ch < 3; ++ch) {
+                    const float st = m_material.sigma_t[ch][k];
+                    const float albedo =
+                        st > 0.f ? std::clamp(m_material.sigma_s[ch][k] / st, 0.f, 1.f) : 0.f;
                     float scale = toC00;
-                    if (m_opt.diffusionExactTotal) {
-                        const float st = m_material.sigma_t[ch][k];
-                        const float albedo = st > 0.f ? m_material.sigma_s[ch][k] / st : 0.f;
+                    if (m_opt.diffusionExactTotal)
                         scale *= (*m_exactRatio)(albedo);
-                    }
-                    m_accum.plane(ch, 0)[m_accum.index(c)] = scale * m_diffusion.exitance(k, ch);
+                    const size_t at = m_accum.index(c);
+                    m_accum.plane(ch, 0)[at] = scale * m_diffusion.exitance(k, ch);
+                    m_accum.plane(ch, LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF)[at] = albedo;
                 }
             }
     m_stats.stepsUsed = std::max({ds.iterations[0], ds.iterations[1], ds.iterations[2]});

@@ -206,7 +206,8 @@ TEST_F(SslpvProviderGl, PixelsMatchCpuFormulaAndCpuImage) {
         const float peak = test::largestValue(gl);
         ASSERT_GT(peak, 0.f);
 
-        // (1) The CPU formula (SslpvSolver::radiance and Fresnel T, as SslpvRenderer) evaluated at
+        // (1) The CPU formula (SslpvSolver::exitantRadiance: radiance, Fresnel T and in mode
+        // diffusion the exit-angle table, as SslpvRenderer) evaluated at
         // the G-buffer's own positions and normals. Differences are float rounding only: u =
         // (p − dΔx n − o)/Δx is off by a few ulp of 16 (≈ 1e-5 in the trilinear weights) and the
         // weighted sums by ~1e-6 relative; the largest coefficient gradient of this grid is under
@@ -226,9 +227,7 @@ TEST_F(SslpvProviderGl, PixelsMatchCpuFormulaAndCpuImage) {
                     const float cosO = glm::dot(n, wo);
                     if (cosO > 0.f) {
                         ++covered;
-                        expected =
-                            (p.solver().exitScale() * (1.f - fresnelDielectric(cosO, s.eta))) *
-                            p.solver().radiance(Point3f(P), n);
+                        expected = p.solver().exitantRadiance(Point3f(P), n, cosO);
                     }
                 }
                 for (int c = 0; c < 3; ++c) {

@@ -26,6 +26,10 @@
 #include <memory>
 #include <vector>
 
+namespace lucent::dipole {
+class DirpoleExitTable;
+}  // namespace lucent::dipole
+
 namespace lucent::sslpv {
 
 /// Dense SH grid, structure of arrays: one plane per (channel, coefficient), each a
@@ -141,6 +145,10 @@ struct SslpvOptions {
     /// Mode Diffusion: scale each boundary cell's exitance by the exact half-space's total over
     /// the diffusion model's at the cell's albedo (ExactReflectanceRatio); false: the model's.
     bool diffusionExactTotal = true;
+    /// Mode Diffusion: send each surface point's light out with the exact half-space's
+    /// distribution over exit angles at its albedo (dipole::DirpoleExitTable, as the directional
+    /// dipole does); false: a Fresnel-weighted diffuse exit. Read-out only: no re-solve.
+    bool diffusionExitTable = true;
 };
 
 /// One injection texel of a reflective shadow map (§3.1).
@@ -231,6 +239,17 @@ public:
     /// from the accumulation grid sampled half a cell inside along −n (trilinear over inside
     /// cells only: isReadable). Not multiplied by Fresnel T (the caller knows ω_o).
     [[nodiscard]] Rgb radiance(const Point3f& p, const Normal3f& n) const;
+    /// Radiance leaving the surface at p (outward unit normal n) towards a viewer at cosine
+    /// cosOut to n, W/(mm²·sr): exitScale()·T(cosOut)·radiance(p, n), T = 1 − F_r(cosOut, η),
+    /// and in mode Diffusion with diffusionExitTable the exact half-space's exit-angle
+    /// correction c(α′, cosOut) per channel, α′ read with the same weights as the radiance.
+    /// The GL sample pass (shaders/sslpv_sample.comp) computes the same.
+    [[nodiscard]] Rgb exitantRadiance(const Point3f& p, const Normal3f& n, float cosOut) const;
+    /// The exit-angle table exitantRadiance() applies (the process's table for η), or null when
+    /// it applies none (not mode Diffusion, diffusionExitTable off, or before a solve).
+    [[nodiscard]] const std::shared_ptr<const dipole::DirpoleExitTable>& exitTable() const {
+        return m_exitTable;
+    }
     /// The diffusion solve of mode Diffusion (its stats: iterations, energy balance).
     [[nodiscard]] const GridDiffusion& diffusion() const { return m_diffusion; }
     /// Factor from radiance() times Fresnel T(ω_o) to the exitant radiance: 1/η² in Paper mode
@@ -295,9 +314,17 @@ private:
     std::vector<uint8_t> m_accBrickLit;   ///< m_accum's brick may hold non-zero values
     std::vector<uint8_t> m_exitBrickLit;  ///< m_exitant's brick may hold non-zero values
     SslpvStats m_stats;
-    GridDiffusion m_diffusion;                                  ///< mode Diffusion's solver
-    std::shared_ptr<const ExactReflectanceRatio> m_exactRatio;  ///< the process's table for η
-    std::array<std::vector<float>, 3> m_diffusionSource;        ///< W per cell (spec layout)
+    GridDiffusion m_diffusion;                                    ///< mode Diffusion's solver
+    std::shared_ptr<const ExactReflectanceRatio> m_exactRatio;    ///< the process's table for η
+    std::shared_ptr<const dipole::DirpoleExitTable> m_exitTable;  ///< see exitTable()
+    /// The read-out's trilinear interpolation of the accumulation grid's coefficients at
+    /// p − depth·Δx·n (radiance()); false where no readable cell is near.
+    bool interpolateCoefficients(const Point3f& p, const Normal3f& n,
+                                 float (&c)[3][SSLPV_MAX_COEFFS]) const;
+    /// Eq. 7's L_i from interpolated coefficients (radiance()).
+    [[nodiscard]] Rgb radianceFromCoefficients(const float (&c)[3][SSLPV_MAX_COEFFS],
+                                               const Normal3f& n) const;
+    std::array<std::vector<float>, 3> m_diffusionSource;  ///< W per cell (spec layout)
 };
 
 }  // namespace lucent::sslpv

@@ -134,6 +134,7 @@ private:
             // every stroke (docs/benchmarks.md, "Diffusion mode").
             o.render.injectionResolution = std::clamp(4 * o.render.gridResolution, 64, 256);
             o.render.solver.diffusionExactTotal = p.getBool("diffusion-normalise");
+            o.render.solver.diffusionExitTable = p.getChoice("diffusion-exit") == "exact";
             o.render.solver.maxSteps = p.isGiven("steps") ? p.getInt("steps") : 1024;
             o.render.solver.stopEpsilon = p.isGiven("stop") ? float(p.getFloat("stop")) : 1e-3f;
             LUCENT_CHECK(!p.isGiven("attenuation"),
@@ -246,6 +247,15 @@ MethodEntry sslpvMethod() {
          0,
          {},
          "on"},
+        {"diffusion-exit",
+         ParamType::Choice,
+         "mode diffusion: the light leaves each surface point with the exact half-space's "
+         "distribution over exit angles at its albedo (exact) or as a Fresnel-weighted diffuse "
+         "source (diffuse, the diffusion model's own); the other modes ignore it",
+         0,
+         0,
+         {"exact", "diffuse"},
+         "exact"},
         {"attenuation",
          ParamType::Choice,
          "mode paper only: per-step attenuation",
