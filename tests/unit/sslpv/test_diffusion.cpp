@@ -19,6 +19,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
 
 using namespace lucent;
 using namespace lucent::sslpv;
@@ -65,19 +66,28 @@ double halfSpaceExitance(double sigmaT, double sigmaS, double eta, double E = 1.
     return (C + K) / (2.0 * A);
 }
 
+/// The box solved in mode diffusion to an unbalanced power of 10⁻⁷.
+std::unique_ptr<SslpvSolver> solvedBox(const LitBox& box, float eta, bool exactTotal,
+                                       bool exitTable = true) {
+    SslpvOptions o;
+    o.mode = SslpvMode::Diffusion;
+    o.diffusionExactTotal = exactTotal;
+    o.diffusionExitTable = exitTable;
+    o.maxSteps = 4096;
+    o.stopEpsilon = 1e-7f;
+    auto s = std::make_unique<SslpvSolver>(o);
+    s->setMaterial(box.material, eta);
+    s->setInjectionSamples(box.texels);
+    s->solve();
+    return s;
+}
+
 /// The solver's exitance at the centre of the top face: radiance() returns
 /// L_i = η²·J/(π(1 − F_dr(η))).
 double solvedTopExitance(const LitBox& box, float eta, float topFraction = 1.f,
                          bool exactTotal = false) {
-    SslpvOptions o;
-    o.mode = SslpvMode::Diffusion;
-    o.diffusionExactTotal = exactTotal;
-    o.maxSteps = 4096;
-    o.stopEpsilon = 1e-7f;
-    SslpvSolver s(o);
-    s.setMaterial(box.material, eta);
-    s.setInjectionSamples(box.texels);
-    s.solve();
+    const std::unique_ptr<SslpvSolver> solver = solvedBox(box, eta, exactTotal);
+    const SslpvSolver& s = *solver;
     const float h = box.material.spec.voxelSize;
     const float top = 0.5f * float(box.material.spec.resolution) * h - (1.f - topFraction) * h;
     const Rgb L = s.radiance(Point3f(0.f, 0.f, top), Normal3f(0, 0, 1));
@@ -172,15 +182,9 @@ TEST(GridDiffusion, LightLeavesAtTheExactHalfSpacesExitAngles) {
     const float top = 0.5f * 64.f * 0.125f;
     double worstDiffuse = 0.0;
     for (const bool table : {true, false}) {
-        SslpvOptions o;
-        o.mode = SslpvMode::Diffusion;
-        o.diffusionExitTable = table;
-        o.maxSteps = 4096;
-        o.stopEpsilon = 1e-7f;
-        SslpvSolver s(o);
-        s.setMaterial(box.material, 1.3f);
-        s.setInjectionSamples(box.texels);
-        s.solve();
+        const std::unique_ptr<SslpvSolver> solver =
+            solvedBox(box, 1.3f, /*exactTotal=*/true, table);
+        const SslpvSolver& s = *solver;
         EXPECT_EQ(s.exitTable() != nullptr, table);
         for (size_t i = 0; i < cosines.size(); ++i) {
             const double want = exact.radiance[i] * entered;
