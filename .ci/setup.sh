@@ -2,11 +2,13 @@
 # SPDX-License-Identifier: MIT
 # Lucent set-up on Debian 12: install what is missing, build, then launch the app or run the tests.
 #   .ci/setup.sh run    install, build (Release), launch `lucent` on the default scene
-#   .ci/setup.sh test   what CI runs (through .ci/run): install, then two stages, each a build
-#                       and its tests with ctest: the ci preset (release, asserts, warnings as
-#                       errors; the whole suite), then the asan-ubsan-ci preset (the engine, the
+#   .ci/setup.sh test   what CI runs (through .ci/run): install, then three stages, each a
+#                       build and its tests with ctest: the ci preset (release, asserts, warnings
+#                       as errors; the whole suite), the asan-ubsan-ci preset (the engine, the
 #                       CLI and all their tests under AddressSanitizer, LeakSanitizer and UBSan,
-#                       halting on the first error; no Qt app, to fit CI's time budget)
+#                       halting on the first error; no Qt app, to fit CI's time budget), then the
+#                       libFuzzer smoke run (.ci/fuzz.sh smoke: the importers' fuzz targets, clang
+#                       14, every seed and regression input, then 5 s of fuzzing per target)
 #   .ci/setup.sh asan   install, then the asan-ubsan-full preset: the whole suite, GUI tests
 #                       included, under the same sanitizers (docs/benchmarks.md, "Sanitizer
 #                       stage")
@@ -24,7 +26,8 @@ packages=(build-essential cmake ninja-build pkg-config ccache
     qt6-base-dev qt6-base-dev-tools libqt6opengl6-dev qt6-charts-dev
     libvtk9-dev libopenvdb-dev libopenvdb-tools libboost-iostreams-dev libopenmesh-dev libglm-dev
     libtbb-dev libepoxy-dev libegl-dev libembree-dev libopenexr-dev libpng-dev zlib1g-dev nlohmann-json3-dev libeigen3-dev
-    libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev glslang-tools xvfb xauth clang-format)
+    libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev glslang-tools xvfb xauth clang-format
+    clang-14 libclang-rt-14-dev)
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -50,9 +53,10 @@ stage() {
 
 case "$mode" in
     # ci first: its failures are the quick ones to read. The sanitizer stage leaves out the Qt
-    # app and its GUI tests: with them the two stages would not fit "a cold build plus the suite
-    # well under 40 minutes on 2 cores" (docs/benchmarks.md, "Sanitizer stage").
-    test) stage ci; stage asan-ubsan-ci; exit 0 ;;
+    # app and its GUI tests: with them the stages would not fit "a cold build plus the suite
+    # well under 40 minutes on 2 cores" (docs/benchmarks.md, "Sanitizer stage"); the fuzz smoke
+    # run adds about 3 minutes cold (docs/benchmarks.md, "Fuzzing").
+    test) stage ci; stage asan-ubsan-ci; .ci/fuzz.sh smoke; exit 0 ;;
     asan) stage asan-ubsan-full; exit 0 ;;
 esac
 
