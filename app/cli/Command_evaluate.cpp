@@ -74,7 +74,7 @@ void redrawReports(const std::string& dir) {
 struct EvaluateOptions {
     std::vector<std::string> scenes;
     std::string suite, cases, methods, out, presets, etas, report;
-    int refSpp = 256, repeats = 3, levels = 3, width = 0, height = 0;
+    int refSpp = 256, repeats = 3, levels = 3, width = 0, height = 0, materialRes = 48;
     bool subsurfaceOnly = false, json = false, verbose = false, noImages = false;
     const CLI::App* app = nullptr;
     bool has(const std::string& option) const { return app->count(option) > 0; }
@@ -96,6 +96,10 @@ void runEvaluate(const EvaluateOptions& args, const std::vector<std::string>& ar
         LUCENT_THROW(ValueError, "--presets and --etas apply to SCENE.json files only");
     if (!suite && args.has("--cases"))
         LUCENT_THROW(ValueError, "--cases applies to --suite only");
+    if (!suite && args.has("--material-res"))
+        LUCENT_THROW(ValueError,
+                     "--material-res applies to --suite only (a scene file has its own "
+                     "\"resolution\")");
     if (args.out.empty())
         LUCENT_THROW(ValueError, "missing --out DIR");
     const std::string* outDir = &args.out;
@@ -136,6 +140,7 @@ void runEvaluate(const EvaluateOptions& args, const std::vector<std::string>& ar
         if (args.has("--width"))
             so.width = args.width;
         so.height = args.has("--height") ? args.height : args.has("--width") ? so.width : so.height;
+        so.materialResolution = args.materialRes;
         so.log = [](const std::string& m) { std::fprintf(stderr, "evaluate: %s\n", m.c_str()); };
         cases =
             evaluation::filterCases(evaluation::buildSuite(args.suite, so), splitComma(args.cases));
@@ -207,7 +212,7 @@ void addEvaluateCommand(CLI::App& cli, const CommandContext& context) {
         "                            [--presets P1,...] [--etas E1,...]) --out DIR\n"
         "                           [--methods M1,M2,...] [--ref-spp N] [--width W] [--height H]\n"
         "                           [--repeats R] [--levels L] [--subsurface-only] [--no-images]\n"
-        "                           [--json] [--verbose]\n"
+        "                           [--material-res N] [--json] [--verbose]\n"
         "       lucent-cli evaluate --report DIR\n",
         "For each case: the exact path-traced reference with variance and coverage (seed 1,\n"
         "dielectric boundary), cached in DIR by scene hash and reference estimator version, with\n"
@@ -250,6 +255,12 @@ void addEvaluateCommand(CLI::App& cli, const CommandContext& context) {
     sub->add_option("--height", args->height, "image height (pixels)")
         ->type_name("H")
         ->check(CLI::Range(1, 16384));
+    sub->add_option("--material-res", args->materialRes,
+                    "--suite: voxels per axis of the cases' painted volumes (default 48; the "
+                    "back-lit thin-thick case keeps its file's 128). Other cases, other "
+                    "references: the scene hash includes the volume")
+        ->type_name("N")
+        ->check(CLI::Range(16, 256));
     sub->add_option("--repeats", args->repeats, "timed runs per setting (default 3)")
         ->type_name("R")
         ->check(CLI::Range(1, 1000));

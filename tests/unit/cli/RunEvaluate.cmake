@@ -6,7 +6,8 @@
 # reference cache and the errors for unknown method names; the --presets/--etas overrides (named
 # cases, their own cached references) and their usage errors. MODE=suite: `--suite smoke` (two
 # cases built through the engine API, 32x32, 16 spp) runs, its metrics are finite and every row
-# carries the case's scene features. Fails (FATAL_ERROR) with the reason.
+# carries the case's scene features, and --material-res makes other cases (SCENE: a scene file
+# for its usage error). Fails (FATAL_ERROR) with the reason.
 
 function(run prefix)
     execute_process(COMMAND ${CLI} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -143,6 +144,19 @@ if(MODE STREQUAL "suite")
         message(FATAL_ERROR "--cases nothing: expected exit 2, got '${badcase_RC}'")
     endif()
     expect_contains(badcase "${badcase_ERR}" "matches no case")
+    # --material-res builds the painted volumes at another resolution: another scene, so the
+    # cached reference of the same case (the run above, 24 voxels) is not reused.
+    run(res evaluate --suite smoke --cases veins --material-res 16 --methods direct --levels 1
+        --repeats 1 --ref-spp 16 --no-images --out ${dir})
+    if(NOT res_RC STREQUAL "0")
+        message(FATAL_ERROR "--material-res 16: exit '${res_RC}': ${res_ERR}")
+    endif()
+    expect_contains(res "${res_OUT}" "veins-marble: reference 16 spp, ")
+    run(resfile evaluate ${SCENE} --material-res 16 --out ${dir}/bad)
+    if(NOT resfile_RC STREQUAL "2")
+        message(FATAL_ERROR "--material-res with a scene file: expected exit 2, got '${resfile_RC}'")
+    endif()
+    expect_contains(resfile "${resfile_ERR}" "--material-res applies to --suite only")
     return()
 endif()
 
