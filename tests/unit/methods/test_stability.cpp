@@ -161,35 +161,47 @@ TEST(StabilityMatrix, EveryMethodStaysFiniteAndBoundedOnEveryCase) {
         for (const methods::MethodInfo* info : methods::all()) {
             if (!info->caps.cpu && !ctx)
                 continue;  // a GL-only method without GL: nothing to render here
-            methods::ParamSet params =
-                info->quality.empty() ? methods::ParamSet{} : info->quality.front().values;
-            if (info->name == "reference")
-                params.set("spp", 4);
-            methods::RenderOptions options;
-            options.subsurfaceOnly = true;
-            options.context = ctx;
-            methods::RenderResult r;
-            try {
-                r = methods::renderImage(scene, info->name, params, options);
-            } catch (const ValueError& e) {
-                // A method may refuse a scene it cannot render, with a reason: that is an
-                // answer, not an instability.
-                std::printf("| %s | %s | refused: %s | – | – |\n", c.name.c_str(),
-                            info->name.c_str(), e.what());
-                continue;
+            // The method as registered, then each of its variants (sslpv:diffusion, dirpole:raw,
+            // ...), at its cheapest quality level.
+            std::vector<const methods::ParamPreset*> variants = {nullptr};
+            for (const methods::ParamPreset& v : info->variants)
+                variants.push_back(&v);
+            for (const methods::ParamPreset* variant : variants) {
+                const std::string name = info->name + (variant ? ":" + variant->name : "");
+                methods::ParamSet params =
+                    info->quality.empty() ? methods::ParamSet{} : info->quality.front().values;
+                if (variant)
+                    params.merge(variant->values);
+                if (info->name == "reference")
+                    params.set("spp", 4);
+                methods::RenderOptions options;
+                options.subsurfaceOnly = true;
+                options.context = ctx;
+                if (variant)
+                    options.backend = variant->backend;
+                methods::RenderResult r;
+                try {
+                    r = methods::renderImage(scene, info->name, params, options);
+                } catch (const ValueError& e) {
+                    // A method may refuse a scene it cannot render, with a reason: that is an
+                    // answer, not an instability.
+                    std::printf("| %s | %s | refused: %s | – | – |\n", c.name.c_str(), name.c_str(),
+                                e.what());
+                    continue;
+                }
+                bool finite = true;
+                double sum = 0.0;
+                for (const Rgb& p : r.radiance.pixels()) {
+                    finite = finite && isFinite(p) && p.r >= 0 && p.g >= 0 && p.b >= 0;
+                    sum += double(luminance(p));
+                }
+                const double ratio = PI_D * sum * pixelArea / (PI_D * c.radius * c.radius);
+                const double limit = 2.0 * -std::expm1(-2.0 * c.sigmaT * c.radius);
+                std::printf("| %s | %s | %s | %.3f | %.0f |\n", c.name.c_str(), name.c_str(),
+                            finite ? "yes" : "**no**", ratio, r.milliseconds);
+                EXPECT_TRUE(finite) << name << " on " << c.name;
+                EXPECT_LE(ratio, limit) << name << " on " << c.name;
             }
-            bool finite = true;
-            double sum = 0.0;
-            for (const Rgb& p : r.radiance.pixels()) {
-                finite = finite && isFinite(p) && p.r >= 0 && p.g >= 0 && p.b >= 0;
-                sum += double(luminance(p));
-            }
-            const double ratio = PI_D * sum * pixelArea / (PI_D * c.radius * c.radius);
-            const double limit = 2.0 * -std::expm1(-2.0 * c.sigmaT * c.radius);
-            std::printf("| %s | %s | %s | %.3f | %.0f |\n", c.name.c_str(), info->name.c_str(),
-                        finite ? "yes" : "**no**", ratio, r.milliseconds);
-            EXPECT_TRUE(finite) << info->name << " on " << c.name;
-            EXPECT_LE(ratio, limit) << info->name << " on " << c.name;
         }
     }
 }
