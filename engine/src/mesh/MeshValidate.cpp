@@ -454,7 +454,19 @@ std::vector<PlyElement> readPlyHeader(Reader& in, const std::string& path, uint6
             }
             checkClaim(path, claimed, 1, size, "elements");
             return elements;
-        } else if (w0 != "comment" && w0 != "obj_info" && !w0.empty()) {
+        } else if (w0 == "obj_info") {
+            // OpenMesh consumes only the word obj_info and reads the rest of the line as header
+            // words, so "obj_info property float z" declared a property before any element and
+            // crashed its reader (a write through an empty element list; found by the fuzz
+            // smoke run in CI). A comment line is skipped whole; obj_info text must not hold a
+            // word the reader acts on.
+            std::string word;
+            for (std::istringstream rest(line.substr(line.find("obj_info") + 8)); rest >> word;)
+                if (word == "format" || word == "element" || word == "property" ||
+                    word == "end_header" || word == "ply")
+                    bad("obj_info text holds a header keyword, which the mesh reader would read "
+                        "as one");
+        } else if (w0 != "comment" && !w0.empty()) {
             bad("unknown keyword");
         }
     }

@@ -260,6 +260,11 @@ TEST(MeshIO, FuzzFindingsAreClearErrors) {
     // input had a version of 76 digits).
     expectLoadError(fuzzFinding("ply_version_overflows_float.ply"),
                     "expected 'format <encoding> <version number>'");
+    // "obj_info property float z" before any element: OpenMesh reads the words after obj_info
+    // as header keywords, so it declared a property with no element and crashed (a write
+    // through an empty list; the CI fuzz smoke run's first finding).
+    expectLoadError(fuzzFinding("ply_obj_info_with_property.ply"),
+                    "obj_info text holds a header keyword");
     // A VTP whose cell offsets (raw appended data, uncompressed) end in 0x7272727272727272:
     // VTK 9.1 sizes the connectivity array by that value before reading it. The fuzz build
     // reads VTK in-process and found it under ASan; the child process (lucent/core/Isolate.h)
