@@ -9,11 +9,10 @@
 #include <lucent/core/Error.h>
 #include <lucent/core/Parallel.h>
 #include <lucent/core/Quadrature.h>
+#include <lucent/core/TableCache.h>
 
 #include <algorithm>
 #include <cmath>
-#include <map>
-#include <mutex>
 #include <utility>
 
 namespace lucent::dipole {
@@ -496,36 +495,14 @@ double DirpoleExitTable::correction(double alphaPrime, double cosOut) const {
                               std::clamp(cosOut, 0.0, 1.0));
 }
 
-namespace {
-/// One table per key for the process. Keys are few (one η per scene, two targets); the cache
-/// keeps at most TABLE_CACHE_LIMIT of them and starts afresh beyond (tables already handed out
-/// live on in their shared_ptrs).
-constexpr size_t TABLE_CACHE_LIMIT = 32;
-template <typename Table, typename Key, typename Make>
-std::shared_ptr<const Table> cachedTable(const Key& key, Make&& make) {
-    static std::mutex mutex;
-    static std::map<Key, std::shared_ptr<const Table>> cache;
-    {
-        const std::lock_guard<std::mutex> lock(mutex);
-        if (const auto it = cache.find(key); it != cache.end())
-            return it->second;
-    }
-    auto table = std::make_shared<const Table>(make());  // built outside the lock
-    const std::lock_guard<std::mutex> lock(mutex);
-    if (cache.size() >= TABLE_CACHE_LIMIT)
-        cache.clear();
-    return cache.emplace(key, std::move(table)).first->second;
-}
-}  // namespace
-
 std::shared_ptr<const DirpoleEnergyTable> DirpoleEnergyTable::shared(double eta,
                                                                      EnergyTarget target) {
-    return cachedTable<DirpoleEnergyTable>(std::make_pair(eta, int(target)),
+    return sharedTable<DirpoleEnergyTable>(std::make_pair(eta, int(target)),
                                            [&] { return DirpoleEnergyTable(eta, target); });
 }
 
 std::shared_ptr<const DirpoleExitTable> DirpoleExitTable::shared(double eta) {
-    return cachedTable<DirpoleExitTable>(eta, [&] { return DirpoleExitTable(eta); });
+    return sharedTable<DirpoleExitTable>(eta, [&] { return DirpoleExitTable(eta); });
 }
 
 double integrateSdOverPlane(const DirectionalDipole& d, double mu0) {
@@ -581,7 +558,7 @@ DirpoleIncidenceTable::DirpoleIncidenceTable(double eta) : m_eta(eta) {
 }
 
 std::shared_ptr<const DirpoleIncidenceTable> DirpoleIncidenceTable::shared(double eta) {
-    return cachedTable<DirpoleIncidenceTable>(eta, [&] { return DirpoleIncidenceTable(eta); });
+    return sharedTable<DirpoleIncidenceTable>(eta, [&] { return DirpoleIncidenceTable(eta); });
 }
 
 double DirpoleIncidenceTable::correction(double alphaPrime, double mu0) const {

@@ -5,6 +5,7 @@
 #include <lucent/core/Error.h>
 #include <lucent/core/Fresnel.h>
 #include <lucent/core/Parallel.h>
+#include <lucent/core/TableCache.h>
 #include <lucent/core/Timer.h>
 #include <lucent/dipole/HalfSpace.h>
 #include <lucent/dipole/Profiles.h>
@@ -12,8 +13,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
-#include <mutex>
 
 namespace lucent::sslpv {
 
@@ -72,13 +71,7 @@ ExactReflectanceRatio::ExactReflectanceRatio(double eta) : m_eta(eta) {
 }
 
 std::shared_ptr<const ExactReflectanceRatio> exactReflectanceRatio(double eta) {
-    static std::mutex mutex;
-    static std::map<double, std::shared_ptr<const ExactReflectanceRatio>> cache;
-    const std::lock_guard<std::mutex> lock(mutex);
-    auto& entry = cache[eta];
-    if (!entry)
-        entry = std::make_shared<const ExactReflectanceRatio>(eta);
-    return entry;
+    return sharedTable<ExactReflectanceRatio>(eta, [&] { return ExactReflectanceRatio(eta); });
 }
 
 float ExactReflectanceRatio::operator()(float albedo) const {

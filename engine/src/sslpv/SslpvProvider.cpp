@@ -409,17 +409,19 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
     glProgramUniform1f(p, s.program.uniformLocation("u_Y00"), SH_Y00);
     glProgramUniform1f(p, s.program.uniformLocation("u_K1"), SH_K1);
     const bool diffusion = s.solver.options().mode == SslpvMode::Diffusion;
+    // Non-null only after a diffusion solve with the exit table on (SslpvSolver::exitTable).
     const std::shared_ptr<const dipole::DirpoleExitTable>& table = s.solver.exitTable();
-    if (diffusion && table && table != s.exitTableUploaded) {
-        s.exitTableBuffer.destroy();
-        s.exitTableBuffer =
-            gpu::createBuffer(table->values().size() * sizeof(float), table->values().data(), 0);
-        s.exitTableUploaded = table;
-    }
-    const bool exitCorrection = diffusion && table != nullptr;
-    if (exitCorrection)
+    const bool exitCorrection = table != nullptr;
+    if (exitCorrection) {
+        if (table != s.exitTableUploaded) {
+            s.exitTableBuffer.destroy();
+            s.exitTableBuffer = gpu::createBuffer(table->values().size() * sizeof(float),
+                                                  table->values().data(), 0);
+            s.exitTableUploaded = table;
+        }
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, LUCENT_SSLPV_BINDING_EXIT_TABLE,
                          s.exitTableBuffer.id());
+    }
     glProgramUniform1i(p, s.program.uniformLocation("u_diffusion"), diffusion ? 1 : 0);
     glProgramUniform1i(p, s.program.uniformLocation("u_exitCorrection"), exitCorrection ? 1 : 0);
     glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
