@@ -46,7 +46,8 @@ void printFeatures(const planner::SceneFeatures& f) {
 struct PlanOptions {
     std::string scene, models, output, source, cost = "wall";
     std::vector<std::string> fit, check;
-    float budgetMs = 1000.f, maxError = 0.f, directMs = 1.f, ridge = 0.05f, budgetRatio = 20.f;
+    float budgetMs = 1000.f, maxError = 0.f, directMs = 1.f, ridge = 0.05f, budgetRatio = 20.f,
+          errorTolerance = float(planner::Budget{}.errorTolerance);
     int width = 0, height = 0;
     bool cpu = false;
     const CLI::App* app = nullptr;
@@ -97,7 +98,7 @@ void runCheck(const PlanOptions& args) {
         rows.insert(rows.end(), r.begin(), r.end());
     }
     const std::vector<planner::FrontCheck> checks =
-        planner::checkAgainstFront(rows, models, budgetRatio);
+        planner::checkAgainstFront(rows, models, budgetRatio, args.errorTolerance);
     if (checks.empty())
         LUCENT_THROW(ValueError, "plan --check: no case has a measured candidate with a model");
     std::printf(
@@ -246,6 +247,12 @@ void addPlanCommand(CLI::App& cli, const CommandContext&) {
                     "the budget of --check as a multiple of the Direct frame (default 20)")
         ->type_name("R")
         ->check(finiteRange(1e-3, 1e9))
+        ->needs(check);
+    sub->add_option("--error-tolerance", args->errorTolerance,
+                    "--check: predicted errors within this fraction of the least count as equal "
+                    "and the cheapest wins (the planner's default 0.1)")
+        ->type_name("T")
+        ->check(finiteRange(0.0, 0.99))
         ->needs(check);
     sub->callback([args] { runPlan(*args); });
 }

@@ -507,7 +507,8 @@ const Models& defaultModels() {
 }
 
 std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
-                                          const Models& models, double budgetRatio) {
+                                          const Models& models, double budgetRatio,
+                                          double errorTolerance) {
     LUCENT_CHECK(budgetRatio > 0, "front check: the budget must be > 0 times the Direct frame");
     std::vector<std::string> cases;
     for (const MeasuredRow& r : rows)
@@ -538,6 +539,7 @@ std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
         Budget budget;
         budget.directMs = 1.0;
         budget.frameMs = budgetRatio;
+        budget.errorTolerance = errorTolerance;
         const Plan p = plan(candidates, measured.front()->features, budget);
         const MeasuredRow& chosen = *measured[p.choice];
         FrontCheck c;

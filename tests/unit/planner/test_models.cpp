@@ -353,5 +353,11 @@ TEST(PlannerModels, FrontCheckJudgesTheChoiceByMeasurement) {
     EXPECT_EQ(w.chosen, "slow s");
     EXPECT_EQ(w.cheapestAtError, "fast s");
     EXPECT_DOUBLE_EQ(w.timeRatio, 10.0);
+    // The planner's tie tolerance reaches the check: fast predicted 0.25 against slow's 0.2 is
+    // "equal" (and cheaper) at 30 % but not at the default 10 %.
+    models.candidates[0].error[0] = std::log(0.25);
+    EXPECT_EQ(checkAgainstFront(worse, models, 20.0)[0].chosen, "slow s");
+    EXPECT_EQ(checkAgainstFront(worse, models, 20.0, 0.3)[0].chosen, "fast s");
     EXPECT_THROW(checkAgainstFront(rows, models, 0.0), ValueError);
+    EXPECT_THROW(checkAgainstFront(rows, models, 20.0, 1.0), ValueError);
 }

@@ -128,9 +128,11 @@ struct FrontCheck {
 /// For every case in `rows`, plans with `models` on the case's features (only candidates that
 /// were measured on that case take part) under a budget of `budgetRatio` × the Direct frame,
 /// then judges the choice by the measured rows. Rows of candidates without a model are left
-/// out. @throw ValueError if budgetRatio ≤ 0.
+/// out. `errorTolerance`: the planner's Budget::errorTolerance. @throw ValueError if
+/// budgetRatio ≤ 0 or the tolerance is outside [0, 1).
 std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
-                                          const Models& models, double budgetRatio);
+                                          const Models& models, double budgetRatio,
+                                          double errorTolerance = Budget{}.errorTolerance);
 
 /// The planner's candidates for `models` (costRatio and error bound to the models; `unusable`
 /// left empty: the caller knows what the scene and backend allow).
