@@ -9,6 +9,7 @@
 #include <lucent/bench/LinePlot.h>
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
+#include <lucent/dipole/HalfSpaceBeam.h>
 #include <lucent/dipole/Profiles.h>
 #include <lucent/dipole/Sampling.h>
 
@@ -62,8 +63,55 @@ struct ProfileOptions {
     std::string model = "dipole", sigmaA = "0.0021,0.0041,0.0071", sigmaS = "2.19,2.62,3.00", plot;
     float eta = 1.5f;
     int radii = 16;
+    int64_t photons = 0;  // > 0: --against-exact
     bool json = false;
 };
+
+/// --against-exact: every radial model against the exact half-space under a pencil beam, per
+/// channel (dipole.md §4b).
+void runAgainstExact(const ProfileOptions& args, const std::array<dipole::ScalarMedium, 3>& media) {
+    const double eta = media[0].eta;
+    std::printf(
+        "radial profiles against the exact half-space (pencil beam at normal incidence, "
+        "eta %.4g, %lld photons per channel)\n",
+        eta, static_cast<long long>(args.photons));
+    std::printf(
+        "shape error: share of the exitant light in the wrong ring (8 rings per decade, "
+        "0.01-100 mfp)\n\n");
+    std::printf("%-8s %-18s %8s %8s %8s %7s %7s\n", "channel", "model", "total", "shape", "floor",
+                "r50", "r90");
+    const char* names[3] = {"R", "G", "B"};
+    for (int c = 0; c < 3; ++c) {
+        const dipole::ScalarMedium& m = media[size_t(c)];
+        const double st = m.sigma_a + m.sigma_s;
+        if (!(st > 0.0) || !(m.sigma_s > 0.0)) {
+            std::printf("%-8s (no scattering: every model is zero)\n", names[c]);
+            continue;
+        }
+        const double albedo = std::min(m.sigma_s / st, 0.9999);
+        if (m.sigma_s / st > 0.9999 * (1.0 + 1e-12))
+            std::printf(
+                "%-8s (albedo %.6f traced at 0.9999: the walk's length has no finite "
+                "mean at 1)\n",
+                names[c], m.sigma_s / st);
+        const dipole::HalfSpaceBeamProfile exact =
+            dipole::traceHalfSpaceBeam(albedo, eta, dipole::defaultBeamRings(), args.photons);
+        std::printf("%-8s %-18s %8.4f %8s %8.4f %7s %7s   (alpha' %.4f, total %.4f +- %.4f)\n",
+                    names[c], "exact", 1.0, "-", 0.0, "-", "-", albedo, exact.total,
+                    exact.totalStdError);
+        dipole::ScalarMedium traced = m;
+        traced.sigma_a = st * (1.0 - albedo);
+        traced.sigma_s = st * albedo;
+        for (const dipole::ModelAgainstBeam& row : dipole::compareModelsWithBeam(traced, exact))
+            std::printf("%-8s %-18s %8.4f %8.4f %8.4f %7.3f %7.3f\n", names[c], row.model.c_str(),
+                        row.comparison.totalRatio, row.comparison.shapeError,
+                        row.comparison.shapeErrorFloor, row.comparison.r50Ratio,
+                        row.comparison.r90Ratio);
+    }
+    std::printf(
+        "\ntotal: model / exact; r50, r90: radius holding 50 %% / 90 %% of the exitant "
+        "light, model / exact\n");
+}
 
 void runProfile(const ProfileOptions& args) {
     const Model model = dipole::parseModel(args.model);
@@ -76,6 +124,8 @@ void runProfile(const ProfileOptions& args) {
     std::array<dipole::ScalarMedium, 3> media;
     for (int c = 0; c < 3; ++c)
         media[size_t(c)] = {double(sigmaA[c]), double(sigmaS[c]), double(eta)};
+    if (args.photons > 0)
+        return runAgainstExact(args, media);
 
     std::array<double, 3> total{}, numeric{};
     for (int c = 0; c < 3; ++c) {
@@ -144,10 +194,13 @@ void addProfileCommand(CLI::App& cli, const CommandContext&) {
         cli, "profile", "diffuse reflectance profile R(r) of a dipole model",
         "usage: lucent-cli profile [--model dipole|better-dipole|dirpole] [--sigma-a R,G,B]\n"
         "                          [--sigma-s R,G,B] [--eta E] [--radii N] [--json]\n"
-        "                          [--plot out.png]\n",
+        "                          [--plot out.png] [--against-exact N]\n",
         "Prints the total diffuse reflectance per channel (closed form and quadrature for the two\n"
         "dipoles; quadrature for the directional dipole, at normal incidence) and R(r) in\n"
-        "mm^-2 at N radii spaced geometrically up to the radius holding 99% of the profile.\n");
+        "mm^-2 at N radii spaced geometrically up to the radius holding 99% of the profile.\n"
+        "With --against-exact N it instead traces the exact half-space under a pencil beam\n"
+        "(N photons per channel) and compares every radial model with it, Christensen-Burley\n"
+        "and photon beam diffusion included.\n");
     auto args = std::make_shared<ProfileOptions>();
     sub->add_option("--model", args->model,
                     "dipole (Jensen 2001, default), better-dipole (d'Eon 2012), dirpole (Frisvad "
@@ -166,6 +219,12 @@ void addProfileCommand(CLI::App& cli, const CommandContext&) {
         ->type_name("N")
         ->check(CLI::Range(2, 1000));
     sub->add_flag("--json", args->json, "machine-readable output");
+    sub->add_option("--against-exact", args->photons,
+                    "trace the exact half-space under a pencil beam with N photons per channel "
+                    "and compare every radial model with it: total, shape error (light in the "
+                    "wrong ring), radii holding 50 and 90 % (e.g. 1000000)")
+        ->type_name("N")
+        ->check(CLI::Range(int64_t(1000), int64_t(10000000000LL)));
     sub->add_option("--plot", args->plot, "write a PNG plot of R(r)*r per channel")
         ->type_name("out.png");
     sub->callback([args] { runProfile(*args); });

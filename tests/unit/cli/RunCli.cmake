@@ -295,6 +295,16 @@ elseif(CASE STREQUAL "render_full_disk")
     if(leftovers)
         message(FATAL_ERROR "temporaries left behind: ${leftovers}")
     endif()
+elseif(CASE STREQUAL "profile_anchors")
+    # Issue 14 item 3: every radial model, the two published anchors included, against the exact
+    # half-space under a pencil beam; a bad photon count is a one-line error.
+    run(anchors profile --against-exact 20000 --sigma-a 0.032,0.17,0.48 --sigma-s 0.74,0.88,1.01
+        --eta 1.3)
+    expect_ok(anchors)
+    expect_contains(anchors "${anchors_OUT}" "exact" "dipole" "better-dipole" "dirpole" "burley"
+        "photon-beam" "photon-beam-ms" "shape error")
+    run(few profile --against-exact 10)
+    expect_one_line_error(few "--against-exact")
 elseif(CASE STREQUAL "methods")
     # Issue 13: the registry is the one list; `methods` shows every method and its parameters,
     # `render` takes any of them by name with --NAME VALUE or --param NAME=VALUE, and a
