@@ -9,6 +9,7 @@
 #include <lucent/bench/LinePlot.h>
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
+#include <lucent/dipole/AnchorProfiles.h>
 #include <lucent/dipole/HalfSpaceBeam.h>
 #include <lucent/dipole/Profiles.h>
 #include <lucent/dipole/Sampling.h>
@@ -26,8 +27,6 @@ namespace lucent::cli {
 
 namespace {
 
-using dipole::Model;
-
 /// Radius holding 99% of the widest channel's profile (Jensen-shaped sampler of the better
 /// dipole's parameters; used for the table and plot range only).
 double profileRange(const std::array<dipole::ScalarMedium, 3>& media) {
@@ -40,9 +39,10 @@ double profileRange(const std::array<dipole::ScalarMedium, 3>& media) {
     return range > 0.0 ? range : 1.0;
 }
 
+using Channels = std::array<dipole::NamedRadialProfile, 3>;
+
 /// Line plot of R(r)·r for the three channels (red, green, blue curves), r in [0, rMax].
-void writePlot(const std::string& path, Model model,
-               const std::array<dipole::ScalarMedium, 3>& media, double rMax) {
+void writePlot(const std::string& path, const Channels& profiles, double rMax) {
     bench::LinePlot plot;
     const std::array<Rgb, 3> colours = {Rgb(0.85f, 0.1f, 0.1f), Rgb(0.1f, 0.6f, 0.1f),
                                         Rgb(0.1f, 0.2f, 0.9f)};
@@ -51,11 +51,21 @@ void writePlot(const std::string& path, Model model,
         bench::LinePlot::Curve curve{std::vector<double>(size_t(samples)), colours[size_t(c)]};
         for (int i = 0; i < samples; ++i) {
             const double r = rMax * i / (samples - 1);
-            curve.values[size_t(i)] = dipole::radialProfile(model, media[size_t(c)], r) * r;
+            // R·r is bounded at r = 0 for every model (Burley's and PBD's R are ∝ 1/r there).
+            curve.values[size_t(i)] = r > 0.0 ? profiles[size_t(c)].R(r) * r : 0.0;
         }
         plot.curves.push_back(std::move(curve));
     }
     writePng(bench::renderLinePlot(plot), path);
+}
+
+/// ∫ R dA by quadrature (Profiles.h's integrateRadial), independent of the model's own total.
+double quadratureTotal(const dipole::NamedRadialProfile& p, const dipole::ScalarMedium& m) {
+    const double st = m.sigma_a + m.sigma_s;
+    const auto thunk = [](const void* ctx, double r) {
+        return (*static_cast<const std::function<double(double)>*>(ctx))(r);
+    };
+    return dipole::integrateRadial(thunk, &p.R, st > 0.0 ? 1.0 / st : 1.0);
 }
 
 struct ProfileOptions {
@@ -114,8 +124,7 @@ void runAgainstExact(const ProfileOptions& args, const std::array<dipole::Scalar
 }
 
 void runProfile(const ProfileOptions& args) {
-    const Model model = dipole::parseModel(args.model);
-    if (model == Model::Directional)
+    if (args.model == "dirpole")
         std::fprintf(stderr, "%s\n", dipole::PUBLISHED_DIRPOLE_WARNING);
     const Rgb sigmaA = parseRgb("--sigma-a", args.sigmaA, 0.f, 1e6f);
     const Rgb sigmaS = parseRgb("--sigma-s", args.sigmaS, 0.f, 1e6f);
@@ -127,15 +136,14 @@ void runProfile(const ProfileOptions& args) {
     if (args.photons > 0)
         return runAgainstExact(args, media);
 
+    Channels profiles;
     std::array<double, 3> total{}, numeric{};
     for (int c = 0; c < 3; ++c) {
-        total[size_t(c)] = dipole::totalReflectance(model, media[size_t(c)]);
-        // Independent quadrature of the same profile (equals `total` for the directional model,
-        // which has no closed form).
-        numeric[size_t(c)] =
-            model == Model::Directional
-                ? total[size_t(c)]
-                : dipole::integrateProfile(dipole::DipoleProfile::make(model, media[size_t(c)]));
+        profiles[size_t(c)] = dipole::makeRadialProfile(args.model, media[size_t(c)]);
+        total[size_t(c)] = profiles[size_t(c)].total;
+        // Independent quadrature of the same profile (for the directional dipole, which has no
+        // closed form, the total is this quadrature too).
+        numeric[size_t(c)] = quadratureTotal(profiles[size_t(c)], media[size_t(c)]);
     }
     const double rMax = profileRange(media);
     std::vector<double> radii(static_cast<size_t>(radiiCount));
@@ -143,8 +151,7 @@ void runProfile(const ProfileOptions& args) {
         radii[size_t(i)] = rMax * std::pow(1e-3, 1.0 - double(i) / (radiiCount - 1));
 
     if (args.json) {
-        std::printf("{\n  \"model\": \"%s\",\n  \"eta\": %.9g,\n", dipole::modelName(model),
-                    double(eta));
+        std::printf("{\n  \"model\": \"%s\",\n  \"eta\": %.9g,\n", args.model.c_str(), double(eta));
         std::printf(
             "  \"sigma_a\": [%.9g, %.9g, %.9g],\n  \"sigma_s_reduced\": [%.9g, %.9g, %.9g],\n",
             double(sigmaA.r), double(sigmaA.g), double(sigmaA.b), double(sigmaS.r),
@@ -155,33 +162,27 @@ void runProfile(const ProfileOptions& args) {
         std::printf("  \"units\": {\"r\": \"mm\", \"R\": \"mm^-2\"},\n  \"profile\": [\n");
         for (size_t i = 0; i < radii.size(); ++i) {
             const double r = radii[i];
-            std::printf("    {\"r\": %.9g, \"R\": [%.9g, %.9g, %.9g]}%s\n", r,
-                        dipole::radialProfile(model, media[0], r),
-                        dipole::radialProfile(model, media[1], r),
-                        dipole::radialProfile(model, media[2], r), i + 1 < radii.size() ? "," : "");
+            std::printf("    {\"r\": %.9g, \"R\": [%.9g, %.9g, %.9g]}%s\n", r, profiles[0].R(r),
+                        profiles[1].R(r), profiles[2].R(r), i + 1 < radii.size() ? "," : "");
         }
         std::printf("  ]\n}\n");
     } else {
         std::printf(
             "model %s, eta %.4g, sigma_a (%.6g, %.6g, %.6g) mm^-1, sigma_s' (%.6g, %.6g, %.6g) "
             "mm^-1\n",
-            dipole::modelName(model), double(eta), double(sigmaA.r), double(sigmaA.g),
-            double(sigmaA.b), double(sigmaS.r), double(sigmaS.g), double(sigmaS.b));
-        std::printf("total diffuse reflectance %s: R %.6f  G %.6f  B %.6f\n",
-                    model == Model::Directional ? "(quadrature)" : "(closed form)", total[0],
+            args.model.c_str(), double(eta), double(sigmaA.r), double(sigmaA.g), double(sigmaA.b),
+            double(sigmaS.r), double(sigmaS.g), double(sigmaS.b));
+        std::printf("total diffuse reflectance (the model's):  R %.6f  G %.6f  B %.6f\n", total[0],
                     total[1], total[2]);
-        if (model != Model::Directional)
-            std::printf("total diffuse reflectance (quadrature):  R %.6f  G %.6f  B %.6f\n",
-                        numeric[0], numeric[1], numeric[2]);
+        std::printf("total diffuse reflectance (quadrature):   R %.6f  G %.6f  B %.6f\n",
+                    numeric[0], numeric[1], numeric[2]);
         std::printf("%14s %14s %14s %14s   (R(r) in mm^-2)\n", "r [mm]", "R", "G", "B");
         for (double r : radii)
-            std::printf("%14.6g %14.6g %14.6g %14.6g\n", r,
-                        dipole::radialProfile(model, media[0], r),
-                        dipole::radialProfile(model, media[1], r),
-                        dipole::radialProfile(model, media[2], r));
+            std::printf("%14.6g %14.6g %14.6g %14.6g\n", r, profiles[0].R(r), profiles[1].R(r),
+                        profiles[2].R(r));
     }
     if (!args.plot.empty()) {
-        writePlot(args.plot, model, media, rMax);
+        writePlot(args.plot, profiles, rMax);
         std::fprintf(stderr, "wrote %s (R(r)*r for r in [0, %.4g] mm; red, green, blue channels)\n",
                      args.plot.c_str(), rMax);
     }
@@ -191,12 +192,12 @@ void runProfile(const ProfileOptions& args) {
 
 void addProfileCommand(CLI::App& cli, const CommandContext&) {
     CLI::App* sub = addCommand(
-        cli, "profile", "diffuse reflectance profile R(r) of a dipole model",
-        "usage: lucent-cli profile [--model dipole|better-dipole|dirpole] [--sigma-a R,G,B]\n"
+        cli, "profile", "diffuse reflectance profile R(r) of a radial model",
+        "usage: lucent-cli profile [--model NAME] [--sigma-a R,G,B]\n"
         "                          [--sigma-s R,G,B] [--eta E] [--radii N] [--json]\n"
         "                          [--plot out.png] [--against-exact N]\n",
-        "Prints the total diffuse reflectance per channel (closed form and quadrature for the two\n"
-        "dipoles; quadrature for the directional dipole, at normal incidence) and R(r) in\n"
+        "Prints the total diffuse reflectance per channel (the model's own: closed form where it\n"
+        "has one; and by quadrature of R(r)), at normal incidence, and R(r) in\n"
         "mm^-2 at N radii spaced geometrically up to the radius holding 99% of the profile.\n"
         "With --against-exact N it instead traces the exact half-space under a pencil beam\n"
         "(N photons per channel) and compares every radial model with it, Christensen-Burley\n"
@@ -204,8 +205,11 @@ void addProfileCommand(CLI::App& cli, const CommandContext&) {
     auto args = std::make_shared<ProfileOptions>();
     sub->add_option("--model", args->model,
                     "dipole (Jensen 2001, default), better-dipole (d'Eon 2012), dirpole (Frisvad "
-                    "2014)")
-        ->type_name("MODEL");
+                    "2014, as published), dirpole-normalised (scaled to the exact half-space "
+                    "total), burley (Christensen-Burley 2015 searchlight fit), photon-beam (Habel "
+                    "et al. 2013), photon-beam-ms (its multiple scattering alone)")
+        ->type_name("NAME")
+        ->check(CLI::IsMember(dipole::radialProfileNames()));
     sub->add_option("--sigma-a", args->sigmaA,
                     "absorption coefficient, mm^-1 (default marble 0.0021,0.0041,0.0071)")
         ->type_name("R,G,B");

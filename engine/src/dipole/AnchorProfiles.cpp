@@ -203,4 +203,46 @@ double PhotonBeamProfile::singleTotal() const {
     return 0.5 * (m_sigmaS / m_sigmaT) * sum;
 }
 
+// ---------------------------------------------------------------------------------------------
+
+const std::vector<std::string>& radialProfileNames() {
+    static const std::vector<std::string> names = {
+        "dipole", "better-dipole", "dirpole",       "dirpole-normalised",
+        "burley", "photon-beam",   "photon-beam-ms"};
+    return names;
+}
+
+NamedRadialProfile makeRadialProfile(const std::string& name, const ScalarMedium& m) {
+    NamedRadialProfile out{name, nullptr, 0.0};
+    if (name == "dipole" || name == "better-dipole") {
+        const DipoleProfile p = DipoleProfile::make(parseModel(name), m);
+        out.R = [p](double r) { return p.Rd(r); };
+        out.total = p.totalReflectance();
+    } else if (name == "dirpole" || name == "dirpole-normalised") {
+        const double st = m.sigma_a + m.sigma_s;
+        const double albedo = st > 0.0 ? m.sigma_s / st : 0.0;
+        const DirectionalDipole d =
+            name == "dirpole"
+                ? DirectionalDipole(m.sigma_a, m.sigma_s, m.eta)
+                : DirectionalDipole(m.sigma_a, m.sigma_s, m.eta, dirpoleEnergyScale(albedo, m.eta));
+        out.R = [d](double r) { return d.radial(r); };
+        out.total = d.isZero() ? 0.0 : integrateProfile(d);
+    } else if (name == "burley") {
+        const BurleyProfile b = BurleyProfile::searchlight(m.sigma_a, m.sigma_s, m.eta);
+        out.R = [b](double r) { return b.R(r); };
+        out.total = b.totalReflectance();
+    } else if (name == "photon-beam" || name == "photon-beam-ms") {
+        const PhotonBeamProfile b(m.sigma_a, m.sigma_s, m.eta);
+        const bool multipleOnly = name == "photon-beam-ms";
+        out.R = [b, multipleOnly](double r) { return multipleOnly ? b.multiple(r) : b.R(r); };
+        out.total = multipleOnly ? b.multipleTotal() : b.totalReflectance();
+    } else {
+        std::string accepted;
+        for (const std::string& n : radialProfileNames())
+            accepted += (accepted.empty() ? "" : ", ") + n;
+        LUCENT_THROW(ValueError, "unknown radial profile '", name, "' (accepted: ", accepted, ")");
+    }
+    return out;
+}
+
 }  // namespace lucent::dipole

@@ -271,26 +271,10 @@ std::vector<ModelAgainstBeam> compareModelsWithBeam(const ScalarMedium& m,
         return [st, f](double r) { return f(r / st) / (st * st); };
     };
     std::vector<ModelAgainstBeam> rows;
-    const auto add = [&](const char* name, const std::function<double(double)>& f, double total) {
-        rows.push_back({name, compareRadial(exact, f, total)});
-    };
-    for (Model model : {Model::Dipole, Model::BetterDipole}) {
-        const DipoleProfile p = DipoleProfile::make(model, m);
-        add(modelName(model), inMfp([p](double r) { return p.Rd(r); }), p.totalReflectance());
+    for (const std::string& name : radialProfileNames()) {
+        const NamedRadialProfile p = makeRadialProfile(name, m);
+        rows.push_back({name, compareRadial(exact, inMfp(p.R), p.total)});
     }
-    const DirectionalDipole normalised(m.sigma_a, m.sigma_s, m.eta,
-                                       dirpoleEnergyScale(albedo, m.eta));
-    add("dirpole", inMfp([normalised](double r) { return normalised.radial(r); }),
-        integrateProfile(normalised));
-    const DirectionalDipole published(m.sigma_a, m.sigma_s, m.eta);
-    add("dirpole-published", inMfp([published](double r) { return published.radial(r); }),
-        integrateProfile(published));
-    const BurleyProfile burley = BurleyProfile::searchlight(m.sigma_a, m.sigma_s, m.eta);
-    add("burley", inMfp([burley](double r) { return burley.R(r); }), burley.totalReflectance());
-    const PhotonBeamProfile beam(m.sigma_a, m.sigma_s, m.eta);
-    add("photon-beam", inMfp([beam](double r) { return beam.R(r); }), beam.totalReflectance());
-    add("photon-beam-ms", inMfp([beam](double r) { return beam.multiple(r); }),
-        beam.multipleTotal());
     return rows;
 }
 

@@ -344,9 +344,11 @@ double integrateRadial(double (*f)(const void*, double), const void* ctx, double
         sum += gl8().integrate(
             a, b, [&](double t) { return f(ctx, 1.0 / t) * 2.0 * PI_D / (t * t * t); });
     }
-    // Core r < 1e-9·scale: f is bounded there, contributes ≤ f(0)π(1e-9 scale)²: added.
+    // Core r < 1e-9·scale, ≈ f(rMin)π rMin² (the dipoles' f is bounded there; Burley's and
+    // photon beam diffusion's grow like 1/r, whose core is twice that — 10⁻¹⁸ of the total
+    // either way; f(0) would be +∞ for them).
     const double rMin = std::exp(lo);
-    sum += f(ctx, 0.0) * PI_D * rMin * rMin;
+    sum += f(ctx, rMin) * PI_D * rMin * rMin;
     return sum;
 }
 

@@ -305,6 +305,18 @@ elseif(CASE STREQUAL "profile_anchors")
         "photon-beam" "photon-beam-ms" "shape error")
     run(few profile --against-exact 10)
     expect_one_line_error(few "--against-exact")
+    # Each anchor on its own, with its total by quadrature (1/r at r = 0 must not make it inf).
+    foreach(model burley photon-beam photon-beam-ms dirpole-normalised)
+        run(one profile --model ${model} --eta 1.3 --radii 4)
+        expect_ok(one)
+        expect_contains(one "${one_OUT}" "model ${model}" "(quadrature)")
+        string(REGEX MATCH "inf|nan" bad "${one_OUT}")
+        if(bad)
+            message(FATAL_ERROR "profile --model ${model}: non-finite output:\n${one_OUT}")
+        endif()
+    endforeach()
+    run(unknown profile --model tripole)
+    expect_one_line_error(unknown "photon-beam")
 elseif(CASE STREQUAL "methods")
     # Issue 13: the registry is the one list; `methods` shows every method and its parameters,
     # `render` takes any of them by name with --NAME VALUE or --param NAME=VALUE, and a

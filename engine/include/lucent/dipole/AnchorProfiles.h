@@ -15,6 +15,12 @@
 ///     PhotonBeamProfile p(0.032, 0.74, 1.3);
 ///     double total = p.totalReflectance();  // multiple (closed form) + single (quadrature)
 
+#include <lucent/dipole/Profiles.h>
+
+#include <functional>
+#include <string>
+#include <vector>
+
 namespace lucent::dipole {
 
 /// Christensen & Burley 2015 Eq. 5, the "searchlight" fit of the scaling factor between the
@@ -82,5 +88,21 @@ private:
     double m_D = 0.0, m_sigmaTr = 0.0, m_zb2 = 0.0;  // m_zb2 = 4AD: virtual source offset
     double m_cPhi = 0.0, m_cE = 0.0;
 };
+
+/// A radial profile by name, for tools and comparisons (lucent-cli profile, HalfSpaceBeam.h).
+struct NamedRadialProfile {
+    std::string name;
+    std::function<double(double)> R;  ///< R(r), mm⁻², r in mm; normal incidence
+    double total = 0.0;               ///< ∫ R dA (closed form where the model has one)
+};
+
+/// The names makeRadialProfile accepts: "dipole", "better-dipole", "dirpole" (as published),
+/// "dirpole-normalised" (scaled to the exact half-space total, the renderers' default),
+/// "burley", "photon-beam" (the paper's sum) and "photon-beam-ms" (its multiple term alone).
+const std::vector<std::string>& radialProfileNames();
+
+/// @throw ValueError for an unknown name (listing the accepted ones) or a medium the model
+/// refuses (as DipoleProfile::jensen()).
+NamedRadialProfile makeRadialProfile(const std::string& name, const ScalarMedium& m);
 
 }  // namespace lucent::dipole

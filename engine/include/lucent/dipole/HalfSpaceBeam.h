@@ -76,17 +76,14 @@ RadialComparison compareRadial(const HalfSpaceBeamProfile& exact,
 
 /// One radial model's comparison (compareModelsWithBeam).
 struct ModelAgainstBeam {
-    std::string model;  ///< "dipole", "better-dipole", "dirpole", "burley", "photon-beam", …
+    std::string model;  ///< a name of radialProfileNames() (AnchorProfiles.h)
     RadialComparison comparison;
 };
 
-/// The radial models of this module for the medium `m` (σ in mm⁻¹), each compared with `exact`
-/// (traced at m's reduced albedo and η; lengths converted through σt′): the Jensen and better
-/// dipoles, the directional dipole at normal incidence normalised to the exact total (the
-/// renderers' default) and as published, Christensen–Burley (searchlight) and photon beam
-/// diffusion (AnchorProfiles.h; "photon-beam" the paper's sum, "photon-beam-ms" its
-/// multiple-scattering term alone). @throw ValueError if the medium does not scatter or does not
-/// match exact's albedo and η (to 10⁻⁶).
+/// Every radial profile of radialProfileNames() (AnchorProfiles.h) for the medium `m` (σ in
+/// mm⁻¹), compared with `exact` (traced at m's reduced albedo and η; lengths converted through
+/// σt′). @throw ValueError if the medium does not scatter or does not match exact's albedo and
+/// η (to 10⁻⁶).
 std::vector<ModelAgainstBeam> compareModelsWithBeam(const ScalarMedium& m,
                                                     const HalfSpaceBeamProfile& exact);
 
