@@ -109,6 +109,12 @@ void runAgainstExact(const ProfileOptions& args, const std::array<dipole::Scalar
         std::printf("%-8s %-18s %8.4f %8s %8.4f %7s %7s   (alpha' %.4f, total %.4f +- %.4f)\n",
                     names[c], "exact", 1.0, "-", 0.0, "-", "-", albedo, exact.total,
                     exact.totalStdError);
+        std::printf(
+            "%-8s mean exit cosine of the exact light: %.3f within 0.1 mfp, %.3f at 0.1-1, "
+            "%.3f at 1-10, %.3f over all\n",
+            names[c], dipole::meanExitCosineWithin(exact, 0.0, 0.1),
+            dipole::meanExitCosineWithin(exact, 0.1, 1.0),
+            dipole::meanExitCosineWithin(exact, 1.0, 10.0), exact.meanExitCosine);
         dipole::ScalarMedium traced = m;
         traced.sigma_a = st * (1.0 - albedo);
         traced.sigma_s = st * albedo;

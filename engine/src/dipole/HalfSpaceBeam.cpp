@@ -46,10 +46,14 @@ double reflectanceLeaving(double cosInside, double eta) {
 }
 
 struct Tally {
-    std::vector<double> sum, sumSq, singleSum, singleSumSq;
-    double beyond = 0.0, total = 0.0, totalSq = 0.0;
+    std::vector<double> sum, sumSq, singleSum, singleSumSq, cosSum;
+    double beyond = 0.0, total = 0.0, totalSq = 0.0, totalCos = 0.0;
     explicit Tally(size_t rings)
-        : sum(rings, 0.0), sumSq(rings, 0.0), singleSum(rings, 0.0), singleSumSq(rings, 0.0) {}
+        : sum(rings, 0.0),
+          sumSq(rings, 0.0),
+          singleSum(rings, 0.0),
+          singleSumSq(rings, 0.0),
+          cosSum(rings, 0.0) {}
 };
 
 /// One photon: enters at the origin along −z (the medium is z < 0), returns nothing; adds its
@@ -70,6 +74,9 @@ void walk(SplitMix64& rng, double albedo, double eta, const std::vector<double>&
                 continue;
             }
             const double r = std::sqrt(x * x + y * y);
+            // Outside cosine of the refracted exit direction (Snell, n_inside = η).
+            const double cosOut = std::sqrt(std::max(0.0, 1.0 - eta * eta * (1.0 - dz * dz)));
+            t.totalCos += w * cosOut;
             const auto ring =
                 size_t(std::upper_bound(edges.begin(), edges.end(), r) - edges.begin());
             t.total += w;
@@ -80,6 +87,7 @@ void walk(SplitMix64& rng, double albedo, double eta, const std::vector<double>&
             }
             t.sum[ring] += w;
             t.sumSq[ring] += w * w;
+            t.cosSum[ring] += w * cosOut;
             if (scatterings == 1) {
                 t.singleSum[ring] += w;
                 t.singleSumSq[ring] += w * w;
@@ -192,7 +200,9 @@ HalfSpaceBeamProfile traceHalfSpaceBeam(double albedo, double eta,
             all.sumSq[i] += t.sumSq[i];
             all.singleSum[i] += t.singleSum[i];
             all.singleSumSq[i] += t.singleSumSq[i];
+            all.cosSum[i] += t.cosSum[i];
         }
+        all.totalCos += t.totalCos;
         all.beyond += t.beyond;
         all.total += t.total;
         all.totalSq += t.totalSq;
@@ -208,10 +218,12 @@ HalfSpaceBeamProfile traceHalfSpaceBeam(double albedo, double eta,
         out.ringStdError.push_back(stdError(all.sum[i], all.sumSq[i], photons));
         out.singleRingFlux.push_back(all.singleSum[i] / n);
         out.singleRingStdError.push_back(stdError(all.singleSum[i], all.singleSumSq[i], photons));
+        out.ringMeanExitCosine.push_back(all.sum[i] > 0.0 ? all.cosSum[i] / all.sum[i] : 0.0);
     }
     out.beyond = all.beyond / n;
     out.total = all.total / n;
     out.totalStdError = stdError(all.total, all.totalSq, photons);
+    out.meanExitCosine = all.total > 0.0 ? all.totalCos / all.total : 0.0;
     return out;
 }
 
@@ -276,6 +288,18 @@ std::vector<ModelAgainstBeam> compareModelsWithBeam(const ScalarMedium& m,
         rows.push_back({name, compareRadial(exact, inMfp(p.R), p.total)});
     }
     return rows;
+}
+
+double meanExitCosineWithin(const HalfSpaceBeamProfile& p, double rMin, double rMax) {
+    double flux = 0.0, cosFlux = 0.0;
+    for (size_t i = 0; i < p.ringEdges.size() && i < p.ringMeanExitCosine.size(); ++i) {
+        const double inner = i == 0 ? 0.0 : p.ringEdges[i - 1];
+        if (inner >= rMin && p.ringEdges[i] <= rMax) {
+            flux += p.ringFlux[i];
+            cosFlux += p.ringFlux[i] * p.ringMeanExitCosine[i];
+        }
+    }
+    return flux > 0.0 ? cosFlux / flux : 0.0;
 }
 
 }  // namespace lucent::dipole

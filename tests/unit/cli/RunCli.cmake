@@ -302,7 +302,7 @@ elseif(CASE STREQUAL "profile_anchors")
         --eta 1.3)
     expect_ok(anchors)
     expect_contains(anchors "${anchors_OUT}" "exact" "dipole" "better-dipole" "dirpole" "burley"
-        "photon-beam" "photon-beam-ms" "shape error")
+        "photon-beam" "photon-beam-ms" "shape error" "mean exit cosine")
     run(few profile --against-exact 10)
     expect_one_line_error(few "--against-exact")
     # Each anchor on its own, with its total by quadrature (1/r at r = 0 must not make it inf).

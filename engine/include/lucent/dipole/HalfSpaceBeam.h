@@ -40,7 +40,15 @@ struct HalfSpaceBeamProfile {
     std::vector<double> singleRingFlux, singleRingStdError;
     double beyond = 0.0;  ///< flux leaving beyond the last edge
     double total = 0.0, totalStdError = 0.0;
+    /// Flux-weighted mean cosine of the exit direction outside the boundary, per ring and over
+    /// all the exitant light: where the light leaves *towards* (1: along the normal; the
+    /// half-space's radiance L(t) gives 2π∫L t² dt / total).
+    std::vector<double> ringMeanExitCosine;
+    double meanExitCosine = 0.0;
 };
+
+/// Flux-weighted mean exit cosine of the rings lying within [rMin, rMax] mfp (0 if none).
+double meanExitCosineWithin(const HalfSpaceBeamProfile& p, double rMin, double rMax);
 
 /// Traces `photons` paths (σt′ = 1, isotropic scattering with the given albedo, a smooth
 /// boundary of relative index η = n_inside / n_outside: exact Fresnel reflection and total
