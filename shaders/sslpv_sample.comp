@@ -12,7 +12,9 @@
 // Mode diffusion (u_diffusion): band 0 only; its band-1 slot holds each cell's reduced albedo
 // (shared/SslpvShared.h), read with the same weights, and with u_exitCorrection the light
 // leaves with the exact half-space's exit-angle distribution c(α′, cos θ_o)
-// (SslpvSolver::exitantRadiance).
+// (SslpvSolver::exitantRadiance). With u_surfaceFlux, slots 2–4 hold the flux along the surface
+// J_t (x, y, z per channel) and the light leaving along the refracted direction ω also carries
+// P1's flux term: × max(0, 1 + 3 J_t·ω_t/(J(2A + 3μ))).
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -22,12 +24,13 @@ layout(binding = 2) uniform sampler3D u_c0;  // rgb: coefficient Y00 per channel
 layout(binding = 3) uniform sampler3D u_c1;  // rgb: Y1-1
 layout(binding = 4) uniform sampler3D u_c2;  // rgb: Y10
 layout(binding = 5) uniform sampler3D u_c3;  // rgb: Y11
+layout(binding = 6) uniform sampler3D u_c4;  // rgb: Y2-2 (mode diffusion only: surface flux z)
 
 layout(rgba32f, binding = 0) writeonly uniform image2D u_target;  // W/(mm²·sr)
 
 #include "shared/SslpvShared.h"
-#if LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF != 1
-#error "radianceInside reads the albedo from u_c1 (coefficient 1)"
+#if LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF != 1 || LUCENT_SSLPV_DIFFUSION_FLUX_COEFF != 2
+#error "radianceInside reads the albedo from u_c1 and the surface flux from u_c2, u_c3, u_c4"
 #endif
 #define LUCENT_EXIT_TABLE_BINDING LUCENT_SSLPV_BINDING_EXIT_TABLE
 #include "common/exit_table.glsl"
@@ -47,6 +50,8 @@ uniform float u_Y00;       // 1/(2√π)
 uniform float u_K1;        // √(3/(4π))
 uniform int u_diffusion;      // mode diffusion: band 0 only, band-1 slot = albedo
 uniform int u_exitCorrection; // mode diffusion: apply exitCorrection (table bound)
+uniform int u_surfaceFlux;    // mode diffusion: apply the surface flux's P1 term
+uniform float u_twoA;         // 2A, the Robin condition's constant (GridDiffusion)
 
 // Exact unpolarised Fresnel reflectance (Born & Wolf §1.5), as lucent::sslpv::dielectricReflectance.
 float dielectricReflectance(float cosThetaI, float eta) {
@@ -65,15 +70,18 @@ bool isInside(ivec3 c) {
     return texelFetch(u_c0, c, 0).a >= 0.5;
 }
 
-vec3 radianceInside(vec3 p, vec3 n, out vec3 albedo) {
+vec3 radianceInside(vec3 p, vec3 n, out vec3 albedo, out vec3 jt[3]) {
     albedo = vec3(0.0);
+    jt[0] = vec3(0.0);
+    jt[1] = vec3(0.0);
+    jt[2] = vec3(0.0);
     const float depths[3] = float[3](0.5, 1.0, 1.5);
     for (int d = 0; d < 3; ++d) {
         vec3 u = (p - depths[d] * u_h * n - u_origin) / u_h - vec3(0.5);
         ivec3 i0 = ivec3(floor(u));
         vec3 f = u - vec3(i0);
         float wsum = 0.0;
-        vec3 c0 = vec3(0.0), c1 = vec3(0.0), c2 = vec3(0.0), c3 = vec3(0.0);
+        vec3 c0 = vec3(0.0), c1 = vec3(0.0), c2 = vec3(0.0), c3 = vec3(0.0), c4 = vec3(0.0);
         for (int corner = 0; corner < 8; ++corner) {
             ivec3 o = ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
             ivec3 cell = i0 + o;
@@ -86,12 +94,16 @@ vec3 radianceInside(vec3 p, vec3 n, out vec3 albedo) {
             c1 += w * texelFetch(u_c1, cell, 0).rgb;
             c2 += w * texelFetch(u_c2, cell, 0).rgb;
             c3 += w * texelFetch(u_c3, cell, 0).rgb;
+            if (u_surfaceFlux != 0) c4 += w * texelFetch(u_c4, cell, 0).rgb;
         }
         if (wsum > 1e-4) {
             c0 /= wsum;
             c1 /= wsum;
             c2 /= wsum;
             c3 /= wsum;
+            c4 /= wsum;
+            // Per channel k: J_t = (x, y, z) from slots 2, 3, 4 (rgb = the channels).
+            for (int k = 0; k < 3; ++k) jt[k] = vec3(c2[k], c3[k], c4[k]);
             float invA = 1.0 / (u_h * u_h);
             vec3 c10n = u_diffusion != 0 ? vec3(0.0) : n.x * c3 + n.y * c1 + n.z * c2;
             if (u_diffusion != 0) albedo = c1;  // the LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF slot
@@ -116,11 +128,24 @@ void main() {
             vec3 p = (u_objectFromWorld * vec4(pos.xyz, 1.0)).xyz;
             vec3 n = normalize(mat3(u_objectFromWorld) * nw);
             vec3 albedo;
-            L = (u_exitScale * (1.0 - dielectricReflectance(cosO, u_eta))) *
-                radianceInside(p, n, albedo);
+            vec3 jt[3];
+            vec3 Li = radianceInside(p, n, albedo, jt);
+            L = (u_exitScale * (1.0 - dielectricReflectance(cosO, u_eta))) * Li;
             if (u_exitCorrection != 0)
                 for (int c = 0; c < 3; ++c)
                     if (albedo[c] > 0.0) L[c] *= exitCorrection(albedo[c], cosO);
+            if (u_surfaceFlux != 0) {
+                // Object space, as the grid: the refracted direction's tangential part and cosine.
+                vec3 woObj = normalize(mat3(u_objectFromWorld) * wo);
+                float cosObj = dot(n, woObj);
+                vec3 wt = (woObj - cosObj * n) / u_eta;
+                float mu = sqrt(max(0.0, 1.0 - dot(wt, wt)));
+                // Li = 2/(Δx²)·Y00·c00 is proportional to J; the ratio needs c00 itself.
+                vec3 jn = Li * (u_h * u_h) / (2.0 * u_Y00);
+                for (int c = 0; c < 3; ++c)
+                    if (jn[c] > 0.0)
+                        L[c] *= max(0.0, 1.0 + 3.0 * dot(jt[c], wt) / (jn[c] * (u_twoA + 3.0 * mu)));
+            }
         }
     }
     imageStore(u_target, px, vec4(L, 1.0));

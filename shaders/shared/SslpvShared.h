@@ -11,6 +11,14 @@
 /// exit-angle correction c(α′, t) with it.
 #define LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF 1
 
+/// Mode diffusion's accumulation grid has the 9 coefficient slots of order 2 whatever the
+/// solver's order, and slots 2, 3 and 4 (Y10, Y11, Y2−2) hold each surface cell's flux along the
+/// surface J_t (x, y and z, per channel, in the units of the band-0 slot: GridDiffusion::
+/// surfaceFlux times the cell's read-out scale), interpolated with the same weights as the
+/// light for the P1 exit term (SslpvSolver::exitantRadiance).
+#define LUCENT_SSLPV_DIFFUSION_ORDER 2
+#define LUCENT_SSLPV_DIFFUSION_FLUX_COEFF 2
+
 /// Shader-storage binding of the exit-angle table (lucent::dipole::DirpoleExitTable, the layout
 /// of shared/DirpoleShared.h: LUCENT_DIRPOLE_EXIT_ALBEDO_NODES rows of
 /// LUCENT_DIRPOLE_EXIT_COSINE_NODES floats) in sslpv_sample.comp.

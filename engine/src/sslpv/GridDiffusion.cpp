@@ -156,6 +156,7 @@ void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {
     // under the surface where the source does, so a linear extrapolation from a cell 1.5Δx deep
     // overestimated J by up to 25 % in the lit half-space test.)
     m_depth.assign(unknowns, 0.5f * dx);
+    m_normal.assign(unknowns, Vector3f(0.f));
     std::vector<int> boundaryFaces(unknowns, 0);
     std::vector<float> depthSum(unknowns, 0.f);
     for (size_t u = 0; u < unknowns; ++u) {
@@ -170,6 +171,8 @@ void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {
         const float glen = std::sqrt(gx * gx + gy * gy + gz * gz);
         const float areaScale =
             glen > 1e-3f ? glen / (std::abs(gx) + std::abs(gy) + std::abs(gz)) : 1.f;
+        if (glen > 1e-3f)
+            m_normal[u] = Vector3f(-gx, -gy, -gz) / glen;
         for (int f = 0; f < 6; ++f) {
             const int nx = x + dirs[f][0], ny = y + dirs[f][1], nz = z + dirs[f][2];
             const bool interior = inside(nx, ny, nz);
@@ -375,6 +378,51 @@ float GridDiffusion::exitance(size_t cell, int channel) const {
     const size_t u = size_t(m_compact[cell]);
     const float d = m_diffusivity[size_t(channel)][u];
     return m_phi[size_t(channel)][u] * d / (float(2.0 * m_boundaryA) * d + m_depth[u]);
+}
+
+Vector3f GridDiffusion::surfaceFlux(size_t cell, int channel) const {
+    if (!isBoundary(cell) || channel < 0 || channel > 2)
+        return Vector3f(0.f);
+    const size_t u = size_t(m_compact[cell]);
+    const Vector3f n = m_normal[u];
+    if (n == Vector3f(0.f))
+        return Vector3f(0.f);
+    // Tangent basis of the surface; the exitance's gradient in it by weighted least squares
+    // over the neighbouring boundary cells (their exitance is already the surface's: each is
+    // φ extrapolated over its own depth δ̄), weights 1/|d|² so the face neighbours lead.
+    const Vector3f t1 = glm::normalize(std::abs(n.x) < 0.9f ? glm::cross(n, Vector3f(1, 0, 0))
+                                                            : glm::cross(n, Vector3f(0, 1, 0)));
+    const Vector3f t2 = glm::cross(n, t1);
+    const int res = m_spec.resolution;
+    const Coord c(int(cell % size_t(res)), int((cell / size_t(res)) % size_t(res)),
+                  int(cell / (size_t(res) * size_t(res))));
+    const double j0 = exitance(cell, channel);
+    double a11 = 0.0, a12 = 0.0, a22 = 0.0, b1 = 0.0, b2 = 0.0;
+    for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                const Coord q = c + Coord(dx, dy, dz);
+                if (q == c || !m_spec.contains(q))
+                    continue;
+                const size_t k = m_spec.linearIndex(q);
+                if (!isBoundary(k))
+                    continue;
+                const Vector3f d = m_spec.voxelSize * Vector3f(float(dx), float(dy), float(dz));
+                const double u1 = glm::dot(d, t1), u2 = glm::dot(d, t2);
+                const double w = 1.0 / double(glm::dot(d, d));
+                const double dj = double(exitance(k, channel)) - j0;
+                a11 += w * u1 * u1;
+                a12 += w * u1 * u2;
+                a22 += w * u2 * u2;
+                b1 += w * u1 * dj;
+                b2 += w * u2 * dj;
+            }
+    const double det = a11 * a22 - a12 * a12;
+    if (!(det > 1e-6 * (a11 + a22) * (a11 + a22)))
+        return Vector3f(0.f);
+    const double g1 = (a22 * b1 - a12 * b2) / det, g2 = (a11 * b2 - a12 * b1) / det;
+    const float scale = -float(2.0 * m_boundaryA) * m_diffusivity[size_t(channel)][u];
+    return scale * (float(g1) * t1 + float(g2) * t2);
 }
 
 }  // namespace lucent::sslpv

@@ -29,7 +29,10 @@ constexpr float SH_Y00 = 0.282094791773878f;
 constexpr float SH_K1 = 0.488602511902920f;
 
 /// Coefficients of bands 0–1 uploaded (band 2 integrates to zero over the hemisphere, Eq. 7).
+/// Bands 0 and 1 (the propagation modes read no more); mode diffusion also needs slot 4, the
+/// surface flux's z (shared/SslpvShared.h).
 constexpr int UPLOADED_COEFFS = 4;
+constexpr int UPLOADED_COEFFS_DIFFUSION = LUCENT_SSLPV_DIFFUSION_FLUX_COEFF + 3;
 
 void validateOptions(const SslpvProviderOptions& o) {
     LUCENT_CHECK(o.meshId >= -1, "SSLPV provider option 'meshId' must be >= -1, got ", o.meshId);
@@ -72,7 +75,7 @@ struct SslpvSubsurfaceProvider::Impl {
     // GL
     bool created = false;
     gpu::GlProgram program;
-    gpu::GlObject coeffTex[UPLOADED_COEFFS];
+    gpu::GlObject coeffTex[UPLOADED_COEFFS_DIFFUSION];
     int texRes = 0;
     gpu::GlObject timeQuery;
     bool queryPending = false;
@@ -343,7 +346,8 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
         const SslpvGrid& grid = s.sampledGrid();
         const size_t cells = spec.voxelCount();
         s.staging.resize(4 * cells);
-        for (int i = 0; i < UPLOADED_COEFFS; ++i) {
+        const int uploaded = std::min(grid.coeffCount(), UPLOADED_COEFFS_DIFFUSION);
+        for (int i = 0; i < uploaded; ++i) {
             const float* planes[3] = {grid.plane(0, i), grid.plane(1, i), grid.plane(2, i)};
             size_t k = 0;
             for (int z = 0; z < N; ++z)
@@ -384,7 +388,7 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
     glUseProgram(p);
     glBindTextureUnit(0, g.positionTexture);
     glBindTextureUnit(1, g.normalTexture);
-    for (int i = 0; i < UPLOADED_COEFFS; ++i)
+    for (int i = 0; i < UPLOADED_COEFFS_DIFFUSION; ++i)
         glBindTextureUnit(GLuint(2 + i), s.coeffTex[i].id());
     glBindImageTexture(0, target, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     // Perspective unless the clip matrix's w row ignores the position (orthographic).
@@ -424,6 +428,10 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
     }
     glProgramUniform1i(p, s.program.uniformLocation("u_diffusion"), diffusion ? 1 : 0);
     glProgramUniform1i(p, s.program.uniformLocation("u_exitCorrection"), exitCorrection ? 1 : 0);
+    const bool surfaceFlux = diffusion && s.solver.surfaceFluxReadout();
+    glProgramUniform1i(p, s.program.uniformLocation("u_surfaceFlux"), surfaceFlux ? 1 : 0);
+    glProgramUniform1f(p, s.program.uniformLocation("u_twoA"),
+                       surfaceFlux ? float(2.0 * s.solver.diffusion().boundaryConstant()) : 0.f);
     glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
     // The target is written with imageStore: visible to texture fetches (the shade pass), image
     // loads, framebuffer clears/draws (the next frame's clear) and glGetTexImage read-backs

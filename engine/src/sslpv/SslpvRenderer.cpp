@@ -143,6 +143,7 @@ void SslpvRenderer::setOptions(const SslpvRenderOptions& o) {
         a.skipEmptySlices != b.skipEmptySlices || a.mode != b.mode ||
         a.diffusionExactTotal != b.diffusionExactTotal ||
         a.diffusionExitTable != b.diffusionExitTable ||
+        a.diffusionSurfaceFlux != b.diffusionSurfaceFlux ||
         a.calibration.linear != b.calibration.linear ||
         a.calibration.transport != b.calibration.transport ||
         a.calibration.diffusion != b.calibration.diffusion ||
@@ -271,7 +272,7 @@ ImageRgb SslpvRenderer::render(const Camera& camera) {
                         // Eq. 4/7: L_o = T(ω_i, ω_o) L_i with T = 1 − F_r(cos θ_o, η);
                         // calibrated mode also scales by G/η² (SslpvSolver::exitScale), the
                         // diffusion mode by the exact exit-angle distribution.
-                        L += m_solver.exitantRadiance(hit->position, n, cosO);
+                        L += m_solver.exitantRadiance(hit->position, n, cosO, wo);
                     }
                     if (m_opt.direct) {
                         const Point3f p = hit->position + eps * hit->geometricNormal;

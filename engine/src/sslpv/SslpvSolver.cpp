@@ -1211,7 +1211,8 @@ Rgb SslpvSolver::radiance(const Point3f& p, const Normal3f& n) const {
     return radianceFromCoefficients(c, n);
 }
 
-Rgb SslpvSolver::exitantRadiance(const Point3f& p, const Normal3f& n, float cosOut) const {
+Rgb SslpvSolver::exitantRadiance(const Point3f& p, const Normal3f& n, float cosOut,
+                                 const Vector3f& wo) const {
     float c[3][SSLPV_MAX_COEFFS];
     if (!(cosOut > 0.f) || !interpolateCoefficients(p, n, c))
         return Rgb(0.f);
@@ -1225,6 +1226,25 @@ Rgb SslpvSolver::exitantRadiance(const Point3f& p, const Normal3f& n, float cosO
             const float albedo = c[ch][LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF];
             if (albedo > 0.f)
                 L[ch] *= float(m_exitTable->correction(double(albedo), double(cosOut)));
+        }
+    }
+    if (m_opt.mode == SslpvMode::Diffusion && m_surfaceFluxReadout) {
+        // P1 just inside the boundary: L(ω) = (φ + 3J·ω)/4π with φ = 2A·J_n (Robin), so along
+        // the refracted direction ω (tangential part ω_t = (wo − cos θ_o n)/η, Snell; cosine μ)
+        // L = J_n(2A + 3μ)/4π · (1 + 3 J_t·ω_t/(J_n(2A + 3μ))). The exit table above stands for
+        // the first factor's angular shape; this is the second. Odd in ω_t, it moves light
+        // between azimuths and keeps the exitance.
+        const Vector3f wt = (wo - cosOut * Vector3f(n)) / m_eta;
+        const float mu = std::sqrt(std::max(0.f, 1.f - glm::dot(wt, wt)));
+        const float twoA = float(2.0 * m_diffusion.boundaryConstant());
+        for (int ch = 0; ch < 3; ++ch) {
+            const float jn = c[ch][0];
+            if (!(jn > 0.f))
+                continue;
+            const Vector3f jt(c[ch][LUCENT_SSLPV_DIFFUSION_FLUX_COEFF],
+                              c[ch][LUCENT_SSLPV_DIFFUSION_FLUX_COEFF + 1],
+                              c[ch][LUCENT_SSLPV_DIFFUSION_FLUX_COEFF + 2]);
+            L[ch] *= std::max(0.f, 1.f + 3.f * glm::dot(jt, wt) / (jn * (twoA + 3.f * mu)));
         }
     }
     return L;
@@ -1374,8 +1394,10 @@ void SslpvSolver::diffuse() {
     // L_o = T(ω_o)·J/(π(1 − F_dr(η))), has ∫ L_o cos θ_o dω_o = J, so c00 = η²·J·Δx²/(2·Y00·π(1 −
     // F_dr(η))) per cell; the higher coefficients are 0.
     const int n = s.resolution;
-    if (m_accum.resolution() != n || m_accum.order() != m_opt.order)
-        m_accum = SslpvGrid(n, m_opt.order);
+    // Order 2's nine slots whatever the solver's order: band 0 the light, slot 1 the albedo,
+    // slots 2–4 the surface flux (shared/SslpvShared.h).
+    if (m_accum.resolution() != n || m_accum.order() != LUCENT_SSLPV_DIFFUSION_ORDER)
+        m_accum = SslpvGrid(n, LUCENT_SSLPV_DIFFUSION_ORDER);
     else
         m_accum.clear();
     const float exitNorm =
@@ -1385,6 +1407,7 @@ void SslpvSolver::diffuse() {
         m_exactRatio = exactReflectanceRatio(double(m_eta));
     m_exitTable =
         m_opt.diffusionExitTable ? dipole::DirpoleExitTable::shared(double(m_eta)) : nullptr;
+    m_surfaceFluxReadout = m_opt.diffusionSurfaceFlux;
     for (int z = 0; z < n; ++z)
         for (int y = 0; y < n; ++y)
             for (int x = 0; x < n; ++x) {
@@ -1402,6 +1425,11 @@ void SslpvSolver::diffuse() {
                     const size_t at = m_accum.index(c);
                     m_accum.plane(ch, 0)[at] = scale * m_diffusion.exitance(k, ch);
                     m_accum.plane(ch, LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF)[at] = albedo;
+                    // The flux along the surface, in the band-0 slot's units (the same scale),
+                    // so the read-out's P1 term sees the ratio J_t/J the model has.
+                    const Vector3f flux = scale * m_diffusion.surfaceFlux(k, ch);
+                    for (int a = 0; a < 3; ++a)
+                        m_accum.plane(ch, LUCENT_SSLPV_DIFFUSION_FLUX_COEFF + a)[at] = flux[a];
                 }
             }
     m_stats.stepsUsed = std::max({ds.iterations[0], ds.iterations[1], ds.iterations[2]});

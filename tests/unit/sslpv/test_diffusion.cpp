@@ -188,8 +188,10 @@ TEST(GridDiffusion, LightLeavesAtTheExactHalfSpacesExitAngles) {
         EXPECT_EQ(s.exitTable() != nullptr, table);
         for (size_t i = 0; i < cosines.size(); ++i) {
             const double want = exact.radiance[i] * entered;
-            const double got =
-                s.exitantRadiance(Point3f(0.f, 0.f, top), Normal3f(0, 0, 1), float(cosines[i])).y;
+            const float t = float(cosines[i]);
+            const double got = s.exitantRadiance(Point3f(0.f, 0.f, top), Normal3f(0, 0, 1), t,
+                                                 Vector3f(std::sqrt(1.f - t * t), 0.f, t))
+                                   .y;
             std::printf("exit %s, t = %.1f: solved / exact %.4f\n", table ? "table" : "diffuse",
                         cosines[i], got / want);
             if (table)
@@ -201,7 +203,63 @@ TEST(GridDiffusion, LightLeavesAtTheExactHalfSpacesExitAngles) {
     EXPECT_GT(worstDiffuse, 0.03);
     // Seen from behind or along the surface: nothing.
     SslpvSolver s(SslpvOptions{});
-    EXPECT_EQ(s.exitantRadiance(Point3f(0.f), Normal3f(0, 0, 1), 0.f), Rgb(0.f));
+    EXPECT_EQ(s.exitantRadiance(Point3f(0.f), Normal3f(0, 0, 1), 0.f, Vector3f(1, 0, 0)), Rgb(0.f));
+}
+
+TEST(GridDiffusion, SurfaceFluxIsFicksLawAlongTheBoundary) {
+    // The lit box of the tests above (σt′ = 2 mm⁻¹, α′ = 0.8, η = 1.3, cells of ½ mfp; 33 of
+    // them, so a cell is centred on the axis) under irradiance E(x) = 1 + βx. Far from the side
+    // faces the solution is (1 + βx)·φ₁(z) — x-linear terms have no Laplacian — so along the top
+    // face J(x) = (1 + βx)·J₁ and Fick's law on the boundary, φ_b = 2A·J, gives the closed form J_t
+    // = −D ∂φ_b/∂x = −2AD·β·J₁ along x, none along y. Then P1's exit term: seen at the centre from
+    // azimuths −x and +x at the same outside cosine t, the light leaving toward −x (with the flow)
+    // over the light toward +x is (1 + a)/(1 − a), a = 3·2ADβ·sin θ_i/(2A + 3μ), sin θ_i = √(1 −
+    // t²)/η, μ = cos θ_i.
+    const float beta = 0.05f;  // mm⁻¹: E from 0.8 to 1.2 across the box
+    LitBox box = litBox(33, 0.25f, 2.f, 1.6f);
+    for (SslpvInjectionSample& t : box.texels)
+        t.flux *= 1.f + beta * t.position.x;
+    const float eta = 1.3f;
+    const std::unique_ptr<SslpvSolver> solver = solvedBox(box, eta, /*exactTotal=*/true);
+    const GridDiffusion& d = solver->diffusion();
+    const double A = diffusionBoundaryConstant(eta), D = 1.0 / 6.0;
+    const GridSpec& spec = box.material.spec;
+    // The side faces are 6.4 diffusion lengths from the axis: their effect on the gradient
+    // there is e^−6.4·(E(4) − E(−4))/(βl_d) ≈ 0.5 % of it, and grows as e^(|x|/l_d) away from
+    // it (3 % at 0.9 mm), so the cells next to the axis are compared. The LSQ gradient of a
+    // linear field is exact, so 1 % holds that and the solve's tolerance.
+    for (int ix : {15, 16, 17}) {
+        const size_t k = spec.linearIndex({ix, 16, 32});
+        const float x = spec.cellCenter({ix, 16, 32}).x;
+        const double J = d.exitance(k, 1);
+        const Vector3f Jt = d.surfaceFlux(k, 1);
+        const double want = -2.0 * A * D * beta * J / (1.0 + beta * x);
+        std::printf("surface flux at x = %+.3f mm: solved / closed form %.4f (y %.1e, z %.1e)\n", x,
+                    Jt.x / want, Jt.y / want, Jt.z / want);
+        EXPECT_NEAR(Jt.x / want, 1.0, 0.01) << "x = " << x;
+        EXPECT_NEAR(Jt.y / want, 0.0, 1e-3) << "x = " << x;
+        EXPECT_NEAR(Jt.z / want, 0.0, 1e-3) << "x = " << x;
+    }
+    // Interior and outside cells carry none.
+    EXPECT_EQ(d.surfaceFlux(spec.linearIndex({16, 16, 16}), 1), Vector3f(0.f));
+
+    const float top = 0.5f * 33.f * 0.25f;
+    for (const float t : {0.8f, 0.4f}) {
+        const float s = std::sqrt(1.f - t * t);
+        const Rgb toMinus = solver->exitantRadiance(Point3f(0.f, 0.f, top), Normal3f(0, 0, 1), t,
+                                                    Vector3f(-s, 0.f, t));
+        const Rgb toPlus = solver->exitantRadiance(Point3f(0.f, 0.f, top), Normal3f(0, 0, 1), t,
+                                                   Vector3f(s, 0.f, t));
+        const double sinI = double(s) / eta, mu = std::sqrt(1.0 - sinI * sinI);
+        const double a = 3.0 * 2.0 * A * D * beta * sinI / (2.0 * A + 3.0 * mu);
+        std::printf("exit at t = %.1f: toward -x / toward +x %.5f, P1 closed form %.5f\n", t,
+                    toMinus.y / toPlus.y, (1.0 + a) / (1.0 - a));
+        EXPECT_NEAR(toMinus.y / toPlus.y, (1.0 + a) / (1.0 - a), 0.02 * a);
+        // Odd in the azimuth: the pair's mean is the light without the term.
+        const Rgb toSide = solver->exitantRadiance(Point3f(0.f, 0.f, top), Normal3f(0, 0, 1), t,
+                                                   Vector3f(0.f, s, t));
+        EXPECT_NEAR(0.5 * (toMinus.y + toPlus.y) / toSide.y, 1.0, 1e-4);
+    }
 }
 
 TEST(GridDiffusion, PowerBalancesAndWarmStartsReachTheSameAnswer) {

@@ -207,9 +207,9 @@ TEST_F(SslpvProviderGl, PixelsMatchCpuFormulaAndCpuImage) {
         ASSERT_GT(peak, 0.f);
 
         // (1) The CPU formula (SslpvSolver::exitantRadiance: radiance, Fresnel T and in mode
-        // diffusion the exit-angle table, as SslpvRenderer) evaluated at
-        // the G-buffer's own positions and normals. Differences are float rounding only: u =
-        // (p − dΔx n − o)/Δx is off by a few ulp of 16 (≈ 1e-5 in the trilinear weights) and the
+        // diffusion the exit-angle table and the surface flux's term, as SslpvRenderer) evaluated
+        // at the G-buffer's own positions and normals. Differences are float rounding only: u = (p
+        // − dΔx n − o)/Δx is off by a few ulp of 16 (≈ 1e-5 in the trilinear weights) and the
         // weighted sums by ~1e-6 relative; the largest coefficient gradient of this grid is under
         // 10× the local value per cell, so |ΔL| ≲ 1e-4·|L| + 1e-6·peak.
         const gpu::GBufferView g = m_renderer.gbuffer();
@@ -227,7 +227,7 @@ TEST_F(SslpvProviderGl, PixelsMatchCpuFormulaAndCpuImage) {
                     const float cosO = glm::dot(n, wo);
                     if (cosO > 0.f) {
                         ++covered;
-                        expected = p.solver().exitantRadiance(Point3f(P), n, cosO);
+                        expected = p.solver().exitantRadiance(Point3f(P), n, cosO, wo);
                     }
                 }
                 for (int c = 0; c < 3; ++c) {

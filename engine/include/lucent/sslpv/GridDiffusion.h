@@ -119,6 +119,8 @@ public:
 
     [[nodiscard]] const GridDiffusionStats& stats() const { return m_stats; }
     [[nodiscard]] const GridSpec& spec() const { return m_spec; }
+    /// The boundary constant A of the last setMaterial (diffusionBoundaryConstant(η)).
+    [[nodiscard]] double boundaryConstant() const { return m_boundaryA; }
     /// True for a medium cell (linear index of spec).
     [[nodiscard]] bool isMedium(size_t cell) const {
         return cell < m_compact.size() && m_compact[cell] >= 0;
@@ -134,6 +136,15 @@ public:
     /// (δ: the mean over its boundary faces, ½Δx for an interior cell): the Robin condition
     /// J = φ_b/(2A) with φ_b extrapolated along the flux. 0 outside the medium.
     [[nodiscard]] float exitance(size_t cell, int channel) const;
+    /// The flux along the surface at a boundary cell (W/mm², a vector in the surface's tangent
+    /// plane): Fick's law J_t = −D ∇_t φ_b on the boundary, where the Robin condition makes the
+    /// surface fluence φ_b = 2A·J, so J_t = −2AD ∇_t J with ∇_t J the least-squares gradient of
+    /// exitance() over the boundary cells of the 3×3×3 neighbourhood, in the tangent plane of
+    /// the inside fraction's outward normal. It is what the read-out's P1 exit term needs
+    /// (SslpvSolver::exitantRadiance; docs/methods/sslpv.md, "Light along the surface"). Zero
+    /// outside the boundary, where the normal is undefined (a shell thinner than the stencil)
+    /// and where the neighbours do not span the plane.
+    [[nodiscard]] Vector3f surfaceFlux(size_t cell, int channel) const;
 
 private:
     GridSpec m_spec;
@@ -153,7 +164,10 @@ private:
     std::array<std::vector<float>, 3> m_sigmaA;
     std::array<std::vector<float>, 3> m_diffusivity;
     std::array<std::vector<float>, 3> m_phi;  ///< solution per unknown (+ sentinel)
-    std::vector<float> m_depth;       ///< per unknown: its centre's depth under the surface, mm
+    std::vector<float> m_depth;  ///< per unknown: its centre's depth under the surface, mm
+    /// Per unknown: the outward unit normal (−∇ of the inside fraction), zero where that
+    /// gradient vanishes; used by surfaceFlux().
+    std::vector<Vector3f> m_normal;
     std::vector<uint8_t> m_boundary;  ///< per spec cell: 1 for a boundary cell
     bool m_hasMaterial = false;
     bool m_phiValid = false;

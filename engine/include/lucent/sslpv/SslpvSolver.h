@@ -149,6 +149,11 @@ struct SslpvOptions {
     /// distribution over exit angles at its albedo (dipole::DirpoleExitTable, as the directional
     /// dipole does); false: a Fresnel-weighted diffuse exit. Read-out only: no re-solve.
     bool diffusionExitTable = true;
+    /// Mode Diffusion: the light leaving a surface point also follows the flux along the surface
+    /// there, P1's radiance (φ + 3J·ω)/4π with J's tangential part (GridDiffusion::surfaceFlux):
+    /// light that has travelled along the surface leaves brighter along its way (back-lit rims);
+    /// false: the exitance only. Read-out only: no re-solve.
+    bool diffusionSurfaceFlux = true;
 };
 
 /// One injection texel of a reflective shadow map (§3.1).
@@ -239,16 +244,25 @@ public:
     /// from the accumulation grid sampled half a cell inside along −n (trilinear over inside
     /// cells only: isReadable). Not multiplied by Fresnel T (the caller knows ω_o).
     [[nodiscard]] Rgb radiance(const Point3f& p, const Normal3f& n) const;
-    /// Radiance leaving the surface at p (outward unit normal n) towards a viewer at cosine
-    /// cosOut to n, W/(mm²·sr): exitScale()·T(cosOut)·radiance(p, n), T = 1 − F_r(cosOut, η),
-    /// and in mode Diffusion with diffusionExitTable the exact half-space's exit-angle
-    /// correction c(α′, cosOut) per channel, α′ read with the same weights as the radiance.
-    /// The GL sample pass (shaders/sslpv_sample.comp) computes the same.
-    [[nodiscard]] Rgb exitantRadiance(const Point3f& p, const Normal3f& n, float cosOut) const;
+    /// Radiance leaving the surface at p (outward unit normal n) towards the unit direction wo
+    /// at cosine cosOut = n·wo (the caller's value: its rounding stays the caller's), W/(mm²·sr):
+    /// exitScale()·T(cosOut)·radiance(p, n), T = 1 − F_r(cosOut, η) (0 for cosOut ≤ 0). In mode
+    /// Diffusion, with diffusionExitTable, times the exact half-space's exit-angle correction
+    /// c(α′, cosOut) per channel, α′ read with the same weights as the radiance; with
+    /// diffusionSurfaceFlux, times P1's flux term max(0, 1 + 3 J_t·ω_t/(J(2A + 3μ))) (ω the
+    /// refracted inside direction, ω_t its tangential part, μ its cosine; J_t read with the same
+    /// weights). The GL sample pass (shaders/sslpv_sample.comp) computes the same.
+    [[nodiscard]] Rgb exitantRadiance(const Point3f& p, const Normal3f& n, float cosOut,
+                                      const Vector3f& wo) const;
     /// The exit-angle table exitantRadiance() applies (the process's table for η), or null when
     /// it applies none (not mode Diffusion, diffusionExitTable off, or before a solve).
     [[nodiscard]] const std::shared_ptr<const dipole::DirpoleExitTable>& exitTable() const {
         return m_exitTable;
+    }
+    /// True when exitantRadiance applies the surface flux's P1 term (mode Diffusion with
+    /// diffusionSurfaceFlux, after a solve); the GL sample pass applies it then too.
+    [[nodiscard]] bool surfaceFluxReadout() const {
+        return m_opt.mode == SslpvMode::Diffusion && m_surfaceFluxReadout;
     }
     /// The diffusion solve of mode Diffusion (its stats: iterations, energy balance).
     [[nodiscard]] const GridDiffusion& diffusion() const { return m_diffusion; }
@@ -317,6 +331,9 @@ private:
     GridDiffusion m_diffusion;                                    ///< mode Diffusion's solver
     std::shared_ptr<const ExactReflectanceRatio> m_exactRatio;    ///< the process's table for η
     std::shared_ptr<const dipole::DirpoleExitTable> m_exitTable;  ///< see exitTable()
+    /// Mode Diffusion: the accumulation grid holds the surface flux (slots
+    /// LUCENT_SSLPV_DIFFUSION_FLUX_COEFF..+2) and exitantRadiance applies its P1 term.
+    bool m_surfaceFluxReadout = false;
     /// The read-out's trilinear interpolation of the accumulation grid's coefficients at
     /// p − depth·Δx·n (radiance()); false where no readable cell is near.
     bool interpolateCoefficients(const Point3f& p, const Normal3f& n,

@@ -135,6 +135,7 @@ private:
             o.render.injectionResolution = std::clamp(4 * o.render.gridResolution, 64, 256);
             o.render.solver.diffusionExactTotal = p.getBool("diffusion-normalise");
             o.render.solver.diffusionExitTable = p.getChoice("diffusion-exit") == "exact";
+            o.render.solver.diffusionSurfaceFlux = p.getBool("diffusion-flux");
             o.render.solver.maxSteps = p.isGiven("steps") ? p.getInt("steps") : 1024;
             o.render.solver.stopEpsilon = p.isGiven("stop") ? float(p.getFloat("stop")) : 1e-3f;
             LUCENT_CHECK(!p.isGiven("attenuation"),
@@ -256,6 +257,15 @@ MethodEntry sslpvMethod() {
          0,
          {"exact", "diffuse"},
          "exact"},
+        {"diffusion-flux",
+         ParamType::Bool,
+         "mode diffusion: the light leaving each surface point also follows the flux along the "
+         "surface there (P1's J.w term: back-lit rims); off: the exitance only; the other modes "
+         "ignore it",
+         0,
+         0,
+         {},
+         "on"},
         {"attenuation",
          ParamType::Choice,
          "mode paper only: per-step attenuation",
