@@ -142,9 +142,15 @@ void main() {
                 float mu = sqrt(max(0.0, 1.0 - dot(wt, wt)));
                 // Li = 2/(Δx²)·Y00·c00 is proportional to J; the ratio needs c00 itself.
                 vec3 jn = Li * (u_h * u_h) / (2.0 * u_Y00);
+                // |J| ≤ φ: J_t limited to J_n·√(4A² − 1), as the CPU read-out.
+                float limit = sqrt(max(0.0, u_twoA * u_twoA - 1.0));
                 for (int c = 0; c < 3; ++c)
-                    if (jn[c] > 0.0)
-                        L[c] *= max(0.0, 1.0 + 3.0 * dot(jt[c], wt) / (jn[c] * (u_twoA + 3.0 * mu)));
+                    if (jn[c] > 0.0) {
+                        vec3 j = jt[c];
+                        float size = length(j);
+                        if (size > limit * jn[c]) j *= limit * jn[c] / size;
+                        L[c] *= max(0.0, 1.0 + 3.0 * dot(j, wt) / (jn[c] * (u_twoA + 3.0 * mu)));
+                    }
             }
         }
     }

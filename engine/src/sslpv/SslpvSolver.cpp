@@ -1233,17 +1233,24 @@ Rgb SslpvSolver::exitantRadiance(const Point3f& p, const Normal3f& n, float cosO
         // the refracted direction ω (tangential part ω_t = (wo − cos θ_o n)/η, Snell; cosine μ)
         // L = J_n(2A + 3μ)/4π · (1 + 3 J_t·ω_t/(J_n(2A + 3μ))). The exit table above stands for
         // the first factor's angular shape; this is the second. Odd in ω_t, it moves light
-        // between azimuths and keeps the exitance.
+        // between azimuths and keeps the exitance. A flux larger than the fluence has no
+        // radiance field (|J| ≤ φ, the bound flux limiters enforce), so J_t is limited to
+        // √(φ_b² − J_n²) = J_n√(4A² − 1): a steep gradient (a shadow's edge on a coarse grid)
+        // cannot make the term exceed what any radiance could carry.
         const Vector3f wt = (wo - cosOut * Vector3f(n)) / m_eta;
         const float mu = std::sqrt(std::max(0.f, 1.f - glm::dot(wt, wt)));
         const float twoA = float(2.0 * m_diffusion.boundaryConstant());
+        const float limit = std::sqrt(std::max(0.f, twoA * twoA - 1.f));
         for (int ch = 0; ch < 3; ++ch) {
             const float jn = c[ch][0];
             if (!(jn > 0.f))
                 continue;
-            const Vector3f jt(c[ch][LUCENT_SSLPV_DIFFUSION_FLUX_COEFF],
-                              c[ch][LUCENT_SSLPV_DIFFUSION_FLUX_COEFF + 1],
-                              c[ch][LUCENT_SSLPV_DIFFUSION_FLUX_COEFF + 2]);
+            Vector3f jt(c[ch][LUCENT_SSLPV_DIFFUSION_FLUX_COEFF],
+                        c[ch][LUCENT_SSLPV_DIFFUSION_FLUX_COEFF + 1],
+                        c[ch][LUCENT_SSLPV_DIFFUSION_FLUX_COEFF + 2]);
+            const float size = glm::length(jt);
+            if (size > limit * jn)
+                jt *= limit * jn / size;
             L[ch] *= std::max(0.f, 1.f + 3.f * glm::dot(jt, wt) / (jn * (twoA + 3.f * mu)));
         }
     }

@@ -262,6 +262,47 @@ TEST(GridDiffusion, SurfaceFluxIsFicksLawAlongTheBoundary) {
     }
 }
 
+TEST(GridDiffusion, TheSurfaceFluxTermIsLimitedWhereTheGradientIsSteep) {
+    // A shadow's edge on cells much larger than the diffusion length (σt′ = 2 mm⁻¹, α′ = 0.2,
+    // 2 mm cells: l_d = 0.39 mm): half the top face lit, η = 1. Beyond the edge the exitance
+    // falls by ~40× per cell, so the least-squares gradient makes |J_t| larger than any radiance
+    // field allows (|J| ≤ φ, i.e. |J_t| ≤ J_n√(4A² − 1)); unlimited, P1's term would multiply
+    // the light leaving along the flow (toward the shadow) by 1 + 3|J_t|sin θ_i/(J_n(2A + 3μ)) —
+    // several times. The read-out limits J_t to the bound, so that factor never exceeds its value
+    // at the bound.
+    LitBox box = litBox(16, 2.f, 2.f, 0.4f);
+    std::erase_if(box.texels, [](const SslpvInjectionSample& t) { return t.position.x > 0.f; });
+    const std::unique_ptr<SslpvSolver> solver = solvedBox(box, 1.f, /*exactTotal=*/true);
+    const GridDiffusion& d = solver->diffusion();
+    const GridSpec& spec = box.material.spec;
+    const double A = d.boundaryConstant(), limit = std::sqrt(4.0 * A * A - 1.0);
+    double steepest = 0.0;
+    for (int x = 0; x < 16; ++x) {
+        const size_t k = spec.linearIndex({x, 8, 15});
+        if (d.exitance(k, 1) > 0.f)
+            steepest = std::max(
+                steepest, double(glm::length(d.surfaceFlux(k, 1))) / (d.exitance(k, 1) * limit));
+    }
+    std::printf("steepest |J_t| / bound: %.2f\n", steepest);
+    ASSERT_GT(steepest, 1.5);  // the case exercises the limit
+
+    const float top = 0.5f * 16.f * 2.f, t = 0.3f, sinO = std::sqrt(1.f - t * t);
+    const double sinI = sinO, mu = t;  // η = 1: no bending
+    const double bound = 1.0 + 3.0 * limit * sinI / (2.0 * A + 3.0 * mu);
+    int compared = 0;
+    for (int x = 0; x < 16; ++x) {
+        const Point3f p(spec.cellCenter({x, 8, 15}).x, spec.cellCenter({x, 8, 15}).y, top);
+        const Rgb along = solver->exitantRadiance(p, Normal3f(0, 0, 1), t, Vector3f(sinO, 0.f, t));
+        const Rgb side = solver->exitantRadiance(p, Normal3f(0, 0, 1), t, Vector3f(0.f, sinO, t));
+        if (!(side.y > 0.f))
+            continue;
+        ++compared;
+        EXPECT_TRUE(std::isfinite(along.y));
+        EXPECT_LE(along.y / side.y, bound * (1.0 + 1e-4)) << "cell x = " << x;
+    }
+    EXPECT_GT(compared, 8);
+}
+
 TEST(GridDiffusion, PowerBalancesAndWarmStartsReachTheSameAnswer) {
     LitBox box = litBox(24, 0.25f, 1.5f, 1.4f);
     SslpvOptions o;
