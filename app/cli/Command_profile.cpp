@@ -13,6 +13,7 @@
 #include <lucent/dipole/HalfSpaceBeam.h>
 #include <lucent/dipole/Profiles.h>
 #include <lucent/dipole/Sampling.h>
+#include <lucent/sslpv/GridDiffusion.h>
 
 #include <algorithm>
 #include <array>
@@ -115,6 +116,18 @@ void runAgainstExact(const ProfileOptions& args, const std::array<dipole::Scalar
             names[c], dipole::meanExitCosineWithin(exact, 0.0, 0.1),
             dipole::meanExitCosineWithin(exact, 0.1, 1.0),
             dipole::meanExitCosineWithin(exact, 1.0, 10.0), exact.meanExitCosine);
+        // The lean of the exiting light along the flux on the surface, per unit J_t/J_n: what
+        // the diffusion mode's P1 exit term assumes, against the walk (sslpv.md).
+        const dipole::SurfaceLean near = dipole::surfaceLeanWithin(exact, 0.1, 1.0);
+        const dipole::SurfaceLean far = dipole::surfaceLeanWithin(exact, 1.0, 10.0);
+        const auto perUnit = [](const dipole::SurfaceLean& s) {
+            return s.fluxRatio > 0.0 ? s.lean / s.fluxRatio : 0.0;
+        };
+        std::printf(
+            "%-8s exit lean per unit J_t/J_n: exact %.3f at 0.1-1 mfp (J_t/J_n %.2f), %.3f at "
+            "1-10 (%.2f); the diffusion read-out's P1 term %.3f\n",
+            names[c], perUnit(near), near.fluxRatio, perUnit(far), far.fluxRatio,
+            sslpv::surfaceFluxExitLean(albedo, eta));
         dipole::ScalarMedium traced = m;
         traced.sigma_a = st * (1.0 - albedo);
         traced.sigma_s = st * albedo;
@@ -207,7 +220,9 @@ void addProfileCommand(CLI::App& cli, const CommandContext&) {
         "mm^-2 at N radii spaced geometrically up to the radius holding 99% of the profile.\n"
         "With --against-exact N it instead traces the exact half-space under a pencil beam\n"
         "(N photons per channel) and compares every radial model with it, Christensen-Burley\n"
-        "and photon beam diffusion included.\n");
+        "and photon beam diffusion included; it also prints how far the exiting light leans\n"
+        "along the flux on the surface, per unit J_t/J_n, against the P1 term of SSLPV's\n"
+        "diffusion read-out.\n");
     auto args = std::make_shared<ProfileOptions>();
     sub->add_option("--model", args->model,
                     "dipole (Jensen 2001, default), better-dipole (d'Eon 2012), dirpole (Frisvad "

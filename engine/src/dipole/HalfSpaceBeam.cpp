@@ -45,16 +45,57 @@ double reflectanceLeaving(double cosInside, double eta) {
     return 0.5 * (rs * rs + rp * rp);
 }
 
+/// Depth of the layer under the surface whose track lengths estimate the flux density there
+/// (mfp): thin against the rings it is read in (≥ 0.3 mfp apart beyond 1 mfp) and thick enough
+/// to be crossed by many flights.
+constexpr double SURFACE_LAYER = 0.05;
+
 struct Tally {
-    std::vector<double> sum, sumSq, singleSum, singleSumSq, cosSum;
+    std::vector<double> sum, sumSq, singleSum, singleSumSq, cosSum, radialSum, layerRadial,
+        layerNormal;
     double beyond = 0.0, total = 0.0, totalSq = 0.0, totalCos = 0.0;
     explicit Tally(size_t rings)
         : sum(rings, 0.0),
           sumSq(rings, 0.0),
           singleSum(rings, 0.0),
           singleSumSq(rings, 0.0),
-          cosSum(rings, 0.0) {}
+          cosSum(rings, 0.0),
+          radialSum(rings, 0.0),
+          layerRadial(rings, 0.0),
+          layerNormal(rings, 0.0) {}
 };
+
+size_t ringOf(const std::vector<double>& edges, double r) {
+    return size_t(std::upper_bound(edges.begin(), edges.end(), r) - edges.begin());
+}
+
+/// The part of the flight from (x, y, z) along (dx, dy, dz) of length `length` that lies in the
+/// surface layer z ∈ [−SURFACE_LAYER, 0]: its track length times the direction's radial and
+/// normal components, in the ring of its midpoint (the layer is thin against the rings).
+void tallyLayer(const std::vector<double>& edges, Tally& t, double w, double x, double y, double z,
+                double dx, double dy, double dz, double length) {
+    double s0 = 0.0, s1 = length;
+    if (dz == 0.0) {
+        if (z < -SURFACE_LAYER)
+            return;
+    } else {
+        const double sLayer = (-SURFACE_LAYER - z) / dz;  // where z(s) = −SURFACE_LAYER
+        if (dz > 0.0)
+            s0 = std::max(s0, sLayer);
+        else
+            s1 = std::min(s1, sLayer);
+    }
+    if (!(s1 > s0))
+        return;
+    const double sm = 0.5 * (s0 + s1), xm = x + sm * dx, ym = y + sm * dy;
+    const double r = std::sqrt(xm * xm + ym * ym);
+    const size_t ring = ringOf(edges, r);
+    if (ring >= edges.size() || !(r > 0.0))
+        return;
+    const double l = w * (s1 - s0);
+    t.layerRadial[ring] += l * (dx * xm + dy * ym) / r;
+    t.layerNormal[ring] += l * dz;
+}
 
 /// One photon: enters at the origin along −z (the medium is z < 0), returns nothing; adds its
 /// exit weight to the tally.
@@ -66,6 +107,7 @@ void walk(SplitMix64& rng, double albedo, double eta, const std::vector<double>&
         const double nz = z + s * dz;
         if (nz >= 0.0) {  // reaches the boundary first: stop on it
             const double d = -z / dz;
+            tallyLayer(edges, t, w, x, y, z, dx, dy, dz, d);
             x += d * dx;
             y += d * dy;
             z = 0.0;
@@ -77,8 +119,7 @@ void walk(SplitMix64& rng, double albedo, double eta, const std::vector<double>&
             // Outside cosine of the refracted exit direction (Snell, n_inside = η).
             const double cosOut = std::sqrt(std::max(0.0, 1.0 - eta * eta * (1.0 - dz * dz)));
             t.totalCos += w * cosOut;
-            const auto ring =
-                size_t(std::upper_bound(edges.begin(), edges.end(), r) - edges.begin());
+            const size_t ring = ringOf(edges, r);
             t.total += w;
             t.totalSq += w * w;
             if (ring >= edges.size()) {
@@ -88,12 +129,16 @@ void walk(SplitMix64& rng, double albedo, double eta, const std::vector<double>&
             t.sum[ring] += w;
             t.sumSq[ring] += w * w;
             t.cosSum[ring] += w * cosOut;
+            // Outside, the tangential part of the direction is η times the inside one (Snell).
+            if (r > 0.0)
+                t.radialSum[ring] += w * eta * (dx * x + dy * y) / r;
             if (scatterings == 1) {
                 t.singleSum[ring] += w;
                 t.singleSumSq[ring] += w * w;
             }
             return;
         }
+        tallyLayer(edges, t, w, x, y, z, dx, dy, dz, s);
         x += s * dx;
         y += s * dy;
         z = nz;
@@ -201,6 +246,9 @@ HalfSpaceBeamProfile traceHalfSpaceBeam(double albedo, double eta,
             all.singleSum[i] += t.singleSum[i];
             all.singleSumSq[i] += t.singleSumSq[i];
             all.cosSum[i] += t.cosSum[i];
+            all.radialSum[i] += t.radialSum[i];
+            all.layerRadial[i] += t.layerRadial[i];
+            all.layerNormal[i] += t.layerNormal[i];
         }
         all.totalCos += t.totalCos;
         all.beyond += t.beyond;
@@ -219,7 +267,12 @@ HalfSpaceBeamProfile traceHalfSpaceBeam(double albedo, double eta,
         out.singleRingFlux.push_back(all.singleSum[i] / n);
         out.singleRingStdError.push_back(stdError(all.singleSum[i], all.singleSumSq[i], photons));
         out.ringMeanExitCosine.push_back(all.sum[i] > 0.0 ? all.cosSum[i] / all.sum[i] : 0.0);
+        out.ringMeanExitRadial.push_back(all.sum[i] > 0.0 ? all.radialSum[i] / all.sum[i] : 0.0);
+        // Track length per layer depth: the flux density integrated over the ring's area.
+        out.ringLayerRadialFlux.push_back(all.layerRadial[i] / (n * SURFACE_LAYER));
+        out.ringLayerNormalFlux.push_back(all.layerNormal[i] / (n * SURFACE_LAYER));
     }
+    out.surfaceLayerDepth = SURFACE_LAYER;
     out.beyond = all.beyond / n;
     out.total = all.total / n;
     out.totalStdError = stdError(all.total, all.totalSq, photons);
@@ -288,6 +341,25 @@ std::vector<ModelAgainstBeam> compareModelsWithBeam(const ScalarMedium& m,
         rows.push_back({name, compareRadial(exact, inMfp(p.R), p.total)});
     }
     return rows;
+}
+
+SurfaceLean surfaceLeanWithin(const HalfSpaceBeamProfile& p, double rMin, double rMax) {
+    double flux = 0.0, leanFlux = 0.0, radial = 0.0, normal = 0.0;
+    for (size_t i = 0; i < p.ringEdges.size() && i < p.ringMeanExitRadial.size(); ++i) {
+        const double inner = i == 0 ? 0.0 : p.ringEdges[i - 1];
+        if (inner >= rMin && p.ringEdges[i] <= rMax) {
+            flux += p.ringFlux[i];
+            leanFlux += p.ringFlux[i] * p.ringMeanExitRadial[i];
+            radial += p.ringLayerRadialFlux[i];
+            normal += p.ringLayerNormalFlux[i];
+        }
+    }
+    SurfaceLean s;
+    if (flux > 0.0)
+        s.lean = leanFlux / flux;
+    if (normal > 0.0)
+        s.fluxRatio = radial / normal;
+    return s;
 }
 
 double meanExitCosineWithin(const HalfSpaceBeamProfile& p, double rMin, double rMax) {

@@ -55,6 +55,29 @@ double diffusionHalfSpaceReflectance(double albedo, double eta) {
     return albedo / ((1.0 + str) * (1.0 + 2.0 * A * str / 3.0));
 }
 
+double surfaceFluxExitLean(double albedo, double eta) {
+    LUCENT_CHECK(std::isfinite(albedo) && albedo >= 0.0 && albedo <= 1.0,
+                 "surface flux exit lean: albedo must be in [0, 1], got ", albedo);
+    LUCENT_CHECK(std::isfinite(eta) && eta >= 1.0 && eta <= 3.0,
+                 "surface flux exit lean: eta must be in [1, 3], got ", eta);
+    const double A = diffusionBoundaryConstant(eta);
+    const std::shared_ptr<const dipole::DirpoleExitTable> table =
+        dipole::DirpoleExitTable::shared(eta);
+    // Midpoint rule in t: the integrands are smooth but for T(t)'s kink at the critical angle
+    // seen from inside, which t never reaches (light from outside always enters).
+    constexpr int NODES = 2048;
+    double lean = 0.0, flux = 0.0;
+    for (int i = 0; i < NODES; ++i) {
+        const double t = (i + 0.5) / NODES, sin2 = 1.0 - t * t;
+        const double shape =
+            (1.0 - double(fresnelDielectric(float(t), float(eta)))) * table->correction(albedo, t);
+        const double mu = std::sqrt(std::max(0.0, 1.0 - sin2 / (eta * eta)));
+        lean += t * shape * sin2 / (2.0 * A + 3.0 * mu);
+        flux += t * shape;
+    }
+    return flux > 0.0 ? 1.5 / eta * lean / flux : 0.0;
+}
+
 ExactReflectanceRatio::ExactReflectanceRatio(double eta) : m_eta(eta) {
     LUCENT_CHECK(std::isfinite(eta) && eta >= 1.0 && eta <= 3.0,
                  "exact reflectance ratio: eta must be in [1, 3], got ", eta);

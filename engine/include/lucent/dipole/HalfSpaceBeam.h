@@ -45,10 +45,31 @@ struct HalfSpaceBeamProfile {
     /// half-space's radiance L(t) gives 2π∫L t² dt / total).
     std::vector<double> ringMeanExitCosine;
     double meanExitCosine = 0.0;
+    /// Flux-weighted mean of ω_o·r̂ per ring, ω_o the exit direction outside, r̂ the outward
+    /// radial direction on the surface: how much the light leaving there leans away from the
+    /// beam (> 0) or back toward it. The azimuthal asymmetry a flux along the surface gives.
+    std::vector<double> ringMeanExitRadial;
+    /// The flux density under the surface, per ring: track-length estimates over the layer of
+    /// depth surfaceLayerDepth (mfp) of the net radial (along r̂) and normal (outward) flux,
+    /// each as a power per ring (the flux density times the ring's area). The normal one equals
+    /// the ring's exitant flux as the layer thins (nothing enters there but the beam); their
+    /// ratio is J_t/J_n, the quantity the grid diffusion's P1 exit term scales with
+    /// (sslpv::GridDiffusion::surfaceFlux).
+    std::vector<double> ringLayerRadialFlux, ringLayerNormalFlux;
+    double surfaceLayerDepth = 0.05;
 };
 
 /// Flux-weighted mean exit cosine of the rings lying within [rMin, rMax] mfp (0 if none).
 double meanExitCosineWithin(const HalfSpaceBeamProfile& p, double rMin, double rMax);
+
+/// Over the rings lying within [rMin, rMax] mfp: the flux-weighted mean of ω_o·r̂ of the light
+/// leaving (`lean`) and the flux along the surface over the flux through it under the surface,
+/// J_t/J_n (`fluxRatio`, the layer estimates summed); lean / fluxRatio is the exit lean per unit
+/// J_t/J_n that a read-out from J_t should give (0s if no ring lies there).
+struct SurfaceLean {
+    double lean = 0.0, fluxRatio = 0.0;
+};
+SurfaceLean surfaceLeanWithin(const HalfSpaceBeamProfile& p, double rMin, double rMax);
 
 /// Traces `photons` paths (σt′ = 1, isotropic scattering with the given albedo, a smooth
 /// boundary of relative index η = n_inside / n_outside: exact Fresnel reflection and total

@@ -72,6 +72,16 @@ private:
 /// @throw ValueError for eta ∉ [1, 3].
 std::shared_ptr<const ExactReflectanceRatio> exactReflectanceRatio(double eta);
 
+/// The lean of the light the read-out sends out where the surface carries a flux J_t along it
+/// (SslpvSolver::exitantRadiance with the exact exit-angle table and the P1 term): the
+/// flux-weighted mean of ω_o·t̂ over the exit hemisphere (t̂ the direction of J_t), per unit
+/// J_t/J_n, to first order: (3/(2η)) ∫ t S(t)(1 − t²)/(2A + 3μ(t)) dt / ∫ t S(t) dt, with
+/// S(t) = (1 − F(t, η))·c(α′, t) the exit radiance's shape over outside cosines t and μ the
+/// refracted cosine inside. The exact pencil-beam walk measures the same quantity
+/// (dipole::surfaceLeanWithin); `lucent-cli profile --against-exact` prints both.
+/// @param albedo α′ ∈ [0, 1]. @param eta ∈ [1, 3].
+double surfaceFluxExitLean(double albedo, double eta);
+
 /// Stopping rule and bound of one solve.
 struct GridDiffusionOptions {
     int maxIterations = 1024;  ///< conjugate-gradient iterations per channel, [0, 1000000]
