@@ -1196,6 +1196,8 @@ void StatsPanel::refresh() {
     t += tr("frame: %1 ms (%2 fps)<br>")
              .arg(s.frameMs, 0, 'f', 1)
              .arg(s.frameMs > 0 ? 1000.0 / s.frameMs : 0.0, 0, 'f', 1);
+    if (s.hostMs > 0)
+        t += tr("app per frame (event loop, swap): %1 ms<br>").arg(s.hostMs, 0, 'f', 1);
     t += tr("last upload: %1 bricks in %2 ms<br>").arg(s.bricksUploaded).arg(s.uploadMs, 0, 'f', 2);
     t += tr("frames: %1, GL errors: %2<br>").arg(s.frames).arg(s.glErrors);
     if (!s.renderError.isEmpty())

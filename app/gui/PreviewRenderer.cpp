@@ -498,6 +498,10 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
     scene.lights = lights;
     planner::Budget budget;  // the planner's live frame budget (50 ms) and hysteresis
     budget.directMs = a.directMs;
+    // A headless calibration's ratios leave out the app's own share of a frame (event loop,
+    // swap): add what this viewport measures (docs/planner.md, "Calibrating on this machine").
+    if (!table.inUse.costs.hostIncluded)
+        budget.hostMs = std::max(0.0, f.hostMs);
     // The previous plan of the same scene, for hysteresis (a new scene plans from scratch).
     const planner::Plan previous = a.choice.plan;
     const bool hasPrevious = a.valid && !f.sceneReplaced;

@@ -125,6 +125,9 @@ struct PreviewFrame {
     float brushRadius = 0.f;        ///< mm
     unsigned framebuffer = 0;       ///< destination (Qt: defaultFramebufferObject())
     int framebufferWidth = 0, framebufferHeight = 0;
+    /// The app's per-frame time outside render() (ViewportStats::hostMs; 0: not measured). Auto
+    /// adds it to live costs measured without it (planner::LiveCosts::hostIncluded).
+    double hostMs = 0.0;
 };
 
 /// The live costs Auto plans with, and the live models made from them.

@@ -972,6 +972,22 @@ void Viewport::paintGL() {
 
 void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
     Timer timer;
+    // The host time: the gap since the previous frame ended, when that frame asked for this
+    // one at once (otherwise the gap is the artist's idle time). A gap over a second is a
+    // stall (a dialog, a blocked event loop), not a frame's cost.
+    constexpr size_t HOST_SAMPLES = 15;
+    if (m_nextFrameChained && m_sinceFrameEnd.isValid()) {
+        const double gap = double(m_sinceFrameEnd.nsecsElapsed()) * 1e-6;
+        if (gap < 1000.0) {
+            if (m_hostSamples.size() < HOST_SAMPLES)
+                m_hostSamples.push_back(gap);
+            else
+                m_hostSamples[m_hostNext] = gap;
+            m_hostNext = (m_hostNext + 1) % HOST_SAMPLES;
+            m_stats.hostMs = medianMs(m_hostSamples);
+        }
+    }
+    m_nextFrameChained = false;
     // A clear only where no frame is drawn: the tone map writes every pixel of a frame.
     const auto clear = [&] {
         QOpenGLContext* ctx = QOpenGLContext::currentContext();
@@ -1017,6 +1033,7 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
     f.framebuffer = framebuffer;
     f.framebufferWidth = fullW;
     f.framebufferHeight = fullH;
+    f.hostMs = m_stats.hostMs;
     try {
         m_preview.render(f);
         m_meshDirty = m_sceneReplaced = false;
@@ -1066,8 +1083,11 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
     ++m_stats.frames;
     // Progressive methods (dipoles) refine while the user is idle, and Auto times a few Direct
     // frames before its first plan.
-    if (m_preview.wantsAnotherFrame() && !m_refinementPaused)
+    if (m_preview.wantsAnotherFrame() && !m_refinementPaused) {
         QTimer::singleShot(0, this, [this] { update(); });
+        m_nextFrameChained = true;
+    }
+    m_sinceFrameEnd.start();
     Q_EMIT frameRendered();
 }
 

@@ -63,7 +63,12 @@ struct OrbitCamera {
 
 /// Per-frame timings shown in the Statistics dock.
 struct ViewportStats {
-    double frameMs = 0.0;    ///< last paintGL, GPU work included (glFinish)
+    double frameMs = 0.0;  ///< last paintGL, GPU work included (glFinish)
+    /// The app's own time per frame outside paintGL (Qt's event loop, the composition and the
+    /// buffer swap): the median gap between one frame's end and the next frame's start over
+    /// the last frames drawn back to back (a progressive method refining); 0 until measured.
+    /// Auto adds it to the predictions of live costs measured headless (docs/planner.md).
+    double hostMs = 0.0;
     double uploadMs = 0.0;   ///< last material update (brick upload / incremental resample)
     int bricksUploaded = 0;  ///< bricks in the last material update
     PreviewStats preview;    ///< per-pass timings and method details of the last frame
@@ -227,6 +232,12 @@ private:
     AppBrush m_brush;
     Tool m_tool = Tool::Paint;
     ViewportStats m_stats;
+    /// hostMs: when the last frame ended and whether it asked for the next at once, and the
+    /// recent gaps (a ring of HOST_SAMPLES).
+    QElapsedTimer m_sinceFrameEnd;
+    bool m_nextFrameChained = false;
+    std::vector<double> m_hostSamples;
+    size_t m_hostNext = 0;
 
     // Interaction state.
     enum class Drag { None, Paint, Orbit, Pan, Light } m_drag = Drag::None;

@@ -261,6 +261,7 @@ void measureLiveCosts(MainWindow& w, const QString& path) {
     measured.renderer =
         vp->stats().glRenderer.section(QStringLiteral(" — "), 0, 0).trimmed().toStdString();
     measured.cpuThreads = int(std::thread::hardware_concurrency());
+    measured.hostIncluded = true;  // the window's stroke -> frame: Qt's share is in it
     for (size_t i = 0; i < entries.size(); ++i) {
         lucent::planner::LiveCost m = entries[i];
         m.strokeRatio = lucent::medianMs(ratios[i]);

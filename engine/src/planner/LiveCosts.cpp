@@ -37,6 +37,9 @@ LiveCosts parseLiveCosts(const std::string& text, const std::string& origin) {
         c.date = j.value("date", "");
         c.renderer = j.value("renderer", "");
         c.cpuThreads = j.value("cpu_threads", 0);
+        if (j.contains("host_included") && !j["host_included"].is_boolean())
+            LUCENT_THROW(ValueError, origin, ": host_included must be true or false");
+        c.hostIncluded = j.value("host_included", false);
         if (c.cpuThreads < 0)
             LUCENT_THROW(ValueError, origin, ": cpu_threads must be ≥ 0");
         for (const nlohmann::json& e : j["entries"]) {
@@ -72,6 +75,7 @@ std::string formatLiveCosts(const LiveCosts& costs) {
         j["renderer"] = costs.renderer;
     if (costs.cpuThreads > 0)
         j["cpu_threads"] = costs.cpuThreads;
+    j["host_included"] = costs.hostIncluded;
     nlohmann::ordered_json list = nlohmann::ordered_json::array();
     for (const LiveCost& l : costs.entries) {
         nlohmann::ordered_json o;

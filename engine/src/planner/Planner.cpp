@@ -63,6 +63,8 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
                  "plan: the Direct frame time must be > 0 ms, got ", budget.directMs);
     // An infinite budget is allowed: no time limit (the most accurate candidate).
     LUCENT_CHECK(budget.frameMs > 0, "plan: the frame budget must be > 0 ms, got ", budget.frameMs);
+    LUCENT_CHECK(budget.hostMs >= 0 && std::isfinite(budget.hostMs),
+                 "plan: the host time must be a finite number >= 0 ms, got ", budget.hostMs);
     LUCENT_CHECK(budget.hysteresis >= 0 && budget.hysteresis < 1,
                  "plan: hysteresis must be in [0, 1), got ", budget.hysteresis);
     LUCENT_CHECK(budget.errorTolerance >= 0 && budget.errorTolerance < 1,
@@ -83,7 +85,7 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
         }
         Option o;
         o.index = i;
-        o.ms = c.costRatio(features) * budget.directMs;
+        o.ms = c.costRatio(features) * budget.directMs + budget.hostMs;
         o.error = c.error(features);
         LUCENT_CHECK(std::isfinite(o.ms) && o.ms >= 0 && std::isfinite(o.error) && o.error >= 0,
                      "plan: the models of ", nameOf(c), " predict ", o.ms, " ms and error ",

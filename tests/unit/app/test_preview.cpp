@@ -11,6 +11,7 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Image.h>
+#include <lucent/planner/AutoMethod.h>
 #include <lucent/scene/SceneFile.h>
 
 #include <QImage>
@@ -268,6 +269,36 @@ TEST_F(PreviewFixture, AutoRunsThePlannersChoiceAndSaysWhy) {
     s.method = "direct";
     render(preview, s);
     EXPECT_TRUE(preview.stats().autoReason.empty());
+}
+
+TEST_F(PreviewFixture, AutoAddsTheAppsHostTimeToHeadlessLiveCosts) {
+    // A headless calibration leaves Qt's share of a frame out of its ratios (hostIncluded
+    // false): Auto adds the viewport's measured host time to every prediction. The app's
+    // harness's table has it in (true): the same host time changes nothing.
+    RenderSettings s = directSettings();
+    s.method = AUTO_METHOD;
+    preview.pinAutoDirectMs(5.0);  // no timing: the predictions are ratio × 5 ms (+ host)
+    const planner::LiveCostsInUse shipped = PreviewRenderer::liveCostTable().inUse;
+    const auto firstCandidateMs = [&](bool hostIncluded, double hostMs) {
+        planner::LiveCostsInUse in = shipped;
+        in.costs.hostIncluded = hostIncluded;
+        PreviewRenderer::useLiveCosts(in);
+        PreviewFrame f = frame(s, /*first=*/true);
+        f.hostMs = hostMs;
+        preview.render(f);
+        const planner::AutoChoice* c = preview.autoChoice();
+        EXPECT_NE(c, nullptr);
+        if (c)
+            for (const planner::Option& o : c->plan.options)
+                if (o.index == 0)
+                    return o.ms;
+        return -1.0;
+    };
+    const double base = firstCandidateMs(false, 0.0);
+    EXPECT_NEAR(base, shipped.costs.entries[0].strokeRatio * 5.0, 1e-9);
+    EXPECT_NEAR(firstCandidateMs(false, 12.5) - base, 12.5, 1e-9);
+    EXPECT_NEAR(firstCandidateMs(true, 12.5) - base, 0.0, 1e-9);
+    PreviewRenderer::useLiveCosts(shipped);
 }
 
 TEST_F(PreviewFixture, LinearImageToneMapsToTheDisplayedImage) {

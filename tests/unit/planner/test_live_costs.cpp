@@ -51,6 +51,18 @@ TEST(LiveCosts, FormatRoundTripsAndRefusesWhatItCannotUse) {
     ASSERT_EQ(again.entries.size(), 1u);
     EXPECT_DOUBLE_EQ(again.entries[0].strokeRatio, 4.5);
     EXPECT_EQ(again.source, "test");
+    // Whether the app's host share is in the ratios: absent means not (a headless calibration
+    // of an older build); it round-trips; anything but a boolean is refused.
+    EXPECT_FALSE(c.hostIncluded);
+    LiveCosts withHost = c;
+    withHost.hostIncluded = true;
+    EXPECT_TRUE(parseLiveCosts(formatLiveCosts(withHost), "t").hostIncluded);
+    EXPECT_FALSE(again.hostIncluded);
+    {
+        std::string json = table(R"({"method": "dirpole", "setting": "8 spp", "stroke_ratio": 2})");
+        json.insert(1, R"("host_included": "yes", )");
+        expectRefused(json, "host_included");
+    }
 
     expectRefused("{", "not valid JSON");
     expectRefused(R"({"format": "lucent-planner-models"})", "not a live costs file");
@@ -95,6 +107,7 @@ TEST(LiveCosts, LiveModelsKeepTheErrorModelAndPredictTheMeasuredCost) {
 TEST(LiveCosts, ShippedTableMatchesTheModelsAndTheRegistry) {
     const LiveCosts& live = defaultLiveCosts();
     ASSERT_FALSE(live.entries.empty());
+    EXPECT_TRUE(live.hostIncluded) << "the shipped table is the app's harness: Qt's share is in it";
     std::vector<std::string> missing;
     const Models lm = liveModels(defaultModels(), live, &missing);
     EXPECT_TRUE(missing.empty()) << missing.front();

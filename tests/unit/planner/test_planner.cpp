@@ -182,6 +182,25 @@ TEST(Planner, ReplansWhenTheSceneClassChangesOrThePreviousNoLongerFits) {
     EXPECT_EQ(costly[tight.choice].method, "back");
 }
 
+TEST(Planner, TheHostTimeIsAddedToEveryPrediction) {
+    // The same candidates with 4 ms of host time per frame (the app's event loop and swap, left
+    // out of a headless calibration): 20 → 24 and 50 → 54 ms, so "edge" no longer fits 50 ms
+    // and "cheap" is taken; at 54 ms "edge" is again exactly at the budget.
+    const std::vector<Candidate> cands = {fixed("cheap", 2.0, 0.30), fixed("edge", 5.0, 0.20)};
+    Budget b = budget(50.0);
+    b.hostMs = 4.0;
+    const Plan p = plan(cands, frontLit(), b);
+    EXPECT_EQ(cands[p.choice].method, "cheap");
+    EXPECT_NEAR(p.chosen.ms, 24.0, 1e-9);
+    EXPECT_NE(p.reason.find("predicted 24 ms"), std::string::npos) << p.reason;
+    b.frameMs = 54.0;
+    EXPECT_EQ(cands[plan(cands, frontLit(), b).choice].method, "edge");
+    b.hostMs = -1.0;
+    EXPECT_THROW(plan(cands, frontLit(), b), ValueError);
+    b.hostMs = std::nan("");
+    EXPECT_THROW(plan(cands, frontLit(), b), ValueError);
+}
+
 TEST(Planner, RejectsBadBudgetsAndModels) {
     const std::vector<Candidate> cands = {fixed("a", 1.0, 0.1)};
     EXPECT_THROW(plan(cands, frontLit(), budget(50.0, 0.0)), ValueError);

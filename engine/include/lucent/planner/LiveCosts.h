@@ -47,6 +47,12 @@ struct LiveCosts {
     std::string date;      ///< UTC date of the measurement, "2026-12-03" ("" when not recorded)
     std::string renderer;  ///< the GL renderer measured on ("" when not recorded)
     int cpuThreads = 0;    ///< hardware threads of the measuring machine (0: not recorded)
+    /// Whether the ratios include the app's own per-frame host time (its event loop and buffer
+    /// swap): true for the app's latency harness, which times the window's frames; false for a
+    /// headless calibration (lucent-cli bench calibrate, the app's Calibrate Live Costs), which
+    /// renders into a framebuffer. Auto adds the host time it measures to the predictions of
+    /// a table without it (Budget::hostMs). JSON "host_included"; absent: false.
+    bool hostIncluded = false;
     std::vector<LiveCost> entries;
 };
 

@@ -42,6 +42,11 @@ struct Budget {
     /// false when no Direct frame could be measured (no GL) and directMs is 1 as a stand-in:
     /// the reason then gives costs as ratios to the Direct frame, not as times.
     bool directKnown = true;
+    /// Time every frame costs outside the renderer that the cost models leave out (ms, ≥ 0):
+    /// the app's event loop and buffer swap when its live costs were measured headless
+    /// (LiveCosts::hostIncluded false). Added to every candidate's predicted time. 0 when
+    /// directKnown is false (costs are then ratios).
+    double hostMs = 0.0;
     /// If > 0: the cheapest candidate whose predicted error is at most this, instead of the
     /// most accurate within frameMs.
     double maxError = 0.0;
