@@ -403,24 +403,28 @@ float GridDiffusion::exitance(size_t cell, int channel) const {
     return m_phi[size_t(channel)][u] * d / (float(2.0 * m_boundaryA) * d + m_depth[u]);
 }
 
-Vector3f GridDiffusion::surfaceFlux(size_t cell, int channel) const {
-    if (!isBoundary(cell) || channel < 0 || channel > 2)
-        return Vector3f(0.f);
+std::array<Vector3f, 3> GridDiffusion::surfaceFlux(size_t cell) const {
+    std::array<Vector3f, 3> flux{Vector3f(0.f), Vector3f(0.f), Vector3f(0.f)};
+    if (!isBoundary(cell))
+        return flux;
     const size_t u = size_t(m_compact[cell]);
     const Vector3f n = m_normal[u];
     if (n == Vector3f(0.f))
-        return Vector3f(0.f);
+        return flux;
     // Tangent basis of the surface; the exitance's gradient in it by weighted least squares
     // over the neighbouring boundary cells (their exitance is already the surface's: each is
-    // φ extrapolated over its own depth δ̄), weights 1/|d|² so the face neighbours lead.
+    // φ extrapolated over its own depth δ̄), weights 1/|d|² so the face neighbours lead. The
+    // normal matrix is the same for the three channels; only the right-hand sides differ.
     const Vector3f t1 = glm::normalize(std::abs(n.x) < 0.9f ? glm::cross(n, Vector3f(1, 0, 0))
                                                             : glm::cross(n, Vector3f(0, 1, 0)));
     const Vector3f t2 = glm::cross(n, t1);
     const int res = m_spec.resolution;
     const Coord c(int(cell % size_t(res)), int((cell / size_t(res)) % size_t(res)),
                   int(cell / (size_t(res) * size_t(res))));
-    const double j0 = exitance(cell, channel);
-    double a11 = 0.0, a12 = 0.0, a22 = 0.0, b1 = 0.0, b2 = 0.0;
+    double j0[3], b1[3] = {}, b2[3] = {};
+    for (int ch = 0; ch < 3; ++ch)
+        j0[ch] = exitance(cell, ch);
+    double a11 = 0.0, a12 = 0.0, a22 = 0.0;
     for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
@@ -433,19 +437,25 @@ Vector3f GridDiffusion::surfaceFlux(size_t cell, int channel) const {
                 const Vector3f d = m_spec.voxelSize * Vector3f(float(dx), float(dy), float(dz));
                 const double u1 = glm::dot(d, t1), u2 = glm::dot(d, t2);
                 const double w = 1.0 / double(glm::dot(d, d));
-                const double dj = double(exitance(k, channel)) - j0;
                 a11 += w * u1 * u1;
                 a12 += w * u1 * u2;
                 a22 += w * u2 * u2;
-                b1 += w * u1 * dj;
-                b2 += w * u2 * dj;
+                for (int ch = 0; ch < 3; ++ch) {
+                    const double dj = double(exitance(k, ch)) - j0[ch];
+                    b1[ch] += w * u1 * dj;
+                    b2[ch] += w * u2 * dj;
+                }
             }
     const double det = a11 * a22 - a12 * a12;
     if (!(det > 1e-6 * (a11 + a22) * (a11 + a22)))
-        return Vector3f(0.f);
-    const double g1 = (a22 * b1 - a12 * b2) / det, g2 = (a11 * b2 - a12 * b1) / det;
-    const float scale = -float(2.0 * m_boundaryA) * m_diffusivity[size_t(channel)][u];
-    return scale * (float(g1) * t1 + float(g2) * t2);
+        return flux;
+    for (int ch = 0; ch < 3; ++ch) {
+        const double g1 = (a22 * b1[ch] - a12 * b2[ch]) / det,
+                     g2 = (a11 * b2[ch] - a12 * b1[ch]) / det;
+        const float scale = -float(2.0 * m_boundaryA) * m_diffusivity[size_t(ch)][u];
+        flux[size_t(ch)] = scale * (float(g1) * t1 + float(g2) * t2);
+    }
+    return flux;
 }
 
 }  // namespace lucent::sslpv

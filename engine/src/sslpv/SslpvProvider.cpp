@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <utility>
 
 namespace lucent::sslpv {
 
@@ -265,7 +266,7 @@ const SslpvStats& SslpvSubsurfaceProvider::update() {
         CoarseMaterial masked = s.coarse;
         for (size_t k = 0; k < s.meshInside.size(); ++k)
             masked.insideFraction[k] = std::min(masked.insideFraction[k], s.meshInside[k]);
-        s.solver.setMaterial(masked, s.eta);
+        s.solver.setMaterial(std::move(masked), s.eta);
         s.materialDirty = false;
     }
     const bool rsmRebuilt = s.rsmDirty;

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 namespace lucent::sslpv {
 namespace {
@@ -477,12 +478,16 @@ void SslpvSolver::validateMaterial(const CoarseMaterial& m) const {
 }
 
 void SslpvSolver::setMaterial(const CoarseMaterial& material, float eta) {
+    setMaterial(CoarseMaterial(material), eta);
+}
+
+void SslpvSolver::setMaterial(CoarseMaterial&& material, float eta) {
     validateMaterial(material);
     LUCENT_CHECK(std::isfinite(eta) && eta >= 1.f && eta <= 3.f,
                  "SSLPV: eta must be in [1, 3], got ", eta);
     const bool regrid = !m_hasMaterial || !(material.spec == m_material.spec);
     const bool insideChanged = regrid || material.insideFraction != m_material.insideFraction;
-    m_material = material;
+    m_material = std::move(material);
     if (regrid || insideChanged || eta != m_eta)
         m_injectionDirty = true;
     m_eta = eta;
@@ -1087,7 +1092,11 @@ const SslpvStats& SslpvSolver::solve() {
     if (m_opt.mode == SslpvMode::Diffusion) {
         // The source depends on σt′ along each beam, so a material change re-injects too.
         if (m_injectionDirty || m_materialDirty) {
-            injectDiffusionSources();
+            // A stroke changes σ in a few cells: only the beams through them are walked again
+            // (reinjectChangedDiffusionSources), the same sources as a full walk to rounding.
+            if (m_injectionDirty || !m_opt.incrementalInjection ||
+                !reinjectChangedDiffusionSources())
+                injectDiffusionSources();
             m_injectionDirty = false;
             m_stats.reinjected = true;
             if (m_factorsDirty)
@@ -1257,25 +1266,142 @@ Rgb SslpvSolver::exitantRadiance(const Point3f& p, const Normal3f& n, float cosO
     return L;
 }
 
+namespace {
+
+/// One cell's share of a beam's first-scattering source (W per channel).
+struct BeamDeposit {
+    uint32_t cell;
+    float q[3];
+};
+
+/// What walking one beam gave: whether it met the medium, its power bookkeeping (W, in double)
+/// and the straight segment it covered in grid units (the cells it can have deposited in lie
+/// along it).
+struct BeamWalk {
+    bool entered = false;
+    double injected[3] = {}, firstAbsorbed[3] = {};
+    Vector3f from{0.f}, to{0.f};
+};
+
+/// Walks texel `smp`'s refracted beam through `m` (Amanatides & Woo 1987) and hands each inside
+/// cell's deposit to `deposit`, scaled by `sign` (−1: take a walk back out of the source). Each
+/// cell gets the exact integral of the first-scattering source over the chord it holds:
+/// α′·T·(1 − e^(−σt′ℓ)), T the transmittance so far. The chord in cells before the medium (the
+/// voxel staircase around x_p: cells the surface cuts with less than half inside, up to two
+/// cells) is medium too: it joins the first inside cell's chord, whose control volume reaches
+/// the surface (the Robin condition's δ counts it). After the medium, the beam is out.
+template <class Deposit>
+BeamWalk walkDiffusionBeam(const SslpvInjectionSample& smp, float eta, const CoarseMaterial& m,
+                           float sign, Deposit&& deposit) {
+    constexpr float OPAQUE = 2.0611536e-9f;  // e^−20: nothing of the beam is left to scatter
+    const GridSpec& s = m.spec;
+    const float h = s.voxelSize;
+    const int maxSteps = 3 * s.resolution + 3;  // a ray crosses at most 3N cells of the grid
+    const float cosI = -glm::dot(smp.direction, smp.normal);
+    const Rgb beam = (1.f - fresnelDielectric(cosI, eta)) * smp.flux;
+    const Vector3f wt = refractInto(smp.direction, smp.normal, eta);
+    const Vector3f u = (smp.position - s.origin) / h;  // grid units
+    Coord c(glm::floor(u));
+    Vector3f tMax, tDelta;
+    Coord stepDir;
+    for (int a = 0; a < 3; ++a) {
+        if (wt[a] > 0.f) {
+            stepDir[a] = 1;
+            tDelta[a] = h / wt[a];
+            tMax[a] = (float(c[a] + 1) - u[a]) * tDelta[a];
+        } else if (wt[a] < 0.f) {
+            stepDir[a] = -1;
+            tDelta[a] = -h / wt[a];
+            tMax[a] = (u[a] - float(c[a])) * tDelta[a];
+        } else {
+            stepDir[a] = 0;
+            tDelta[a] = tMax[a] = INF;
+        }
+    }
+    const auto inside = [&](const Coord& q) {
+        return s.contains(q) && m.insideFraction[s.linearIndex(q)] >= 0.5f;
+    };
+    BeamWalk w;
+    Rgb transmitted(1.f);
+    float t = 0.f, pending = 0.f;
+    for (int k = 0; k < maxSteps; ++k) {
+        const int axis = tMax.x < tMax.y ? (tMax.x < tMax.z ? 0 : 2) : (tMax.y < tMax.z ? 1 : 2);
+        const float tNext = tMax[axis];
+        const float len = tNext - t + pending;
+        if (inside(c)) {
+            pending = 0.f;
+            w.entered = true;
+            const size_t i = s.linearIndex(c);
+            BeamDeposit d{uint32_t(i), {}};
+            for (int ch = 0; ch < 3; ++ch) {
+                const float st = m.sigma_t[ch][i];
+                const float interacting =
+                    transmitted[ch] * -std::expm1(-st * len);  // one exp per cell
+                transmitted[ch] -= interacting;
+                const float albedo = st > 0.f ? std::min(1.f, m.sigma_s[ch][i] / st) : 0.f;
+                const float power = beam[ch] * interacting;
+                d.q[ch] = sign * albedo * power;
+                w.injected[ch] += double(sign) * double(power);
+                w.firstAbsorbed[ch] += double(sign) * double((1.f - albedo) * power);
+            }
+            deposit(d);
+            if (transmitted.x < OPAQUE && transmitted.y < OPAQUE && transmitted.z < OPAQUE) {
+                t = tNext;
+                break;
+            }
+        } else if (w.entered || t > 2.f * h) {
+            break;
+        } else {
+            pending = len;
+        }
+        t = tNext;
+        c[axis] += stepDir[axis];
+        tMax[axis] += tDelta[axis];
+        if (!s.contains(c))
+            break;
+    }
+    w.from = u;
+    w.to = u + (std::isfinite(t) ? t : 0.f) / h * wt;
+    return w;
+}
+
+/// Whether the segment [a, b] (grid units) meets the box [lo, hi] (slab test).
+bool segmentMeetsBox(const Vector3f& a, const Vector3f& b, const Vector3f& lo, const Vector3f& hi) {
+    float t0 = 0.f, t1 = 1.f;
+    for (int k = 0; k < 3; ++k) {
+        const float d = b[k] - a[k];
+        if (std::abs(d) < 1e-12f) {
+            if (a[k] < lo[k] || a[k] > hi[k])
+                return false;
+            continue;
+        }
+        float ta = (lo[k] - a[k]) / d, tb = (hi[k] - a[k]) / d;
+        if (ta > tb)
+            std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t0 > t1)
+            return false;
+    }
+    return true;
+}
+
+}  // namespace
+
 void SslpvSolver::injectDiffusionSources() {
     const Timer timer;
     const GridSpec& s = m_material.spec;
     const size_t count = s.voxelCount();
     for (auto& q : m_diffusionSource)
         q.assign(count, 0.f);
-    const float h = s.voxelSize;
-    constexpr float OPAQUE = 2.0611536e-9f;     // e^−20: nothing of the beam is left to scatter
-    const int maxSteps = 3 * s.resolution + 3;  // a ray crosses at most 3N cells of the grid
+    m_beamSegments.assign(m_samples.size(), {});
+    m_beamEntered.assign(m_samples.size(), 0);
 
     // The beams are walked in parallel over contiguous texel ranges, each range recording its
     // deposits in walk order; the ranges are then applied in texel order, so every cell sums its
     // deposits in the order a serial walk would: the source is bit-identical on any thread count.
-    struct Deposit {
-        uint32_t cell;
-        float q[3];
-    };
     struct Part {
-        std::vector<Deposit> deposits;
+        std::vector<BeamDeposit> deposits;
         double injected[3] = {}, firstAbsorbed[3] = {};  // W, summed in double
         int used = 0, skipped = 0;
     };
@@ -1292,75 +1418,16 @@ void SslpvSolver::injectDiffusionSources() {
                     ++part.skipped;
                     continue;
                 }
-                const float cosI = -glm::dot(smp.direction, smp.normal);
-                const Rgb beam = (1.f - fresnelDielectric(cosI, m_eta)) * smp.flux;
-                const Vector3f wt = refractInto(smp.direction, smp.normal, m_eta);
-                // Walk the beam cell by cell (Amanatides & Woo 1987) so each cell gets the exact
-                // integral of the first-scattering source over the chord it holds:
-                // α′·T·(1 − e^(−σt′ℓ)), T the transmittance so far. The chord in cells before
-                // the medium (the voxel staircase around x_p: cells the surface cuts with less
-                // than half inside, up to two cells) is medium too: it joins the first inside
-                // cell's chord, whose control volume reaches the surface (the Robin condition's
-                // δ counts it). After the medium, the beam is out.
-                const Vector3f u = (smp.position - s.origin) / h;  // grid units
-                Coord c(glm::floor(u));
-                Vector3f tMax, tDelta;
-                Coord stepDir;
-                for (int a = 0; a < 3; ++a) {
-                    if (wt[a] > 0.f) {
-                        stepDir[a] = 1;
-                        tDelta[a] = h / wt[a];
-                        tMax[a] = (float(c[a] + 1) - u[a]) * tDelta[a];
-                    } else if (wt[a] < 0.f) {
-                        stepDir[a] = -1;
-                        tDelta[a] = -h / wt[a];
-                        tMax[a] = (u[a] - float(c[a])) * tDelta[a];
-                    } else {
-                        stepDir[a] = 0;
-                        tDelta[a] = tMax[a] = INF;
-                    }
+                const BeamWalk w =
+                    walkDiffusionBeam(smp, m_eta, m_material, 1.f,
+                                      [&](const BeamDeposit& d) { part.deposits.push_back(d); });
+                for (int ch = 0; ch < 3; ++ch) {
+                    part.injected[ch] += w.injected[ch];
+                    part.firstAbsorbed[ch] += w.firstAbsorbed[ch];
                 }
-                Rgb transmitted(1.f);
-                bool entered = false;
-                float t = 0.f, pending = 0.f;
-                for (int k = 0; k < maxSteps; ++k) {
-                    const int axis =
-                        tMax.x < tMax.y ? (tMax.x < tMax.z ? 0 : 2) : (tMax.y < tMax.z ? 1 : 2);
-                    const float tNext = tMax[axis];
-                    const float len = tNext - t + pending;
-                    if (isInside(c)) {
-                        pending = 0.f;
-                        entered = true;
-                        const size_t i = s.linearIndex(c);
-                        Deposit d{uint32_t(i), {}};
-                        for (int ch = 0; ch < 3; ++ch) {
-                            const float st = m_material.sigma_t[ch][i];
-                            const float interacting =
-                                transmitted[ch] * -std::expm1(-st * len);  // one exp per cell
-                            transmitted[ch] -= interacting;
-                            const float albedo =
-                                st > 0.f ? std::min(1.f, m_material.sigma_s[ch][i] / st) : 0.f;
-                            const float power = beam[ch] * interacting;
-                            d.q[ch] = albedo * power;
-                            part.injected[ch] += double(power);
-                            part.firstAbsorbed[ch] += double((1.f - albedo) * power);
-                        }
-                        part.deposits.push_back(d);
-                        if (transmitted.x < OPAQUE && transmitted.y < OPAQUE &&
-                            transmitted.z < OPAQUE)
-                            break;
-                    } else if (entered || t > 2.f * h) {
-                        break;
-                    } else {
-                        pending = len;
-                    }
-                    t = tNext;
-                    c[axis] += stepDir[axis];
-                    tMax[axis] += tDelta[axis];
-                    if (!s.contains(c))
-                        break;
-                }
-                if (entered)
+                m_beamSegments[size_t(j)] = {w.from, w.to};
+                m_beamEntered[size_t(j)] = w.entered ? 1 : 0;
+                if (w.entered)
                     ++part.used;
                 else
                     ++part.skipped;
@@ -1368,25 +1435,126 @@ void SslpvSolver::injectDiffusionSources() {
         }
     });
     int used = 0, skipped = 0;
-    double injected[3] = {}, firstAbsorbed[3] = {};
+    m_sourceInjected = {};
+    m_sourceFirstAbsorbed = {};
     for (const Part& part : parts) {
-        for (const Deposit& d : part.deposits)
+        for (const BeamDeposit& d : part.deposits)
             for (int ch = 0; ch < 3; ++ch)
                 m_diffusionSource[size_t(ch)][d.cell] += d.q[ch];
         for (int ch = 0; ch < 3; ++ch) {
-            injected[ch] += part.injected[ch];
-            firstAbsorbed[ch] += part.firstAbsorbed[ch];
+            m_sourceInjected[size_t(ch)] += part.injected[ch];
+            m_sourceFirstAbsorbed[size_t(ch)] += part.firstAbsorbed[ch];
         }
         used += part.used;
         skipped += part.skipped;
     }
+    m_sourceMaterial = m_material;
+    m_incrementalInjections = 0;
     m_stats.injectedTexels = used;
     m_stats.skippedTexels = skipped;
+    m_stats.rewalkedTexels = 0;
     for (int ch = 0; ch < 3; ++ch) {
-        m_stats.injected[ch] = float(injected[ch]);
-        m_stats.absorbed[ch] = float(firstAbsorbed[ch]);  // diffuse() adds the diffusion's
+        m_stats.injected[ch] = float(m_sourceInjected[size_t(ch)]);
+        m_stats.absorbed[ch] = float(m_sourceFirstAbsorbed[size_t(ch)]);  // diffuse() adds
     }
     m_stats.injectMs = timer.elapsedMs();
+}
+
+bool SslpvSolver::reinjectChangedDiffusionSources() {
+    const Timer timer;
+    const CoarseMaterial& now = m_material;
+    const CoarseMaterial& was = m_sourceMaterial;
+    // A walk depends on the inside cells (where beams enter and stop) and on σt′, σs′ along
+    // them; a new shape, grid or η re-walks everything (m_injectionDirty). The drift of adding
+    // and taking away in float is bounded by a full walk every MAX_INCREMENTAL updates.
+    constexpr int MAX_INCREMENTAL = 64;
+    if (m_incrementalInjections >= MAX_INCREMENTAL || !(was.spec == now.spec) ||
+        was.insideFraction != now.insideFraction || m_beamSegments.size() != m_samples.size())
+        return false;
+    const GridSpec& s = now.spec;
+    const int n = s.resolution;
+    std::vector<uint32_t> changed;
+    Coord lo(n), hi(-1);
+    for (size_t k = 0; k < s.voxelCount(); ++k) {
+        bool differs = false;
+        for (int ch = 0; ch < 3 && !differs; ++ch)
+            differs = now.sigma_t[ch][k] != was.sigma_t[ch][k] ||
+                      now.sigma_s[ch][k] != was.sigma_s[ch][k];
+        if (!differs)
+            continue;
+        changed.push_back(uint32_t(k));
+        const Coord c(int(k % size_t(n)), int((k / size_t(n)) % size_t(n)),
+                      int(k / (size_t(n) * size_t(n))));
+        lo = glm::min(lo, c);
+        hi = glm::max(hi, c);
+    }
+    // A stroke over much of the object gains nothing from the bookkeeping.
+    if (changed.size() > s.voxelCount() / 8)
+        return false;
+    m_stats.rewalkedTexels = 0;
+    if (!changed.empty()) {
+        // The beams whose walked segment meets the changed cells' box (a cell's centre is at
+        // its index + ½: the box [lo, hi + 1] in grid units, one cell of margin for rounding).
+        const Vector3f boxLo = Vector3f(lo) - Vector3f(1.f), boxHi = Vector3f(hi) + Vector3f(2.f);
+        std::vector<uint32_t> affected;
+        for (size_t j = 0; j < m_samples.size(); ++j)
+            if (m_beamEntered[j] &&
+                segmentMeetsBox(m_beamSegments[j].from, m_beamSegments[j].to, boxLo, boxHi))
+                affected.push_back(uint32_t(j));
+        // Each affected beam is walked through the old material with its deposits taken away
+        // and through the new one with them added, in parallel over ranges of the list and
+        // applied in its (texel) order: deterministic on any thread count.
+        struct Part {
+            std::vector<BeamDeposit> deposits;
+            double injected[3] = {}, firstAbsorbed[3] = {};
+        };
+        constexpr int64_t BEAMS_PER_PART = 256;
+        const int64_t beams = int64_t(affected.size());
+        std::vector<Part> parts(size_t((beams + BEAMS_PER_PART - 1) / BEAMS_PER_PART));
+        parallelFor(0, int64_t(parts.size()), [&](int64_t p0, int64_t p1) {
+            for (int64_t p = p0; p < p1; ++p) {
+                Part& part = parts[size_t(p)];
+                const int64_t end = std::min(beams, (p + 1) * BEAMS_PER_PART);
+                for (int64_t b = p * BEAMS_PER_PART; b < end; ++b) {
+                    const size_t j = affected[size_t(b)];
+                    const auto keep = [&](const BeamDeposit& d) { part.deposits.push_back(d); };
+                    const BeamWalk before = walkDiffusionBeam(m_samples[j], m_eta, was, -1.f, keep);
+                    const BeamWalk after = walkDiffusionBeam(m_samples[j], m_eta, now, 1.f, keep);
+                    for (int ch = 0; ch < 3; ++ch) {
+                        part.injected[ch] += before.injected[ch] + after.injected[ch];
+                        part.firstAbsorbed[ch] +=
+                            before.firstAbsorbed[ch] + after.firstAbsorbed[ch];
+                    }
+                    m_beamSegments[j] = {after.from, after.to};
+                }
+            }
+        });
+        for (const Part& part : parts) {
+            for (const BeamDeposit& d : part.deposits)
+                for (int ch = 0; ch < 3; ++ch) {
+                    float& q = m_diffusionSource[size_t(ch)][d.cell];
+                    // Taking a beam's share away can leave a rounding residue below 0.
+                    q = std::max(0.f, q + d.q[ch]);
+                }
+            for (int ch = 0; ch < 3; ++ch) {
+                m_sourceInjected[size_t(ch)] += part.injected[ch];
+                m_sourceFirstAbsorbed[size_t(ch)] += part.firstAbsorbed[ch];
+            }
+        }
+        for (const uint32_t k : changed)
+            for (int ch = 0; ch < 3; ++ch) {
+                m_sourceMaterial.sigma_t[ch][k] = now.sigma_t[ch][k];
+                m_sourceMaterial.sigma_s[ch][k] = now.sigma_s[ch][k];
+            }
+        m_stats.rewalkedTexels = int(affected.size());
+        ++m_incrementalInjections;
+    }
+    for (int ch = 0; ch < 3; ++ch) {
+        m_stats.injected[ch] = float(m_sourceInjected[size_t(ch)]);
+        m_stats.absorbed[ch] = float(m_sourceFirstAbsorbed[size_t(ch)]);
+    }
+    m_stats.injectMs = timer.elapsedMs();
+    return true;
 }
 
 void SslpvSolver::diffuse() {
@@ -1422,6 +1590,7 @@ void SslpvSolver::diffuse() {
                 const size_t k = s.linearIndex(c);
                 if (!m_diffusion.isBoundary(k))
                     continue;  // only boundary cells are read (isReadable)
+                const std::array<Vector3f, 3> surfaceFlux = m_diffusion.surfaceFlux(k);
                 for (int ch = 0; ch < 3; ++ch) {
                     const float st = m_material.sigma_t[ch][k];
                     const float albedo =
@@ -1434,7 +1603,7 @@ void SslpvSolver::diffuse() {
                     m_accum.plane(ch, LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF)[at] = albedo;
                     // The flux along the surface, in the band-0 slot's units (the same scale),
                     // so the read-out's P1 term sees the ratio J_t/J the model has.
-                    const Vector3f flux = scale * m_diffusion.surfaceFlux(k, ch);
+                    const Vector3f flux = scale * surfaceFlux[size_t(ch)];
                     for (int a = 0; a < 3; ++a)
                         m_accum.plane(ch, LUCENT_SSLPV_DIFFUSION_FLUX_COEFF + a)[at] = flux[a];
                 }

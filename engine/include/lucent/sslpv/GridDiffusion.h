@@ -146,15 +146,15 @@ public:
     /// (δ: the mean over its boundary faces, ½Δx for an interior cell): the Robin condition
     /// J = φ_b/(2A) with φ_b extrapolated along the flux. 0 outside the medium.
     [[nodiscard]] float exitance(size_t cell, int channel) const;
-    /// The flux along the surface at a boundary cell (W/mm², a vector in the surface's tangent
-    /// plane): Fick's law J_t = −D ∇_t φ_b on the boundary, where the Robin condition makes the
-    /// surface fluence φ_b = 2A·J, so J_t = −2AD ∇_t J with ∇_t J the least-squares gradient of
-    /// exitance() over the boundary cells of the 3×3×3 neighbourhood, in the tangent plane of
-    /// the inside fraction's outward normal. It is what the read-out's P1 exit term needs
-    /// (SslpvSolver::exitantRadiance; docs/methods/sslpv.md, "Light along the surface"). Zero
-    /// outside the boundary, where the normal is undefined (a shell thinner than the stencil)
+    /// The flux along the surface at a boundary cell, per channel (W/mm², vectors in the
+    /// surface's tangent plane): Fick's law J_t = −D ∇_t φ_b on the boundary, where the Robin
+    /// condition makes the surface fluence φ_b = 2A·J, so J_t = −2AD ∇_t J with ∇_t J the
+    /// least-squares gradient of exitance() over the boundary cells of the 3×3×3 neighbourhood, in
+    /// the tangent plane of the inside fraction's outward normal. It is what the read-out's P1 exit
+    /// term needs (SslpvSolver::exitantRadiance; docs/methods/sslpv.md, "Light along the surface").
+    /// Zero outside the boundary, where the normal is undefined (a shell thinner than the stencil)
     /// and where the neighbours do not span the plane.
-    [[nodiscard]] Vector3f surfaceFlux(size_t cell, int channel) const;
+    [[nodiscard]] std::array<Vector3f, 3> surfaceFlux(size_t cell) const;
 
 private:
     GridSpec m_spec;

@@ -154,6 +154,10 @@ struct SslpvOptions {
     /// light that has travelled along the surface leaves brighter along its way (back-lit rims);
     /// false: the exitance only. Read-out only: no re-solve.
     bool diffusionSurfaceFlux = true;
+    /// Mode Diffusion: after a material change that keeps the shape, walk again only the beams
+    /// through the changed cells (the same source to float rounding; a full walk every 64
+    /// updates); false: every beam on every change.
+    bool incrementalInjection = true;
 };
 
 /// One injection texel of a reflective shadow map (§3.1).
@@ -182,6 +186,9 @@ struct SslpvStats {
     Rgb absorbed{0.f};   ///< flux removed by the Beer attenuation
     int injectedTexels = 0;
     int skippedTexels = 0;  ///< back-facing, zero flux, or no inside cell near x_p
+    /// Mode Diffusion: beams walked again by the last solve's incremental re-injection (a
+    /// stroke; 0 after a full walk or when nothing along the beams changed).
+    int rewalkedTexels = 0;
     double injectMs = 0.0;
     double propagateMs = 0.0;   ///< whole propagation, including set-up and bookkeeping
     double stepsMs = 0.0;       ///< the propagation steps alone
@@ -210,6 +217,8 @@ public:
     /// of refraction. Re-injects when the grid changed, always re-propagates.
     /// @throw ValueError naming the field for missing/inconsistent arrays or eta ∉ [1, 3].
     void setMaterial(const CoarseMaterial& material, float eta);
+    /// The same, taking the material over (a stroke at grid 64 saves copying its ten 64³ arrays).
+    void setMaterial(CoarseMaterial&& material, float eta);
     /// The material arrays were edited in place through material(): re-propagate.
     void markMaterialDirty() { m_materialDirty = m_factorsDirty = true; }
     CoarseMaterial& material() { return m_material; }
@@ -296,6 +305,12 @@ private:
     /// scattering, α′·(e^−τ(s) − e^−τ(s+ds))·T·Φ_p, is deposited in the cell where it happens:
     /// the collimated source of the diffusion equation with reduced coefficients.
     void injectDiffusionSources();
+    /// After a material change that keeps the inside cells: walks again only the beams whose
+    /// segment meets the cells whose σt′ or σs′ changed, taking their old deposits away and
+    /// adding the new ones. False when a full walk is due instead (other inside cells, more
+    /// than an eighth of the cells changed, or 64 incremental updates since the last full walk,
+    /// which bounds the float drift).
+    bool reinjectChangedDiffusionSources();
     /// Mode Diffusion's "propagation": the GridDiffusion solve and the accumulation grid it
     /// writes for radiance() and the GL read-out.
     void diffuse();
@@ -342,6 +357,17 @@ private:
     [[nodiscard]] Rgb radianceFromCoefficients(const float (&c)[3][SSLPV_MAX_COEFFS],
                                                const Normal3f& n) const;
     std::array<std::vector<float>, 3> m_diffusionSource;  ///< W per cell (spec layout)
+    /// Mode Diffusion's incremental re-injection: the material the sources were walked through,
+    /// each texel's walked segment (grid units) and whether it met the medium, the sources'
+    /// power bookkeeping (W, double) and the incremental updates since the last full walk.
+    struct BeamSegment {
+        Vector3f from{0.f}, to{0.f};
+    };
+    CoarseMaterial m_sourceMaterial;
+    std::vector<BeamSegment> m_beamSegments;
+    std::vector<uint8_t> m_beamEntered;
+    std::array<double, 3> m_sourceInjected{}, m_sourceFirstAbsorbed{};
+    int m_incrementalInjections = 0;
 };
 
 }  // namespace lucent::sslpv
