@@ -1365,6 +1365,54 @@ BeamWalk walkDiffusionBeam(const SslpvInjectionSample& smp, float eta, const Coa
     return w;
 }
 
+/// One range of beams walked on one thread: its deposits in walk order and its power (W, in
+/// double).
+struct BeamPart {
+    std::vector<BeamDeposit> deposits;
+    double injected[3] = {}, firstAbsorbed[3] = {};
+    int used = 0, skipped = 0;
+    void count(const BeamWalk& w) {
+        for (int ch = 0; ch < 3; ++ch) {
+            injected[ch] += w.injected[ch];
+            firstAbsorbed[ch] += w.firstAbsorbed[ch];
+        }
+    }
+};
+
+/// Runs walk(part, i) for i in [0, count) in parallel over ranges of `perPart`, each range into
+/// its own part; applyBeamParts then sums the parts in order, so every cell adds its deposits
+/// in the order a serial walk would: the same bits on any thread count.
+template <class Walk>
+std::vector<BeamPart> walkInParts(int64_t count, int64_t perPart, Walk&& walk) {
+    std::vector<BeamPart> parts(size_t((count + perPart - 1) / perPart));
+    parallelFor(0, int64_t(parts.size()), [&](int64_t p0, int64_t p1) {
+        for (int64_t p = p0; p < p1; ++p) {
+            const int64_t end = std::min(count, (p + 1) * perPart);
+            for (int64_t i = p * perPart; i < end; ++i)
+                walk(parts[size_t(p)], i);
+        }
+    });
+    return parts;
+}
+
+/// Adds the parts' deposits to `source` and their power to the totals, in part order. Taking a
+/// beam's share away (an incremental update) can leave a rounding residue below 0: clamped
+/// (a no-op for a full walk, whose deposits are all ≥ 0).
+void applyBeamParts(const std::vector<BeamPart>& parts, std::array<std::vector<float>, 3>& source,
+                    std::array<double, 3>& injected, std::array<double, 3>& firstAbsorbed) {
+    for (const BeamPart& part : parts) {
+        for (const BeamDeposit& d : part.deposits)
+            for (int ch = 0; ch < 3; ++ch) {
+                float& q = source[size_t(ch)][d.cell];
+                q = std::max(0.f, q + d.q[ch]);
+            }
+        for (int ch = 0; ch < 3; ++ch) {
+            injected[size_t(ch)] += part.injected[ch];
+            firstAbsorbed[size_t(ch)] += part.firstAbsorbed[ch];
+        }
+    }
+}
+
 /// Whether the segment [a, b] (grid units) meets the box [lo, hi] (slab test).
 bool segmentMeetsBox(const Vector3f& a, const Vector3f& b, const Vector3f& lo, const Vector3f& hi) {
     float t0 = 0.f, t1 = 1.f;
@@ -1398,53 +1446,32 @@ void SslpvSolver::injectDiffusionSources() {
     m_beamEntered.assign(m_samples.size(), 0);
 
     // The beams are walked in parallel over contiguous texel ranges, each range recording its
-    // deposits in walk order; the ranges are then applied in texel order, so every cell sums its
-    // deposits in the order a serial walk would: the source is bit-identical on any thread count.
-    struct Part {
-        std::vector<BeamDeposit> deposits;
-        double injected[3] = {}, firstAbsorbed[3] = {};  // W, summed in double
-        int used = 0, skipped = 0;
-    };
+    // deposits in walk order; the ranges are then applied in texel order (walkInParts): the
+    // source is bit-identical on any thread count.
     constexpr int64_t TEXELS_PER_PART = 1024;
-    const int64_t texels = int64_t(m_samples.size());
-    std::vector<Part> parts(size_t((texels + TEXELS_PER_PART - 1) / TEXELS_PER_PART));
-    parallelFor(0, int64_t(parts.size()), [&](int64_t p0, int64_t p1) {
-        for (int64_t p = p0; p < p1; ++p) {
-            Part& part = parts[size_t(p)];
-            const int64_t end = std::min(texels, (p + 1) * TEXELS_PER_PART);
-            for (int64_t j = p * TEXELS_PER_PART; j < end; ++j) {
-                const SslpvInjectionSample& smp = m_samples[size_t(j)];
-                if (!isInjectable(smp)) {
-                    ++part.skipped;
-                    continue;
-                }
-                const BeamWalk w =
-                    walkDiffusionBeam(smp, m_eta, m_material, 1.f,
-                                      [&](const BeamDeposit& d) { part.deposits.push_back(d); });
-                for (int ch = 0; ch < 3; ++ch) {
-                    part.injected[ch] += w.injected[ch];
-                    part.firstAbsorbed[ch] += w.firstAbsorbed[ch];
-                }
-                m_beamSegments[size_t(j)] = {w.from, w.to};
-                m_beamEntered[size_t(j)] = w.entered ? 1 : 0;
-                if (w.entered)
-                    ++part.used;
-                else
-                    ++part.skipped;
+    const std::vector<BeamPart> parts =
+        walkInParts(int64_t(m_samples.size()), TEXELS_PER_PART, [&](BeamPart& part, int64_t j) {
+            const SslpvInjectionSample& smp = m_samples[size_t(j)];
+            if (!isInjectable(smp)) {
+                ++part.skipped;
+                return;
             }
-        }
-    });
-    int used = 0, skipped = 0;
+            const BeamWalk w =
+                walkDiffusionBeam(smp, m_eta, m_material, 1.f,
+                                  [&](const BeamDeposit& d) { part.deposits.push_back(d); });
+            part.count(w);
+            m_beamSegments[size_t(j)] = {w.from, w.to};
+            m_beamEntered[size_t(j)] = w.entered ? 1 : 0;
+            if (w.entered)
+                ++part.used;
+            else
+                ++part.skipped;
+        });
     m_sourceInjected = {};
     m_sourceFirstAbsorbed = {};
-    for (const Part& part : parts) {
-        for (const BeamDeposit& d : part.deposits)
-            for (int ch = 0; ch < 3; ++ch)
-                m_diffusionSource[size_t(ch)][d.cell] += d.q[ch];
-        for (int ch = 0; ch < 3; ++ch) {
-            m_sourceInjected[size_t(ch)] += part.injected[ch];
-            m_sourceFirstAbsorbed[size_t(ch)] += part.firstAbsorbed[ch];
-        }
+    applyBeamParts(parts, m_diffusionSource, m_sourceInjected, m_sourceFirstAbsorbed);
+    int used = 0, skipped = 0;
+    for (const BeamPart& part : parts) {
         used += part.used;
         skipped += part.skipped;
     }
@@ -1504,43 +1531,17 @@ bool SslpvSolver::reinjectChangedDiffusionSources() {
         // Each affected beam is walked through the old material with its deposits taken away
         // and through the new one with them added, in parallel over ranges of the list and
         // applied in its (texel) order: deterministic on any thread count.
-        struct Part {
-            std::vector<BeamDeposit> deposits;
-            double injected[3] = {}, firstAbsorbed[3] = {};
-        };
         constexpr int64_t BEAMS_PER_PART = 256;
-        const int64_t beams = int64_t(affected.size());
-        std::vector<Part> parts(size_t((beams + BEAMS_PER_PART - 1) / BEAMS_PER_PART));
-        parallelFor(0, int64_t(parts.size()), [&](int64_t p0, int64_t p1) {
-            for (int64_t p = p0; p < p1; ++p) {
-                Part& part = parts[size_t(p)];
-                const int64_t end = std::min(beams, (p + 1) * BEAMS_PER_PART);
-                for (int64_t b = p * BEAMS_PER_PART; b < end; ++b) {
-                    const size_t j = affected[size_t(b)];
-                    const auto keep = [&](const BeamDeposit& d) { part.deposits.push_back(d); };
-                    const BeamWalk before = walkDiffusionBeam(m_samples[j], m_eta, was, -1.f, keep);
-                    const BeamWalk after = walkDiffusionBeam(m_samples[j], m_eta, now, 1.f, keep);
-                    for (int ch = 0; ch < 3; ++ch) {
-                        part.injected[ch] += before.injected[ch] + after.injected[ch];
-                        part.firstAbsorbed[ch] +=
-                            before.firstAbsorbed[ch] + after.firstAbsorbed[ch];
-                    }
-                    m_beamSegments[j] = {after.from, after.to};
-                }
-            }
-        });
-        for (const Part& part : parts) {
-            for (const BeamDeposit& d : part.deposits)
-                for (int ch = 0; ch < 3; ++ch) {
-                    float& q = m_diffusionSource[size_t(ch)][d.cell];
-                    // Taking a beam's share away can leave a rounding residue below 0.
-                    q = std::max(0.f, q + d.q[ch]);
-                }
-            for (int ch = 0; ch < 3; ++ch) {
-                m_sourceInjected[size_t(ch)] += part.injected[ch];
-                m_sourceFirstAbsorbed[size_t(ch)] += part.firstAbsorbed[ch];
-            }
-        }
+        const std::vector<BeamPart> parts =
+            walkInParts(int64_t(affected.size()), BEAMS_PER_PART, [&](BeamPart& part, int64_t b) {
+                const size_t j = affected[size_t(b)];
+                const auto keep = [&](const BeamDeposit& d) { part.deposits.push_back(d); };
+                part.count(walkDiffusionBeam(m_samples[j], m_eta, was, -1.f, keep));
+                const BeamWalk after = walkDiffusionBeam(m_samples[j], m_eta, now, 1.f, keep);
+                part.count(after);
+                m_beamSegments[j] = {after.from, after.to};
+            });
+        applyBeamParts(parts, m_diffusionSource, m_sourceInjected, m_sourceFirstAbsorbed);
         for (const uint32_t k : changed)
             for (int ch = 0; ch < 3; ++ch) {
                 m_sourceMaterial.sigma_t[ch][k] = now.sigma_t[ch][k];
