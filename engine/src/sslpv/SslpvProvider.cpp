@@ -347,7 +347,11 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
         const SslpvGrid& grid = s.sampledGrid();
         const size_t cells = spec.voxelCount();
         s.staging.resize(4 * cells);
-        const int uploaded = std::min(grid.coeffCount(), UPLOADED_COEFFS_DIFFUSION);
+        // Bands 0 and 1; mode diffusion's slot 4 too (the surface flux's z). An order-2 grid
+        // of the propagation modes has band 2 there, which the sample pass does not read.
+        const bool diffusion = s.solver.options().mode == SslpvMode::Diffusion;
+        const int uploaded =
+            std::min(grid.coeffCount(), diffusion ? UPLOADED_COEFFS_DIFFUSION : UPLOADED_COEFFS);
         for (int i = 0; i < uploaded; ++i) {
             const float* planes[3] = {grid.plane(0, i), grid.plane(1, i), grid.plane(2, i)};
             size_t k = 0;
