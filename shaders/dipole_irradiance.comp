@@ -81,12 +81,7 @@ void main() {
 #if LIGHT_VIEW
     imageStore(o_irradiance, xy, vec4(E, pos.w));
 #else
-    float R = 0.0;
-    for (int c = 0; c < 3; ++c) {
-        Profile prof = makeProfile(u_model, max(sigT[c] - sigS[c], 0.0), sigS[c], u_boundary);
-        if (prof.zr > 0.0) R = max(R, sampleSourceRadius(prof.sigma, prof.zv, u_discQuantile));
-    }
-    if (u_maxRadius > 0.0) R = min(R, u_maxRadius);
+    float R = discRadius(u_model, sigT, sigS, u_boundary, u_discQuantile, u_maxRadius);
     if (R > 0.0) {
         atomicMin(b_minRadius, floatBitsToUint(R));
         atomicMax(b_maxRadius, floatBitsToUint(R));

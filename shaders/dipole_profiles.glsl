@@ -80,6 +80,18 @@ float sampleSourceRadius(float sigma, float z, float xi) {
     return z * sqrt(expm1Safe(2.0 * solveLogU(sigma * z, xi)));
 }
 
+// R′, the radius of the uniform disc samples (mm): the `quantile` quantile of the widest
+// channel's virtual-source radius (as the CPU gather's PixelMaterial), capped at maxRadius > 0
+// (the local-radius window); 0 when no channel scatters.
+float discRadius(int model, vec3 sigT, vec3 sigS, vec3 boundary, float quantile, float maxRadius) {
+    float R = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        Profile prof = makeProfile(model, max(sigT[c] - sigS[c], 0.0), sigS[c], boundary);
+        if (prof.zr > 0.0) R = max(R, sampleSourceRadius(prof.sigma, prof.zv, quantile));
+    }
+    return maxRadius > 0.0 ? min(R, maxRadius) : R;
+}
+
 // Frisvad, Hachisuka & Kjeldsen 2014 directional dipole S_d (ACM TOG 34(1):5), float mirror of
 // lucent::dipole::DirectionalDipole (Profiles.cpp; equations and clamps documented there).
 // moments = (C₁(η), C₂(η), C₁(1/η)) (Fresnel moments, η-only: computed once on the CPU).

@@ -38,7 +38,7 @@ layout(binding = 2) uniform sampler2D u_irradiance;  // E (W/mm²)
 layout(binding = 3) uniform sampler2D u_sigmaT;      // σt (mm⁻¹)
 layout(binding = 4) uniform sampler2D u_sigmaS;      // rgb σs′ (mm⁻¹), a disc radius R′ (mm)
 
-layout(rgba32f, binding = 0) uniform image2D u_accum;            // rgb Σ_f B_f (W/mm²)
+layout(rgba32f, binding = 0) uniform image2D u_accum;            // rgb Σ_f B_f (W/mm²), a frames
 layout(rgba32f, binding = 1) writeonly uniform image2D u_target;  // renderer's subsurface term
 
 layout(std430, binding = 0) readonly buffer ShiftBlock { vec4 b_shift[]; };  // 2 per cell
@@ -54,6 +54,8 @@ struct LightView {
     vec4 viewDir;   // xyz unit direction the view looks; w its layer of the u_lv* arrays
 };
 layout(std430, binding = 2) readonly buffer LightViewBlock { LightView b_views[]; };
+// The catch-up list of dipole_material_update.comp (its counts, then x | y << 16 per pixel).
+layout(std430, binding = 4) readonly buffer UpdateBlock { uvec4 b_updateCounts; uint b_list[]; };
 
 uniform mat4 u_clipFromWorld;
 uniform vec3 u_eye;
@@ -76,18 +78,25 @@ uniform uint u_frameSeed;
 uniform float u_maxRadius;  // mm; > 0: only r ≤ u_maxRadius (ProviderSettings::maxRadius)
 uniform int u_lightViews;     // light views gathered (entries of b_views), 0: camera only
 uniform int u_lightViewSize;  // texels per side of each light view
-uniform int u_gather;      // 1: add one frame of samples; 0: only resolve the stored mean
-uniform int u_framesBefore;  // frames already in u_accum (rows of parts ≥ u_part)
+uniform int u_gather;  // 1: add one frame of samples; 0: only resolve the stored mean
+// 0: the accumulation restarts (every gathered pixel's sum is overwritten); else each pixel's
+// frame count is its own, in u_accum's alpha (material-only restarts reset single pixels).
+uniform int u_framesBefore;
 // Frame parts (interactive accumulations, docs/methods/dipole.md §3c): a frame's samples are
 // added over u_parts provider frames; work-group row y belongs to part y mod u_parts. The gather
-// program is dispatched over part u_part's rows only; the RESOLVE_ONLY program over every pixel
-// (rows of parts < u_part already hold frame u_framesBefore + 1). Every pixel gets exactly the
-// samples of a one-part frame. RESOLVE_ONLY 1 (a third program): no gather code at all —
-// llvmpipe runs the straight-line code of a branch under its execution mask even when no lane
-// takes it, so a resolve inside the gather program cost nearly a gather (≈ 200 ms at 640×360).
+// program is dispatched over part u_part's rows only; the RESOLVE_ONLY program over every pixel.
+// Every pixel gets exactly the samples of a one-part frame. RESOLVE_ONLY 1 (a third program): no
+// gather code at all — llvmpipe runs the straight-line code of a branch under its execution mask
+// even when no lane takes it, so a resolve inside the gather program cost nearly a gather
+// (≈ 200 ms at 640×360).
 uniform int u_parts;
 uniform int u_part;
-uniform int u_previewInAccum;  // RESOLVE_ONLY: u_accum holds a preview (one frame) where empty
+// Catch-up after a material-only restart: u_listCount > 0 dispatches one invocation per listed
+// pixel (64 per work group, in list order) instead of the image's rows; a listed pixel with
+// fewer than u_level frames gathers one more. A list, not a branch, because of the execution
+// mask above: only the listed pixels pay for the gather.
+uniform int u_listCount;
+uniform int u_level;
 #ifndef RESOLVE_ONLY
 #define RESOLVE_ONLY 0
 #endif
@@ -288,24 +297,37 @@ void main() {
     }
     barrier();
     ivec2 group = ivec2(gl_WorkGroupID.xy);
-#if RESOLVE_ONLY
-    const bool gatherHere = false;
-    int part = u_parts > 1 ? group.y % u_parts : 0;
-    int frames = u_framesBefore + (part < u_part ? 1 : 0);
-    if (frames == 0 && u_previewInAccum != 0) frames = 1;  // rows still showing the preview
-#else
-    if (u_parts > 1) group.y = u_part + u_parts * group.y;  // the rows of part u_part only
-    bool gatherHere = u_gather != 0;
-    int frames = u_framesBefore;
-#endif
     ivec2 xy = group * 8 + ivec2(gl_LocalInvocationID.xy);
     bool inside = xy.x < u_size.x && xy.y < u_size.y;
+#if RESOLVE_ONLY
+    const bool gatherHere = false, listed = false;
+#else
+    bool listed = u_listCount > 0;
+    if (listed) {
+        uint i = gl_WorkGroupID.x * 64u + gl_LocalInvocationIndex;
+        inside = i < uint(u_listCount);
+        uint code = inside ? b_list[i] : 0u;
+        xy = ivec2(code & 0xffffu, code >> 16);
+    } else if (u_parts > 1) {
+        group.y = u_part + u_parts * group.y;  // the rows of part u_part only
+        xy = group * 8 + ivec2(gl_LocalInvocationID.xy);
+        inside = xy.x < u_size.x && xy.y < u_size.y;
+    }
+    bool gatherHere = u_gather != 0;
+#endif
     vec4 pos = inside ? texelFetch(u_position, xy, 0) : vec4(0.0);
     if (inside && pos.w == 0.0) imageStore(u_target, xy, vec4(0.0));
     if (inside && pos.w != 0.0) {
         vec3 xo = pos.xyz;
         vec3 no = normalize(texelFetch(u_normal, xy, 0).xyz);
-        vec3 sum = frames > 0 ? imageLoad(u_accum, xy).rgb : vec3(0.0);
+        vec4 acc = imageLoad(u_accum, xy);
+#if RESOLVE_ONLY
+        int frames = int(acc.a + 0.5);
+#else
+        int frames = u_framesBefore == 0 && !listed ? 0 : int(acc.a + 0.5);
+        if (listed) gatherHere = gatherHere && frames < u_level;
+#endif
+        vec3 sum = frames > 0 ? acc.rgb : vec3(0.0);
 #if !RESOLVE_ONLY
         if (gatherHere) {
             vec3 B = gatherExitance(xy, xo, no);
@@ -313,14 +335,15 @@ void main() {
             sum += B;
             frames += 1;
             vec3 mean = sum / float(frames);
-            imageStore(u_accum, xy, vec4(sum, 0.0));
+            imageStore(u_accum, xy, vec4(sum, float(frames)));
             // Non-negative floats order like their bit patterns: atomicMax on uint, first in
-            // shared memory, then once per work group.
-            if (frames > 1) {
+            // shared memory, then once per work group. Catch-up frames add nothing: the
+            // convergence test is the whole image's (the host does not read them).
+            if (frames > 1 && !listed) {
                 vec3 d = abs(mean - oldMean);
                 atomicMax(s_maxChange, floatBitsToUint(max(d.r, max(d.g, d.b))));
             }
-            atomicMax(s_maxMean, floatBitsToUint(max(mean.r, max(mean.g, mean.b))));
+            if (!listed) atomicMax(s_maxMean, floatBitsToUint(max(mean.r, max(mean.g, mean.b))));
         }
 #endif
         vec3 mean = frames > 0 ? sum / float(frames) : vec3(0.0);

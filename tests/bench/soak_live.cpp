@@ -19,11 +19,9 @@
 #include <lucent/core/Timer.h>
 #include <lucent/gpu/GlContext.h>
 #include <lucent/gpu/GlResources.h>
-#include <lucent/gpu/SceneRenderer.h>
-#include <lucent/gpu/Shader.h>
 #include <lucent/material/Brush.h>
-#include <lucent/methods/Registry.h>
-#include <lucent/scene/SceneFile.h>
+
+#include "LiveMethodHarness.h"
 
 #include <epoxy/gl.h>
 #include <unistd.h>
@@ -32,6 +30,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -105,13 +104,10 @@ struct Result {
     int glErrors = 0;
 };
 
-Result soak(const std::string& name, const Options& opt, gpu::GlContext& ctx) {
-    Result r;
-    r.method = name;
-    Scene scene = makeDefaultScene();
-    scene.camera.width = opt.width;
-    scene.camera.height = opt.height;
-    MaterialVolume& volume = *scene.objects[0].material;
+/// The strokes of one method (the harness lives in here: its teardown's GL errors count too).
+void soakStrokes(bench::LiveMethodHarness& live, const Options& opt, Result& r,
+                 const std::function<int()>& glErrors) {
+    MaterialVolume& volume = live.volume;
     const GridSpec spec = volume.spec();
     std::vector<Coord> inside;  // stroke starts: every 61st inside voxel
     size_t count = 0;
@@ -121,26 +117,6 @@ Result soak(const std::string& name, const Options& opt, gpu::GlContext& ctx) {
                 if (volume.isInside({x, y, z}) && count++ % 61 == 0)
                     inside.push_back({x, y, z});
 
-    const gpu::ShaderLibrary library;
-    gpu::SceneRenderer renderer;
-    renderer.create(library);
-    std::unique_ptr<methods::Method> method =
-        methods::create(name, {}, {methods::Backend::Gl, /*live=*/true, {}});
-    method->createGl(library);
-    const int mesh = renderer.addMesh(scene.objects[0].mesh, method->surface(scene.eta));
-    renderer.setLights(scene.lights);
-    renderer.setCamera(scene.camera);
-    renderer.setSubsurfaceProvider(method->subsurfacePass());
-    method->setScene({&scene.objects[0].mesh, &volume, scene.eta, scene.lights, mesh});
-    method->cameraChanged(scene.camera);
-    renderer.render();  // first frame: every upload and program in place
-    (void)volume.takeDirtyBricks();
-    const auto glErrors = [&ctx] {
-        int n = 0;
-        while (glGetError() != GL_NO_ERROR)
-            ++n;
-        return n + int(ctx.debugLog().takeErrors().size());
-    };
     r.glErrors += glErrors();
 
     std::vector<double> at, rss;
@@ -157,8 +133,7 @@ Result soak(const std::string& name, const Options& opt, gpu::GlContext& ctx) {
         for (int k = 0; k < 4; ++k)
             stamp(volume, brush, spec.cellCenter(start) + Vector3f(float(k) * spec.voxelSize, 0, 0),
                   nullptr);
-        method->materialChanged(volume.takeDirtyBricks());
-        renderer.render();
+        live.strokeFrame();
         r.glErrors += glErrors();
         r.strokes = s + 1;
         if (s + 1 == WARMUP_STROKES) {
@@ -183,9 +158,21 @@ Result soak(const std::string& name, const Options& opt, gpu::GlContext& ctx) {
     const size_t skip = at.size() / 10;
     r.bytesPerStroke = slope(std::vector<double>(at.begin() + long(skip), at.end()),
                              std::vector<double>(rss.begin() + long(skip), rss.end()));
-    renderer.setSubsurfaceProvider(nullptr);
-    method->destroyGl();
-    renderer.destroy();
+}
+
+Result soak(const std::string& name, const Options& opt, gpu::GlContext& ctx) {
+    Result r;
+    r.method = name;
+    const std::function<int()> glErrors = [&ctx] {
+        int n = 0;
+        while (glGetError() != GL_NO_ERROR)
+            ++n;
+        return n + int(ctx.debugLog().takeErrors().size());
+    };
+    {
+        bench::LiveMethodHarness live(name, opt.width, opt.height);
+        soakStrokes(live, opt, r, glErrors);
+    }
     r.glErrors += glErrors();
     return r;
 }

@@ -133,6 +133,16 @@ uint32_t frameSeed(uint32_t seed, int frame) {
     return seed + 0x9E3779B9u * uint32_t(frame);
 }
 
+/// Seed of the c-th catch-up frame since create() (material-only restarts): a stream apart from
+/// frameSeed's, so that a restarted pixel never repeats the samples it was given before.
+uint32_t catchUpSeed(uint32_t seed, uint32_t c) {
+    return ~seed + 0x85EBCA6Bu * (c + 1u);
+}
+
+/// dipole_material_update.comp's UpdateBlock: four count words, then the list.
+constexpr size_t UPDATE_HEADER_WORDS = 4;
+enum UpdateWord { LISTED = 0, RESTARTED = 1, MIN_FRAMES = 2 };
+
 }  // namespace
 
 struct DipoleSubsurfaceProvider::Impl {
@@ -146,11 +156,25 @@ struct DipoleSubsurfaceProvider::Impl {
     gpu::GlProgram cameraGatherProgram;
     /// dipole_provider.comp with RESOLVE_ONLY=1: the stored mean only, no gather code.
     gpu::GlProgram resolveProgram;
+    /// dipole_material_update.comp: material-only restarts (docs/methods/dipole.md §3c).
+    gpu::GlProgram materialUpdateProgram;
 
     // Per-pixel images (renderer size).
     int width = 0, height = 0;
     gpu::GlObject irradiance, sigmaT, sigmaS, accum;
     gpu::GlObject shiftBuffer, statsBuffer, radiusBuffer;
+    gpu::GlObject updateBuffer;  ///< UpdateBlock: counts + one word per pixel
+
+    // Material-only restarts (docs/methods/dipole.md §3c): a material change restarts only the
+    // pixels whose material changed, which then catch up to the others' frame count.
+    bool needMaterialUpdate = false;
+    int listed = 0;              ///< pixels in the catch-up list
+    int catchUpLevel = 0;        ///< frames the listed pixels catch up to
+    int catchUpLeft = 0;         ///< catch-up frames still to run (0: none pending)
+    uint32_t catchUpFrames = 0;  ///< catch-up frames run since create() (their seeds)
+    /// The whole-image accumulation's own convergence (stats.converged is also false while
+    /// restarted pixels catch up).
+    bool imageConverged = false;
 
     // Light views (Mertens et al. 2005 §7.1): scratch images of one view, then the gathered views
     // as layers of three arrays, with their cameras and descriptors (LightViewBlock).
@@ -193,7 +217,6 @@ struct DipoleSubsurfaceProvider::Impl {
     bool interactiveAccum = false;
     int part = 0;               ///< next part of the current frame
     bool viewWorkDone = false;  ///< the last updateViews() rendered a view or the fractions
-    bool previewShown = false;  ///< the accumulation image holds this restart's preview
 
     // GPU timestamps of the passes (ProviderStats::passMs), resolved at the end of a frame.
     std::vector<gpu::GlObject> timerQueries;
@@ -209,7 +232,7 @@ struct DipoleSubsurfaceProvider::Impl {
     std::vector<uint64_t> lastMeshes;
 
     void destroyImages() {
-        for (gpu::GlObject* o : {&irradiance, &sigmaT, &sigmaS, &accum})
+        for (gpu::GlObject* o : {&irradiance, &sigmaT, &sigmaS, &accum, &updateBuffer})
             o->destroy();
         width = height = 0;
     }
@@ -224,6 +247,9 @@ struct DipoleSubsurfaceProvider::Impl {
         sigmaT = gpu::createTexture2D(GL_RGBA32F, w, h);
         sigmaS = gpu::createTexture2D(GL_RGBA32F, w, h);
         accum = gpu::createTexture2D(GL_RGBA32F, w, h);
+        updateBuffer =
+            gpu::createBuffer((UPDATE_HEADER_WORDS + size_t(w) * size_t(h)) * sizeof(uint32_t),
+                              nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
         needReset = true;
     }
 
@@ -231,7 +257,73 @@ struct DipoleSubsurfaceProvider::Impl {
         detail::restartAccumulation(stats);
         needReset = false;
         part = 0;
-        previewShown = false;
+        needMaterialUpdate = false;
+        listed = catchUpLeft = 0;
+        imageConverged = false;
+        stats.pixelsRestarted = 0;
+    }
+
+    /// A material change (setMaterial, uploadBricks, syncMaterial, an unreported edit): the
+    /// pixels whose material changed restart at the next frame when the accumulation holds
+    /// whole-image frames of the full estimator (light views joined); else everything restarts.
+    void materialChanged() {
+        if (needReset || !everRendered || !viewsReady || stats.frames < 1 || width == 0) {
+            needReset = true;
+            return;
+        }
+        needMaterialUpdate = true;
+        stats.converged = false;  // callers poll it to schedule the next frame
+    }
+
+    /// What the material look-up and R′ read (dipole_irradiance.comp, dipole_material_update.comp):
+    /// the model, its boundary terms, the disc quantile, the local window and the mesh.
+    void setProfileUniforms(const gpu::GlProgram& p, int meshId) const {
+        const Boundary boundary = Boundary::of(settings.eta);
+        glUniform1i(p.uniformLocation("u_model"), settings.model == Model::Dipole ? 0 : 1);
+        glUniform3f(p.uniformLocation("u_boundary"), float(boundary.fdr), float(boundary.c1),
+                    float(boundary.c2));
+        glUniform1f(p.uniformLocation("u_discQuantile"), settings.discQuantile);
+        glUniform1f(p.uniformLocation("u_maxRadius"), settings.maxRadius);
+        glUniform1i(p.uniformLocation("u_meshId"), meshId);
+    }
+
+    /// dipole_material_update.comp: restarts the pixels whose material changed, lists the pixels
+    /// behind the accumulation's frame count and sets up their catch-up.
+    void updateMaterial(const gpu::GBufferView& g) {
+        const gpu::GlProgram& p = materialUpdateProgram;
+        glUseProgram(p.id());
+        glBindTextureUnit(0, g.positionTexture);
+        glBindTextureUnit(1, g.normalTexture);
+        volume.bind(p, 3, 4);
+        glBindImageTexture(0, accum.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindImageTexture(1, sigmaT.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindImageTexture(2, sigmaS.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, radiusBuffer.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, updateBuffer.id());
+        const uint32_t init[UPDATE_HEADER_WORDS] = {0u, 0u, 0xffffffffu, 0u};
+        glNamedBufferSubData(updateBuffer.id(), 0, sizeof(init), init);
+        glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
+        setProfileUniforms(p, settings.meshId);
+        glUniform1i(p.uniformLocation("u_level"), stats.frames);
+        glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                        GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+        glUseProgram(0);
+        uint32_t counts[UPDATE_HEADER_WORDS] = {};
+        glGetNamedBufferSubData(updateBuffer.id(), 0, sizeof(counts), counts);
+        float r[2] = {0.f, 0.f};
+        glGetNamedBufferSubData(radiusBuffer.id(), 0, sizeof(r), r);
+        stats.minRadius = r[1] > 0.f ? r[0] : 0.f;
+        stats.maxRadius = r[1];
+        needMaterialUpdate = false;
+        // Painting is interactive use: from here on the whole-image frames are split into
+        // bounded parts (a first accumulation that began in the CLI's way is not).
+        interactiveAccum = true;
+        stats.pixelsRestarted = int(counts[RESTARTED]);
+        listed = int(counts[LISTED]);
+        catchUpLevel = stats.frames;
+        catchUpLeft = listed > 0 ? catchUpLevel - int(counts[MIN_FRAMES]) : 0;
+        stats.converged = catchUpLeft == 0 && imageConverged;
     }
 
     /// Opens a timed pass: a GL_TIMESTAMP query now; closePass() stores its duration in `out`.
@@ -291,13 +383,7 @@ struct DipoleSubsurfaceProvider::Impl {
             settings.shadows && g.shadows && g.shadowMapTexture != 0 && g.shadowLayerBuffer != 0;
         glUniform1i(p.uniformLocation("u_shadows"), shadows ? 1 : 0);
         glUniform1f(p.uniformLocation("u_eta"), settings.eta);
-        const Boundary boundary = Boundary::of(settings.eta);
-        glUniform1i(p.uniformLocation("u_model"), settings.model == Model::Dipole ? 0 : 1);
-        glUniform3f(p.uniformLocation("u_boundary"), float(boundary.fdr), float(boundary.c1),
-                    float(boundary.c2));
-        glUniform1f(p.uniformLocation("u_discQuantile"), settings.discQuantile);
-        glUniform1f(p.uniformLocation("u_maxRadius"), settings.maxRadius);
-        glUniform1i(p.uniformLocation("u_meshId"), meshId);
+        setProfileUniforms(p, meshId);
         glDispatchCompute(unsigned(w + 7) / 8, unsigned(h + 7) / 8, 1);
         glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
                         GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
@@ -521,10 +607,12 @@ struct DipoleSubsurfaceProvider::Impl {
         return true;
     }
 
-    /// What the RESOLVE_ONLY program reads besides the images bound for the gather: the size,
-    /// the exit Fresnel (η, camera) and the frame count / parts.
-    void setResolveUniforms(const gpu::GlProgram& p, const gpu::GBufferView& g, int framesBefore,
-                            int parts, int part) const {
+    /// The RESOLVE_ONLY program over every pixel: each pixel's mean Σ_f B_f / N (N in the
+    /// accumulation's alpha) times the exit Fresnel (η, camera).
+    void resolveAll(const gpu::GBufferView& g, unsigned target) const {
+        const gpu::GlProgram& p = resolveProgram;
+        glUseProgram(p.id());
+        bindFrameImages(g, target);
         const CameraView cv = cameraView(g);
         glUniform3f(p.uniformLocation("u_eye"), g.cameraPosition.x, g.cameraPosition.y,
                     g.cameraPosition.z);
@@ -532,10 +620,71 @@ struct DipoleSubsurfaceProvider::Impl {
         glUniform1i(p.uniformLocation("u_ortho"), cv.ortho ? 1 : 0);
         glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
         glUniform1f(p.uniformLocation("u_eta"), settings.eta);
-        glUniform1i(p.uniformLocation("u_framesBefore"), framesBefore);
-        glUniform1i(p.uniformLocation("u_parts"), parts);
-        glUniform1i(p.uniformLocation("u_part"), part);
-        glUniform1i(p.uniformLocation("u_previewInAccum"), previewShown ? 1 : 0);
+        glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    }
+
+    /// The images and buffers every dipole_provider.comp program reads or writes.
+    void bindFrameImages(const gpu::GBufferView& g, unsigned target) const {
+        glBindTextureUnit(0, g.positionTexture);
+        glBindTextureUnit(1, g.normalTexture);
+        glBindTextureUnit(2, irradiance.id());
+        glBindTextureUnit(3, sigmaT.id());
+        glBindTextureUnit(4, sigmaS.id());
+        glBindImageTexture(0, accum.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindImageTexture(1, target, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, shiftBuffer.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, statsBuffer.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, viewBuffer.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, updateBuffer.id());
+        glBindTextureUnit(5, lvPosition.id());
+        glBindTextureUnit(6, lvNormal.id());
+        glBindTextureUnit(7, lvIrradiance.id());
+    }
+
+    /// Uploads the k×k Cranley–Patterson table of the frame seeded `seed` (Mertens et al. 2005
+    /// §6.2; `gs` gives k and the sample counts).
+    void uploadShifts(GatherSettings gs, uint32_t seed) const {
+        gs.seed = seed;
+        const auto shifts = interleaveShifts(gs);
+        std::vector<glm::vec4> data(2 * shifts.size());
+        for (size_t c = 0; c < shifts.size(); ++c) {
+            data[2 * c] = {shifts[c][0], shifts[c][1], shifts[c][2], shifts[c][3]};
+            data[2 * c + 1] = {shifts[c][4], 0.f, 0.f, 0.f};
+        }
+        glNamedBufferSubData(shiftBuffer.id(), 0, GLsizeiptr(data.size() * sizeof(data[0])),
+                             data.data());
+    }
+
+    /// A gather program's inputs for a frame of `gs` with `views` light views gathered.
+    void setGatherUniforms(const gpu::GlProgram& p, const gpu::GBufferView& g,
+                           const GatherSettings& gs, int views) const {
+        glUniform1i(p.uniformLocation("u_lightViews"), views);
+        glUniform1i(p.uniformLocation("u_lightViewSize"), lvSize);
+        const CameraView cv = cameraView(g);
+        glUniformMatrix4fv(p.uniformLocation("u_clipFromWorld"), 1, GL_FALSE,
+                           &g.clipFromWorld[0][0]);
+        glUniform3f(p.uniformLocation("u_eye"), g.cameraPosition.x, g.cameraPosition.y,
+                    g.cameraPosition.z);
+        glUniform3f(p.uniformLocation("u_viewDir"), cv.forward.x, cv.forward.y, cv.forward.z);
+        glUniform1i(p.uniformLocation("u_ortho"), cv.ortho ? 1 : 0);
+        glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
+        glUniform1i(p.uniformLocation("u_model"), gs.model == Model::Dipole ? 0 : 1);
+        const Boundary boundary = Boundary::of(gs.eta);
+        glUniform3f(p.uniformLocation("u_boundary"), float(boundary.fdr), float(boundary.c1),
+                    float(boundary.c2));
+        glUniform1f(p.uniformLocation("u_eta"), gs.eta);
+        glUniform1i(p.uniformLocation("u_nImp"), gs.importanceSamples);
+        glUniform1i(p.uniformLocation("u_nUni"), gs.uniformSamples);
+        glUniform1i(p.uniformLocation("u_jacobian"), gs.jacobian ? 1 : 0);
+        glUniform1f(p.uniformLocation("u_maxJacobian"), gs.maxJacobian);
+        glUniform1i(p.uniformLocation("u_interleave"), gs.interleave);
+        glUniform1f(p.uniformLocation("u_maxRadius"), gs.maxRadius);
+    }
+
+    /// The gather program for `views` gathered light views.
+    [[nodiscard]] const gpu::GlProgram& gatherProgramFor(int views) const {
+        return views == 0 ? cameraGatherProgram : gatherProgram;
     }
 
     /// One frame of the gather (`gather`) or only the resolve of the stored mean. `preview`:
@@ -561,95 +710,45 @@ struct DipoleSubsurfaceProvider::Impl {
                 : 1;
         stats.frameParts = parts;
         if (gather && part == 0) {
-            GatherSettings frameGs = gs;
-            frameGs.seed = frameSeed(settings.seed, stats.frames);
-            const auto shifts = interleaveShifts(frameGs);
-            std::vector<glm::vec4> data(2 * shifts.size());
-            for (size_t c = 0; c < shifts.size(); ++c) {
-                data[2 * c] = {shifts[c][0], shifts[c][1], shifts[c][2], shifts[c][3]};
-                data[2 * c + 1] = {shifts[c][4], 0.f, 0.f, 0.f};
-            }
-            glNamedBufferSubData(shiftBuffer.id(), 0, GLsizeiptr(data.size() * sizeof(data[0])),
-                                 data.data());
+            uploadShifts(gs, frameSeed(settings.seed, stats.frames));
             const uint32_t zero[2] = {0u, 0u};
             glNamedBufferSubData(statsBuffer.id(), 0, sizeof(zero), zero);
         }
-        const gpu::GlProgram& p = !gather      ? resolveProgram
-                                  : views == 0 ? cameraGatherProgram
-                                               : gatherProgram;
-        glUseProgram(p.id());
-        glBindTextureUnit(0, g.positionTexture);
-        glBindTextureUnit(1, g.normalTexture);
-        glBindTextureUnit(2, irradiance.id());
-        glBindTextureUnit(3, sigmaT.id());
-        glBindTextureUnit(4, sigmaS.id());
-        glBindImageTexture(0, accum.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
-        glBindImageTexture(1, target, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, shiftBuffer.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, statsBuffer.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, viewBuffer.id());
-        glBindTextureUnit(5, lvPosition.id());
-        glBindTextureUnit(6, lvNormal.id());
-        glBindTextureUnit(7, lvIrradiance.id());
-        glUniform1i(p.uniformLocation("u_lightViews"), views);
-        glUniform1i(p.uniformLocation("u_lightViewSize"), lvSize);
-
-        const CameraView cv = cameraView(g);
-        const bool ortho = cv.ortho;
-        const Vector3f forward = cv.forward;
-        glUniformMatrix4fv(p.uniformLocation("u_clipFromWorld"), 1, GL_FALSE,
-                           &g.clipFromWorld[0][0]);
-        glUniform3f(p.uniformLocation("u_eye"), g.cameraPosition.x, g.cameraPosition.y,
-                    g.cameraPosition.z);
-        glUniform3f(p.uniformLocation("u_viewDir"), forward.x, forward.y, forward.z);
-        glUniform1i(p.uniformLocation("u_ortho"), ortho ? 1 : 0);
-        glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
-        glUniform1i(p.uniformLocation("u_model"), gs.model == Model::Dipole ? 0 : 1);
-        const Boundary boundary = Boundary::of(gs.eta);
-        glUniform3f(p.uniformLocation("u_boundary"), float(boundary.fdr), float(boundary.c1),
-                    float(boundary.c2));
-        glUniform1f(p.uniformLocation("u_eta"), gs.eta);
-        glUniform1i(p.uniformLocation("u_nImp"), gs.importanceSamples);
-        glUniform1i(p.uniformLocation("u_nUni"), gs.uniformSamples);
-        glUniform1i(p.uniformLocation("u_jacobian"), gs.jacobian ? 1 : 0);
-        glUniform1f(p.uniformLocation("u_maxJacobian"), gs.maxJacobian);
-        glUniform1i(p.uniformLocation("u_interleave"), gs.interleave);
-        // Frames after the first rotate each pixel's samples by its own hash: with the k×k table
-        // alone, pixels k apart share every frame's samples and the mean keeps a k-periodic
-        // error (the waffle of issue 17). Frame 0 (and a preview) keeps the CPU gather's table.
-        glUniform1i(p.uniformLocation("u_pixelShifts"), gather && !preview && stats.frames > 0);
-        glUniform1ui(p.uniformLocation("u_frameSeed"), frameSeed(settings.seed, stats.frames));
-        glUniform1f(p.uniformLocation("u_maxRadius"), gs.maxRadius);
-        glUniform1i(p.uniformLocation("u_gather"), gather ? 1 : 0);
-        glUniform1i(p.uniformLocation("u_framesBefore"), stats.frames);
-        // Resolve only: rows with no frame yet show the preview (u_previewInAccum).
-        glUniform1i(p.uniformLocation("u_previewInAccum"), previewShown ? 1 : 0);
-        glUniform1i(p.uniformLocation("u_parts"), parts);
-        glUniform1i(p.uniformLocation("u_part"), gather ? part : 0);
-        const unsigned groupsX = unsigned(g.width + 7) / 8, groupsY = unsigned(g.height + 7) / 8;
-        if (parts > 1) {
-            // Every pixel's current mean first (rows of earlier parts hold one frame more),
-            // then part `part`'s rows gather (they overwrite their pixels).
-            const gpu::GlProgram& rp = resolveProgram;
-            glUseProgram(rp.id());
-            setResolveUniforms(rp, g, stats.frames, parts, part);
-            glDispatchCompute(groupsX, groupsY, 1);
-            glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+        if (!gather || parts > 1)
+            // Every pixel's current mean first; with parts, part `part`'s rows then gather
+            // (they overwrite their pixels).
+            resolveAll(g, target);
+        if (gather) {
+            const gpu::GlProgram& p = gatherProgramFor(views);
             glUseProgram(p.id());
+            bindFrameImages(g, target);
+            setGatherUniforms(p, g, gs, views);
+            // Frames after the first rotate each pixel's samples by its own hash: with the k×k
+            // table alone, pixels k apart share every frame's samples and the mean keeps a
+            // k-periodic error (the waffle of issue 17). Frame 0 (and a preview) keeps the CPU
+            // gather's table.
+            glUniform1i(p.uniformLocation("u_pixelShifts"), !preview && stats.frames > 0);
+            glUniform1ui(p.uniformLocation("u_frameSeed"), frameSeed(settings.seed, stats.frames));
+            glUniform1i(p.uniformLocation("u_gather"), 1);
+            glUniform1i(p.uniformLocation("u_framesBefore"), stats.frames);
+            glUniform1i(p.uniformLocation("u_parts"), parts);
+            glUniform1i(p.uniformLocation("u_part"), part);
+            glUniform1i(p.uniformLocation("u_listCount"), 0);
+            const unsigned groupsX = unsigned(g.width + 7) / 8,
+                           groupsY = unsigned(g.height + 7) / 8;
+            const unsigned rows =
+                parts > 1
+                    ? (groupsY > unsigned(part)
+                           ? (groupsY - unsigned(part) + unsigned(parts) - 1) / unsigned(parts)
+                           : 0u)
+                    : groupsY;
+            if (rows > 0)
+                glDispatchCompute(groupsX, rows, 1);
+            glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                            GL_BUFFER_UPDATE_BARRIER_BIT);
         }
-        const unsigned rows =
-            parts > 1 ? (groupsY > unsigned(part)
-                             ? (groupsY - unsigned(part) + unsigned(parts) - 1) / unsigned(parts)
-                             : 0u)
-                      : groupsY;
-        if (rows > 0)
-            glDispatchCompute(groupsX, rows, 1);
-        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
-                        GL_BUFFER_UPDATE_BARRIER_BIT);
         glUseProgram(0);
         closePass(t0, &stats.passMs.gather);
-        if (preview && gather)
-            previewShown = true;
         if (!gather || preview)
             return;
         if (++part < parts)
@@ -657,6 +756,41 @@ struct DipoleSubsurfaceProvider::Impl {
         part = 0;
         detail::finishFrame(stats, statsBuffer.id(), settings.samplesPerFrame, settings.maxFrames,
                             settings.convergenceThreshold);
+        imageConverged = stats.converged;
+    }
+
+    /// Catch-up after a material-only restart: `frames` frames of the full estimator for the
+    /// listed pixels (each gathers while it has fewer than catchUpLevel frames; seeds of their
+    /// own stream), then every pixel's mean. The whole-image accumulation (stats.frames, its
+    /// parts and convergence test) waits until the listed pixels have caught up.
+    void runCatchUp(const gpu::GBufferView& g, unsigned target, int frames) {
+        const size_t t0 = openPass();
+        const GatherSettings gs = settings.gatherSettings();
+        const int views = int(lvGathered.size());
+        const gpu::GlProgram& p = gatherProgramFor(views);
+        for (int f = 0; f < frames; ++f) {
+            const uint32_t seed = catchUpSeed(settings.seed, catchUpFrames++);
+            uploadShifts(gs, seed);
+            glUseProgram(p.id());
+            bindFrameImages(g, target);
+            setGatherUniforms(p, g, gs, views);
+            glUniform1i(p.uniformLocation("u_pixelShifts"), 1);
+            glUniform1ui(p.uniformLocation("u_frameSeed"), seed);
+            glUniform1i(p.uniformLocation("u_gather"), 1);
+            glUniform1i(p.uniformLocation("u_framesBefore"), catchUpLevel);
+            glUniform1i(p.uniformLocation("u_parts"), 1);
+            glUniform1i(p.uniformLocation("u_part"), 0);
+            glUniform1i(p.uniformLocation("u_listCount"), listed);
+            glUniform1i(p.uniformLocation("u_level"), catchUpLevel);
+            glDispatchCompute(unsigned(listed + 63) / 64, 1, 1);
+            glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+        }
+        resolveAll(g, target);
+        glUseProgram(0);
+        closePass(t0, &stats.passMs.gather);
+        catchUpLeft = std::max(catchUpLeft - frames, 0);
+        if (catchUpLeft == 0)
+            stats.converged = imageConverged;
     }
 };
 
@@ -673,6 +807,7 @@ void DipoleSubsurfaceProvider::createGl(const gpu::ShaderLibrary& library) {
         gpu::GlProgram::compute(library, "dipole_provider.comp", {"MULTI_VIEW=0"});
     m->resolveProgram = gpu::GlProgram::compute(library, "dipole_provider.comp",
                                                 {"MULTI_VIEW=0", "RESOLVE_ONLY=1"});
+    m->materialUpdateProgram = gpu::GlProgram::compute(library, "dipole_material_update.comp");
     // Largest shift table: interleave 64 → 64² cells × 2 vec4.
     m->shiftBuffer =
         gpu::createBuffer(64 * 64 * 2 * sizeof(glm::vec4), nullptr, GL_DYNAMIC_STORAGE_BIT);
@@ -702,6 +837,7 @@ void DipoleSubsurfaceProvider::destroyGl() {
     m->gatherProgram.destroy();
     m->cameraGatherProgram.destroy();
     m->resolveProgram.destroy();
+    m->materialUpdateProgram.destroy();
     m->lightGbufferProgram.destroy();
     m->lightStatsProgram.destroy();
     m->lightIrradianceProgram.destroy();
@@ -734,11 +870,13 @@ const ProviderSettings& DipoleSubsurfaceProvider::settings() const {
 }
 
 void DipoleSubsurfaceProvider::restart() {
-    m->needReset = true;
+    // The base class calls this for material changes (and reset(), after invalidateCaches()).
+    m->materialChanged();
 }
 
 void DipoleSubsurfaceProvider::invalidateCaches() {
     m->lvKeyValid = false;  // every light view is re-rendered at the next restart
+    m->needReset = true;    // reset(): G-buffer content changed, not only the material
 }
 
 std::vector<SurfaceBuffers> DipoleSubsurfaceProvider::debugLightViews() const {
@@ -793,7 +931,7 @@ void DipoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsig
     // Material: a changed grid or changes nobody reported (revision moved without
     // uploadBricks) re-upload everything; reported bricks were uploaded already.
     if (r.volume.syncForFrame(r.stats))
-        r.needReset = true;
+        r.materialChanged();
     // Camera and lights: compare with the accumulated frame's (the light SSBO is tiny).
     std::vector<unsigned char> lights(size_t(std::max(g.lightCount, 0)) * 64);
     if (!lights.empty() && g.lightBuffer)
@@ -814,7 +952,7 @@ void DipoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsig
         r.lastMeshes = std::move(meshes);
     }
     r.stats.passMs = {};
-    bool preview = false, viewFrame = false;
+    bool preview = false, viewFrame = false, materialFrame = false;
     if (r.needReset) {
         // Interactive restart (docs/methods/dipole.md §3c "Bounded restarts"): something was
         // shown and is now discarded. The first frame is a cheap camera-only preview; the light
@@ -833,6 +971,13 @@ void DipoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsig
         } else {
             r.viewsReady = r.updateViews(g, /*all=*/true);
         }
+    } else if (r.needMaterialUpdate) {
+        // Material-only restart (§3c): the pixels whose material changed restart and catch up;
+        // the others keep their sums, the light views and their fractions stay as they are.
+        const size_t t0 = r.openPass();
+        r.updateMaterial(g);
+        r.closePass(t0, &r.stats.passMs.materialUpdate);
+        materialFrame = true;
     } else if (!r.viewsReady) {
         r.viewsReady = r.updateViews(g, /*all=*/false);
         viewFrame = r.viewWorkDone;
@@ -848,9 +993,22 @@ void DipoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsig
     // A pending frame does either light-view work or gather work, each bounded; the preview
     // stays on screen meanwhile. While the views are pending the refinement may not end (a
     // back-lit object can be black in the camera image), nor grow past maxFrames.
-    const bool gather =
-        !r.stats.converged && !viewFrame && (r.viewsReady || r.stats.frames < r.settings.maxFrames);
-    r.runGather(g, target, gather, preview);
+    if (r.catchUpLeft > 0) {
+        // The stroke's frame gathers one catch-up frame (its latency is the material update
+        // and that); idle frames as many as fit one interactive part's work.
+        const double work =
+            double(r.listed) * double(r.settings.samplesPerFrame) * double(1 + r.lvGathered.size());
+        const int frames =
+            materialFrame
+                ? 1
+                : std::clamp(int(INTERACTIVE_PART_WORK / std::max(work, 1.0)), 1, r.catchUpLeft);
+        r.runCatchUp(g, target, frames);
+    } else {
+        const bool gather = !r.stats.converged && !viewFrame &&
+                            (r.viewsReady || r.stats.frames < r.settings.maxFrames);
+        r.runGather(g, target, gather, preview);
+    }
+    r.stats.pixelsCatchingUp = r.catchUpLeft > 0 ? r.listed : 0;
     if (!r.viewsReady)
         r.stats.converged = false;
     r.stats.preview = preview || !r.viewsReady;

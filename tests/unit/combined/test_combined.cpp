@@ -953,10 +953,39 @@ TEST_F(CombinedGl, StrokeReusesLocalEstimateAndDefersKernel) {
     ASSERT_TRUE(provider.stats().converged);
     EXPECT_EQ(provider.stats().localEstimates, 2);
     const ImageRgb incremental = renderer.readRadiance();
+    // The dipole part restarted only the pixels whose material changed (material-only
+    // restarts, docs/methods/dipole.md §3c); they caught up with samples of their own stream.
+    const int restarted = provider.stats().dipole.pixelsRestarted;
+    EXPECT_GT(restarted, 0);
 
     (void)frame(settings(-1.f));  // setMaterial: everything from scratch
     for (int i = 0; i < 20 && !provider.stats().converged; ++i)
         renderer.render();  // past the dipole part's interactive preview frame
     const ImageRgb scratch = renderer.readRadiance();
-    expectImagesEqual(incremental, scratch, 1e-5f, "stroke vs from scratch");
+    // Every other pixel (SSLPV, the kernel, L̂ and the dipole's kept sums) equals the render
+    // from scratch; the restarted ones agree within their Monte Carlo noise (z-score of the
+    // mean difference; per-pixel errors are independent).
+    int differing = 0;
+    double sum = 0.0, sum2 = 0.0;
+    for (int y = 0; y < scratch.height(); ++y)
+        for (int x = 0; x < scratch.width(); ++x) {
+            bool same = true;
+            for (int c = 0; c < 3; ++c)
+                same = same && std::abs(incremental.at(x, y)[c] - scratch.at(x, y)[c]) <=
+                                   1e-5f * std::abs(scratch.at(x, y)[c]);
+            if (same)
+                continue;
+            ++differing;
+            const double d = double(luminance(incremental.at(x, y))) - luminance(scratch.at(x, y));
+            sum += d;
+            sum2 += d * d;
+        }
+    std::printf("stroke vs from scratch: %d pixels differ (%d restarted by the dipole part)\n",
+                differing, restarted);
+    EXPECT_LE(differing, restarted);
+    if (differing >= 10) {
+        const double n = double(differing), mean = sum / n;
+        const double sd = std::sqrt(std::max(sum2 / n - mean * mean, 0.0));
+        EXPECT_LT(std::abs(mean) / (sd / std::sqrt(n)), 4.0);
+    }
 }

@@ -452,20 +452,29 @@ TEST_F(ProviderFixture, AccumulationResetsOnChangeAndStopsWhenConverged) {
     renderer.render();
     EXPECT_EQ(frames(), 1);
     renderer.render();
-    // Material (painted voxel, reported through the dirty bricks).
+    // Material (painted voxel, reported through the dirty bricks): a material-only restart —
+    // the pixels whose material changed restart and catch up, the frame count stays (test
+    // MaterialChangeRestartsOnlyThePixelsItChanges).
     MaterialVolume& vol = *s.objects[0].material;
     MaterialSample red = testutil::skinMaterial();
     red.sigma_t.r *= 3.f;
-    vol.set({16, 16, 28}, red);
+    for (int z = 24; z < 32; ++z)
+        vol.set({16, 16, z}, red);
+    const int resetsBeforePaint = provider.stats().resets;
     provider.syncMaterial(vol);
-    EXPECT_EQ(provider.stats().lastUploadBricks, 1);
+    EXPECT_GE(provider.stats().lastUploadBricks, 1);
+    EXPECT_FALSE(provider.stats().converged);
     renderer.render();
-    EXPECT_EQ(frames(), 1);
+    EXPECT_EQ(frames(), 2);
+    EXPECT_GT(provider.stats().pixelsRestarted, 0);
     renderer.render();
-    // Material changed behind the provider's back (nobody took the dirty bricks): revision.
-    vol.set({16, 16, 27}, testutil::skinMaterial());
+    // Material changed behind the provider's back (nobody took the dirty bricks): revision,
+    // the same material-only restart.
+    for (int z = 24; z < 32; ++z)
+        vol.set({16, 16, z}, testutil::skinMaterial());
     renderer.render();
-    EXPECT_EQ(frames(), 1);
+    EXPECT_GT(provider.stats().pixelsRestarted, 0);
+    EXPECT_EQ(provider.stats().resets, resetsBeforePaint);
     // Settings.
     ps.model = Model::BetterDipole;
     provider.setSettings(ps);
@@ -508,6 +517,115 @@ TEST_F(ProviderFixture, AccumulationResetsOnChangeAndStopsWhenConverged) {
 
 // Only the reported bricks are written: after a full upload the 3-D texture is overwritten with
 // a sentinel; syncing one painted brick must restore exactly that brick's voxels.
+// Material-only restarts (docs/methods/dipole.md §3c): a pixel's running sum depends on the
+// material only through its own σt, σs′ (the profile, the samplers and R′ are x_o's; E and the
+// light views do not depend on the material), so a stroke restarts exactly the pixels whose
+// looked-up material changed. They catch up to the accumulation's frame count with samples of
+// their own stream; every other pixel keeps its sum bit for bit. The caught-up pixels must agree
+// with a fresh render of the painted volume within the Monte Carlo noise of the two: z-score of
+// the mean difference over the restarted pixels, with per-pixel errors independent (each pixel's
+// rotation is its own from frame 1 on, test ConvergedErrorHasNoInterleavePeriod).
+TEST_F(ProviderFixture, MaterialChangeRestartsOnlyThePixelsItChanges) {
+    Scene s = testutil::pointLitSphere(4, 64, 48);
+    ProviderSettings ps;
+    ps.samplesPerFrame = 8;
+    ps.maxFrames = 8;
+    ps.convergenceThreshold = 0.f;
+    load(s, ps);
+    MaterialVolume& vol = *s.objects[0].material;
+    (void)vol.takeDirtyBricks();
+    renderUntilConverged(20);
+    ASSERT_TRUE(provider.stats().converged);
+    ASSERT_EQ(provider.stats().frames, ps.maxFrames);
+    const int w = s.camera.width, h = s.camera.height;
+    const unsigned accumTex = provider.debugTextures().accumulation;
+    const auto before = readRgba(accumTex, w, h);
+    int covered = 0;
+    for (const glm::vec4& a : before)
+        covered += a.a > 0.f ? 1 : 0;
+    const int resets = provider.stats().resets, viewPasses = provider.stats().lightViewPasses;
+
+    // A stroke of a denser, redder material on the sphere's front.
+    MaterialSample painted = testutil::skinMaterial();
+    painted.sigma_s = painted.sigma_s * 2.f;
+    painted.sigma_t = painted.sigma_s + Rgb(0.01f, 0.2f, 0.4f);
+    for (int z = 22; z < 32; ++z)
+        for (int y = 14; y < 19; ++y)
+            for (int x = 14; x < 19; ++x)
+                vol.set({x, y, z}, painted);
+    provider.syncMaterial(vol);
+    EXPECT_FALSE(provider.stats().converged);
+    renderer.render();  // the stroke's frame: the material update and one catch-up frame
+    const ProviderStats& st = provider.stats();
+    EXPECT_EQ(st.frames, ps.maxFrames);
+    EXPECT_EQ(st.resets, resets);
+    EXPECT_EQ(st.lightViewPasses, viewPasses);
+    EXPECT_EQ(st.passMs.irradiance, 0.f);  // no irradiance pass: E does not depend on σ
+    EXPECT_GT(st.passMs.materialUpdate, 0.f);
+    const int restarted = st.pixelsRestarted;
+    std::printf("stroke restarted %d of %d covered pixels\n", restarted, covered);
+    EXPECT_GT(restarted, 10);
+    EXPECT_LT(restarted, covered / 4);
+    EXPECT_EQ(st.pixelsCatchingUp, restarted);
+    EXPECT_FALSE(st.converged);
+    const auto stroke = readRgba(accumTex, w, h);
+    int oneFrame = 0, kept = 0;
+    for (size_t i = 0; i < stroke.size(); ++i) {
+        if (before[i].a == 0.f)
+            continue;
+        if (stroke[i] == before[i])
+            ++kept;
+        else if (stroke[i].a == 1.f)
+            ++oneFrame;
+    }
+    EXPECT_EQ(oneFrame, restarted);
+    EXPECT_EQ(kept + oneFrame, covered);
+
+    renderUntilConverged(20);
+    ASSERT_TRUE(st.converged);
+    EXPECT_EQ(st.frames, ps.maxFrames);
+    EXPECT_EQ(st.pixelsCatchingUp, 0);
+    const auto after = readRgba(accumTex, w, h);
+    std::vector<size_t> changed;
+    for (size_t i = 0; i < after.size(); ++i) {
+        if (before[i].a == 0.f)
+            continue;
+        EXPECT_EQ(after[i].a, float(ps.maxFrames)) << "pixel " << i;
+        if (stroke[i] == before[i])
+            EXPECT_EQ(after[i], before[i]) << "pixel " << i;  // untouched: bit for bit
+        else
+            changed.push_back(i);
+    }
+    const ImageRgb incremental = renderer.readRadiance();
+
+    // A fresh provider with the painted volume: the same estimator, other samples.
+    DipoleSubsurfaceProvider fresh;
+    fresh.create();
+    fresh.setSettings(ps);
+    fresh.setMaterial(&vol);
+    renderer.setSubsurfaceProvider(&fresh);
+    for (int i = 0; i < 20 && !fresh.stats().converged; ++i)
+        renderer.render();
+    const ImageRgb reference = renderer.readRadiance();
+    renderer.setSubsurfaceProvider(&provider);
+    fresh.destroy();
+    double sum = 0.0, sum2 = 0.0, level = 0.0;
+    for (const size_t i : changed) {
+        const int x = int(i % size_t(w)), y = h - 1 - int(i / size_t(w));  // top-first rows
+        const double d = double(luminance(incremental.at(x, y))) - luminance(reference.at(x, y));
+        sum += d;
+        sum2 += d * d;
+        level += luminance(reference.at(x, y));
+    }
+    const double n = double(changed.size());
+    ASSERT_GT(n, 10.0);
+    const double mean = sum / n, sd = std::sqrt(std::max(sum2 / n - mean * mean, 0.0));
+    const double z = mean / (sd / std::sqrt(n));
+    std::printf("restarted pixels: mean difference %.3g (z = %.2f) of mean level %.3g\n", mean, z,
+                level / n);
+    EXPECT_LT(std::abs(z), 4.0);
+}
+
 TEST_F(ProviderFixture, DirtyBrickUploadWritesOnlyThoseBricks) {
     Scene s = litSphere();
     s.camera.width = 32;
@@ -738,15 +856,12 @@ TEST_F(ProviderFixture, InteractiveRestartPreviewsThenEqualsTheFullEstimator) {
     (void)vol.takeDirtyBricks();
     renderer.render();
     renderer.render();
-    // A stroke and its undo: the material ends as it started.
-    const MaterialSample original = vol.at({16, 16, 28});
-    MaterialSample red = original;
-    red.sigma_t.r *= 3.f;
-    vol.set({16, 16, 28}, red);
-    provider.syncMaterial(vol);
+    // A camera move and back: the scene ends as it started.
+    Camera moved = s.camera;
+    moved.position.x += 1.f;
+    renderer.setCamera(moved);
     renderer.render();
-    vol.set({16, 16, 28}, original);
-    provider.syncMaterial(vol);
+    renderer.setCamera(s.camera);
     const int passes = provider.stats().lightViewPasses;
     renderer.render();  // the preview frame
     {

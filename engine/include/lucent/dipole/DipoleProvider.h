@@ -15,11 +15,13 @@
 ///  2. gather pass: one more set of samples of the dipole gather (same estimator as
 ///     gatherImageSpace(), a new Cranley–Patterson rotation per frame) added to a running sum;
 ///  3. resolve: L = F_t(η, ω_o) B̄/π (Eq. 3) into the renderer's subsurface texture.
-/// Accumulation restarts when the camera, the lights, the meshes, the material or the settings
-/// change (or on reset()); it stops adding samples when the largest per-pixel change of the mean
-/// falls below ProviderSettings::convergenceThreshold times the brightest pixel, or after
-/// maxFrames. A restart while an image is shown is bounded (ProviderSettings::previewSamples):
-/// a camera-only preview first, the light views' work spread over the following frames.
+/// Accumulation restarts when the camera, the lights, the meshes or the settings change (or on
+/// reset()); it stops adding samples when the largest per-pixel change of the mean falls below
+/// ProviderSettings::convergenceThreshold times the brightest pixel, or after maxFrames. A
+/// restart while an image is shown is bounded (ProviderSettings::previewSamples): a camera-only
+/// preview first, the light views' work spread over the following frames. A material change
+/// (a paint stroke) restarts only the pixels whose material changed, which then catch up to the
+/// others' frame count (a pixel's sum depends on the material only through its own σt, σs′).
 ///
 /// Usage (Qt: create in initializeGL, destroy on aboutToBeDestroyed, context current):
 /// @code
@@ -120,13 +122,19 @@ struct ProviderStats {
     /// with an interactive restart ⌈pixels × samplesPerFrame × (1 + gathered views) /
     /// (320·180·16)⌉ (bounded idle frames; every pixel gets the samples of one frame either way).
     int frameParts = 1;
+    /// Material-only restarts (docs/methods/dipole.md §3c): pixels whose material changed at the
+    /// last material update (their sums restarted; the others kept theirs), and the pixels
+    /// still catching up to the accumulation's frame count (0: none).
+    int pixelsRestarted = 0;
+    int pixelsCatchingUp = 0;
     /// GPU time (ms, GL timer queries) of the provider's passes in the last frame; 0 for a pass
     /// that did not run.
     struct PassTimes {
-        float irradiance = 0.f;  ///< camera irradiance, material and R′ (after a reset)
-        float lightViews = 0.f;  ///< light-view raster + E (re-rendered views only)
-        float fractions = 0.f;   ///< back-lit fractions of the views
-        float gather = 0.f;      ///< gather + resolve
+        float irradiance = 0.f;      ///< camera irradiance, material and R′ (after a reset)
+        float lightViews = 0.f;      ///< light-view raster + E (re-rendered views only)
+        float fractions = 0.f;       ///< back-lit fractions of the views
+        float gather = 0.f;          ///< gather + resolve
+        float materialUpdate = 0.f;  ///< material-only restart: the changed pixels found
     } passMs;
 };
 

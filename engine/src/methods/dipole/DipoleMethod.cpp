@@ -80,6 +80,13 @@ public:
                                                                                      : "skipped") +
                              " (back-lit flux fraction " + num(f, "%.3g") + ")"});
         }
+        // GPU time of the last frame's passes (GL timer queries; 0: the pass did not run).
+        s.push_back({"irradiance pass ms", num(st.passMs.irradiance, "%.2f")});
+        s.push_back({"light views pass ms", num(st.passMs.lightViews, "%.2f")});
+        s.push_back({"back-lit fractions pass ms", num(st.passMs.fractions, "%.2f")});
+        s.push_back({"gather pass ms", num(st.passMs.gather, "%.2f")});
+        s.push_back({"material update pass ms", num(st.passMs.materialUpdate, "%.2f")});
+        s.push_back({"pixels restarted by the last stroke", std::to_string(st.pixelsRestarted)});
         return s;
     }
 

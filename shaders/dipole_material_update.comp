@@ -1,0 +1,78 @@
+#version 450 core
+// SPDX-License-Identifier: MIT
+// Material update of dipole::DipoleSubsurfaceProvider after a paint stroke (docs/methods/dipole.md
+// §3c, "Material-only restarts"). A pixel's running sum Σ_f B_f(x_o) depends on the material only
+// through σt and σs′ just inside x_o: the profile R_d, the samplers and the disc radius R′ are
+// x_o's (Mertens et al. 2005 §5), and the irradiance E, the G-buffer and the light views do not
+// depend on the material at all. So a pixel whose looked-up material differs from the one its sum
+// was computed with restarts (sum and frame count 0) and stores the new σt, σs′ and R′; every
+// other pixel keeps its sum. Covered pixels with fewer than u_level frames (the restarted ones,
+// and those of earlier strokes still catching up) are listed for the catch-up gather
+// (dipole_provider.comp with u_listCount > 0), with the fewest frames of any listed pixel.
+#include "dipole_material.glsl"
+#include "dipole_profiles.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(binding = 0) uniform sampler2D u_position;  // G-buffer: xyz mm, a coverage
+layout(binding = 1) uniform sampler2D u_normal;    // unit normal, a mesh id + 1
+layout(binding = 3) uniform sampler3D u_volumeSigmaT;  // rgb σt (mm⁻¹), a inside
+layout(binding = 4) uniform sampler3D u_volumeSigmaS;  // rgb σs′ (mm⁻¹)
+
+layout(rgba32f, binding = 0) uniform image2D u_accum;   // rgb Σ_f B_f (W/mm²), a frames
+layout(rgba32f, binding = 1) uniform image2D u_sigmaT;  // σt (mm⁻¹) the sum was computed with
+layout(rgba32f, binding = 2) uniform image2D u_sigmaS;  // rgb σs′ (mm⁻¹), a R′ (mm)
+// min and max of R′ (floats ≥ 0 order like their bit patterns): widened by the restarted pixels.
+layout(std430, binding = 3) buffer RadiusBlock { uint b_minRadius; uint b_maxRadius; };
+// Counts (zeroed by the host, b_minFrames = ~0) and the list, x | y << 16 per pixel.
+layout(std430, binding = 4) buffer UpdateBlock {
+    uint b_listed;
+    uint b_restarted;
+    uint b_minFrames;
+    uint b_pad;
+    uint b_list[];
+};
+
+uniform ivec2 u_size;
+uniform int u_hasMaterial;
+uniform vec3 u_gridOrigin;  // mm
+uniform float u_voxelSize;  // mm
+uniform int u_resolution;
+uniform int u_model;      // 0 dipole, 1 better dipole
+uniform vec3 u_boundary;  // F_dr, C1, C2
+uniform float u_discQuantile;
+uniform float u_maxRadius;  // mm; > 0: R′ is capped at the local-radius window
+uniform int u_meshId;       // −1: every mesh; else only pixels of this mesh
+uniform int u_level;        // frames of the accumulation: pixels below it are listed
+
+void main() {
+    ivec2 xy = ivec2(gl_GlobalInvocationID.xy);
+    if (xy.x >= u_size.x || xy.y >= u_size.y) return;
+    vec4 pos = texelFetch(u_position, xy, 0);
+    vec4 normalId = texelFetch(u_normal, xy, 0);
+    bool ours = u_meshId < 0 || int(normalId.a + 0.5) - 1 == u_meshId;
+    // The irradiance pass stored σ = 0 for the other pixels, and they never gather.
+    if (pos.w == 0.0 || !ours) return;
+    vec3 sigT = vec3(0.0), sigS = vec3(0.0);
+    if (u_hasMaterial != 0)
+        dipoleMaterialInside(u_volumeSigmaT, u_volumeSigmaS, u_gridOrigin, u_voxelSize,
+                             u_resolution, pos.xyz, normalize(normalId.xyz), sigT, sigS);
+    vec4 acc = imageLoad(u_accum, xy);
+    if (imageLoad(u_sigmaT, xy).rgb != sigT || imageLoad(u_sigmaS, xy).rgb != sigS) {
+        float R = discRadius(u_model, sigT, sigS, u_boundary, u_discQuantile, u_maxRadius);
+        imageStore(u_sigmaT, xy, vec4(sigT, 0.0));
+        imageStore(u_sigmaS, xy, vec4(sigS, R));
+        acc = vec4(0.0);
+        imageStore(u_accum, xy, acc);
+        atomicAdd(b_restarted, 1u);
+        if (R > 0.0) {
+            atomicMin(b_minRadius, floatBitsToUint(R));
+            atomicMax(b_maxRadius, floatBitsToUint(R));
+        }
+    }
+    uint frames = uint(acc.a + 0.5);
+    if (frames < uint(u_level)) {
+        b_list[atomicAdd(b_listed, 1u)] = uint(xy.x) | (uint(xy.y) << 16);
+        atomicMin(b_minFrames, frames);
+    }
+}
