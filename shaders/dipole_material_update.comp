@@ -70,7 +70,7 @@ void main() {
             atomicMax(b_maxRadius, floatBitsToUint(R));
         }
     }
-    uint frames = uint(acc.a + 0.5);
+    uint frames = uint(max(acc.a, 0.0) + 0.5);  // a stroke's preview (alpha −1): no frame
     if (frames < uint(u_level)) {
         b_list[atomicAdd(b_listed, 1u)] = uint(xy.x) | (uint(xy.y) << 16);
         atomicMin(b_minFrames, frames);

@@ -97,6 +97,10 @@ uniform int u_part;
 // mask above: only the listed pixels pay for the gather.
 uniform int u_listCount;
 uniform int u_level;
+// With u_listCount > 0: a preview of the listed pixels that have no frame yet (a paint stroke's
+// frame, ProviderSettings::previewSamples camera-only samples): stored with alpha −1, shown by
+// the resolve, never added to a sum (the first catch-up frame overwrites it).
+uniform int u_listPreview;
 #ifndef RESOLVE_ONLY
 #define RESOLVE_ONLY 0
 #endif
@@ -321,32 +325,40 @@ void main() {
         vec3 xo = pos.xyz;
         vec3 no = normalize(texelFetch(u_normal, xy, 0).xyz);
         vec4 acc = imageLoad(u_accum, xy);
-#if RESOLVE_ONLY
-        int frames = int(acc.a + 0.5);
-#else
-        int frames = u_framesBefore == 0 && !listed ? 0 : int(acc.a + 0.5);
-        if (listed) gatherHere = gatherHere && frames < u_level;
+        int frames = acc.a > 0.0 ? int(acc.a + 0.5) : 0;
+#if !RESOLVE_ONLY
+        if (u_framesBefore == 0 && !listed) frames = 0;
+        if (listed) gatherHere = gatherHere && (u_listPreview != 0 ? frames == 0 : frames < u_level);
 #endif
         vec3 sum = frames > 0 ? acc.rgb : vec3(0.0);
 #if !RESOLVE_ONLY
         if (gatherHere) {
             vec3 B = gatherExitance(xy, xo, no);
-            vec3 oldMean = frames > 0 ? sum / float(frames) : vec3(0.0);
-            sum += B;
-            frames += 1;
-            vec3 mean = sum / float(frames);
-            imageStore(u_accum, xy, vec4(sum, float(frames)));
-            // Non-negative floats order like their bit patterns: atomicMax on uint, first in
-            // shared memory, then once per work group. Catch-up frames add nothing: the
-            // convergence test is the whole image's (the host does not read them).
-            if (frames > 1 && !listed) {
-                vec3 d = abs(mean - oldMean);
-                atomicMax(s_maxChange, floatBitsToUint(max(d.r, max(d.g, d.b))));
+            if (u_listPreview != 0) {
+                // Shown by the resolve that follows; no sum, no statistics.
+                imageStore(u_accum, xy, vec4(B, -1.0));
+            } else {
+                vec3 oldMean = frames > 0 ? sum / float(frames) : vec3(0.0);
+                sum += B;
+                frames += 1;
+                vec3 mean = sum / float(frames);
+                imageStore(u_accum, xy, vec4(sum, float(frames)));
+                // Non-negative floats order like their bit patterns: atomicMax on uint, first in
+                // shared memory, then once per work group. Catch-up frames add nothing: the
+                // convergence test is the whole image's (the host does not read them).
+                if (frames > 1 && !listed) {
+                    vec3 d = abs(mean - oldMean);
+                    atomicMax(s_maxChange, floatBitsToUint(max(d.r, max(d.g, d.b))));
+                }
+                if (!listed)
+                    atomicMax(s_maxMean, floatBitsToUint(max(mean.r, max(mean.g, mean.b))));
             }
-            if (!listed) atomicMax(s_maxMean, floatBitsToUint(max(mean.r, max(mean.g, mean.b))));
         }
 #endif
         vec3 mean = frames > 0 ? sum / float(frames) : vec3(0.0);
+#if RESOLVE_ONLY
+        if (acc.a < 0.0) mean = acc.rgb;  // a stroke's preview: one estimate, no sum
+#endif
         // Eq. 3: L = F_t(η, ω_o) B/π, F_t = 1 − F_r for the exit direction.
         float cosO = max(0.0, dot(no, towardEye(xo)));
         float Ft = 1.0 - dipoleFresnelReflectance(cosO, u_eta);

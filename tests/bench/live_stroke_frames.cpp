@@ -3,11 +3,12 @@
 /// @brief What a paint stroke's frame costs in each live method, pass by pass: scripted strokes
 /// into the default scene's volume (as soak_live), each followed by one live frame and then
 /// idle frames, driven as the app drives a method (materialChanged with the dirty bricks, then
-/// render) on a headless EGL context. Prints, per method, the median wall time of the stroke
-/// frame and of the idle frames (render() + glFinish) and the method's own per-pass statistics
-/// of the stroke frame (the keys ending in "ms"), so a slow pass can be found without the app.
-/// Not a Google Benchmark: results in docs/benchmarks.md ("Stroke frames of the image-space
-/// dipoles").
+/// render) on a headless EGL context. A stroke is --stamps stamps of the app's starting brush (or
+/// --brush-mm), half a radius apart along +x from a voxel of the surface shell. Prints, per method,
+/// the median wall time of the stroke frame and of the idle frames (render() + glFinish) and the
+/// method's own per-pass statistics of the stroke frame (the keys ending in "ms"), so a slow pass
+/// can be found without the app. Not a Google Benchmark: results in docs/benchmarks.md ("Stroke
+/// frames of the image-space dipoles").
 ///
 ///     live_stroke_frames [--strokes N] [--idle K] [--methods a,b,...] [--size WxH]
 
@@ -38,6 +39,8 @@ struct Options {
     int idle = 4;
     std::vector<std::string> methods;  // empty: every method with a GL pass
     int width = 640, height = 360;
+    float brushRadius = startingBrush().radius;  ///< mm: the app's starting brush
+    int stamps = 8;                              ///< per stroke, half a radius apart
 };
 
 double median(std::vector<double> v) {
@@ -82,13 +85,13 @@ void profile(const std::string& name, const Options& opt) {
     for (int s = -2; s < opt.strokes; ++s) {
         lcg = lcg * 1664525u + 1013904223u;
         const Coord start = inside[(lcg >> 8) % inside.size()];
-        BrushSettings brush;
-        brush.radius = 3.f * spec.voxelSize;
-        brush.mode = BrushMode::Set;
+        BrushSettings brush = startingBrush();
+        brush.radius = opt.brushRadius;
+        brush.strength = 1.f;
         brush.value = {Rgb(1.f + float((s + 7) % 7)), Rgb(0.5f), Rgb(0.f)};
-        for (int k = 0; k < 4; ++k)
-            stamp(volume, brush, spec.cellCenter(start) + Vector3f(float(k) * spec.voxelSize, 0, 0),
-                  nullptr);
+        for (int k = 0; k < opt.stamps; ++k)
+            stamp(volume, brush,
+                  spec.cellCenter(start) + Vector3f(0.5f * float(k) * brush.radius, 0, 0), nullptr);
         Timer t;
         live.strokeFrame();
         glFinish();
@@ -97,14 +100,15 @@ void profile(const std::string& name, const Options& opt) {
             continue;
         strokeMs.push_back(ms);
         for (const methods::Stat& stat : method.stats())
-            if (stat.key.size() > 2 && stat.key.compare(stat.key.size() - 2, 2, "ms") == 0)
+            if ((stat.key.size() > 2 && stat.key.compare(stat.key.size() - 2, 2, "ms") == 0) ||
+                stat.key.rfind("pixels", 0) == 0)
                 passes[stat.key].push_back(std::atof(stat.value.c_str()));
         for (int i = 0; i < opt.idle; ++i)
             idleMs.push_back(frame());
     }
     std::printf("| %s | %.1f | %.1f |", name.c_str(), median(strokeMs), median(idleMs));
     for (const auto& [key, values] : passes)
-        std::printf(" %s %.1f;", key.c_str(), median(values));
+        std::printf(" %s %.4g;", key.c_str(), median(values));
     std::printf("\n");
     std::fflush(stdout);
 }
@@ -120,6 +124,10 @@ int main(int argc, char** argv) {
     app.add_option("--idle", opt.idle, "idle frames after each stroke")
         ->check(CLI::NonNegativeNumber);
     app.add_option("--size", size, "viewport WxH");
+    app.add_option("--brush-mm", opt.brushRadius, "brush radius, mm (default: the app's)")
+        ->check(CLI::PositiveNumber);
+    app.add_option("--stamps", opt.stamps, "stamps per stroke, half a radius apart")
+        ->check(CLI::PositiveNumber);
     app.add_option("--methods", methodList,
                    "comma-separated registry names (default: every GL method)");
     CLI11_PARSE(app, argc, argv);

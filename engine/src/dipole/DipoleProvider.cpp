@@ -734,6 +734,7 @@ struct DipoleSubsurfaceProvider::Impl {
             glUniform1i(p.uniformLocation("u_parts"), parts);
             glUniform1i(p.uniformLocation("u_part"), part);
             glUniform1i(p.uniformLocation("u_listCount"), 0);
+            glUniform1i(p.uniformLocation("u_listPreview"), 0);
             const unsigned groupsX = unsigned(g.width + 7) / 8,
                            groupsY = unsigned(g.height + 7) / 8;
             const unsigned rows =
@@ -762,11 +763,17 @@ struct DipoleSubsurfaceProvider::Impl {
     /// Catch-up after a material-only restart: `frames` frames of the full estimator for the
     /// listed pixels (each gathers while it has fewer than catchUpLevel frames; seeds of their
     /// own stream), then every pixel's mean. The whole-image accumulation (stats.frames, its
-    /// parts and convergence test) waits until the listed pixels have caught up.
-    void runCatchUp(const gpu::GBufferView& g, unsigned target, int frames) {
+    /// parts and convergence test) waits until the listed pixels have caught up. `preview`
+    /// (frames = 1, a stroke's frame): instead, a camera-only estimate with
+    /// settings.previewSamples samples for the listed pixels without a frame, shown until the
+    /// first catch-up frame replaces it (as a full restart's preview, §3c "Bounded restarts").
+    void runCatchUp(const gpu::GBufferView& g, unsigned target, int frames, bool preview) {
         const size_t t0 = openPass();
-        const GatherSettings gs = settings.gatherSettings();
-        const int views = int(lvGathered.size());
+        ProviderSettings frameSettings = settings;
+        if (preview)
+            frameSettings.samplesPerFrame = settings.previewSamples;
+        const GatherSettings gs = frameSettings.gatherSettings();
+        const int views = preview ? 0 : int(lvGathered.size());
         const gpu::GlProgram& p = gatherProgramFor(views);
         for (int f = 0; f < frames; ++f) {
             const uint32_t seed = catchUpSeed(settings.seed, catchUpFrames++);
@@ -782,12 +789,15 @@ struct DipoleSubsurfaceProvider::Impl {
             glUniform1i(p.uniformLocation("u_part"), 0);
             glUniform1i(p.uniformLocation("u_listCount"), listed);
             glUniform1i(p.uniformLocation("u_level"), catchUpLevel);
+            glUniform1i(p.uniformLocation("u_listPreview"), preview ? 1 : 0);
             glDispatchCompute(unsigned(listed + 63) / 64, 1, 1);
             glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
         }
         resolveAll(g, target);
         glUseProgram(0);
         closePass(t0, &stats.passMs.gather);
+        if (preview)
+            return;
         catchUpLeft = std::max(catchUpLeft - frames, 0);
         if (catchUpLeft == 0)
             stats.converged = imageConverged;
@@ -994,15 +1004,18 @@ void DipoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsig
     // stays on screen meanwhile. While the views are pending the refinement may not end (a
     // back-lit object can be black in the camera image), nor grow past maxFrames.
     if (r.catchUpLeft > 0) {
-        // The stroke's frame gathers one catch-up frame (its latency is the material update
-        // and that); idle frames as many as fit one interactive part's work.
+        // The stroke's frame shows a camera-only preview of the restarted pixels (its latency
+        // is the material update and that; previewSamples 0: one catch-up frame instead); idle
+        // frames catch up by as many frames as fit one interactive part's work.
         const double work =
             double(r.listed) * double(r.settings.samplesPerFrame) * double(1 + r.lvGathered.size());
+        const bool strokePreview = materialFrame && r.settings.previewSamples > 0;
         const int frames =
             materialFrame
                 ? 1
                 : std::clamp(int(INTERACTIVE_PART_WORK / std::max(work, 1.0)), 1, r.catchUpLeft);
-        r.runCatchUp(g, target, frames);
+        r.runCatchUp(g, target, frames, strokePreview);
+        preview = strokePreview;
     } else {
         const bool gather = !r.stats.converged && !viewFrame &&
                             (r.viewsReady || r.stats.frames < r.settings.maxFrames);

@@ -555,7 +555,7 @@ TEST_F(ProviderFixture, MaterialChangeRestartsOnlyThePixelsItChanges) {
                 vol.set({x, y, z}, painted);
     provider.syncMaterial(vol);
     EXPECT_FALSE(provider.stats().converged);
-    renderer.render();  // the stroke's frame: the material update and one catch-up frame
+    renderer.render();  // the stroke's frame: the material update and a preview of its pixels
     const ProviderStats& st = provider.stats();
     EXPECT_EQ(st.frames, ps.maxFrames);
     EXPECT_EQ(st.resets, resets);
@@ -568,18 +568,32 @@ TEST_F(ProviderFixture, MaterialChangeRestartsOnlyThePixelsItChanges) {
     EXPECT_LT(restarted, covered / 4);
     EXPECT_EQ(st.pixelsCatchingUp, restarted);
     EXPECT_FALSE(st.converged);
+    EXPECT_TRUE(st.preview);
+    // Restarted pixels hold the camera-only preview (alpha −1: no frame, never summed), lit.
     const auto stroke = readRgba(accumTex, w, h);
-    int oneFrame = 0, kept = 0;
+    int previewed = 0, lit = 0, kept = 0;
     for (size_t i = 0; i < stroke.size(); ++i) {
         if (before[i].a == 0.f)
             continue;
-        if (stroke[i] == before[i])
+        if (stroke[i] == before[i]) {
             ++kept;
-        else if (stroke[i].a == 1.f)
-            ++oneFrame;
+        } else if (stroke[i].a == -1.f) {
+            ++previewed;
+            lit += stroke[i].r + stroke[i].g + stroke[i].b > 0.f ? 1 : 0;
+        }
     }
-    EXPECT_EQ(oneFrame, restarted);
-    EXPECT_EQ(kept + oneFrame, covered);
+    EXPECT_EQ(previewed, restarted);
+    EXPECT_GT(lit, restarted / 2);
+    EXPECT_EQ(kept + previewed, covered);
+    {  // ... and the resolve shows them
+        const ImageRgb shown = renderer.readRadiance();
+        int shownLit = 0;
+        for (size_t i = 0; i < stroke.size(); ++i)
+            if (stroke[i].a == -1.f)
+                shownLit +=
+                    luminance(shown.at(int(i % size_t(w)), h - 1 - int(i / size_t(w)))) > 0.f;
+        EXPECT_EQ(shownLit, lit);
+    }
 
     renderUntilConverged(20);
     ASSERT_TRUE(st.converged);
