@@ -78,7 +78,7 @@ bool sameSettings(const ProviderSettings& a, const ProviderSettings& b) {
            a.interleave == b.interleave && a.seed == b.seed && a.shadows == b.shadows &&
            a.meshId == b.meshId && a.lightViews == b.lightViews &&
            a.lightViewResolution == b.lightViewResolution &&
-           a.lightViewThreshold == b.lightViewThreshold;  // previewSamples: no restart
+           a.lightViewThreshold == b.lightViewThreshold;  // preview settings: no restart
 }
 
 /// The camera of a G-buffer as a view (clip matrix, centre of projection, orthographic flag and
@@ -967,7 +967,8 @@ void DipoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsig
         // Interactive restart (docs/methods/dipole.md §3c "Bounded restarts"): something was
         // shown and is now discarded. The first frame is a cheap camera-only preview; the light
         // views catch up in the following frames.
-        const bool interactive = r.everRendered && r.settings.previewSamples > 0;
+        const bool interactive =
+            (r.everRendered || r.settings.interactiveFirstFrame) && r.settings.previewSamples > 0;
         r.resetAccumulation();
         r.interactiveAccum = interactive;
         const size_t t0 = r.openPass();

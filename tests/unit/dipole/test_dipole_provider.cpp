@@ -918,32 +918,49 @@ TEST_F(ProviderFixture, InteractiveRestartPreviewsThenEqualsTheFullEstimator) {
     const ImageRgb interactive = renderer.readRadiance();
 
     // The old scheme: a fresh provider computing everything in its first frame.
-    DipoleSubsurfaceProvider full;
-    full.create();
+    const auto freshImage = [&](const ProviderSettings& settings, bool checkFirstFrame) {
+        DipoleSubsurfaceProvider fresh;
+        fresh.create();
+        fresh.setSettings(settings);
+        fresh.setMaterial(&vol);
+        renderer.setSubsurfaceProvider(&fresh);
+        renderer.render();
+        if (checkFirstFrame) {  // the live first frame: a preview, no light view rendered yet
+            EXPECT_TRUE(fresh.stats().preview);
+            EXPECT_EQ(fresh.stats().frames, 0);
+            EXPECT_EQ(fresh.stats().lightViewPasses, 0);
+        }
+        for (int i = 0; i < 20 && !fresh.stats().converged; ++i)
+            renderer.render();
+        const ImageRgb image = renderer.readRadiance();
+        EXPECT_EQ(fresh.stats().frames, ps.maxFrames);
+        EXPECT_EQ(fresh.stats().lightViewsGathered, 1);
+        renderer.setSubsurfaceProvider(&provider);
+        fresh.destroy();
+        return image;
+    };
     ProviderSettings fs = ps;
     fs.previewSamples = 0;
-    full.setSettings(fs);
-    full.setMaterial(&vol);
-    renderer.setSubsurfaceProvider(&full);
-    for (int i = 0; i < 20 && !full.stats().converged; ++i)
-        renderer.render();
-    const ImageRgb reference = renderer.readRadiance();
-    EXPECT_EQ(full.stats().frames, ps.maxFrames);
-    EXPECT_EQ(full.stats().lightViewsGathered, 1);
-    renderer.setSubsurfaceProvider(&provider);
-    full.destroy();
-    float peak = 0.f, maxDiff = 0.f;
-    for (int y = 0; y < reference.height(); ++y)
-        for (int x = 0; x < reference.width(); ++x)
-            for (int c = 0; c < 3; ++c) {
-                peak = std::max(peak, reference.at(x, y)[c]);
-                maxDiff =
-                    std::max(maxDiff, std::abs(interactive.at(x, y)[c] - reference.at(x, y)[c]));
-            }
-    std::printf("interactive vs full restart: max |diff| %.3g of peak %.3g\n", double(maxDiff),
-                double(peak));
-    ASSERT_GT(peak, 0.f);
-    EXPECT_LE(maxDiff, 1e-6f * peak);
+    const ImageRgb reference = freshImage(fs, false);
+    // The live preview's first accumulation (interactiveFirstFrame) is bounded the same way.
+    ProviderSettings live = ps;
+    live.interactiveFirstFrame = true;
+    const ImageRgb liveFirst = freshImage(live, true);
+    for (const ImageRgb* image : {&interactive, &liveFirst}) {
+        float peak = 0.f, maxDiff = 0.f;
+        for (int y = 0; y < reference.height(); ++y)
+            for (int x = 0; x < reference.width(); ++x)
+                for (int c = 0; c < 3; ++c) {
+                    peak = std::max(peak, reference.at(x, y)[c]);
+                    maxDiff =
+                        std::max(maxDiff, std::abs(image->at(x, y)[c] - reference.at(x, y)[c]));
+                }
+        std::printf("%s vs full restart: max |diff| %.3g of peak %.3g\n",
+                    image == &interactive ? "interactive restart" : "live first accumulation",
+                    double(maxDiff), double(peak));
+        ASSERT_GT(peak, 0.f);
+        EXPECT_LE(maxDiff, 1e-6f * peak);
+    }
 }
 
 /// resources/scenes/minimal.json with a preset, η = 1 and a size² image.

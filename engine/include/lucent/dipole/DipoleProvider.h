@@ -86,6 +86,12 @@ struct ProviderSettings {
     /// split into ProviderStats::frameParts parts. Camera-only and light-view frames are never
     /// mixed (that would be biased). 0: every restart computes everything in its first frame.
     int previewSamples = 4;
+    /// The live preview (the app): the first accumulation after create() is bounded like every
+    /// later restart (a preview, the light views over the next frames, then frames in parts),
+    /// so a method switch never blocks on one whole frame (≈ 200 ms at 640×360 with two light
+    /// views on llvmpipe). false (the CLI, `evaluate`): the first frame computes everything and
+    /// is exactly gatherImageSpace()'s. Needs previewSamples > 0; no restart when it changes.
+    bool interactiveFirstFrame = false;
 
     /// The CPU gather settings of frame 0 (importance = samplesPerFrame − uniform).
     [[nodiscard]] GatherSettings gatherSettings() const;

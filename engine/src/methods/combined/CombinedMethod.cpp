@@ -145,6 +145,7 @@ private:
         combined::CombinedProviderSettings s = m_settings;
         s.eta = m_eta;
         s.meshId = m_meshId;
+        s.dipole.interactiveFirstFrame = isLive();  // the app: bounded frames from the first one
         if (!isLive()) {  // frames of spp-frame dipole samples up to spp (or convergence)
             s.dipole.samplesPerFrame = std::min(s.dipole.samplesPerFrame, m_spp);
             s.dipole.maxFrames = (m_spp + s.dipole.samplesPerFrame - 1) / s.dipole.samplesPerFrame;

@@ -107,6 +107,7 @@ private:
         ps.maxRadius = m_maxRadius;
         ps.lightViews = m_lightViews;
         ps.lightViewResolution = m_lightViewRes;
+        ps.interactiveFirstFrame = isLive();  // the app: bounded frames from the first one
     }
 
     dipole::Model m_model;
