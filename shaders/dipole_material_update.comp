@@ -6,9 +6,11 @@
 // x_o's (Mertens et al. 2005 §5), and the irradiance E, the G-buffer and the light views do not
 // depend on the material at all. So a pixel whose looked-up material differs from the one its sum
 // was computed with restarts (sum and frame count 0) and stores the new σt, σs′ and R′; every
-// other pixel keeps its sum. Covered pixels with fewer than u_level frames (the restarted ones,
-// and those of earlier strokes still catching up) are listed for the catch-up gather
-// (dipole_provider.comp with u_listCount > 0), with the fewest frames of any listed pixel.
+// other pixel keeps its sum. The restarted pixels and every covered pixel with fewer than u_level
+// frames (earlier strokes' pixels still catching up) are listed for the stroke's preview and the
+// catch-up gather (dipole_provider.comp with u_listCount > 0), with the fewest frames of any
+// listed pixel. (u_level 0: the accumulation's frame 0 is still under way; it overwrites every
+// pixel, so the restarted ones are listed for the preview only.)
 #include "dipole_material.glsl"
 #include "dipole_profiles.glsl"
 
@@ -58,6 +60,7 @@ void main() {
         dipoleMaterialInside(u_volumeSigmaT, u_volumeSigmaS, u_gridOrigin, u_voxelSize,
                              u_resolution, pos.xyz, normalize(normalId.xyz), sigT, sigS);
     vec4 acc = imageLoad(u_accum, xy);
+    bool restarted = false;
     if (imageLoad(u_sigmaT, xy).rgb != sigT || imageLoad(u_sigmaS, xy).rgb != sigS) {
         float R = discRadius(u_model, sigT, sigS, u_boundary, u_discQuantile, u_maxRadius);
         imageStore(u_sigmaT, xy, vec4(sigT, 0.0));
@@ -65,13 +68,14 @@ void main() {
         acc = vec4(0.0);
         imageStore(u_accum, xy, acc);
         atomicAdd(b_restarted, 1u);
+        restarted = true;
         if (R > 0.0) {
             atomicMin(b_minRadius, floatBitsToUint(R));
             atomicMax(b_maxRadius, floatBitsToUint(R));
         }
     }
     uint frames = uint(max(acc.a, 0.0) + 0.5);  // a stroke's preview (alpha −1): no frame
-    if (frames < uint(u_level)) {
+    if (restarted || frames < uint(u_level)) {
         b_list[atomicAdd(b_listed, 1u)] = uint(xy.x) | (uint(xy.y) << 16);
         atomicMin(b_minFrames, frames);
     }

@@ -264,10 +264,11 @@ struct DipoleSubsurfaceProvider::Impl {
     }
 
     /// A material change (setMaterial, uploadBricks, syncMaterial, an unreported edit): the
-    /// pixels whose material changed restart at the next frame when the accumulation holds
-    /// whole-image frames of the full estimator (light views joined); else everything restarts.
+    /// pixels whose material changed restart at the next frame once the accumulation runs the
+    /// full estimator (light views joined; its frame 0 may still be under way); before that,
+    /// everything restarts.
     void materialChanged() {
-        if (needReset || !everRendered || !viewsReady || stats.frames < 1 || width == 0) {
+        if (needReset || !everRendered || !viewsReady || width == 0) {
             needReset = true;
             return;
         }
@@ -322,7 +323,7 @@ struct DipoleSubsurfaceProvider::Impl {
         stats.pixelsRestarted = int(counts[RESTARTED]);
         listed = int(counts[LISTED]);
         catchUpLevel = stats.frames;
-        catchUpLeft = listed > 0 ? catchUpLevel - int(counts[MIN_FRAMES]) : 0;
+        catchUpLeft = listed > 0 ? std::max(catchUpLevel - int(counts[MIN_FRAMES]), 0) : 0;
         stats.converged = catchUpLeft == 0 && imageConverged;
     }
 
@@ -1004,13 +1005,13 @@ void DipoleSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsig
     // A pending frame does either light-view work or gather work, each bounded; the preview
     // stays on screen meanwhile. While the views are pending the refinement may not end (a
     // back-lit object can be black in the camera image), nor grow past maxFrames.
-    if (r.catchUpLeft > 0) {
-        // The stroke's frame shows a camera-only preview of the restarted pixels (its latency
-        // is the material update and that; previewSamples 0: one catch-up frame instead); idle
-        // frames catch up by as many frames as fit one interactive part's work.
+    // The stroke's frame shows a camera-only preview of the restarted pixels (its latency is the
+    // material update and that; previewSamples 0: one catch-up frame instead); idle frames
+    // catch up by as many frames as fit one interactive part's work.
+    const bool strokePreview = materialFrame && r.listed > 0 && r.settings.previewSamples > 0;
+    if (r.catchUpLeft > 0 || strokePreview) {
         const double work =
             double(r.listed) * double(r.settings.samplesPerFrame) * double(1 + r.lvGathered.size());
-        const bool strokePreview = materialFrame && r.settings.previewSamples > 0;
         const int frames =
             materialFrame
                 ? 1

@@ -80,6 +80,52 @@ protected:
         loadScene(s, ps, /*ownMeshId=*/false);
     }
     Scene* scene = nullptr;
+
+    /// A stroke of a denser, redder material on the front of pointLitSphere()'s volume.
+    static MaterialSample paintFront(MaterialVolume& vol) {
+        MaterialSample painted = testutil::skinMaterial();
+        painted.sigma_s = painted.sigma_s * 2.f;
+        painted.sigma_t = painted.sigma_s + Rgb(0.01f, 0.2f, 0.4f);
+        for (int z = 22; z < 32; ++z)
+            for (int y = 14; y < 19; ++y)
+                for (int x = 14; x < 19; ++x)
+                    vol.set({x, y, z}, painted);
+        return painted;
+    }
+
+    /// `image` (the provider's converged radiance) on `pixels` (GL-row indices) against a fresh
+    /// provider with `ps` on the scene's current material: the same estimator, other samples.
+    /// z-score of the mean luminance difference < 4 (per-pixel errors are independent: each
+    /// pixel's rotation is its own from frame 1 on, test ConvergedErrorHasNoInterleavePeriod).
+    void expectPixelsMatchFreshRender(const ImageRgb& image, const std::vector<size_t>& pixels,
+                                      const ProviderSettings& ps) {
+        DipoleSubsurfaceProvider fresh;
+        fresh.create();
+        fresh.setSettings(ps);
+        fresh.setMaterial(scene->objects[0].material.get());
+        renderer.setSubsurfaceProvider(&fresh);
+        for (int i = 0; i < 40 && !fresh.stats().converged; ++i)
+            renderer.render();
+        const ImageRgb reference = renderer.readRadiance();
+        renderer.setSubsurfaceProvider(&provider);
+        fresh.destroy();
+        const int w = image.width(), h = image.height();
+        double sum = 0.0, sum2 = 0.0, level = 0.0;
+        for (const size_t i : pixels) {
+            const int x = int(i % size_t(w)), y = h - 1 - int(i / size_t(w));  // top-first rows
+            const double d = double(luminance(image.at(x, y))) - luminance(reference.at(x, y));
+            sum += d;
+            sum2 += d * d;
+            level += luminance(reference.at(x, y));
+        }
+        const double n = double(pixels.size());
+        ASSERT_GT(n, 10.0);
+        const double mean = sum / n, sd = std::sqrt(std::max(sum2 / n - mean * mean, 0.0));
+        const double z = mean / (sd / std::sqrt(n));
+        std::printf("restarted pixels: mean difference %.3g (z = %.2f) of mean level %.3g\n", mean,
+                    z, level / n);
+        EXPECT_LT(std::abs(z), 4.0);
+    }
 };
 
 /// The lit sphere of the parity tests: 160×90 pixels, subdivision 4.
@@ -545,14 +591,7 @@ TEST_F(ProviderFixture, MaterialChangeRestartsOnlyThePixelsItChanges) {
         covered += a.a > 0.f ? 1 : 0;
     const int resets = provider.stats().resets, viewPasses = provider.stats().lightViewPasses;
 
-    // A stroke of a denser, redder material on the sphere's front.
-    MaterialSample painted = testutil::skinMaterial();
-    painted.sigma_s = painted.sigma_s * 2.f;
-    painted.sigma_t = painted.sigma_s + Rgb(0.01f, 0.2f, 0.4f);
-    for (int z = 22; z < 32; ++z)
-        for (int y = 14; y < 19; ++y)
-            for (int x = 14; x < 19; ++x)
-                vol.set({x, y, z}, painted);
+    (void)paintFront(vol);
     provider.syncMaterial(vol);
     EXPECT_FALSE(provider.stats().converged);
     renderer.render();  // the stroke's frame: the material update and a preview of its pixels
@@ -612,32 +651,50 @@ TEST_F(ProviderFixture, MaterialChangeRestartsOnlyThePixelsItChanges) {
     }
     const ImageRgb incremental = renderer.readRadiance();
 
-    // A fresh provider with the painted volume: the same estimator, other samples.
-    DipoleSubsurfaceProvider fresh;
-    fresh.create();
-    fresh.setSettings(ps);
-    fresh.setMaterial(&vol);
-    renderer.setSubsurfaceProvider(&fresh);
-    for (int i = 0; i < 20 && !fresh.stats().converged; ++i)
-        renderer.render();
-    const ImageRgb reference = renderer.readRadiance();
-    renderer.setSubsurfaceProvider(&provider);
-    fresh.destroy();
-    double sum = 0.0, sum2 = 0.0, level = 0.0;
-    for (const size_t i : changed) {
-        const int x = int(i % size_t(w)), y = h - 1 - int(i / size_t(w));  // top-first rows
-        const double d = double(luminance(incremental.at(x, y))) - luminance(reference.at(x, y));
-        sum += d;
-        sum2 += d * d;
-        level += luminance(reference.at(x, y));
-    }
-    const double n = double(changed.size());
-    ASSERT_GT(n, 10.0);
-    const double mean = sum / n, sd = std::sqrt(std::max(sum2 / n - mean * mean, 0.0));
-    const double z = mean / (sd / std::sqrt(n));
-    std::printf("restarted pixels: mean difference %.3g (z = %.2f) of mean level %.3g\n", mean, z,
-                level / n);
-    EXPECT_LT(std::abs(z), 4.0);
+    expectPixelsMatchFreshRender(incremental, changed, ps);
+}
+
+// A stroke once the light views have joined but before the accumulation's first whole frame is
+// complete (the live preview's first accumulation, in parts): still a material-only restart —
+// frame 0 overwrites every pixel anyway, so the restarted pixels are only previewed — and the
+// converged image agrees with a fresh render of the painted volume on them.
+TEST_F(ProviderFixture, StrokeDuringTheFirstFrameRestartsOnlyItsPixels) {
+    Scene s = testutil::pointLitSphere(4, 96, 64);
+    ProviderSettings ps;
+    ps.samplesPerFrame = 160;  // a frame in 3 parts (test InteractiveRestartPreviews...)
+    ps.maxFrames = 3;
+    ps.convergenceThreshold = 0.f;
+    ps.interactiveFirstFrame = true;
+    load(s, ps);
+    MaterialVolume& vol = *s.objects[0].material;
+    (void)vol.takeDirtyBricks();
+    renderer.render();  // the preview
+    ASSERT_TRUE(provider.stats().viewsPending);
+    for (int i = 0; i < 8 && provider.stats().viewsPending; ++i)
+        renderer.render();  // the light views, their fractions
+    ASSERT_FALSE(provider.stats().viewsPending);
+    renderer.render();  // the first part of frame 0
+    ASSERT_EQ(provider.stats().frames, 0);
+    const int resets = provider.stats().resets;
+    const auto painted = paintFront(vol);
+    provider.syncMaterial(vol);
+    renderer.render();
+    const ProviderStats& st = provider.stats();
+    EXPECT_EQ(st.resets, resets);
+    EXPECT_EQ(st.passMs.irradiance, 0.f);
+    EXPECT_GT(st.pixelsRestarted, 10);
+    EXPECT_TRUE(st.preview);
+    renderUntilConverged(20);
+    ASSERT_TRUE(st.converged);
+    EXPECT_EQ(st.frames, ps.maxFrames);
+    const int w = s.camera.width, h = s.camera.height;
+    std::vector<size_t> pixels;  // where the painted material shows: σt changed
+    const auto sigT = readRgba(provider.debugTextures().sigmaT, w, h);
+    for (size_t i = 0; i < sigT.size(); ++i)
+        if (Rgb(sigT[i]) == painted.sigma_t)
+            pixels.push_back(i);
+    EXPECT_EQ(int(pixels.size()), st.pixelsRestarted);
+    expectPixelsMatchFreshRender(renderer.readRadiance(), pixels, ps);
 }
 
 TEST_F(ProviderFixture, DirtyBrickUploadWritesOnlyThoseBricks) {
