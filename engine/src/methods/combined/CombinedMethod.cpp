@@ -99,6 +99,11 @@ public:
         s.push_back({"converged", st.converged ? "yes" : "no"});
         s.push_back({"sslpv incremental updates", std::to_string(st.sslpv.incrementalUpdates)});
         s.push_back({"sslpv full resamples", std::to_string(st.sslpv.fullResamples)});
+        // The last frame's parts (sslpv, dipole, kernel, local, add): GPU and issuing CPU time.
+        for (const gpu::PassTiming& t : m_provider->passTimes()) {
+            s.push_back({t.name + " gpu ms", num(float(t.gpuMs), "%.2f")});
+            s.push_back({t.name + " cpu ms", num(float(t.cpuMs), "%.2f")});
+        }
         return s;
     }
 
