@@ -247,6 +247,8 @@ struct DipoleSubsurfaceProvider::Impl {
         sigmaT = gpu::createTexture2D(GL_RGBA32F, w, h);
         sigmaS = gpu::createTexture2D(GL_RGBA32F, w, h);
         accum = gpu::createTexture2D(GL_RGBA32F, w, h);
+        // The catch-up list packs a pixel as x | y << 16 (dipole_material_update.comp).
+        LUCENT_ASSERT(w < 65536 && h < 65536);
         updateBuffer =
             gpu::createBuffer((UPDATE_HEADER_WORDS + size_t(w) * size_t(h)) * sizeof(uint32_t),
                               nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
