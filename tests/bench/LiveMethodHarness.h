@@ -17,14 +17,16 @@
 namespace lucent::bench {
 
 struct LiveMethodHarness {
-    /// makeDefaultScene() at width×height, method `name` with its live defaults on the GL
-    /// backend, and one first frame (every upload and program in place; dirty bricks taken).
-    LiveMethodHarness(const std::string& name, int width, int height)
+    /// makeDefaultScene() at width×height, method `name` with its live defaults (and `params`)
+    /// on the GL backend, and one first frame (every upload and program in place; dirty bricks
+    /// taken).
+    LiveMethodHarness(const std::string& name, int width, int height,
+                      const methods::ParamSet& params = {})
         : scene(makeDefaultScene()), volume(*scene.objects[0].material) {
         scene.camera.width = width;
         scene.camera.height = height;
         renderer.create(library);
-        method = methods::create(name, {}, {methods::Backend::Gl, /*live=*/true, {}});
+        method = methods::create(name, params, {methods::Backend::Gl, /*live=*/true, {}});
         method->createGl(library);
         const int mesh = renderer.addMesh(scene.objects[0].mesh, method->surface(scene.eta));
         renderer.setLights(scene.lights);

@@ -11,6 +11,7 @@
 /// frames of the image-space dipoles").
 ///
 ///     live_stroke_frames [--strokes N] [--idle K] [--methods a,b,...] [--size WxH]
+///                        [--brush-mm R] [--stamps N] [--param key=value ...]
 
 #include "LiveMethodHarness.h"
 
@@ -41,6 +42,7 @@ struct Options {
     int width = 640, height = 360;
     float brushRadius = startingBrush().radius;  ///< mm: the app's starting brush
     int stamps = 8;                              ///< per stroke, half a radius apart
+    methods::ParamSet params;                    ///< --param key=value, for every method
 };
 
 double median(std::vector<double> v) {
@@ -51,7 +53,7 @@ double median(std::vector<double> v) {
 }
 
 void profile(const std::string& name, const Options& opt) {
-    bench::LiveMethodHarness live(name, opt.width, opt.height);
+    bench::LiveMethodHarness live(name, opt.width, opt.height, opt.params);
     MaterialVolume& volume = live.volume;
     const methods::Method& method = *live.method;
     const GridSpec spec = volume.spec();
@@ -128,9 +130,17 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber);
     app.add_option("--stamps", opt.stamps, "stamps per stroke, half a radius apart")
         ->check(CLI::PositiveNumber);
+    std::vector<std::string> assignments;
+    app.add_option("--param", assignments, "a method parameter, key=value (repeatable)");
     app.add_option("--methods", methodList,
                    "comma-separated registry names (default: every GL method)");
     CLI11_PARSE(app, argc, argv);
+    try {
+        opt.params = methods::ParamSet::fromAssignments(assignments);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "live_stroke_frames: %s\n", e.what());
+        return 2;
+    }
     if (std::sscanf(size.c_str(), "%dx%d", &opt.width, &opt.height) != 2 || opt.width < 8 ||
         opt.height < 8) {
         std::fprintf(stderr, "live_stroke_frames: --size must be WxH, at least 8x8\n");

@@ -633,12 +633,14 @@ void SslpvSolver::rebuildFactors() {
 }
 
 Rgb SslpvSolver::interactingFraction(const Point3f& entry, const Vector3f& wt,
-                                     const Coord& injectionCell) const {
+                                     const Coord& injectionCell, BeamSegment* chord,
+                                     const CoarseMaterial* sigmaT) const {
     // Optical depth τ of the refracted beam's chord, by midpoint samples every half cell from
     // the entry point until the beam leaves the medium (the object's inside cells with sinks,
     // the whole grid without) or every channel is opaque. A concave object's re-entry is not
     // followed: light leaving the object is refracted out there, not carried on.
     const GridSpec& s = m_material.spec;
+    const CoarseMaterial& optics = sigmaT ? *sigmaT : m_material;
     const float step = 0.5f * s.voxelSize;
     constexpr float OPAQUE_DEPTH = 20.f;  // e^−20 = 2·10⁻⁹: below float resolution of 1 − e^−τ
     const int maxSamples = 4 * s.resolution;  // a half-cell step crosses the grid in ≤ 2√3·N
@@ -647,7 +649,9 @@ Rgb SslpvSolver::interactingFraction(const Point3f& entry, const Vector3f& wt,
     };
     Rgb tau(0.f);
     bool entered = false;
+    int walked = 0;  // samples taken (the chord ends at the last one)
     for (int k = 0; k < maxSamples; ++k) {
+        walked = k + 1;
         const Coord c = s.cellOf(entry + (float(k) + 0.5f) * step * wt);
         if (!isMedium(c)) {
             // Before the medium (the entry point lies on the mesh, the voxelised surface is a
@@ -659,15 +663,20 @@ Rgb SslpvSolver::interactingFraction(const Point3f& entry, const Vector3f& wt,
         entered = true;
         const size_t i = s.linearIndex(c);
         for (int ch = 0; ch < 3; ++ch)
-            tau[ch] += m_material.sigma_t[ch][i] * step;
+            tau[ch] += optics.sigma_t[ch][i] * step;
         if (tau.x > OPAQUE_DEPTH && tau.y > OPAQUE_DEPTH && tau.z > OPAQUE_DEPTH)
             break;
     }
+    const auto toGrid = [&](const Point3f& p) { return (p - s.origin) / s.voxelSize; };
+    if (chord)
+        *chord = {toGrid(entry), toGrid(entry + (float(walked) + 0.5f) * step * wt)};
     if (!entered) {
         // The staircase missed the beam: one cell of the injection cell's material.
         const size_t i = s.linearIndex(injectionCell);
         for (int ch = 0; ch < 3; ++ch)
-            tau[ch] = m_material.sigma_t[ch][i] * s.voxelSize;
+            tau[ch] = optics.sigma_t[ch][i] * s.voxelSize;
+        if (chord)
+            *chord = {Vector3f(injectionCell) + 0.5f, Vector3f(injectionCell) + 0.5f};
     }
     Rgb f;
     for (int ch = 0; ch < 3; ++ch)
@@ -687,8 +696,16 @@ void SslpvSolver::inject() {
     const int bricksX = (s.resolution + SSLPV_BRICK_X - 1) / SSLPV_BRICK_X;
     const int bricksY = (s.resolution + SSLPV_BRICK_Y - 1) / SSLPV_BRICK_Y;
     m_injBrickLit.assign(size_t(s.resolution) * bricksX * bricksY, 0);
+    // What an incremental re-injection needs (reinjectChangedChords): each texel's cell,
+    // deposit and chord, and the material they were computed with.
+    m_injectionCell.assign(m_samples.size(), UINT32_MAX);
+    m_beamSegments.assign(m_samples.size(), BeamSegment{});
+    m_sourceMaterial = m_material;
+    m_incrementalInjections = 0;
+    m_stats.rewalkedTexels = 0;
     const float h = s.voxelSize;
-    for (const SslpvInjectionSample& smp : m_samples) {
+    for (size_t j = 0; j < m_samples.size(); ++j) {
+        const SslpvInjectionSample& smp = m_samples[j];
         if (!isInjectable(smp)) {
             ++skipped;
             continue;
@@ -715,7 +732,7 @@ void SslpvSolver::inject() {
         // coefficients √π/2, √(π/3), √(5π)/8 (the SSLPV project page errata).
         const float T = 1.f - fresnelDielectric(cosI, m_eta);
         const Vector3f wt = refractInto(smp.direction, smp.normal, m_eta);
-        const Rgb interacting = interactingFraction(smp.position, wt, cell);
+        const Rgb interacting = interactingFraction(smp.position, wt, cell, &m_beamSegments[j]);
         const ShCoeffs<2> lobe = clampedCosineLobe<2>(wt);
         const size_t idx = m_injection.index(cell);
         m_injBrickLit[(size_t(cell.z) * bricksY + size_t(cell.y / SSLPV_BRICK_Y)) * bricksX +
@@ -725,6 +742,7 @@ void SslpvSolver::inject() {
             for (int i = 0; i < count; ++i)
                 m_injection.plane(ch, i)[idx] += k * lobe.c[i];
         }
+        m_injectionCell[j] = uint32_t(s.linearIndex(cell));
         ++used;
     }
     m_stats.injectedTexels = used;
@@ -1108,6 +1126,14 @@ const SslpvStats& SslpvSolver::solve() {
         }
         return m_stats;
     }
+    if (m_materialDirty && !m_injectionDirty) {
+        // Each beam's deposit holds its chord's interacting fraction, so σt along a beam is part
+        // of the injection: a stroke injects the beams through the cells it changed again.
+        if (!m_opt.incrementalInjection || !reinjectChangedChords())
+            m_injectionDirty = true;
+        else if (m_stats.rewalkedTexels > 0)
+            m_stats.reinjected = true;
+    }
     if (m_injectionDirty) {
         inject();
         m_injectionDirty = false;
@@ -1434,6 +1460,37 @@ bool segmentMeetsBox(const Vector3f& a, const Vector3f& b, const Vector3f& lo, c
     return true;
 }
 
+/// The cells whose σt (and σs′ when `withScattering`) differ between two materials of one
+/// spec, and the box of their centres in grid units with a cell of margin for rounding (a
+/// cell's centre is at its index + ½: [lo − 1, hi + 2]).
+struct ChangedCells {
+    std::vector<uint32_t> cells;
+    Vector3f boxLo{0.f}, boxHi{0.f};
+};
+ChangedCells changedCells(const CoarseMaterial& now, const CoarseMaterial& was,
+                          bool withScattering) {
+    const GridSpec& s = now.spec;
+    const int n = s.resolution;
+    ChangedCells out;
+    Coord lo(n), hi(-1);
+    for (size_t k = 0; k < s.voxelCount(); ++k) {
+        bool differs = false;
+        for (int ch = 0; ch < 3 && !differs; ++ch)
+            differs = now.sigma_t[ch][k] != was.sigma_t[ch][k] ||
+                      (withScattering && now.sigma_s[ch][k] != was.sigma_s[ch][k]);
+        if (!differs)
+            continue;
+        out.cells.push_back(uint32_t(k));
+        const Coord c(int(k % size_t(n)), int((k / size_t(n)) % size_t(n)),
+                      int(k / (size_t(n) * size_t(n))));
+        lo = glm::min(lo, c);
+        hi = glm::max(hi, c);
+    }
+    out.boxLo = Vector3f(lo) - Vector3f(1.f);
+    out.boxHi = Vector3f(hi) + Vector3f(2.f);
+    return out;
+}
+
 }  // namespace
 
 void SslpvSolver::injectDiffusionSources() {
@@ -1499,34 +1556,18 @@ bool SslpvSolver::reinjectChangedDiffusionSources() {
         was.insideFraction != now.insideFraction || m_beamSegments.size() != m_samples.size())
         return false;
     const GridSpec& s = now.spec;
-    const int n = s.resolution;
-    std::vector<uint32_t> changed;
-    Coord lo(n), hi(-1);
-    for (size_t k = 0; k < s.voxelCount(); ++k) {
-        bool differs = false;
-        for (int ch = 0; ch < 3 && !differs; ++ch)
-            differs = now.sigma_t[ch][k] != was.sigma_t[ch][k] ||
-                      now.sigma_s[ch][k] != was.sigma_s[ch][k];
-        if (!differs)
-            continue;
-        changed.push_back(uint32_t(k));
-        const Coord c(int(k % size_t(n)), int((k / size_t(n)) % size_t(n)),
-                      int(k / (size_t(n) * size_t(n))));
-        lo = glm::min(lo, c);
-        hi = glm::max(hi, c);
-    }
+    const ChangedCells diff = changedCells(now, was, /*withScattering=*/true);
+    const std::vector<uint32_t>& changed = diff.cells;
     // A stroke over much of the object gains nothing from the bookkeeping.
     if (changed.size() > s.voxelCount() / 8)
         return false;
     m_stats.rewalkedTexels = 0;
     if (!changed.empty()) {
-        // The beams whose walked segment meets the changed cells' box (a cell's centre is at
-        // its index + ½: the box [lo, hi + 1] in grid units, one cell of margin for rounding).
-        const Vector3f boxLo = Vector3f(lo) - Vector3f(1.f), boxHi = Vector3f(hi) + Vector3f(2.f);
+        // The beams whose walked segment meets the changed cells' box.
         std::vector<uint32_t> affected;
         for (size_t j = 0; j < m_samples.size(); ++j)
-            if (m_beamEntered[j] &&
-                segmentMeetsBox(m_beamSegments[j].from, m_beamSegments[j].to, boxLo, boxHi))
+            if (m_beamEntered[j] && segmentMeetsBox(m_beamSegments[j].from, m_beamSegments[j].to,
+                                                    diff.boxLo, diff.boxHi))
                 affected.push_back(uint32_t(j));
         // Each affected beam is walked through the old material with its deposits taken away
         // and through the new one with them added, in parallel over ranges of the list and
@@ -1619,6 +1660,60 @@ void SslpvSolver::diffuse() {
     }
     m_stats.stepsMs = ds.ms;
     m_stats.propagateMs = timer.elapsedMs();
+}
+
+bool SslpvSolver::reinjectChangedChords() {
+    const Timer timer;
+    const CoarseMaterial& now = m_material;
+    const CoarseMaterial& was = m_sourceMaterial;
+    // A chord depends on the inside cells (where it runs) and on σt along it; a new shape, grid
+    // or η injects everything again (m_injectionDirty). The drift of replacing deposits in float
+    // is bounded by a full injection every MAX_INCREMENTAL updates.
+    constexpr int MAX_INCREMENTAL = 64;
+    if (m_incrementalInjections >= MAX_INCREMENTAL || !(was.spec == now.spec) ||
+        was.insideFraction != now.insideFraction || m_injectionCell.size() != m_samples.size())
+        return false;
+    const GridSpec& s = now.spec;
+    const ChangedCells diff = changedCells(now, was, /*withScattering=*/false);
+    if (diff.cells.size() > s.voxelCount() / 8)
+        return false;  // a stroke over much of the object gains nothing from the bookkeeping
+    m_stats.rewalkedTexels = 0;
+    if (diff.cells.empty())
+        return true;  // σs′ or g only: the injection stands
+    const int count = shCount(m_opt.order);
+    int rewalked = 0;
+    for (size_t j = 0; j < m_samples.size(); ++j) {
+        const uint32_t k = m_injectionCell[j];
+        if (k == UINT32_MAX ||
+            !segmentMeetsBox(m_beamSegments[j].from, m_beamSegments[j].to, diff.boxLo, diff.boxHi))
+            continue;
+        // inject()'s deposit with the old and the new σt along the chord; the difference
+        // replaces the old deposit in the injection grid.
+        const SslpvInjectionSample& smp = m_samples[j];
+        const float cosI = -glm::dot(smp.direction, smp.normal);
+        const float T = 1.f - fresnelDielectric(cosI, m_eta);
+        const Vector3f wt = refractInto(smp.direction, smp.normal, m_eta);
+        const Coord cell(int(k % size_t(s.resolution)),
+                         int((k / size_t(s.resolution)) % size_t(s.resolution)),
+                         int(k / (size_t(s.resolution) * size_t(s.resolution))));
+        const Rgb before = interactingFraction(smp.position, wt, cell, nullptr, &was);
+        const Rgb after = interactingFraction(smp.position, wt, cell, &m_beamSegments[j]);
+        const ShCoeffs<2> lobe = clampedCosineLobe<2>(wt);
+        const size_t idx = m_injection.index(cell);
+        for (int ch = 0; ch < 3; ++ch) {
+            const float delta = T * (after[ch] - before[ch]) * smp.flux[ch] * INV_PI;
+            for (int i = 0; i < count; ++i)
+                m_injection.plane(ch, i)[idx] += delta * lobe.c[i];
+        }
+        ++rewalked;
+    }
+    for (const uint32_t k : diff.cells)
+        for (int ch = 0; ch < 3; ++ch)
+            m_sourceMaterial.sigma_t[ch][k] = now.sigma_t[ch][k];
+    m_stats.rewalkedTexels = rewalked;
+    ++m_incrementalInjections;
+    m_stats.injectMs = timer.elapsedMs();
+    return true;
 }
 
 }  // namespace lucent::sslpv

@@ -154,9 +154,11 @@ struct SslpvOptions {
     /// light that has travelled along the surface leaves brighter along its way (back-lit rims);
     /// false: the exitance only. Read-out only: no re-solve.
     bool diffusionSurfaceFlux = true;
-    /// Mode Diffusion: after a material change that keeps the shape, walk again only the beams
-    /// through the changed cells (the same source to float rounding; a full walk every 64
-    /// updates); false: every beam on every change.
+    /// After a material change that keeps the shape, inject again only the beams through the
+    /// changed cells (the same injection to float rounding; a full injection every 64 updates);
+    /// false: every beam on every change. Mode Diffusion walks each beam's first scatterings;
+    /// modes Paper and Calibrated weigh each beam by its chord's interacting fraction (σt along
+    /// it), so a stroke of σt on a thin part changes how much light enters.
     bool incrementalInjection = true;
 };
 
@@ -186,8 +188,8 @@ struct SslpvStats {
     Rgb absorbed{0.f};   ///< flux removed by the Beer attenuation
     int injectedTexels = 0;
     int skippedTexels = 0;  ///< back-facing, zero flux, or no inside cell near x_p
-    /// Mode Diffusion: beams walked again by the last solve's incremental re-injection (a
-    /// stroke; 0 after a full walk or when nothing along the beams changed).
+    /// Beams injected again by the last solve's incremental re-injection (a stroke; 0 after a
+    /// full injection or when nothing along the beams changed).
     int rewalkedTexels = 0;
     double injectMs = 0.0;
     double propagateMs = 0.0;   ///< whole propagation, including set-up and bookkeeping
@@ -297,8 +299,20 @@ private:
     /// interacts before it leaves the object, τ the optical depth of its chord through the
     /// medium (σt′ of the cells crossed, per channel). Light that crosses without interacting
     /// is not subsurface light: it leaves as a refracted beam, which SSLPV does not render.
+    /// `chord` (optional): the part of the beam the sum walked, in grid units (cell index + ½
+    /// at a centre), for the incremental re-injection's box test. `sigmaT` (optional): σt′ of
+    /// another material on the same inside cells (the one an earlier injection used).
+    struct BeamSegment {
+        Vector3f from{0.f}, to{0.f};
+    };
     [[nodiscard]] Rgb interactingFraction(const Point3f& entry, const Vector3f& wt,
-                                          const Coord& injectionCell) const;
+                                          const Coord& injectionCell, BeamSegment* chord = nullptr,
+                                          const CoarseMaterial* sigmaT = nullptr) const;
+    /// Modes Paper and Calibrated, after a material change that keeps the inside cells: injects
+    /// again only the beams whose chord meets the cells whose σt changed (their interacting
+    /// fraction), replacing each one's deposit. False when a full injection is due instead (as
+    /// reinjectChangedDiffusionSources).
+    bool reinjectChangedChords();
     void propagate();
     /// Mode Diffusion's injection: each texel's refracted beam T·Φ_p is followed through the
     /// medium (half-cell midpoint steps, as interactingFraction) and the power of its first
@@ -360,14 +374,17 @@ private:
     /// Mode Diffusion's incremental re-injection: the material the sources were walked through,
     /// each texel's walked segment (grid units) and whether it met the medium, the sources'
     /// power bookkeeping (W, double) and the incremental updates since the last full walk.
-    struct BeamSegment {
-        Vector3f from{0.f}, to{0.f};
-    };
     CoarseMaterial m_sourceMaterial;
     std::vector<BeamSegment> m_beamSegments;
     std::vector<uint8_t> m_beamEntered;
     std::array<double, 3> m_sourceInjected{}, m_sourceFirstAbsorbed{};
     int m_incrementalInjections = 0;
+    /// Modes Paper and Calibrated: each texel's injection cell (spec index, UINT32_MAX when
+    /// skipped); its chord is m_beamSegments[j] and the material its deposit was computed with
+    /// m_sourceMaterial (the deposit is recomputed from it, not stored: keeping a copy changed
+    /// how the compiler associates inject()'s products under -fassociative-math, which moved
+    /// SSLPV's images in the last bits).
+    std::vector<uint32_t> m_injectionCell;
 };
 
 }  // namespace lucent::sslpv
