@@ -699,6 +699,7 @@ void SslpvSolver::inject() {
     // What an incremental re-injection needs (reinjectChangedChords): each texel's cell,
     // deposit and chord, and the material they were computed with.
     m_injectionCell.assign(m_samples.size(), UINT32_MAX);
+    m_injectionFraction.assign(m_samples.size(), Rgb(0.f));
     m_beamSegments.assign(m_samples.size(), BeamSegment{});
     m_sourceMaterial = m_material;
     m_incrementalInjections = 0;
@@ -743,6 +744,7 @@ void SslpvSolver::inject() {
                 m_injection.plane(ch, i)[idx] += k * lobe.c[i];
         }
         m_injectionCell[j] = uint32_t(s.linearIndex(cell));
+        m_injectionFraction[j] = interacting;
         ++used;
     }
     m_stats.injectedTexels = used;
@@ -1687,8 +1689,8 @@ bool SslpvSolver::reinjectChangedChords() {
         if (k == UINT32_MAX ||
             !segmentMeetsBox(m_beamSegments[j].from, m_beamSegments[j].to, diff.boxLo, diff.boxHi))
             continue;
-        // inject()'s deposit with the old and the new σt along the chord; the difference
-        // replaces the old deposit in the injection grid.
+        // inject()'s deposit with the new σt along the chord; its difference from the old one
+        // replaces that in the injection grid.
         const SslpvInjectionSample& smp = m_samples[j];
         const float cosI = -glm::dot(smp.direction, smp.normal);
         const float T = 1.f - fresnelDielectric(cosI, m_eta);
@@ -1696,8 +1698,9 @@ bool SslpvSolver::reinjectChangedChords() {
         const Coord cell(int(k % size_t(s.resolution)),
                          int((k / size_t(s.resolution)) % size_t(s.resolution)),
                          int(k / (size_t(s.resolution) * size_t(s.resolution))));
-        const Rgb before = interactingFraction(smp.position, wt, cell, nullptr, &was);
+        const Rgb before = m_injectionFraction[j];
         const Rgb after = interactingFraction(smp.position, wt, cell, &m_beamSegments[j]);
+        m_injectionFraction[j] = after;
         const ShCoeffs<2> lobe = clampedCosineLobe<2>(wt);
         const size_t idx = m_injection.index(cell);
         for (int ch = 0; ch < 3; ++ch) {

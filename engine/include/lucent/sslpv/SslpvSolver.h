@@ -380,11 +380,12 @@ private:
     std::array<double, 3> m_sourceInjected{}, m_sourceFirstAbsorbed{};
     int m_incrementalInjections = 0;
     /// Modes Paper and Calibrated: each texel's injection cell (spec index, UINT32_MAX when
-    /// skipped); its chord is m_beamSegments[j] and the material its deposit was computed with
-    /// m_sourceMaterial (the deposit is recomputed from it, not stored: keeping a copy changed
-    /// how the compiler associates inject()'s products under -fassociative-math, which moved
-    /// SSLPV's images in the last bits).
+    /// skipped) and interacting fraction; its chord is m_beamSegments[j], computed with
+    /// m_sourceMaterial. (The fraction is kept, not the deposit T·(1 − e^−τ)·Φ_p/π: keeping the
+    /// deposit changed how the compiler associates inject()'s products under
+    /// -fassociative-math, which moved SSLPV's images in the last bits.)
     std::vector<uint32_t> m_injectionCell;
+    std::vector<Rgb> m_injectionFraction;
 };
 
 }  // namespace lucent::sslpv
