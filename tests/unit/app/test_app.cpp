@@ -401,6 +401,45 @@ TEST(AppPaint, StrokeChangesSslpvPixelsNearTheStroke) {
     EXPECT_GT(dNear, 4.0 * dFar) << "near " << dNear << ", far " << dFar;
 }
 
+// The image-space dipole in the app after a stroke (docs/methods/dipole.md §3c, "Material-only
+// restarts"): once the preview has refined, a stroke restarts only the pixels whose material it
+// changed, so the stroke's frame changes the image near the stroke and keeps the rest of the
+// refined image (it only goes on refining). Before, every stroke dropped the whole image back
+// to a noisy 4-sample preview: the far region then moved by whole 8-bit levels.
+TEST(AppPaint, DipoleStrokeKeepsTheRefinedImageAwayFromIt) {
+    auto w = shownWindow(1);
+    Viewport* vp = w->viewport();
+    ASSERT_TRUE(w->setRenderMethod(QStringLiteral("dipole")));
+    // The dipole's Method::stats() keys (engine/src/methods/dipole/DipoleMethod.cpp).
+    const auto stat = [vp](const char* key) { return vp->stats().preview.methodStat(key); };
+    ASSERT_TRUE(QTest::qWaitFor([&] { return std::atoi(stat("frames").c_str()) >= 8; }, 60000))
+        << "the dipole preview did not refine to 8 frames while idle";
+    const QImage before = vp->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
+    const int cy = before.height() / 2;
+    const int xr = rightEndOnRow(vp, cy);
+    ASSERT_GT(xr, before.width() / 2) << "object not found on the middle row";
+    const int xs = xr - 30;
+    setExactBrush(vp, {Rgb(5.f), Rgb(0.f), Rgb(0.f)}, 4.f);
+    ASSERT_EQ(vp->strokeBetween(QPointF(xs, cy - 30), QPointF(xs, cy + 30)), 1);
+    renderOneFrame(vp);
+    const QImage after = vp->grabFramebuffer().convertToFormat(QImage::Format_RGB32);
+    before.save(outputPath("app_dipole_before.png"));
+    after.save(outputPath("app_dipole_after.png"));
+    EXPECT_EQ(vp->stats().glErrors, 0);
+    EXPECT_GT(std::atoi(stat("pixels restarted by the last stroke").c_str()), 0);
+    const QRect nearStroke(xs - 20, cy - 45, 40, 90);
+    const int xl = before.width() - 1 - xr;  // the object is symmetric about the view centre
+    const QRect farAway(xl - 6, cy - 45, 40, 90);
+    const double dNear = meanAbsDiff(before, after, nearStroke);
+    const double dFar = meanAbsDiff(before, after, farAway);
+    std::printf("dipole stroke: mean |delta| near %.2f, far %.4f (8-bit levels)\n", dNear, dFar);
+    EXPECT_GT(dNear, 2.0) << "dipole pixels near the stroke did not change";
+    // Away from it only the idle refinement moves pixels (a frame more of 8+): well under a
+    // level on average.
+    EXPECT_LT(dFar, 0.25) << "the refined image away from the stroke was not kept";
+    EXPECT_GT(dNear, 8.0 * dFar) << "near " << dNear << ", far " << dFar;
+}
+
 TEST(AppPaint, MouseStrokeChangesExpectedVoxels) {
     auto w = shownWindow();
     Viewport* vp = w->viewport();
