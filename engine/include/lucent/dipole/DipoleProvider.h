@@ -108,7 +108,8 @@ struct ProviderStats {
     int resets = 0;            ///< accumulation restarts so far
     int lastUploadBricks = 0;  ///< bricks written by the last material upload
     int fullUploads = 0;       ///< complete volume uploads so far
-    // Set at each reset (the irradiance passes):
+    // Set at each reset (the irradiance passes; a material-only restart widens the R′ range by
+    // its restarted pixels, it does not narrow it):
     float epsilon = 0.f;         ///< 1 − discQuantile: energy fraction beyond R′ (GatherStats)
     float minRadius = 0.f;       ///< disc radius min(R′, maxRadius) over the object's pixels, mm
     float maxRadius = 0.f;       ///< (0 when no object pixel)
