@@ -43,6 +43,7 @@ struct Options {
     float brushRadius = startingBrush().radius;  ///< mm: the app's starting brush
     int stamps = 8;                              ///< per stroke, half a radius apart
     methods::ParamSet params;                    ///< --param key=value, for every method
+    bool idlePasses = false;  ///< also the first idle frame's passes (deferred work)
 };
 
 double median(std::vector<double> v) {
@@ -82,7 +83,7 @@ void profile(const std::string& name, const Options& opt) {
     };
     // Two warm-up strokes: llvmpipe compiles the preview programs on first use.
     std::vector<double> strokeMs, idleMs;
-    std::map<std::string, std::vector<double>> passes;
+    std::map<std::string, std::vector<double>> passes, firstIdlePasses;
     uint32_t lcg = 12345;
     for (int s = -2; s < opt.strokes; ++s) {
         lcg = lcg * 1664525u + 1013904223u;
@@ -101,16 +102,27 @@ void profile(const std::string& name, const Options& opt) {
         if (s < 0)
             continue;
         strokeMs.push_back(ms);
-        for (const methods::Stat& stat : method.stats())
-            if ((stat.key.size() > 2 && stat.key.compare(stat.key.size() - 2, 2, "ms") == 0) ||
-                stat.key.rfind("pixels", 0) == 0)
-                passes[stat.key].push_back(std::atof(stat.value.c_str()));
-        for (int i = 0; i < opt.idle; ++i)
+        const auto keep = [&method](std::map<std::string, std::vector<double>>& into) {
+            for (const methods::Stat& stat : method.stats())
+                if ((stat.key.size() > 2 && stat.key.compare(stat.key.size() - 2, 2, "ms") == 0) ||
+                    stat.key.rfind("pixels", 0) == 0)
+                    into[stat.key].push_back(std::atof(stat.value.c_str()));
+        };
+        keep(passes);
+        for (int i = 0; i < opt.idle; ++i) {
             idleMs.push_back(frame());
+            if (i == 0)
+                keep(firstIdlePasses);
+        }
     }
     std::printf("| %s | %.1f | %.1f |", name.c_str(), median(strokeMs), median(idleMs));
     for (const auto& [key, values] : passes)
         std::printf(" %s %.4g;", key.c_str(), median(values));
+    if (opt.idlePasses) {
+        std::printf(" | first idle frame:");
+        for (const auto& [key, values] : firstIdlePasses)
+            std::printf(" %s %.4g;", key.c_str(), median(values));
+    }
     std::printf("\n");
     std::fflush(stdout);
 }
@@ -130,6 +142,8 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber);
     app.add_option("--stamps", opt.stamps, "stamps per stroke, half a radius apart")
         ->check(CLI::PositiveNumber);
+    app.add_flag("--idle-passes", opt.idlePasses,
+                 "also print the passes of the first idle frame after each stroke");
     std::vector<std::string> assignments;
     app.add_option("--param", assignments, "a method parameter, key=value (repeatable)");
     app.add_option("--methods", methodList,

@@ -38,7 +38,11 @@ struct CombinedSubsurfaceProvider::Impl {
     /// of a 128³ volume moves little per stroke) and the next frame recomputes it, so the
     /// stroke frame does not pay the half-space solve; the image converges to the same result.
     bool kernelDeferred = false;
-    uint64_t kernelVersion = 0;  ///< counts kernel recomputes (part of the L̂ key)
+    /// The kernel is dirty only because the material changed (a stroke), not the split: it is
+    /// kept when the mean material is still close to `kernelMaterial` (kernelMaterialClose).
+    bool kernelMaterialOnly = false;
+    MaterialSample kernelMaterial;  ///< the mean material the kernel was computed for
+    uint64_t kernelVersion = 0;     ///< counts kernel recomputes (part of the L̂ key)
     /// L̂ = F_t/π ∫_{r≤r_s} R_lpv E dA (`local`) and the kernel's near fraction
     /// f = ∫_{r≤r_s} R_lpv E dA / ∫ R_lpv E dA (`fraction`, localSslpvFraction) per pixel
     /// (RGBA32F, a = the object's pixel). They depend
@@ -51,6 +55,18 @@ struct CombinedSubsurfaceProvider::Impl {
     CombinedProviderStats stats;
     mutable gpu::GpuProfiler profiler;  ///< per-part GPU/CPU times (passTimes())
 };
+
+bool kernelMaterialClose(const MaterialSample& now, const MaterialSample& was) {
+    const float tol = KERNEL_MATERIAL_TOLERANCE;
+    for (int c = 0; c < 3; ++c) {
+        const float aNow = now.sigma_t[c] - now.sigma_s[c], aWas = was.sigma_t[c] - was.sigma_s[c];
+        if (std::abs(aNow - aWas) > tol * std::abs(aWas) ||
+            std::abs(now.sigma_s[c] - was.sigma_s[c]) > tol * std::abs(was.sigma_s[c]) ||
+            std::abs(now.g[c] - was.g[c]) > tol)
+            return false;
+    }
+    return true;
+}
 
 CombinedSubsurfaceProvider::CombinedSubsurfaceProvider() : m(std::make_unique<Impl>()) {
     applySplit();
@@ -80,6 +96,7 @@ void CombinedSubsurfaceProvider::destroy() {
     m->localKey.clear();
     m->kernelBuffer.destroy();
     m->kernelDirty = true;
+    m->kernelMaterialOnly = false;
     m->scratchW = m->scratchH = 0;
     m->created = false;
 }
@@ -138,6 +155,7 @@ void CombinedSubsurfaceProvider::applySplit() {
     m->dipole.setSettings(dp);  // validates; restarts the accumulation only on a change
     m->stats.plan = plan;
     m->kernelDirty = true;
+    m->kernelMaterialOnly = false;
 }
 
 void CombinedSubsurfaceProvider::setMesh(const TriangleMesh& mesh) {
@@ -186,8 +204,10 @@ void CombinedSubsurfaceProvider::updateMaterial(const MaterialVolume& volume,
         return;
     m->sslpv.updateMaterial(volume, dirtyBricks);
     m->pendingBricks.insert(m->pendingBricks.end(), dirtyBricks.begin(), dirtyBricks.end());
-    if (!m->kernelDirty)
+    if (!m->kernelDirty) {
         m->kernelDeferred = true;  // the mean material may have changed: next frame
+        m->kernelMaterialOnly = true;
+    }
     m->kernelDirty = true;
     if (m->settings.autoSkipSslpv && m->extent >= 0.f) {
         // A stroke may paint a material whose light travels further (or less far): the skip is
@@ -251,16 +271,25 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
         if (kernel && (m->kernelDirty || !m->kernelBuffer.isValid()) && m->volume && !deferKernel) {
             const auto scope = m->profiler.scope("kernel");
             // SSLPV's local kernel for the volume's mean material (docs/methods/combined.md).
-            m->kernel = computeSslpvSurfaceKernel(meanInsideMaterial(*m->volume), m->settings.eta,
-                                                  m->sslpv.options().render.solver, plan.cellSize,
-                                                  plan.splitRadius);
-            std::vector<glm::vec4> rings;
-            for (size_t b = 0; b < m->kernel.ringOuter.size(); ++b)
-                rings.emplace_back(m->kernel.ringOuter[b], m->kernel.ringValue[b]);
-            m->kernelBuffer.destroy();
-            m->kernelBuffer = gpu::createBuffer(rings.size() * sizeof(glm::vec4), rings.data(), 0);
+            const MaterialSample mean = meanInsideMaterial(*m->volume);
+            if (m->kernelMaterialOnly && m->kernelBuffer.isValid() &&
+                kernelMaterialClose(mean, m->kernelMaterial)) {
+                ++m->stats.kernelsKept;  // a stroke that hardly moved the mean: kernel and L̂ stay
+            } else {
+                m->kernel = computeSslpvSurfaceKernel(mean, m->settings.eta,
+                                                      m->sslpv.options().render.solver,
+                                                      plan.cellSize, plan.splitRadius);
+                m->kernelMaterial = mean;
+                std::vector<glm::vec4> rings;
+                for (size_t b = 0; b < m->kernel.ringOuter.size(); ++b)
+                    rings.emplace_back(m->kernel.ringOuter[b], m->kernel.ringValue[b]);
+                m->kernelBuffer.destroy();
+                m->kernelBuffer =
+                    gpu::createBuffer(rings.size() * sizeof(glm::vec4), rings.data(), 0);
+                ++m->kernelVersion;
+            }
             m->kernelDirty = false;
-            ++m->kernelVersion;
+            m->kernelMaterialOnly = false;
         }
         const bool subtract = kernel && m->kernelBuffer.isValid();
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT |

@@ -99,6 +99,7 @@ public:
         s.push_back({"converged", st.converged ? "yes" : "no"});
         s.push_back({"sslpv incremental updates", std::to_string(st.sslpv.incrementalUpdates)});
         s.push_back({"sslpv full resamples", std::to_string(st.sslpv.fullResamples)});
+        s.push_back({"kernels kept after strokes", std::to_string(st.kernelsKept)});
         // The last frame's parts (sslpv, dipole, kernel, local, add): GPU and issuing CPU time.
         for (const gpu::PassTiming& t : m_provider->passTimes()) {
             s.push_back({t.name + " gpu ms", num(float(t.gpuMs), "%.2f")});
