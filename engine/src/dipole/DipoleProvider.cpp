@@ -685,6 +685,14 @@ struct DipoleSubsurfaceProvider::Impl {
         glUniform1f(p.uniformLocation("u_maxRadius"), gs.maxRadius);
     }
 
+    /// A frame's gather settings: the settings', or a preview's previewSamples per pixel.
+    [[nodiscard]] GatherSettings frameGatherSettings(bool preview) const {
+        ProviderSettings frameSettings = settings;
+        if (preview)
+            frameSettings.samplesPerFrame = settings.previewSamples;
+        return frameSettings.gatherSettings();
+    }
+
     /// The gather program for `views` gathered light views.
     [[nodiscard]] const gpu::GlProgram& gatherProgramFor(int views) const {
         return views == 0 ? cameraGatherProgram : gatherProgram;
@@ -695,10 +703,7 @@ struct DipoleSubsurfaceProvider::Impl {
     /// frame overwrites it: stats.frames stays 0).
     void runGather(const gpu::GBufferView& g, unsigned target, bool gather, bool preview) {
         const size_t t0 = openPass();
-        ProviderSettings frameSettings = settings;
-        if (preview)
-            frameSettings.samplesPerFrame = settings.previewSamples;
-        const GatherSettings gs = frameSettings.gatherSettings();
+        const GatherSettings gs = frameGatherSettings(preview);
         // Light views join once their fractions are known (camera-only estimator before).
         const int views = viewsReady && !preview ? int(lvGathered.size()) : 0;
         // Interactive accumulations split a frame into parts over interleaved work groups, one
@@ -706,7 +711,7 @@ struct DipoleSubsurfaceProvider::Impl {
         // default size; 80–130 ms on llvmpipe under load): a light view's visibility and density
         // tests make the samples of a frame with views ≈ (1 + views)× dearer (§3d).
         const double work = double(g.width) * double(g.height) *
-                            double(frameSettings.samplesPerFrame) * double(1 + views);
+                            double(gs.importanceSamples + gs.uniformSamples) * double(1 + views);
         const int parts =
             interactiveAccum && !preview && gather
                 ? std::clamp(int(std::ceil(work / INTERACTIVE_PART_WORK - 1e-9)), 1, 64)
@@ -772,10 +777,7 @@ struct DipoleSubsurfaceProvider::Impl {
     /// first catch-up frame replaces it (as a full restart's preview, §3c "Bounded restarts").
     void runCatchUp(const gpu::GBufferView& g, unsigned target, int frames, bool preview) {
         const size_t t0 = openPass();
-        ProviderSettings frameSettings = settings;
-        if (preview)
-            frameSettings.samplesPerFrame = settings.previewSamples;
-        const GatherSettings gs = frameSettings.gatherSettings();
+        const GatherSettings gs = frameGatherSettings(preview);
         const int views = preview ? 0 : int(lvGathered.size());
         const gpu::GlProgram& p = gatherProgramFor(views);
         for (int f = 0; f < frames; ++f) {
