@@ -6,7 +6,7 @@
 /// render) on a headless EGL context. A stroke is --stamps stamps of the app's starting brush (or
 /// --brush-mm), half a radius apart along +x from a voxel of the surface shell. Prints, per method,
 /// the median wall time of the stroke frame and of the idle frames (render() + glFinish) and the
-/// method's own per-pass statistics of the stroke frame (the keys ending in "ms"), so a slow pass
+/// method's own per-pass statistics of the stroke frame (the keys holding " ms"), so a slow pass
 /// can be found without the app. Not a Google Benchmark: results in docs/benchmarks.md ("Stroke
 /// frames of the image-space dipoles").
 ///
@@ -104,8 +104,7 @@ void profile(const std::string& name, const Options& opt) {
         strokeMs.push_back(ms);
         const auto keep = [&method](std::map<std::string, std::vector<double>>& into) {
             for (const methods::Stat& stat : method.stats())
-                if ((stat.key.size() > 2 && stat.key.compare(stat.key.size() - 2, 2, "ms") == 0) ||
-                    stat.key.rfind("pixels", 0) == 0)
+                if (stat.key.find(" ms") != std::string::npos || stat.key.rfind("pixels", 0) == 0)
                     into[stat.key].push_back(std::atof(stat.value.c_str()));
         };
         keep(passes);
