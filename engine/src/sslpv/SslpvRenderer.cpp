@@ -140,8 +140,8 @@ void SslpvRenderer::setOptions(const SslpvRenderOptions& o) {
     if (a.order != b.order || a.maxSteps != b.maxSteps ||
         a.skipAccumulateSteps != b.skipAccumulateSteps || a.removeExitant != b.removeExitant ||
         a.attenuation != b.attenuation || a.stopEpsilon != b.stopEpsilon ||
-        a.skipEmptySlices != b.skipEmptySlices || a.mode != b.mode ||
-        a.diffusionExactTotal != b.diffusionExactTotal ||
+        a.brickStopEpsilon != b.brickStopEpsilon || a.skipEmptySlices != b.skipEmptySlices ||
+        a.mode != b.mode || a.diffusionExactTotal != b.diffusionExactTotal ||
         a.diffusionExitTable != b.diffusionExitTable ||
         a.diffusionSurfaceFlux != b.diffusionSurfaceFlux ||
         a.calibration.linear != b.calibration.linear ||

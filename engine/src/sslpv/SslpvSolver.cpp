@@ -153,12 +153,16 @@ struct StepCtx {
     int padded = 0;
     bool l1 = false;  ///< order 1 with the symmetric sparsity: use l1w instead of terms
     L1Weights l1w[6];
+    /// Per-brick stop threshold on |coefficient| (SslpvOptions::brickStopEpsilon); 0: off.
+    float dark = 0.f;
 };
 
-/// Sums of one z-slice: [channel] × {remaining, exitant, absorbed}; bricks and cells computed.
+/// Sums of one z-slice: [channel] × {remaining, exitant, absorbed, dropped}; bricks computed
+/// and lit after the step; cells computed.
 struct SliceSums {
-    double v[3][3] = {};
+    double v[3][4] = {};
     int activeBricks = 0;
+    int litBricks = 0;
     int64_t cells = 0;
 };
 
@@ -190,11 +194,20 @@ typedef int32_t Vec16i __attribute__((vector_size(2 * VEC * sizeof(int32_t))));
 // generic term list over 4 independent accumulator pairs to hide the FMA latency.
 //
 // One call computes the run of `len` cells starting at (xStart, y, z) and writes into nz[x]
-// (x relative to xStart, len entries) a non-zero lane mask of the cell's new propagation
-// values, from which the caller derives the bricks lit after this step.
+// (x relative to xStart, len entries) the cell's flags over its new propagation values: bit
+// NZ_ANY when one is non-zero, bit NZ_BRIGHT when one exceeds ctx.dark in magnitude (with
+// ctx.dark = 0: when one is non-zero), from which the caller derives the bricks lit after
+// this step.
+constexpr int32_t NZ_ANY = 1;
+constexpr int32_t NZ_BRIGHT = 2;
+
 LUCENT_ISA_CLONES void processRun(const StepCtx& ctx, int z, int y, int xStart, int len,
                                   SliceSums& sums, int32_t* nz) {
     const size_t p = size_t(ctx.padded);
+    // |value| > ctx.dark compared on the bits: non-negative floats order as their bit patterns
+    // (a NaN counts as bright).
+    int32_t darkBits;
+    __builtin_memcpy(&darkBits, &ctx.dark, sizeof(darkBits));
     constexpr int BLOCK = 4 * VEC;  // 32 cells
     alignas(64) float out[SSLPV_MAX_COEFFS][BLOCK];
     {
@@ -254,7 +267,7 @@ LUCENT_ISA_CLONES void processRun(const StepCtx& ctx, int z, int y, int xStart, 
                 // ---- post-processing per coefficient
                 // 16-cell halves done with vectors: both for a full block, else as many as fit.
                 const int halves = x0 + BLOCK <= len ? 2 : (len - x0) / (2 * VEC);
-                Vec16i nzv[2] = {};  // lanes whose new value is non-zero in any coefficient
+                Vec16i nzv[2] = {};  // NZ_ANY | NZ_BRIGHT over the coefficients
                 const size_t bx = base + size_t(x0);
                 const float* msk = ctx.mask ? ctx.mask + bx : nullptr;
                 for (int i = 0; i < ctx.coeffs; ++i) {
@@ -286,7 +299,10 @@ LUCENT_ISA_CLONES void processRun(const StepCtx& ctx, int z, int y, int xStart, 
                             // times the scattering reweighting of band l (Eq. 3).
                             const Vec16 d = fac ? o * LUCENT_LOAD16(fac + x) : o * homF;
                             LUCENT_STORE16(ds + x, d);
-                            nzv[h] |= (d != 0.f);
+                            Vec16i magnitude;  // |d|'s bits: ordered as |d| is
+                            __builtin_memcpy(&magnitude, &d, sizeof(magnitude));
+                            magnitude &= 0x7fffffff;
+                            nzv[h] |= ((d != 0.f) & NZ_ANY) | ((magnitude > darkBits) & NZ_BRIGHT);
                             if (sum) {
                                 remV += d;
                                 absV += o;
@@ -318,7 +334,8 @@ LUCENT_ISA_CLONES void processRun(const StepCtx& ctx, int z, int y, int xStart, 
                             ac[x] = ctx.assignAcc ? v : ac[x] + v;
                         const float d = v * (fac ? fac[x] : homF);
                         ds[x] = d;
-                        nz[x0 + x] = (ch > 0 || i > 0 ? nz[x0 + x] : 0) | (d != 0.f);
+                        nz[x0 + x] = (ch > 0 || i > 0 ? nz[x0 + x] : 0) | (d != 0.f ? NZ_ANY : 0) |
+                                     (std::abs(d) > ctx.dark ? NZ_BRIGHT : 0);
                         if (sum) {
                             remS += d;
                             absS += v;
@@ -439,6 +456,9 @@ void SslpvSolver::setOptions(const SslpvOptions& o) {
                  "SSLPV option 'mode' is not Paper, Calibrated or Diffusion");
     LUCENT_CHECK(std::isfinite(o.stopEpsilon) && o.stopEpsilon >= 0.f && o.stopEpsilon <= 1.f,
                  "SSLPV option 'stopEpsilon' must be in [0, 1], got ", o.stopEpsilon);
+    LUCENT_CHECK(
+        std::isfinite(o.brickStopEpsilon) && o.brickStopEpsilon >= 0.f && o.brickStopEpsilon <= 1.f,
+        "SSLPV option 'brickStopEpsilon' must be in [0, 1], got ", o.brickStopEpsilon);
     // Order and sinks change where light is injected; everything changes propagation.
     if (o.order != m_opt.order || o.removeExitant != m_opt.removeExitant || o.mode != m_opt.mode)
         m_injectionDirty = true;
@@ -550,6 +570,7 @@ void SslpvSolver::rebuildFactors() {
     // every stair riser: a slab tilted 20–45° against the grid read 14–18 % darker than one
     // aligned with it, and the stair pattern shows as contour bands).
     m_mask.assign(m_opt.removeExitant ? plane : 0, 0.f);
+    m_lightCells = 0;
     Bounds3f insideBox;
     for (int z = 0; z < n; ++z)
         for (int y = 0; y < n; ++y)
@@ -557,6 +578,7 @@ void SslpvSolver::rebuildFactors() {
                 const float f = m_material.insideFraction[s.linearIndex({x, y, z})];
                 if (!(f > 0.f))
                     continue;
+                ++m_lightCells;
                 if (m_opt.removeExitant)
                     m_mask[padded(x, y, z)] = std::min(1.f, 2.f * f);
                 insideBox.expand(Point3f(float(x), float(y), float(z)));
@@ -831,6 +853,13 @@ void SslpvSolver::propagate() {
     }
     ctx.terms = terms;
     ctx.box = m_active;
+    // Per-brick stop: ε times the injected band-0 coefficient per cell that can hold light.
+    const Rgb injectedFlux = m_injection.flux();
+    const bool brickStop = m_opt.brickStopEpsilon > 0.f;
+    if (brickStop)
+        ctx.dark = m_opt.brickStopEpsilon *
+                   std::max({injectedFlux.x, injectedFlux.y, injectedFlux.z}) /
+                   (TWO_SQRT_PI * float(std::max<int64_t>(m_lightCells, 1)));
     ctx.padded = int(p);
     ctx.mask = m_opt.removeExitant ? m_mask.data() : nullptr;
     for (int ch = 0; ch < 3; ++ch) {
@@ -845,8 +874,8 @@ void SslpvSolver::propagate() {
     // Step 0: the injected lights become the first sources, with their cells' factors folded in.
     // Only bricks holding injected light are computed; bricks of m_prop[0] lit by the previous
     // solve are cleared, so m_prop[0]'s bricks are exactly the injected ones afterwards.
-    Rgb absorbed(0.f), exitant(0.f), remaining(0.f);
-    const Rgb injected = m_injection.flux();
+    Rgb absorbed(0.f), exitant(0.f), remaining(0.f), dropped(0.f);
+    const Rgb injected = injectedFlux;
     {
         if (cleared || m_brickLit[0].size() != brickTotal)
             m_brickLit[0].assign(brickTotal, 0);
@@ -930,7 +959,8 @@ void SslpvSolver::propagate() {
             seg[segs++] = {xs, xe};
     };
     const Timer stepTimer;
-    while (!empty && steps < m_opt.maxSteps && !converged()) {
+    bool anyLit = true;  // some brick holds light (with the per-brick stop: above its threshold)
+    while (!empty && anyLit && steps < m_opt.maxSteps && !converged()) {
         const int next = 1 - m_cur;
         const bool accumulate = steps + 1 > m_opt.skipAccumulateSteps;
         ctx.assignAcc = accumulate && !accWritten;
@@ -1052,20 +1082,44 @@ void SslpvSolver::propagate() {
                                     int32_t any = 0;
                                     for (int x = a; x <= b; ++x)
                                         any |= nz[x];
-                                    brickNz[bx] |= uint8_t(any != 0);
+                                    brickNz[bx] |= uint8_t(any & (NZ_ANY | NZ_BRIGHT));
                                 }
                             }
                         // Bricks the runs touched: fully rewritten when active, zero or
                         // rewritten with exact zeros otherwise, so their new flag is exact.
+                        // With the per-brick stop, a wholly rewritten brick whose values are
+                        // all below ctx.dark is set to zero (its light counted as dropped) and
+                        // is dark: a dark brick holds exact zeros, as without the stop.
                         for (int r = 0; r < nr; ++r)
                             for (int bx = runs[r].xs / SSLPV_BRICK_X;
                                  bx <= runs[r].xe / SSLPV_BRICK_X; ++bx) {
                                 const size_t t = rowBase + size_t(bx);
-                                const bool whole =
-                                    std::max(bx * SSLPV_BRICK_X, box.lo.x) >= runs[r].xs &&
-                                    std::min(bx * SSLPV_BRICK_X + SSLPV_BRICK_X - 1, box.hi.x) <=
-                                        runs[r].xe;
-                                dstLit[t] = whole ? brickNz[bx] : uint8_t(dstLit[t] | brickNz[bx]);
+                                const int xa = std::max(bx * SSLPV_BRICK_X, box.lo.x);
+                                const int xb =
+                                    std::min(bx * SSLPV_BRICK_X + SSLPV_BRICK_X - 1, box.hi.x);
+                                const bool whole = xa >= runs[r].xs && xb <= runs[r].xe;
+                                const uint8_t bits = brickNz[bx];
+                                uint8_t lit = uint8_t((bits & NZ_ANY) != 0);
+                                if (brickStop && whole) {
+                                    lit = uint8_t((bits & NZ_BRIGHT) != 0);
+                                    if ((bits & NZ_ANY) && !lit) {
+                                        for (int ch = 0; ch < 3; ++ch) {
+                                            double faint = 0.0;
+                                            for (int y = ya; y <= yb; ++y) {
+                                                const float* c0 = m_prop[next].plane(ch, 0) +
+                                                                  m_prop[next].index({xa, y, z});
+                                                for (int x = 0; x <= xb - xa; ++x)
+                                                    faint += double(c0[x]);
+                                            }
+                                            sl.v[ch][3] += faint;
+                                            sl.v[ch][0] -= faint;  // no longer remaining
+                                        }
+                                        const Run brick{xa, xb};
+                                        zeroSegments(m_prop[next], &brick, 1, ya, yb, z);
+                                    }
+                                }
+                                dstLit[t] = whole ? lit : uint8_t(dstLit[t] | lit);
+                                sl.litBricks += dstLit[t];
                                 accLit[t] |= uint8_t(accumulate);
                                 exitLit[t] |= uint8_t(ctx.exit[0][0] != nullptr);
                             }
@@ -1074,17 +1128,20 @@ void SslpvSolver::propagate() {
             },
             /*grain=*/1);
         Rgb rem(0.f);
-        int active = 0;
+        int active = 0, lit = 0;
         for (const SliceSums& sl : sums) {
             for (int ch = 0; ch < 3; ++ch) {
                 rem[ch] += float(sl.v[ch][0] * TWO_SQRT_PI);
                 exitant[ch] += float(sl.v[ch][1] * TWO_SQRT_PI);
                 absorbed[ch] += float(sl.v[ch][2] * TWO_SQRT_PI);
+                dropped[ch] += float(sl.v[ch][3] * TWO_SQRT_PI);
             }
             active += sl.activeBricks;
+            lit += sl.litBricks;
             m_stats.cellsComputed += sl.cells;
         }
         m_stats.activeBricksPerStep.push_back(active);
+        anyLit = !brickStop || lit > 0;  // all dark: the rest of the steps would add nothing
         remaining = rem;
         m_cur = next;
         ++steps;
@@ -1103,6 +1160,7 @@ void SslpvSolver::propagate() {
     m_stats.remaining = remaining;
     m_stats.exitant = exitant;
     m_stats.absorbed = absorbed;
+    m_stats.dropped = dropped;
     m_stats.propagateMs = timer.elapsedMs();
 }
 

@@ -259,3 +259,159 @@ TEST(SslpvBricks, StepMatchesBruteForceGather) {
         EXPECT_EQ(bad, 0) << (dense ? "dense" : "active");
     }
 }
+
+namespace {
+
+/// Σ c00 over the cells with x ≥ xFrom of a grid (band 0 of channel `ch`), flux units.
+double fluxFrom(const SslpvGrid& g, int ch, int xFrom) {
+    const int n = g.resolution();
+    double sum = 0.0;
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = xFrom; x < n; ++x)
+                sum += double(g.plane(ch, 0)[g.index({x, y, z})]);
+    return sum * 2.0 * std::sqrt(3.14159265358979323846);
+}
+
+}  // namespace
+
+TEST(SslpvBricks, BrickStopDropsAtMostWhatItCounts) {
+    // SslpvOptions::brickStopEpsilon against the exact solve of as many steps. The stop sets to
+    // zero bricks whose every value is under d = ε·max(injected)/(2√π·cells that hold light), so
+    // what it drops per cell and step is at most 2√π·d in flux: in all at most
+    // ε·max(injected)·(cells computed)/(cells that hold light). Dropped light would only have
+    // been split between the sinks, absorption and the grid (energy never grows, as for the
+    // global stop: EarlyStopDropsAtMostTheFluxLeftInTheGrid), so the exact solve's exitant flux
+    // exceeds the stopped one's by between 0 and the dropped flux, and its accumulation by at
+    // most (steps)·(dropped flux). Rounding: 2e-4 of the injected flux (float sums).
+    const float eps = 1e-4f;
+    for (SslpvMode mode : {SslpvMode::Paper, SslpvMode::Calibrated})
+        for (int order : {1, 2}) {
+            SCOPED_TRACE(std::string(mode == SslpvMode::Paper ? "paper" : "calibrated") +
+                         " order " + std::to_string(order));
+            const int n = order == 1 ? 24 : 16;
+            const CoarseMaterial m = hetBall(n, 1.f, 2.f, 1.2f, 0.2f, 23);
+            SslpvOptions o{.order = order, .maxSteps = 400, .skipAccumulateSteps = 2};
+            o.mode = mode;
+            SslpvSolver exact(o);
+            o.brickStopEpsilon = eps;
+            SslpvSolver stopped(o);
+            const auto texels = ballTexels(m, Vector3f(0.2f, 0.1f, -1.f));
+            for (SslpvSolver* s : {&exact, &stopped}) {
+                s->setMaterial(m, 1.3f);
+                s->setInjectionSamples(texels);
+                s->solve();
+            }
+            const SslpvStats &a = stopped.stats(), &b = exact.stats();
+            EXPECT_EQ(b.stepsUsed, 400);
+            EXPECT_LT(a.stepsUsed, 400) << "every brick dark: the solve ends";
+            EXPECT_LT(a.cellsComputed * 2, b.cellsComputed);
+            int64_t lightCells = 0;
+            for (float f : m.insideFraction)
+                lightCells += f > 0.f;
+            const float brightest = std::max({a.injected.x, a.injected.y, a.injected.z});
+            const Rgb accA = stopped.accumulation().flux(), accB = exact.accumulation().flux();
+            for (int c = 0; c < 3; ++c) {
+                SCOPED_TRACE("channel " + std::to_string(c));
+                const float tol = 2e-4f * a.injected[c];
+                EXPECT_EQ(a.injected[c], b.injected[c]);
+                EXPECT_EQ(b.dropped[c], 0.f);
+                EXPECT_GT(a.dropped[c], 0.f);
+                EXPECT_LE(a.dropped[c],
+                          eps * brightest * float(a.cellsComputed) / float(lightCells));
+                EXPECT_GE(b.exitant[c] - a.exitant[c], -tol);
+                EXPECT_LE(b.exitant[c] - a.exitant[c], a.dropped[c] + tol);
+                EXPECT_GE(accB[c] - accA[c], -tol);
+                EXPECT_LE(accB[c] - accA[c], float(b.stepsUsed) * a.dropped[c] + tol);
+            }
+            // Off, the stop changes nothing: the exact solve's grids bit for bit.
+            o.brickStopEpsilon = 0.f;
+            stopped.setOptions(o);
+            stopped.solve();
+            EXPECT_EQ(stopped.accumulation().raw(), exact.accumulation().raw());
+        }
+}
+
+TEST(SslpvBricks, BrickStopIsLocalPaintDoesNotEndThePropagationElsewhere) {
+    // Why the live preview can stop per brick where it could not stop globally (the method's
+    // `steps` parameter): two separate balls of a bright medium, each lit from above; an
+    // absorber is painted into ball A (σs′ lowered, σt kept, so the injection does not change).
+    // Ball B's light never meets the paint. With the per-brick stop its bricks carry on until
+    // their own light is dark, so B's accumulation is bit for bit what it was; the global stop
+    // (stopEpsilon at the same ε) ends the whole solve sooner once A absorbs, and B dims (by
+    // 2.7·10⁻⁴ here: the global stop's loss is bounded by ε too, but it is taken from light
+    // that the stroke never touched).
+    const int n = 48;
+    const Point3f centres[2] = {Point3f(-12.f, 0.f, 0.f), Point3f(12.f, 0.f, 0.f)};
+    const float radius = 9.f;
+    auto material = [&](float albedoA) {
+        CoarseMaterial m = test::centredMaterial(n, 1.f);
+        for (int z = 0; z < n; ++z)
+            for (int y = 0; y < n; ++y)
+                for (int x = 0; x < n; ++x) {
+                    const Point3f p = m.spec.cellCenter({x, y, z});
+                    for (int b = 0; b < 2; ++b) {
+                        if (glm::length(p - centres[b]) > radius)
+                            continue;
+                        const size_t k = m.spec.linearIndex({x, y, z});
+                        m.insideFraction[k] = 1.f;
+                        for (int c = 0; c < 3; ++c) {
+                            m.sigma_t[c][k] = 1.f;
+                            m.sigma_s[c][k] = b == 0 ? albedoA : 0.99f;
+                        }
+                    }
+                }
+        return m;
+    };
+    std::vector<SslpvInjectionSample> tops;  // 1 mm² texels over each ball's upper cap
+    for (const Point3f& c : centres)
+        for (float u = -6.5f; u <= 6.5f; u += 1.f)
+            for (float v = -6.5f; v <= 6.5f; v += 1.f) {
+                const Point3f p = c + Vector3f(u, v, std::sqrt(radius * radius - u * u - v * v));
+                tops.push_back({p, glm::normalize(p - c), Vector3f(0, 0, -1), Rgb(1.f)});
+            }
+    const float eps = 1e-4f;
+    // B's cells: x ≥ 24 (the balls are 6 cells apart at x = 20..27).
+    auto ballB = [&](const SslpvSolver& s) {
+        std::vector<float> out;
+        const SslpvGrid& g = s.accumulation();
+        for (int ch = 0; ch < 3; ++ch)
+            for (int i = 0; i < g.coeffCount(); ++i)
+                for (int z = 0; z < n; ++z)
+                    for (int y = 0; y < n; ++y)
+                        for (int x = 24; x < n; ++x)
+                            out.push_back(g.plane(ch, i)[g.index({x, y, z})]);
+        return out;
+    };
+    double sumB[2][2] = {};  // [global, local][before, after]
+    std::vector<float> localB[2];
+    int steps[2][2] = {};
+    for (int painted = 0; painted < 2; ++painted) {
+        const CoarseMaterial m = material(painted ? 0.2f : 0.99f);
+        SslpvOptions o{.maxSteps = 400, .skipAccumulateSteps = 0};
+        o.mode = SslpvMode::Calibrated;
+        o.brickStopEpsilon = eps;
+        SslpvSolver local(o);
+        o.brickStopEpsilon = 0.f;
+        o.stopEpsilon = eps;
+        SslpvSolver global(o);
+        for (SslpvSolver* s : {&local, &global}) {
+            s->setMaterial(m, 1.f);
+            s->setInjectionSamples(tops);
+            s->solve();
+        }
+        ASSERT_LT(local.stats().stepsUsed, 400);
+        localB[painted] = ballB(local);
+        sumB[0][painted] = fluxFrom(global.accumulation(), 1, 24);
+        sumB[1][painted] = fluxFrom(local.accumulation(), 1, 24);
+        steps[0][painted] = global.stats().stepsUsed;
+        steps[1][painted] = local.stats().stepsUsed;
+    }
+    std::printf(
+        "[sslpv bricks] paint in ball A: ball B's accumulation x %.6f with the global "
+        "stop (steps %d -> %d), x %.6f with the per-brick stop (steps %d -> %d)\n",
+        sumB[0][1] / sumB[0][0], steps[0][0], steps[0][1], sumB[1][1] / sumB[1][0], steps[1][0],
+        steps[1][1]);
+    EXPECT_EQ(localB[1], localB[0]);
+    EXPECT_LT(sumB[0][1] / sumB[0][0], 1.0 - 1e-5);
+}

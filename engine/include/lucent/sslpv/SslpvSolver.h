@@ -130,6 +130,17 @@ struct SslpvOptions {
     /// Stop once the flux left in the propagation grid is below stopEpsilon · injected flux
     /// (all channels); 0 runs maxSteps. [0, 1].
     float stopEpsilon = 0.f;
+    /// Per-brick stop (modes Paper and Calibrated): after a step, a brick whose cells all hold
+    /// less than brickStopEpsilon · c̄ in every coefficient and channel, c̄ the injected band-0
+    /// coefficient per cell that can hold light (insideFraction > 0; the brightest channel's),
+    /// is set to zero and counts as
+    /// dark, so light that has died out in one part of the object stops being propagated there
+    /// while the rest carries on; the solve ends early once every brick is dark. Unlike
+    /// stopEpsilon this is local: paint that absorbs in one place does not end the propagation
+    /// elsewhere. The light set to zero is SslpvStats::dropped (at most brickStopEpsilon · 2√π
+    /// · c̄ per cell and step). 0: off (every brick with any non-zero value propagates: the
+    /// exact solve of maxSteps steps). [0, 1].
+    float brickStopEpsilon = 0.f;
     /// Active-brick propagation: each step computes only the bricks (SSLPV_BRICK_X × _Y × _Z
     /// cells) of which the brick itself or a face neighbour held non-zero flux after the
     /// previous step; every other cell's new value is exactly zero (the stencil reaches only
@@ -186,6 +197,7 @@ struct SslpvStats {
     Rgb remaining{0.f};  ///< flux still in the propagation grid
     Rgb exitant{0.f};    ///< flux that reached sink cells (removeExitant)
     Rgb absorbed{0.f};   ///< flux removed by the Beer attenuation
+    Rgb dropped{0.f};    ///< flux set to zero in dark bricks (SslpvOptions::brickStopEpsilon)
     int injectedTexels = 0;
     int skippedTexels = 0;  ///< back-facing, zero flux, or no inside cell near x_p
     /// Beams injected again by the last solve's incremental re-injection (a stroke; 0 after a
@@ -351,6 +363,7 @@ private:
     float m_homAbsorb[3] = {};
     CoordBox m_active;  ///< cells that can hold light (inside cells dilated by one, or all)
     CoordBox m_lastActive;
+    int64_t m_lightCells = 0;  ///< cells that can hold light (insideFraction > 0)
     // Per-brick flags (index (z·bricksY + by)·bricksX + bx with SSLPV_BRICK_Z = 1):
     std::vector<uint8_t> m_injBrickLit;   ///< bricks holding injected light
     std::vector<uint8_t> m_brickLit[2];   ///< m_prop[k]'s brick may hold non-zero values

@@ -114,6 +114,7 @@ private:
         // and what has not reached the accumulation grid is missing from the image. The GL
         // propagation runs as many steps as the CPU solve used (SslpvGl.h).
         o.render.solver.stopEpsilon = float(p.getFloat("stop"));
+        o.render.solver.brickStopEpsilon = float(p.getFloat("brick-stop"));
         o.render.solver.order = p.getInt("sh");
         // calibrated: the fitted per-step absorption and radiance gain (SslpvCalibration,
         // docs/methods/sslpv.md); paper: §3.2.1 with `attenuation` (absorption-only by default
@@ -222,6 +223,17 @@ MethodEntry sslpvMethod() {
          "0.01",
          "",
          "0"},
+        {"brick-stop",
+         ParamType::Float,
+         "modes paper and calibrated: a brick of cells whose light is below this fraction of "
+         "the injected light per cell stops propagating, and the solve ends once every brick "
+         "is dark (0: off; live preview default 0.0001)",
+         0,
+         1,
+         {},
+         "0",
+         "",
+         "0.0001"},
         {"sh",
          ParamType::Int,
          "spherical-harmonics order: 1 (4 coefficients) or 2 (9)",
