@@ -6,6 +6,7 @@
 #include <lucent/sslpv/SslpvProvider.h>
 
 #include <lucent/core/Error.h>
+#include <lucent/core/Parallel.h>
 #include <lucent/core/Timer.h>
 #include <lucent/dipole/Profiles.h>
 #include <lucent/gpu/GlResources.h>
@@ -85,6 +86,8 @@ struct SslpvSubsurfaceProvider::Impl {
     std::shared_ptr<const dipole::DirpoleExitTable> exitTableUploaded;
     std::unique_ptr<SslpvGlPropagator> gl;
     std::vector<float> staging;
+    std::vector<uint8_t> readable;  ///< per cell, x fastest: SslpvSolver::isReadable
+    uint64_t readableVersion = 0;   ///< SslpvSolver::readableVersion() of `readable`
 
     SslpvProviderTimings timings;
     SslpvProviderStats stats;
@@ -352,19 +355,36 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
         const bool diffusion = s.solver.options().mode == SslpvMode::Diffusion;
         const int uploaded =
             std::min(grid.coeffCount(), diffusion ? UPLOADED_COEFFS_DIFFUSION : UPLOADED_COEFFS);
+        // The readable flags (texture 0's alpha) only when they may have changed (a stroke
+        // keeps them), then each texture's texels slice by slice on the worker threads: the
+        // repacking took 3.3 of the 5.6 ms of a 64³ upload on one thread.
+        if (s.readable.size() != cells || s.readableVersion != s.solver.readableVersion()) {
+            s.readable.resize(cells);
+            parallelFor(0, N, [&](int64_t z0, int64_t z1) {
+                for (int z = int(z0); z < int(z1); ++z)
+                    for (int y = 0; y < N; ++y)
+                        for (int x = 0; x < N; ++x)
+                            s.readable[(size_t(z) * N + size_t(y)) * N + size_t(x)] =
+                                uint8_t(s.solver.isReadable({x, y, z}));
+            });
+            s.readableVersion = s.solver.readableVersion();
+        }
         for (int i = 0; i < uploaded; ++i) {
             const float* planes[3] = {grid.plane(0, i), grid.plane(1, i), grid.plane(2, i)};
-            size_t k = 0;
-            for (int z = 0; z < N; ++z)
-                for (int y = 0; y < N; ++y)
-                    for (int x = 0; x < N; ++x, ++k) {
-                        const size_t pi = grid.index({x, y, z});
-                        float* dst = &s.staging[4 * k];
-                        dst[0] = planes[0][pi];
-                        dst[1] = planes[1][pi];
-                        dst[2] = planes[2][pi];
-                        dst[3] = i == 0 && s.solver.isReadable({x, y, z}) ? 1.f : 0.f;
+            parallelFor(0, N, [&](int64_t z0, int64_t z1) {
+                for (int z = int(z0); z < int(z1); ++z)
+                    for (int y = 0; y < N; ++y) {
+                        const size_t row = (size_t(z) * N + size_t(y)) * N;
+                        const size_t pi = grid.index({0, y, z});
+                        for (int x = 0; x < N; ++x) {
+                            float* dst = &s.staging[4 * (row + size_t(x))];
+                            dst[0] = planes[0][pi + size_t(x)];
+                            dst[1] = planes[1][pi + size_t(x)];
+                            dst[2] = planes[2][pi + size_t(x)];
+                            dst[3] = i == 0 && s.readable[row + size_t(x)] ? 1.f : 0.f;
+                        }
                     }
+            });
             glTextureSubImage3D(s.coeffTex[i].id(), 0, 0, 0, 0, N, N, N, GL_RGBA, GL_FLOAT,
                                 s.staging.data());
         }

@@ -465,6 +465,7 @@ void SslpvSolver::setOptions(const SslpvOptions& o) {
     m_opt = o;
     m_materialDirty = true;
     m_factorsDirty = true;
+    ++m_readableVersion;
     m_exitTable = nullptr;  // the next diffusion solve sets it (its grid holds the albedo)
 }
 
@@ -510,6 +511,8 @@ void SslpvSolver::setMaterial(CoarseMaterial&& material, float eta) {
     m_material = std::move(material);
     if (regrid || insideChanged || eta != m_eta)
         m_injectionDirty = true;
+    if (regrid || insideChanged)
+        ++m_readableVersion;
     m_eta = eta;
     m_hasMaterial = true;
     m_materialDirty = true;

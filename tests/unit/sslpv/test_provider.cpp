@@ -318,6 +318,27 @@ TEST_F(SslpvProviderGl, PaintingUpdatesIncrementallyAndMatchesFromScratch) {
     p.destroy();
 }
 
+TEST_F(SslpvProviderGl, ModeSwitchReadsTheNewModesCells) {
+    // The upload keeps the readable flags between uploads (a stroke leaves them); a switch to
+    // mode diffusion, which reads boundary cells only, must take its own: the frame after the
+    // switch equals a fresh diffusion provider's bit for bit.
+    const TestScene s = makeScene();
+    SslpvSubsurfaceProvider p(providerOptions(SslpvMode::Paper));
+    p.create();
+    setUp(p, s);
+    (void)render(p, s);
+    p.setOptions(providerOptions(SslpvMode::Diffusion));
+    const ImageRgb switched = render(p, s);
+    SslpvSubsurfaceProvider fresh(providerOptions(SslpvMode::Diffusion));
+    fresh.create();
+    setUp(fresh, s);
+    const ImageRgb expected = render(fresh, s);
+    ASSERT_GT(test::largestValue(expected), 0.f);
+    EXPECT_EQ(test::largestDifference(switched, expected), 0.f);
+    fresh.destroy();
+    p.destroy();
+}
+
 TEST_F(SslpvProviderGl, GlBackendMatchesCpuBackend) {
     const TestScene s = makeScene();
     SslpvSubsurfaceProvider cpu(providerOptions());

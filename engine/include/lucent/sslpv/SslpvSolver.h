@@ -262,6 +262,9 @@ public:
     /// Cell c is one radiance() (and the GL read-out) interpolates: an inside cell; in mode
     /// Diffusion only those with a boundary face (GridDiffusion::isBoundary).
     [[nodiscard]] bool isReadable(const Coord& c) const;
+    /// Changes whenever isReadable() may answer differently: new options, grid or inside
+    /// cells (a stroke that only changes σ keeps it), so a caller can keep a copy of the flags.
+    [[nodiscard]] uint64_t readableVersion() const { return m_readableVersion; }
     /// Incident radiance estimate just inside the surface at p with outward unit normal n
     /// (Eq. 5–7: area light of cross-section A = Δx², L_i = Φ_hemisphere/(Aπ)), W/(mm²·sr),
     /// from the accumulation grid sampled half a cell inside along −n (trilinear over inside
@@ -364,6 +367,7 @@ private:
     CoordBox m_active;  ///< cells that can hold light (inside cells dilated by one, or all)
     CoordBox m_lastActive;
     int64_t m_lightCells = 0;  ///< cells that can hold light (insideFraction > 0)
+    uint64_t m_readableVersion = 0;
     // Per-brick flags (index (z·bricksY + by)·bricksX + bx with SSLPV_BRICK_Z = 1):
     std::vector<uint8_t> m_injBrickLit;   ///< bricks holding injected light
     std::vector<uint8_t> m_brickLit[2];   ///< m_prop[k]'s brick may hold non-zero values
