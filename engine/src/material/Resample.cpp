@@ -287,7 +287,7 @@ CoarseMaterial resampleForPropagation(const MaterialVolume& volume, int resoluti
 }
 
 size_t updateCoarseMaterial(CoarseMaterial& coarse, const MaterialVolume& volume,
-                            const std::vector<int>& dirtyBricks) {
+                            const std::vector<int>& dirtyBricks, std::vector<int>* recomputed) {
     LUCENT_CHECK(volume.brickCount() > 0, "updateCoarseMaterial: the material volume is empty");
     const int res = coarse.spec.resolution;
     LUCENT_CHECK(res >= 1 && res <= volume.resolution(), "updateCoarseMaterial: coarse resolution ",
@@ -340,6 +340,8 @@ size_t updateCoarseMaterial(CoarseMaterial& coarse, const MaterialVolume& volume
         },
         64);
     coarse.homogeneous = isHomogeneous(coarse);
+    if (recomputed)
+        recomputed->insert(recomputed->end(), list.begin(), list.end());
     return list.size();
 }
 

@@ -465,8 +465,44 @@ void SslpvSolver::setOptions(const SslpvOptions& o) {
     m_opt = o;
     m_materialDirty = true;
     m_factorsDirty = true;
+    m_refoldAll = true;
     ++m_readableVersion;
     m_exitTable = nullptr;  // the next diffusion solve sets it (its grid holds the albedo)
+}
+
+namespace {
+
+void validateCell(const CoarseMaterial& m, size_t k, int c) {
+    const float st = m.sigma_t[c][k], ss = m.sigma_s[c][k], g = m.g[c][k];
+    if (!(std::isfinite(st) && st >= 0.f) || !(std::isfinite(ss) && ss >= 0.f) ||
+        !(std::isfinite(g) && std::abs(g) <= 1.f)) {
+        LUCENT_THROW(ValueError, "SSLPV material: cell ", k, " channel ", c, " has sigma_t=", st,
+                     " sigma_s=", ss, " g=", g,
+                     " (need finite sigma_t, sigma_s >= 0 mm^-1 and |g| <= 1)");
+    }
+}
+
+}  // namespace
+
+void SslpvSolver::markMaterialCellsDirty(const std::vector<int>& cells) {
+    LUCENT_CHECK(m_hasMaterial, "SSLPV: markMaterialCellsDirty() called before setMaterial()");
+    const int n = m_material.spec.resolution;
+    const size_t count = m_material.spec.voxelCount();
+    for (const int k : cells) {
+        LUCENT_CHECK(k >= 0 && size_t(k) < count, "SSLPV: markMaterialCellsDirty: cell ", k,
+                     " outside [0, ", count, ")");
+        for (int c = 0; c < 3; ++c)
+            validateCell(m_material, size_t(k), c);
+    }
+    m_materialDirty = true;
+    if (!m_factorsDirty) {
+        m_factorsDirty = true;
+        m_refoldAll = false;
+        m_refoldRows.clear();
+    }
+    if (!m_refoldAll)
+        for (const int k : cells)
+            m_refoldRows.push_back(k / n);
 }
 
 void SslpvSolver::validateMaterial(const CoarseMaterial& m) const {
@@ -484,15 +520,8 @@ void SslpvSolver::validateMaterial(const CoarseMaterial& m) const {
             LUCENT_CHECK(arrays[a]->size() == n, "SSLPV material: ", names[a], "[", c, "] has ",
                          arrays[a]->size(), " values, expected ", n);
         }
-        for (size_t k = 0; k < n; ++k) {
-            const float st = m.sigma_t[c][k], ss = m.sigma_s[c][k], g = m.g[c][k];
-            if (!(std::isfinite(st) && st >= 0.f) || !(std::isfinite(ss) && ss >= 0.f) ||
-                !(std::isfinite(g) && std::abs(g) <= 1.f)) {
-                LUCENT_THROW(ValueError, "SSLPV material: cell ", k, " channel ", c,
-                             " has sigma_t=", st, " sigma_s=", ss, " g=", g,
-                             " (need finite sigma_t, sigma_s >= 0 mm^-1 and |g| <= 1)");
-            }
-        }
+        for (size_t k = 0; k < n; ++k)
+            validateCell(m, k, c);
     }
     LUCENT_CHECK(m.insideFraction.size() == n, "SSLPV material: insideFraction has ",
                  m.insideFraction.size(), " values, expected ", n);
@@ -517,6 +546,7 @@ void SslpvSolver::setMaterial(CoarseMaterial&& material, float eta) {
     m_hasMaterial = true;
     m_materialDirty = true;
     m_factorsDirty = true;
+    m_refoldAll = true;
 }
 
 void SslpvSolver::setInjectionSamples(std::vector<SslpvInjectionSample> samples) {
@@ -566,37 +596,52 @@ void SslpvSolver::rebuildFactors() {
         absorb = 1.f - a;
     };
 
-    // Sinks: a cell keeps min(1, 2f) of the light that enters it, f its insideFraction, and the
-    // rest leaves the object. Inside cells (f ≥ ½) keep everything, as with a binary mask; a
-    // cell the surface cuts with f < ½ is a partial sink, so the lattice's boundary follows
-    // the surface within a cell instead of the voxel staircase (a binary mask leaks through
-    // every stair riser: a slab tilted 20–45° against the grid read 14–18 % darker than one
-    // aligned with it, and the stair pattern shows as contour bands).
-    m_mask.assign(m_opt.removeExitant ? plane : 0, 0.f);
-    m_lightCells = 0;
-    Bounds3f insideBox;
-    for (int z = 0; z < n; ++z)
-        for (int y = 0; y < n; ++y)
-            for (int x = 0; x < n; ++x) {
-                const float f = m_material.insideFraction[s.linearIndex({x, y, z})];
-                if (!(f > 0.f))
-                    continue;
-                ++m_lightCells;
-                if (m_opt.removeExitant)
-                    m_mask[padded(x, y, z)] = std::min(1.f, 2.f * f);
-                insideBox.expand(Point3f(float(x), float(y), float(z)));
+    // After markMaterialCellsDirty alone the inside cells, so the sinks, the active box and the
+    // cells that hold light, are as they were, and of a heterogeneous material only the named
+    // rows need refolding (the same row calls as a full refold: bit-identical factors).
+    const bool rowsOnly = !m_refoldAll && !m_homogeneous && m_factor[0][0].size() == plane;
+    m_refoldAll = false;
+    std::vector<int> rows;
+    if (rowsOnly) {
+        rows.swap(m_refoldRows);
+        std::sort(rows.begin(), rows.end());
+        rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+    }
+    m_refoldRows.clear();
+
+    if (!rowsOnly) {
+        // Sinks: a cell keeps min(1, 2f) of the light that enters it, f its insideFraction, and the
+        // rest leaves the object. Inside cells (f ≥ ½) keep everything, as with a binary mask; a
+        // cell the surface cuts with f < ½ is a partial sink, so the lattice's boundary follows
+        // the surface within a cell instead of the voxel staircase (a binary mask leaks through
+        // every stair riser: a slab tilted 20–45° against the grid read 14–18 % darker than one
+        // aligned with it, and the stair pattern shows as contour bands).
+        m_mask.assign(m_opt.removeExitant ? plane : 0, 0.f);
+        m_lightCells = 0;
+        Bounds3f insideBox;
+        for (int z = 0; z < n; ++z)
+            for (int y = 0; y < n; ++y)
+                for (int x = 0; x < n; ++x) {
+                    const float f = m_material.insideFraction[s.linearIndex({x, y, z})];
+                    if (!(f > 0.f))
+                        continue;
+                    ++m_lightCells;
+                    if (m_opt.removeExitant)
+                        m_mask[padded(x, y, z)] = std::min(1.f, 2.f * f);
+                    insideBox.expand(Point3f(float(x), float(y), float(z)));
+                }
+        if (m_opt.removeExitant) {
+            // Light can only exist in cells with f > 0 and the sink cells one step away.
+            if (insideBox.isEmpty()) {
+                m_active = CoordBox{};
+            } else {
+                m_active.lo = glm::max(Coord(insideBox.lo) - Coord(1), Coord(0));
+                m_active.hi = glm::min(Coord(insideBox.hi) + Coord(1), Coord(n - 1));
             }
-    if (m_opt.removeExitant) {
-        // Light can only exist in cells with f > 0 and the sink cells one step away.
-        if (insideBox.isEmpty()) {
-            m_active = CoordBox{};
         } else {
-            m_active.lo = glm::max(Coord(insideBox.lo) - Coord(1), Coord(0));
-            m_active.hi = glm::min(Coord(insideBox.hi) + Coord(1), Coord(n - 1));
+            m_active.lo = Coord(0);
+            m_active.hi = Coord(n - 1);
         }
-    } else {
-        m_active.lo = Coord(0);
-        m_active.hi = Coord(n - 1);
     }
 
     // Homogeneous fast path: every cell that can carry light to a neighbour has the same
@@ -618,6 +663,7 @@ void SslpvSolver::rebuildFactors() {
     }
     m_homogeneous = hom;
     if (hom) {
+        m_stats.refoldedRows = 0;
         for (int c = 0; c < 3; ++c) {
             if (ref == SIZE_MAX) {
                 m_homFactor[c][0] = m_homFactor[c][1] = m_homFactor[c][2] = 1.f;
@@ -636,23 +682,37 @@ void SslpvSolver::rebuildFactors() {
             if (f.size() != plane)
                 f.assign(plane, 0.f);
     }
+    const auto foldRow = [&](int y, int z) {
+        // Row loops over contiguous arrays with the branch-free exp: they vectorise.
+        for (int c = 0; c < 3; ++c) {
+            const size_t k = s.linearIndex({0, y, z});
+            const size_t pk = padded(0, y, z);
+            const float* __restrict st = &m_material.sigma_t[c][k];
+            const float* __restrict ssIn = &m_material.sigma_s[c][k];
+            const float* __restrict gg = &m_material.g[c][k];
+            float* __restrict f0 = &m_factor[c][0][pk];
+            float* __restrict f1 = &m_factor[c][1][pk];
+            float* __restrict f2 = &m_factor[c][2][pk];
+            foldFactorRow(st, ssIn, gg, f0, f1, f2, n, dx, model);
+        }
+    };
+    m_stats.refoldedRows = rowsOnly ? int64_t(rows.size()) : int64_t(n) * n;
+    if (rowsOnly) {
+        parallelFor(
+            0, int64_t(rows.size()),
+            [&](int64_t r0, int64_t r1) {
+                for (int64_t r = r0; r < r1; ++r)
+                    foldRow(rows[size_t(r)] % n, rows[size_t(r)] / n);
+            },
+            /*grain=*/16);
+        return;
+    }
     parallelFor(
         0, n,
         [&](int64_t z0, int64_t z1) {
-            // Row loops over contiguous arrays with the branch-free exp: they vectorise.
             for (int z = int(z0); z < int(z1); ++z)
-                for (int c = 0; c < 3; ++c)
-                    for (int y = 0; y < n; ++y) {
-                        const size_t k = s.linearIndex({0, y, z});
-                        const size_t pk = padded(0, y, z);
-                        const float* __restrict st = &m_material.sigma_t[c][k];
-                        const float* __restrict ssIn = &m_material.sigma_s[c][k];
-                        const float* __restrict gg = &m_material.g[c][k];
-                        float* __restrict f0 = &m_factor[c][0][pk];
-                        float* __restrict f1 = &m_factor[c][1][pk];
-                        float* __restrict f2 = &m_factor[c][2][pk];
-                        foldFactorRow(st, ssIn, gg, f0, f1, f2, n, dx, model);
-                    }
+                for (int y = 0; y < n; ++y)
+                    foldRow(y, z);
         },
         /*grain=*/1);
 }
@@ -1170,6 +1230,7 @@ void SslpvSolver::propagate() {
 const SslpvStats& SslpvSolver::solve() {
     LUCENT_CHECK(m_hasMaterial, "SSLPV: solve() called before setMaterial()");
     m_stats.reinjected = m_stats.repropagated = false;
+    m_stats.refoldedRows = 0;
     if (m_opt.mode == SslpvMode::Diffusion) {
         // The source depends on σt′ along each beam, so a material change re-injects too.
         if (m_injectionDirty || m_materialDirty) {

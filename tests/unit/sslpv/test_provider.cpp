@@ -295,6 +295,11 @@ TEST_F(SslpvProviderGl, PaintingUpdatesIncrementallyAndMatchesFromScratch) {
     const ImageRgb after = render(p, s);
     EXPECT_EQ(p.stats().fullResamples, 1);  // only the incremental path ran
     EXPECT_EQ(p.stats().incrementalUpdates, 1);
+    // The stroke's cells went into the solver's material in place, and only their rows'
+    // factors were refolded (the scene's first stroke made the material heterogeneous).
+    EXPECT_EQ(p.stats().inPlaceUpdates, 1);
+    EXPECT_GT(p.solver().stats().refoldedRows, 0);
+    EXPECT_LT(p.solver().stats().refoldedRows, 16 * 16 / 2);
     EXPECT_GT(p.stats().lastResampledCells, 0u);
     EXPECT_LT(p.stats().lastResampledCells, size_t(16 * 16 * 16) / 4);
     EXPECT_GT(test::largestDifference(before, after),

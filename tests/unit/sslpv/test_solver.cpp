@@ -303,6 +303,76 @@ TEST(SslpvSolver, RejectsBadInput) {
     EXPECT_THROW(solver.setOptions({.order = 3}), ValueError);
     EXPECT_THROW(solver.setOptions({.maxSteps = -1}), ValueError);
     EXPECT_THROW(solver.setOptions({.stopEpsilon = 2.f}), ValueError);
+    EXPECT_THROW(solver.setOptions({.brickStopEpsilon = -1e-3f}), ValueError);
+    EXPECT_THROW(solver.markMaterialCellsDirty({0}), ValueError);  // no material yet
+    solver.setMaterial(m, 1.3f);
+    EXPECT_THROW(solver.markMaterialCellsDirty({int(m.spec.voxelCount())}), ValueError);
+    solver.material().g[0][7] = 2.f;
+    EXPECT_THROW(solver.markMaterialCellsDirty({7}), ValueError);
+}
+
+TEST(SslpvSolver, CellsEditedInPlaceSolveAsANewMaterial) {
+    // A stroke's cells written through material() and named to markMaterialCellsDirty refold
+    // only their rows' factors, and the solve equals one of a solver handed the whole material
+    // bit for bit (the rows are folded by the same calls as a full refold). Three strokes in a
+    // row, the second before a solve, then one that makes the material homogeneous again.
+    // (Without incremental re-injection, which matches a full one only to float rounding.)
+    CoarseMaterial m = ballMaterial(20, 1.f, Rgb(1.f, 1.2f, 1.5f), Rgb(0.8f, 1.f, 1.2f), Rgb(0.f));
+    m.sigma_t[0][m.spec.linearIndex({10, 10, 10})] = 3.f;  // heterogeneous from the start
+    m.homogeneous = false;
+    const SslpvOptions o{.maxSteps = 24, .incrementalInjection = false};
+    SslpvSolver live(o);
+    live.setMaterial(m, 1.3f);
+    const auto texels = ballTexels(m, Vector3f(0.3f, 0, -1), Rgb(1.f));
+    live.setInjectionSamples(texels);
+    live.solve();
+    const auto stroke = [&](Coord c, float st, bool solve) {
+        std::vector<int> cells;
+        for (int dz = 0; dz < 2; ++dz)
+            for (int dx = 0; dx < 3; ++dx) {
+                const int k = int(m.spec.linearIndex(c + Coord(dx, 0, dz)));
+                cells.push_back(k);
+                for (CoarseMaterial* mat : {&m, &live.material()})
+                    for (int ch = 0; ch < 3; ++ch) {
+                        mat->sigma_t[ch][size_t(k)] = st;
+                        mat->sigma_s[ch][size_t(k)] = 0.5f * st;
+                    }
+            }
+        live.markMaterialCellsDirty(cells);
+        if (solve)
+            live.solve();
+    };
+    const auto expectAsNew = [&](const char* what, bool rowsOnly) {
+        SCOPED_TRACE(what);
+        SslpvSolver fresh(o);
+        fresh.setMaterial(m, 1.3f);
+        fresh.setInjectionSamples(texels);
+        fresh.solve();
+        EXPECT_EQ(live.accumulation().raw(), fresh.accumulation().raw());
+        if (rowsOnly) {
+            EXPECT_GT(live.stats().refoldedRows, 0);
+            EXPECT_LT(live.stats().refoldedRows, 20 * 20 / 10);
+        }
+    };
+    stroke({6, 8, 12}, 4.f, true);
+    expectAsNew("one stroke", true);
+    stroke({9, 12, 5}, 0.5f, false);
+    stroke({12, 6, 9}, 2.f, true);
+    expectAsNew("two strokes, one solve", true);
+    // Back to one material everywhere inside: the solver finds it homogeneous again.
+    for (CoarseMaterial* mat : {&m, &live.material()})
+        for (int ch = 0; ch < 3; ++ch)
+            for (size_t k = 0; k < m.spec.voxelCount(); ++k) {
+                mat->sigma_t[ch][k] = 1.f;
+                mat->sigma_s[ch][k] = 0.8f;
+            }
+    std::vector<int> all(m.spec.voxelCount());
+    for (size_t k = 0; k < all.size(); ++k)
+        all[k] = int(k);
+    live.markMaterialCellsDirty(all);
+    live.solve();
+    expectAsNew("homogeneous again", false);
+    EXPECT_EQ(live.stats().refoldedRows, 0);
 }
 
 TEST(SslpvSolver, RadianceFacesTheLight) {

@@ -38,10 +38,12 @@ CoarseMaterial resampleForPropagation(const MaterialVolume& volume, int resoluti
 ///     paint(volume);                                            // strokes mark bricks dirty
 ///     updateCoarseMaterial(coarse, volume, volume.takeDirtyBricks());
 ///
+/// @param recomputed if given, the recomputed cells' linear indices are appended (ascending).
 /// @return the number of coarse cells recomputed.
 /// @throw ValueError if `coarse` was not resampled from a volume with this GridSpec (origin,
 /// voxel size, resolution), its arrays have the wrong size, or a brick index is out of range.
 size_t updateCoarseMaterial(CoarseMaterial& coarse, const MaterialVolume& volume,
-                            const std::vector<int>& dirtyBricks);
+                            const std::vector<int>& dirtyBricks,
+                            std::vector<int>* recomputed = nullptr);
 
 }  // namespace lucent

@@ -73,9 +73,12 @@ struct SslpvProviderStats {
     int fullResamples = 0;          ///< setMaterial calls (resampleForPropagation)
     int incrementalUpdates = 0;     ///< updateMaterial calls with at least one dirty brick
     size_t lastResampledCells = 0;  ///< coarse cells recomputed by the last (partial) resample
-    int solves = 0;                 ///< solver runs that did work
-    int uploads = 0;                ///< grid uploads
-    int frames = 0;                 ///< sample passes
+    /// Material updates written into the solver's material cell by cell (strokes that kept
+    /// the shape: SslpvSolver::markMaterialCellsDirty) instead of handing it a new one.
+    int inPlaceUpdates = 0;
+    int solves = 0;   ///< solver runs that did work
+    int uploads = 0;  ///< grid uploads
+    int frames = 0;   ///< sample passes
 };
 
 /// gpu::SubsurfaceProvider evaluating SSLPV per G-buffer pixel. Create/destroy explicitly with

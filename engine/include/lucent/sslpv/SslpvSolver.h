@@ -216,6 +216,10 @@ struct SslpvStats {
     /// Cells computed over all steps (active bricks' cells, plus the cells SIMD rows padded
     /// them with, which are exactly zero).
     int64_t cellsComputed = 0;
+    /// Grid rows (N cells along x) whose per-cell factors the last solve refolded: N² after a
+    /// new material or options, the rows of the cells markMaterialCellsDirty named, 0 for a
+    /// homogeneous material (one set of factors) or an unchanged one.
+    int64_t refoldedRows = 0;
 };
 
 /// Incremental SSLPV solver (see file comment). Not thread-safe; solve() uses parallelFor.
@@ -233,8 +237,18 @@ public:
     void setMaterial(const CoarseMaterial& material, float eta);
     /// The same, taking the material over (a stroke at grid 64 saves copying its ten 64³ arrays).
     void setMaterial(CoarseMaterial&& material, float eta);
+    [[nodiscard]] bool hasMaterial() const { return m_hasMaterial; }
     /// The material arrays were edited in place through material(): re-propagate.
-    void markMaterialDirty() { m_materialDirty = m_factorsDirty = true; }
+    void markMaterialDirty() {
+        m_materialDirty = m_factorsDirty = true;
+        m_refoldAll = true;
+    }
+    /// Only the listed cells' σt, σs′ and g were edited in place through material() (a stroke;
+    /// not their insideFraction, which changes the shape: markMaterialDirty or setMaterial):
+    /// re-propagate, refolding the per-cell factors of their rows only (bit-identical to a full
+    /// refold). The cells' values are checked as setMaterial checks them.
+    /// @throw ValueError for a cell index out of range or a value setMaterial would reject.
+    void markMaterialCellsDirty(const std::vector<int>& cells);
     CoarseMaterial& material() { return m_material; }
     /// Replaces the injection texels (lights or mesh moved): re-inject and re-propagate.
     void setInjectionSamples(std::vector<SslpvInjectionSample> samples);
@@ -349,8 +363,10 @@ private:
     float m_eta = 1.3f;
     std::vector<SslpvInjectionSample> m_samples;
     bool m_injectionDirty = true;
-    bool m_materialDirty = true;  ///< propagation must rerun
-    bool m_factorsDirty = true;   ///< per-cell factors must be refolded (material/options)
+    bool m_materialDirty = true;    ///< propagation must rerun
+    bool m_factorsDirty = true;     ///< per-cell factors must be refolded (material/options)
+    bool m_refoldAll = true;        ///< m_factorsDirty: every row (else m_refoldRows only)
+    std::vector<int> m_refoldRows;  ///< rows (z·N + y) whose cells markMaterialCellsDirty named
     bool m_hasMaterial = false;
 
     SslpvGrid m_injection, m_accum, m_exitant;
