@@ -219,12 +219,13 @@ void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath,
 /// Measures the live costs Auto plans with (planner/LiveCosts.h): for every candidate of the
 /// shipped table, at the app's default render settings, the stroke → frame median over the
 /// render time of a Direct stroke frame (its paintGL, median). Each candidate's ratio is taken
-/// against a Direct timing made just before it, and the median of three rounds is kept: on a
+/// against a Direct timing made just before it, and the median of five rounds is kept: on a
 /// shared machine the load drifts within a run, and a pair measured together sees the same
-/// load. Prints them and writes them to `path` in the table's format.
+/// load (three rounds left entries within ±10 % of the 50 ms budget on either side of it from
+/// one run to the next). Prints them and writes them to `path` in the table's format.
 /// @throw lucent::Error when the file cannot be written.
 void measureLiveCosts(MainWindow& w, const QString& path) {
-    constexpr int ROUNDS = 3;
+    constexpr int ROUNDS = 5;
     lucent::app::Viewport* vp = w.viewport();
     const lucent::app::RenderSettings defaults;  // half resolution, passes reused
     const auto timed = [&](const std::string& method, const lucent::methods::ParamSet& params) {
