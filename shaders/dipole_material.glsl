@@ -11,6 +11,7 @@
 // σt in `volumeSigmaT`.rgb (0 where masked), σs′ in `volumeSigmaS`.rgb; h = voxelSize (mm).
 // Returns false (σ = 0: black) when neither finds material.
 #pragma once
+// Its reach (how far from p's voxel it reads): LUCENT_DIPOLE_MATERIAL_REACH in shared/DipoleShared.h.
 
 bool dipoleMaterialInside(sampler3D volumeSigmaT, sampler3D volumeSigmaS, vec3 gridOrigin,
                           float voxelSize, int resolution, vec3 p, vec3 n, out vec3 sigT,

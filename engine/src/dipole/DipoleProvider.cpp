@@ -16,6 +16,7 @@
 #include <lucent/material/MaterialVolume.h>
 
 #include <epoxy/gl.h>
+#include <shared/DipoleShared.h>
 #include <shared/LightingShared.h>
 
 #include <algorithm>
@@ -156,14 +157,20 @@ struct DipoleSubsurfaceProvider::Impl {
     gpu::GlProgram cameraGatherProgram;
     /// dipole_provider.comp with RESOLVE_ONLY=1: the stored mean only, no gather code.
     gpu::GlProgram resolveProgram;
-    /// dipole_material_update.comp: material-only restarts (docs/methods/dipole.md §3c).
-    gpu::GlProgram materialUpdateProgram;
+    /// dipole_material_update.comp: material-only restarts (docs/methods/dipole.md §3c): with
+    /// SCAN=1 the pass over every pixel that lists the ones to look up, without it the look-up
+    /// over that list.
+    gpu::GlProgram materialScanProgram, materialUpdateProgram;
+    gpu::GlObject reachBuffer;  ///< the bricks the look-up must read again (bindReachedBricks)
+    size_t reachBufferBytes = 0;
+    std::vector<uint32_t> reached;
 
     // Per-pixel images (renderer size).
     int width = 0, height = 0;
     gpu::GlObject irradiance, sigmaT, sigmaS, accum;
     gpu::GlObject shiftBuffer, statsBuffer, radiusBuffer;
     gpu::GlObject updateBuffer;  ///< UpdateBlock: counts + one word per pixel
+    gpu::GlObject lookupBuffer;  ///< LookupBlock: count + one word per pixel
 
     // Material-only restarts (docs/methods/dipole.md §3c): a material change restarts only the
     // pixels whose material changed, which then catch up to the others' frame count.
@@ -232,7 +239,8 @@ struct DipoleSubsurfaceProvider::Impl {
     std::vector<uint64_t> lastMeshes;
 
     void destroyImages() {
-        for (gpu::GlObject* o : {&irradiance, &sigmaT, &sigmaS, &accum, &updateBuffer})
+        for (gpu::GlObject* o :
+             {&irradiance, &sigmaT, &sigmaS, &accum, &updateBuffer, &lookupBuffer})
             o->destroy();
         width = height = 0;
     }
@@ -252,11 +260,15 @@ struct DipoleSubsurfaceProvider::Impl {
         updateBuffer =
             gpu::createBuffer((UPDATE_HEADER_WORDS + size_t(w) * size_t(h)) * sizeof(uint32_t),
                               nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
+        lookupBuffer =
+            gpu::createBuffer((UPDATE_HEADER_WORDS + size_t(w) * size_t(h)) * sizeof(uint32_t),
+                              nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
         needReset = true;
     }
 
     void resetAccumulation() {
         detail::restartAccumulation(stats);
+        (void)volume.takeWrittenBricks();  // every pixel looks its material up again
         needReset = false;
         part = 0;
         needMaterialUpdate = false;
@@ -290,25 +302,73 @@ struct DipoleSubsurfaceProvider::Impl {
         glUniform1i(p.uniformLocation("u_meshId"), meshId);
     }
 
+    /// The bricks a pixel's material look-up must read again: those within one brick of a brick
+    /// written since the last update (the look-up reads at most LUCENT_DIPOLE_MATERIAL_REACH
+    /// voxels from the pixel's own), one word per brick in reachBuffer, bound to binding 6; or
+    /// u_reachAll after a full upload.
+    void bindReachedBricks(const gpu::GlProgram& p) {
+        static_assert(LUCENT_DIPOLE_MATERIAL_REACH <= MaterialVolume::BRICK,
+                      "a written brick's neighbours must cover the look-up's reach");
+        const detail::VolumeTextures::WrittenBricks w = volume.takeWrittenBricks();
+        const int n = std::max(w.bricksPerAxis, 1);
+        glUniform1i(p.uniformLocation("u_reachAll"), w.all ? 1 : 0);
+        glUniform1i(p.uniformLocation("u_bricksPerAxis"), n);
+        glUniform1i(p.uniformLocation("u_brick"), MaterialVolume::BRICK);
+        reached.assign(size_t(n) * size_t(n) * size_t(n), 0u);
+        if (!w.all && !w.written.empty())
+            for (int bz = 0; bz < n; ++bz)
+                for (int by = 0; by < n; ++by)
+                    for (int bx = 0; bx < n; ++bx) {
+                        if (!w.written[size_t((bz * n + by) * n + bx)])
+                            continue;
+                        for (int z = std::max(bz - 1, 0); z <= std::min(bz + 1, n - 1); ++z)
+                            for (int y = std::max(by - 1, 0); y <= std::min(by + 1, n - 1); ++y)
+                                for (int x = std::max(bx - 1, 0); x <= std::min(bx + 1, n - 1); ++x)
+                                    reached[size_t((z * n + y) * n + x)] = 1u;
+                    }
+        const size_t bytes = reached.size() * sizeof(uint32_t);
+        if (reachBufferBytes != bytes) {
+            reachBuffer = gpu::createBuffer(bytes, nullptr, GL_DYNAMIC_STORAGE_BIT);
+            reachBufferBytes = bytes;
+        }
+        glNamedBufferSubData(reachBuffer.id(), 0, GLsizeiptr(bytes), reached.data());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, reachBuffer.id());
+    }
+
     /// dipole_material_update.comp: restarts the pixels whose material changed, lists the pixels
-    /// behind the accumulation's frame count and sets up their catch-up.
+    /// behind the accumulation's frame count and sets up their catch-up. Its SCAN pass lists the
+    /// pixels whose look-up reaches a changed voxel; the look-up runs over that list only.
     void updateMaterial(const gpu::GBufferView& g) {
-        const gpu::GlProgram& p = materialUpdateProgram;
-        glUseProgram(p.id());
         glBindTextureUnit(0, g.positionTexture);
         glBindTextureUnit(1, g.normalTexture);
-        volume.bind(p, 3, 4);
         glBindImageTexture(0, accum.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         glBindImageTexture(1, sigmaT.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         glBindImageTexture(2, sigmaS.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, radiusBuffer.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, updateBuffer.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, lookupBuffer.id());
         const uint32_t init[UPDATE_HEADER_WORDS] = {0u, 0u, 0xffffffffu, 0u};
         glNamedBufferSubData(updateBuffer.id(), 0, sizeof(init), init);
-        glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
-        setProfileUniforms(p, settings.meshId);
-        glUniform1i(p.uniformLocation("u_level"), stats.frames);
-        glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
+        const uint32_t none[UPDATE_HEADER_WORDS] = {};
+        glNamedBufferSubData(lookupBuffer.id(), 0, sizeof(none), none);
+        for (const gpu::GlProgram* p : {&materialScanProgram, &materialUpdateProgram}) {
+            glUseProgram(p->id());
+            volume.bind(*p, 3, 4);
+            glUniform2i(p->uniformLocation("u_size"), g.width, g.height);
+            setProfileUniforms(*p, settings.meshId);
+            glUniform1i(p->uniformLocation("u_level"), stats.frames);
+            if (p == &materialScanProgram) {
+                bindReachedBricks(*p);
+                glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
+                glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+            } else {
+                uint32_t lookups = 0;
+                glGetNamedBufferSubData(lookupBuffer.id(), 0, sizeof(lookups), &lookups);
+                stats.pixelsLookedUp = int(lookups);
+                if (lookups > 0)
+                    glDispatchCompute((lookups + 63u) / 64u, 1, 1);
+            }
+        }
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
                         GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
         glUseProgram(0);
@@ -822,6 +882,8 @@ void DipoleSubsurfaceProvider::createGl(const gpu::ShaderLibrary& library) {
         gpu::GlProgram::compute(library, "dipole_provider.comp", {"MULTI_VIEW=0"});
     m->resolveProgram = gpu::GlProgram::compute(library, "dipole_provider.comp",
                                                 {"MULTI_VIEW=0", "RESOLVE_ONLY=1"});
+    m->materialScanProgram =
+        gpu::GlProgram::compute(library, "dipole_material_update.comp", {"SCAN=1"});
     m->materialUpdateProgram = gpu::GlProgram::compute(library, "dipole_material_update.comp");
     // Largest shift table: interleave 64 → 64² cells × 2 vec4.
     m->shiftBuffer =
@@ -852,7 +914,10 @@ void DipoleSubsurfaceProvider::destroyGl() {
     m->gatherProgram.destroy();
     m->cameraGatherProgram.destroy();
     m->resolveProgram.destroy();
+    m->materialScanProgram.destroy();
     m->materialUpdateProgram.destroy();
+    m->reachBuffer.destroy();
+    m->reachBufferBytes = 0;
     m->lightGbufferProgram.destroy();
     m->lightStatsProgram.destroy();
     m->lightIrradianceProgram.destroy();

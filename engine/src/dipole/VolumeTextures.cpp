@@ -151,6 +151,13 @@ void VolumeTextures::writeBricks(const std::vector<int>& bricks, ProviderStats& 
                   nz = std::min(B, res - o.z);
         if (nx <= 0 || ny <= 0 || nz <= 0)
             continue;
+        if (!m_written.all) {
+            if (m_written.bricksPerAxis != v.bricksPerAxis()) {
+                m_written.bricksPerAxis = v.bricksPerAxis();
+                m_written.written.assign(size_t(v.brickCount()), 0);
+            }
+            m_written.written[size_t(b)] = 1;
+        }
         const float* data = v.brickData(b);  // component-major, then x fastest
         size_t k = 0;
         for (int z = 0; z < nz; ++z)
@@ -182,10 +189,18 @@ void VolumeTextures::writeBricks(const std::vector<int>& bricks, ProviderStats& 
     m_revision = v.revision();
 }
 
+VolumeTextures::WrittenBricks VolumeTextures::takeWrittenBricks() {
+    WrittenBricks w = std::move(m_written);
+    m_written = WrittenBricks{};
+    return w;
+}
+
 void VolumeTextures::uploadAll(ProviderStats& stats) {
     m_sigmaT.destroy();
     m_sigmaS.destroy();
     m_stale = false;
+    // Everything may have changed, also where no brick is written (a material removed).
+    m_written.all = true;
     if (!m_volume)
         return;
     const int res = m_volume->resolution();

@@ -52,6 +52,17 @@ public:
     /// u_hasMaterial, u_gridOrigin, u_voxelSize, u_resolution of `program` (in use).
     void bind(const gpu::GlProgram& program, int unitSigmaT, int unitSigmaS) const;
 
+    /// The bricks uploaded since the last call, and forgets them: a flag per brick of the
+    /// attached volume (MaterialVolume's brick order), or `all` after a full upload or a
+    /// material removed. A pixel whose material look-up reads no voxel of a written brick looks
+    /// up the same material as before.
+    struct WrittenBricks {
+        bool all = false;
+        int bricksPerAxis = 0;
+        std::vector<uint8_t> written;
+    };
+    WrittenBricks takeWrittenBricks();
+
     [[nodiscard]] bool hasMaterial() const;
     [[nodiscard]] const std::string& owner() const { return m_owner; }
     [[nodiscard]] const MaterialVolume* volume() const { return m_volume; }
@@ -68,6 +79,7 @@ private:
     GridSpec m_spec;
     uint64_t m_revision = 0;
     bool m_stale = true;  ///< full upload at the next syncForFrame()
+    WrittenBricks m_written;
 };
 
 /// ProviderStats after a reset: no frames, not converged (counts a restart if any work is lost:

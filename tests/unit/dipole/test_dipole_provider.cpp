@@ -126,6 +126,29 @@ protected:
                     z, level / n);
         EXPECT_LT(std::abs(z), 4.0);
     }
+
+    /// Every pixel's stored material (σt, and σs′ with R′) equals what a fresh provider's
+    /// irradiance pass looks up for the painted volume, bit for bit: the material update skips
+    /// the look-up only where it cannot change (pixels out of reach of the written bricks).
+    void expectMaterialMatchesFreshLookUp(const ProviderSettings& ps) {
+        const gpu::GBufferView g = renderer.gbuffer();
+        const auto sigT = readRgba(provider.debugTextures().sigmaT, g.width, g.height);
+        const auto sigS = readRgba(provider.debugTextures().sigmaS, g.width, g.height);
+        DipoleSubsurfaceProvider fresh;
+        fresh.create();
+        fresh.setSettings(ps);
+        fresh.setMaterial(scene->objects[0].material.get());
+        renderer.setSubsurfaceProvider(&fresh);
+        renderer.render();
+        const auto freshT = readRgba(fresh.debugTextures().sigmaT, g.width, g.height);
+        const auto freshS = readRgba(fresh.debugTextures().sigmaS, g.width, g.height);
+        renderer.setSubsurfaceProvider(&provider);
+        fresh.destroy();
+        int differ = 0;
+        for (size_t i = 0; i < sigT.size(); ++i)
+            differ += glm::vec3(sigT[i]) != glm::vec3(freshT[i]) || sigS[i] != freshS[i];
+        EXPECT_EQ(differ, 0) << "pixels whose stored material is not a fresh look-up's";
+    }
 };
 
 /// The lit sphere of the parity tests: 160×90 pixels, subdivision 4.
@@ -624,6 +647,11 @@ TEST_F(ProviderFixture, MaterialChangeRestartsOnlyThePixelsItChanges) {
     EXPECT_EQ(previewed, restarted);
     EXPECT_GT(lit, restarted / 2);
     EXPECT_EQ(kept + previewed, covered);
+    // Only pixels within reach of the painted bricks are looked up again (here, on a 32³ volume
+    // of 4 bricks a side, the stroke's bricks and their neighbours are all of it), and that
+    // misses none.
+    EXPECT_GE(st.pixelsLookedUp, restarted);
+    expectMaterialMatchesFreshLookUp(ps);
     {  // ... and the resolve shows them
         const ImageRgb shown = renderer.readRadiance();
         int shownLit = 0;
@@ -652,6 +680,69 @@ TEST_F(ProviderFixture, MaterialChangeRestartsOnlyThePixelsItChanges) {
     const ImageRgb incremental = renderer.readRadiance();
 
     expectPixelsMatchFreshRender(incremental, changed, ps);
+}
+
+// The material update looks up again only the pixels whose look-up can reach a brick the stroke
+// wrote (within LUCENT_DIPOLE_MATERIAL_REACH voxels of their own: one brick around each written
+// one): on a 128³ volume a small stroke's bricks and their neighbours cover a small part of the
+// sphere, and every pixel's stored material still equals a fresh look-up's, bit for bit.
+TEST_F(ProviderFixture, StrokeLooksUpOnlyThePixelsWithinReachOfItsBricks) {
+    Scene s = testutil::pointLitSphere(4, 96, 72);
+    s.objects[0].material = std::make_shared<MaterialVolume>(
+        GridSpec::around(s.objects[0].mesh.bounds(), 128), testutil::skinMaterial());
+    ProviderSettings ps;
+    ps.samplesPerFrame = 8;
+    ps.maxFrames = 4;
+    ps.convergenceThreshold = 0.f;
+    load(s, ps);
+    MaterialVolume& vol = *s.objects[0].material;
+    (void)vol.takeDirtyBricks();
+    renderUntilConverged(20);
+    ASSERT_TRUE(provider.stats().converged);
+    const auto before =
+        readRgba(provider.debugTextures().accumulation, s.camera.width, s.camera.height);
+    int covered = 0;
+    for (const glm::vec4& a : before)
+        covered += a.a > 0.f ? 1 : 0;
+
+    // A denser 10³-voxel dab (1.8 mm) at the front of the sphere (radius 10 mm, camera on +z).
+    MaterialSample painted = testutil::skinMaterial();
+    painted.sigma_t = painted.sigma_t * 3.f;
+    painted.sigma_s = painted.sigma_s * 3.f;
+    const GridSpec& spec = vol.spec();
+    const Coord c = spec.cellOf(Point3f(2.f, 1.f, 9.5f));
+    for (int z = -5; z < 5; ++z)
+        for (int y = -5; y < 5; ++y)
+            for (int x = -5; x < 5; ++x)
+                if (vol.isInside(c + Coord(x, y, z)))
+                    vol.set(c + Coord(x, y, z), painted);
+    provider.syncMaterial(vol);
+    renderer.render();
+    const ProviderStats& st = provider.stats();
+    std::printf("stroke looked up %d and restarted %d of %d covered pixels\n", st.pixelsLookedUp,
+                st.pixelsRestarted, covered);
+    EXPECT_GT(st.pixelsRestarted, 0);
+    EXPECT_GE(st.pixelsLookedUp, st.pixelsRestarted);
+    EXPECT_LT(st.pixelsLookedUp, covered / 4);
+    expectMaterialMatchesFreshLookUp(ps);
+
+    // A layer of voxels just below a brick face: pixels whose own voxel lies in the brick above
+    // (not written) look up a voxel of the layer, so the bricks around a written one must be
+    // looked up too (with only the written bricks this leaves pixels with their old material).
+    renderUntilConverged(20);
+    const int top = spec.cellOf(Point3f(0.f, 0.f, 10.f)).z;  // the sphere's top voxel
+    const int face = top / MaterialVolume::BRICK * MaterialVolume::BRICK;
+    ASSERT_GT(face, 0);
+    for (int y = 0; y < spec.resolution; ++y)
+        for (int x = 0; x < spec.resolution; ++x)
+            if (vol.isInside({x, y, face - 1}))
+                vol.set({x, y, face - 1}, painted);
+    provider.syncMaterial(vol);
+    renderer.render();
+    std::printf("layer below z = %d: looked up %d, restarted %d\n", face, st.pixelsLookedUp,
+                st.pixelsRestarted);
+    EXPECT_GT(st.pixelsRestarted, 0);
+    expectMaterialMatchesFreshLookUp(ps);
 }
 
 // A stroke once the light views have joined but before the accumulation's first whole frame is

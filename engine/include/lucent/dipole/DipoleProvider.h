@@ -134,6 +134,9 @@ struct ProviderStats {
     /// still catching up to the accumulation's frame count (0: none).
     int pixelsRestarted = 0;
     int pixelsCatchingUp = 0;
+    /// Pixels whose material the last material update looked up again: those within the
+    /// look-up's reach of a brick written since the update before (the others cannot change).
+    int pixelsLookedUp = 0;
     /// GPU time (ms, GL timer queries) of the provider's passes in the last frame; 0 for a pass
     /// that did not run.
     struct PassTimes {

@@ -87,6 +87,7 @@ public:
         s.push_back({"gather pass ms", num(st.passMs.gather, "%.2f")});
         s.push_back({"material update pass ms", num(st.passMs.materialUpdate, "%.2f")});
         s.push_back({"pixels restarted by the last stroke", std::to_string(st.pixelsRestarted)});
+        s.push_back({"pixels looked up by the last stroke", std::to_string(st.pixelsLookedUp)});
         return s;
     }
 
