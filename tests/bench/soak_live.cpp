@@ -23,6 +23,7 @@
 
 #include "LiveMethodHarness.h"
 
+#include <CLI/CLI.hpp>
 #include <epoxy/gl.h>
 #include <unistd.h>
 
@@ -181,30 +182,25 @@ Result soak(const std::string& name, const Options& opt, gpu::GlContext& ctx) {
 
 int main(int argc, char** argv) {
     Options opt;
-    for (int i = 1; i + 1 < argc; i += 2) {
-        const std::string key = argv[i], value = argv[i + 1];
-        if (key == "--strokes") {
-            opt.strokes = std::atoi(value.c_str());
-        } else if (key == "--seconds") {
-            opt.seconds = std::atof(value.c_str());
-        } else if (key == "--size") {
-            std::sscanf(value.c_str(), "%dx%d", &opt.width, &opt.height);
-        } else if (key == "--methods") {
-            std::stringstream list(value);
-            for (std::string m; std::getline(list, m, ',');)
-                opt.methods.push_back(m);
-        } else {
-            std::fprintf(stderr, "soak_live: unknown option %s\n", key.c_str());
-            return 2;
-        }
-    }
-    if (opt.strokes <= WARMUP_STROKES || opt.seconds <= 0 || opt.width < 8 || opt.height < 8) {
-        std::fprintf(stderr,
-                     "soak_live: --strokes must exceed %d, --seconds and --size must be "
-                     "positive\n",
-                     WARMUP_STROKES);
+    std::string size = std::to_string(opt.width) + "x" + std::to_string(opt.height);
+    std::string methodList;
+    CLI::App app{"Soak of the live preview: scripted strokes per live method (headless EGL)"};
+    app.add_option("--strokes", opt.strokes, "strokes per method, at most")
+        ->check(CLI::Range(WARMUP_STROKES + 1, 100000000));
+    app.add_option("--seconds", opt.seconds, "seconds per method, at most")
+        ->check(CLI::PositiveNumber);
+    app.add_option("--size", size, "viewport WxH");
+    app.add_option("--methods", methodList,
+                   "comma-separated registry names (default: every GL method)");
+    CLI11_PARSE(app, argc, argv);
+    if (std::sscanf(size.c_str(), "%dx%d", &opt.width, &opt.height) != 2 || opt.width < 8 ||
+        opt.height < 8) {
+        std::fprintf(stderr, "soak_live: --size must be WxH, at least 8x8\n");
         return 2;
     }
+    std::stringstream list(methodList);
+    for (std::string m; std::getline(list, m, ',');)
+        opt.methods.push_back(m);
     if (opt.methods.empty())
         for (const methods::MethodInfo* info : methods::all())
             if (info->caps.gl)
