@@ -308,6 +308,14 @@ TEST(MeshIO, FuzzFindingsAreClearErrors) {
     // the child process died with "crashed (Floating point exception)"). Refused before VTK.
     expectLoadError(fuzzFinding("vtp_compression_block_size_zero.vtp"),
                     "claims blocks of 0 bytes (corrupt)");
+    // The CI fuzz smoke run of 2026-12-05: the `offsets` array's format mutated to "appen9ded",
+    // its offset kept. VTK reads an array of an unknown format with an offset from the appended
+    // data, where its compression header read 1.9·10⁹ blocks (the fuzz build's VTK allocated
+    // 7.5 GB in vtkXMLDataParser::ReadCompressionHeader); the check took only format
+    // "appended" for appended. Refused before VTK.
+    expectLoadError(fuzzFinding("vtp_unknown_format_with_offset.vtp"),
+                    "the compression header of the appended array at offset 101 claims 1868759041 "
+                    "blocks, more than the file holds");
     // The same header fault in an inline base64 array, whose headers were not checked at all.
     expectLoadError(robustInput("vtp_last_block_larger_inline_binary_zlib.vtp"),
                     "the compression header of the inline array 'Points' claims a last block of "
