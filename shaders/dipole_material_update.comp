@@ -20,6 +20,7 @@
 // pixels only. A stroke's update went from 6.2–6.5 to ~2 ms at 640×360 on llvmpipe.
 #include "dipole_material.glsl"
 #include "dipole_profiles.glsl"
+#include "common/dispatch.glsl"
 
 #ifdef SCAN
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -105,7 +106,7 @@ void main() {
 }
 #else
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = lineGroup() * 64u + gl_LocalInvocationIndex;  // gpu::dispatchLine
     if (i >= b_lookupCount) return;
     ivec2 xy = ivec2(int(b_lookup[i] & 0xffffu), int(b_lookup[i] >> 16));
     vec4 pos = texelFetch(u_position, xy, 0);

@@ -25,6 +25,7 @@
 #ifndef MULTI_VIEW
 #define MULTI_VIEW 1
 #endif
+#include "common/dispatch.glsl"
 #include "common/hash.glsl"
 #include "dipole_profiles.glsl"
 #include "dipole_fresnel.glsl"
@@ -308,7 +309,7 @@ void main() {
 #else
     bool listed = u_listCount > 0;
     if (listed) {
-        uint i = gl_WorkGroupID.x * 64u + gl_LocalInvocationIndex;
+        uint i = lineGroup() * 64u + gl_LocalInvocationIndex;  // gpu::dispatchLine
         inside = i < uint(u_listCount);
         uint code = inside ? b_list[i] : 0u;
         xy = ivec2(code & 0xffffu, code >> 16);

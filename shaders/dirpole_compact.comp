@@ -11,6 +11,7 @@
 // (material lookup, profiles, hashes) of all 6 × cubeMapSize² of them even when only the
 // texels under a stroke sample.
 #include "dirpole_common.glsl"
+#include "common/dispatch.glsl"
 
 #ifdef FROM_LIST
 layout(local_size_x = 64) in;
@@ -35,8 +36,9 @@ void main() {
     if (gl_LocalInvocationIndex == 0u) s_count = 0u;
     barrier();
 #ifdef FROM_LIST
-    bool valid = gl_GlobalInvocationID.x < u_sourceCount;
-    ivec3 id = unpackTexel(valid ? b_source[gl_GlobalInvocationID.x] : 0u);
+    uint entry = lineGroup() * 64u + gl_LocalInvocationIndex;  // gpu::dispatchLine
+    bool valid = entry < u_sourceCount;
+    ivec3 id = unpackTexel(valid ? b_source[entry] : 0u);
 #else
     ivec3 id = ivec3(gl_GlobalInvocationID);
     bool valid = id.x < u_faceSize && id.y < u_faceSize &&

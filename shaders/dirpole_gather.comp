@@ -39,6 +39,7 @@
 #include "shared/DirpoleShared.h"
 #include "dipole_profiles.glsl"
 #include "dirpole_common.glsl"
+#include "common/dispatch.glsl"
 
 layout(local_size_x = 64) in;  // one invocation per listed texel
 
@@ -191,9 +192,10 @@ void main() {
         s_sampled = 0u;
     }
     barrier();
-    uint entry = gl_GlobalInvocationID.x < u_listed ? b_texels[gl_GlobalInvocationID.x] : 0u;
+    uint index = lineGroup() * 64u + gl_LocalInvocationIndex;  // gpu::dispatchLine
+    bool listed = index < u_listed;
+    uint entry = listed ? b_texels[index] : 0u;
     ivec3 id = unpackTexel(entry);
-    bool listed = gl_GlobalInvocationID.x < u_listed;
     vec4 pos = listed ? texelFetch(u_facePosition, id, 0) : vec4(0.0);
     vec4 acc = listed ? imageLoad(u_accum, id) : vec4(0.0);
     uint before = uint(acc.a);

@@ -9,6 +9,7 @@
 // Counts for the CPU's frame plan: covered texels, restarted texels, the fewest and the most
 // samples of any covered texel.
 #include "dirpole_common.glsl"
+#include "common/dispatch.glsl"
 
 layout(local_size_x = 64) in;  // one invocation per covered texel
 
@@ -34,8 +35,9 @@ void main() {
         s_maxN = 0u;
     }
     barrier();
-    bool valid = gl_GlobalInvocationID.x < u_sourceCount;
-    ivec3 id = unpackTexel(valid ? b_source[gl_GlobalInvocationID.x] : 0u);
+    uint entry = lineGroup() * 64u + gl_LocalInvocationIndex;  // gpu::dispatchLine
+    bool valid = entry < u_sourceCount;
+    ivec3 id = unpackTexel(valid ? b_source[entry] : 0u);
     vec4 pos = valid ? texelFetch(u_facePosition, id, 0) : vec4(0.0);
     if (pos.w != 0.0) {
         vec3 sigT, sigS;

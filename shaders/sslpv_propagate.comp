@@ -9,6 +9,8 @@
 // One invocation per pair of consecutive cells (so fp16 pairs are written by one invocation)
 // and per colour channel (gl_GlobalInvocationID.y).
 
+#include "common/dispatch.glsl"
+
 layout(local_size_x = 64) in;
 
 #ifdef SSLPV_FP16
@@ -50,7 +52,7 @@ uniform int u_offset[6];
 int bandOf(int i) { return i == 0 ? 0 : (i < 4 ? 1 : 2); }
 
 void main() {
-    int e = int(gl_GlobalInvocationID.x) * 2;
+    int e = int(lineGroup() * 64u + gl_LocalInvocationID.x) * 2;  // gpu::dispatchLine
     int ch = int(gl_GlobalInvocationID.y);
     if (e >= u_planeSize || ch >= 3) return;
     bool interior[2];

@@ -366,7 +366,7 @@ struct DipoleSubsurfaceProvider::Impl {
                 glGetNamedBufferSubData(lookupBuffer.id(), 0, sizeof(lookups), &lookups);
                 stats.pixelsLookedUp = int(lookups);
                 if (lookups > 0)
-                    glDispatchCompute((lookups + 63u) / 64u, 1, 1);
+                    gpu::dispatchLine((lookups + 63u) / 64u);
             }
         }
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
@@ -855,7 +855,7 @@ struct DipoleSubsurfaceProvider::Impl {
             glUniform1i(p.uniformLocation("u_listCount"), listed);
             glUniform1i(p.uniformLocation("u_level"), catchUpLevel);
             glUniform1i(p.uniformLocation("u_listPreview"), preview ? 1 : 0);
-            glDispatchCompute(unsigned(listed + 63) / 64, 1, 1);
+            gpu::dispatchLine(unsigned(listed + 63) / 64);
             glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
         }
         resolveAll(g, target);

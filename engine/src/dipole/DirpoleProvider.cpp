@@ -363,7 +363,7 @@ struct DirpoleSubsurfaceProvider::Impl {
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, coveredList.id());
         volume.bind(p, 6, 7);
         glUniform1ui(p.uniformLocation("u_sourceCount"), uint32_t(covered));
-        glDispatchCompute(unsigned(covered + 63) / 64, 1, 1);
+        gpu::dispatchLine(unsigned(covered + 63) / 64);
         // The gather reads the stored material as textures and the accumulator as an image;
         // the CPU reads the counts.
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
@@ -388,7 +388,7 @@ struct DirpoleSubsurfaceProvider::Impl {
         glUniform1ui(program.uniformLocation("u_target"), target);
         const unsigned groups = unsigned(faceSize + 7) / 8;
         if (fromList)
-            glDispatchCompute(unsigned(covered + 63) / 64, 1, 1);
+            gpu::dispatchLine(unsigned(covered + 63) / 64);
         else
             glDispatchCompute(groups, groups, 6);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
@@ -458,7 +458,7 @@ struct DirpoleSubsurfaceProvider::Impl {
         glUniform1ui(p.uniformLocation("u_target"), uint32_t(target));
         glUniform1f(p.uniformLocation("u_shrink"), settings.gbufferShrink ? settings.shrink : 0.f);
         glUniform1ui(p.uniformLocation("u_seed"), settings.seed);
-        glDispatchCompute(unsigned(listed + 63) / 64, 1, 1);
+        gpu::dispatchLine(unsigned(listed + 63) / 64);
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
                         GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
         glUseProgram(0);

@@ -9,6 +9,8 @@
 
 #include <epoxy/gl.h>
 
+#include <algorithm>
+
 #include <atomic>
 #include <utility>
 
@@ -167,6 +169,13 @@ GlObject createTexture3D(unsigned internalFormat, int width, int height, int dep
     glTextureStorage3D(t.id(), 1, internalFormat, width, height, depth);
     setSampling(t.id(), linear);
     return t;
+}
+
+void dispatchLine(unsigned groups, unsigned y) {
+    if (groups == 0 || y == 0)
+        return;
+    const unsigned x = std::min(groups, MAX_DISPATCH_GROUPS);
+    glDispatchCompute(x, y, (groups + x - 1) / x);
 }
 
 }  // namespace lucent::gpu

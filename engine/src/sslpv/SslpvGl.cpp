@@ -365,7 +365,7 @@ void SslpvGlPropagator::propagate(const SslpvSolver& solver) {
             glUniform1i(prog.uniformLocation("u_accumulate"), accumulate ? 1 : 0);
             glUniform1i(prog.uniformLocation("u_assignAcc"), accumulate && !accWritten ? 1 : 0);
             glUniform1i(prog.uniformLocation("u_assignExit"), exitWritten ? 0 : 1);
-            glDispatchCompute(groups, 3, 1);
+            gpu::dispatchLine(groups, 3);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             accWritten = accWritten || accumulate;
             exitWritten = exitWritten || opt.removeExitant;

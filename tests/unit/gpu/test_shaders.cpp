@@ -6,6 +6,7 @@
 #include "GlTestContext.h"
 
 #include <lucent/core/Error.h>
+#include <lucent/gpu/GlResources.h>
 #include <lucent/gpu/Shader.h>
 #include <shared/LightingShared.h>
 
@@ -19,6 +20,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 using namespace lucent;
 using namespace lucent::gpu;
@@ -246,6 +248,48 @@ TEST(GlProgram, SharedStructLayoutsMatchGlsl) {
               GLint(sizeof(shared::GpuShadowLayer)));
     EXPECT_EQ(blockSize(GL_SHADER_STORAGE_BLOCK, "SurfaceBlock"),
               GLint(sizeof(shared::GpuSurface)));
+    prog.destroy();
+}
+
+// gpu::dispatchLine folds a line of work groups longer than one dispatch dimension allows
+// (65535 on llvmpipe) into x and z, and common/dispatch.glsl's lineGroup() unfolds it: every
+// entry of a list of 64 × (65535 + 100) is visited exactly once (the folded dispatch's spare
+// groups beyond the line do nothing), and a short line is one plain dispatch.
+TEST(GlProgram, DispatchLineVisitsALongListOnce) {
+    LUCENT_REQUIRE_GL();
+    ShaderLibrary library;  // the embedded common/dispatch.glsl
+    library.setFile("test_line.comp",
+                    "#version 450 core\n"
+                    "#include \"common/dispatch.glsl\"\n"
+                    "layout(local_size_x = 64) in;\n"
+                    "layout(std430, binding = 0) buffer Hits { uint b_hits[]; };\n"
+                    "uniform uint u_count;\n"
+                    "void main() {\n"
+                    "    uint i = lineGroup() * 64u + gl_LocalInvocationIndex;\n"
+                    "    if (i < u_count) atomicAdd(b_hits[i], 1u);\n"
+                    "}\n");
+    GlProgram prog = GlProgram::compute(library, "test_line.comp");
+    for (const unsigned groups : {MAX_DISPATCH_GROUPS + 100u, 3u}) {
+        SCOPED_TRACE(std::to_string(groups) + " groups");
+        const unsigned count = groups * 64u - 5u;
+        std::vector<uint32_t> hits(count, 0u);
+        GlObject buffer = createBuffer(hits.size() * sizeof(uint32_t), hits.data(),
+                                       GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
+        glUseProgram(prog.id());
+        glUniform1ui(prog.uniformLocation("u_count"), count);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buffer.id());
+        dispatchLine(groups);
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        ASSERT_EQ(glGetError(), GLenum(GL_NO_ERROR));
+        glGetNamedBufferSubData(buffer.id(), 0, GLsizeiptr(hits.size() * sizeof(uint32_t)),
+                                hits.data());
+        size_t wrong = 0;
+        for (const uint32_t h : hits)
+            wrong += h != 1u;
+        EXPECT_EQ(wrong, 0u);
+        buffer.destroy();
+    }
+    glUseProgram(0);
     prog.destroy();
 }
 

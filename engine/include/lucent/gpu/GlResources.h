@@ -63,4 +63,13 @@ GlObject createTexture2DArray(unsigned internalFormat, int width, int height, in
 GlObject createTexture3D(unsigned internalFormat, int width, int height, int depth,
                          bool linear = true);
 
+/// Work groups per dispatch dimension that every GL 4.5 implementation accepts
+/// (GL_MAX_COMPUTE_WORK_GROUP_COUNT is at least this; llvmpipe's is exactly this).
+constexpr unsigned MAX_DISPATCH_GROUPS = 65535;
+/// glDispatchCompute of `groups` work groups along a line (× `y` along y), the line folded into
+/// x and z when it is longer than MAX_DISPATCH_GROUPS (a list of every pixel of a 4K image in
+/// groups of 64 is). The shader takes its group's place on the line from
+/// common/dispatch.glsl's lineGroup() and skips what lies beyond its count. groups = 0: nothing.
+void dispatchLine(unsigned groups, unsigned y = 1);
+
 }  // namespace lucent::gpu
