@@ -9,12 +9,20 @@
 // with the coefficients read at p − d·Δx·n, d = ½, 1, 3⁄2 (first depth whose inside weight
 // exceeds 1e-4), trilinear over the 8 nearest cell centres that are inside, renormalised.
 // Only bands 0 and 1 are read: band 2's hemisphere integral vanishes (Eq. 7).
-// Mode diffusion (u_diffusion): band 0 only; its band-1 slot holds each cell's reduced albedo
+// Mode diffusion (DIFFUSION=1): band 0 only; its band-1 slot holds each cell's reduced albedo
 // (shared/SslpvShared.h), read with the same weights, and with u_exitCorrection the light
 // leaves with the exact half-space's exit-angle distribution c(α′, cos θ_o)
 // (SslpvSolver::exitantRadiance). With u_surfaceFlux, slots 2–4 hold the flux along the surface
 // J_t (x, y, z per channel) and the light leaving along the refracted direction ω also carries
 // P1's flux term: × max(0, 1 + 3 J_t·ω_t/(J(2A + 3μ))).
+
+// Compiled twice (SslpvSubsurfaceProvider): DIFFUSION=1 for mode diffusion, with its albedo, exit
+// table and surface flux; without it for the propagation modes, which then carry none of that
+// code (llvmpipe ran it under the execution mask: the pass took 9.8 instead of 7.3 ms at
+// 640×360).
+#ifndef DIFFUSION
+#define DIFFUSION 0
+#endif
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -48,7 +56,6 @@ uniform float u_eta;       // relative index of refraction
 uniform float u_exitScale; // SslpvSolver::exitScale()
 uniform float u_Y00;       // 1/(2√π)
 uniform float u_K1;        // √(3/(4π))
-uniform int u_diffusion;      // mode diffusion: band 0 only, band-1 slot = albedo
 uniform int u_exitCorrection; // mode diffusion: apply exitCorrection (table bound)
 uniform int u_surfaceFlux;    // mode diffusion: apply the surface flux's P1 term
 uniform float u_twoA;         // 2A, the Robin condition's constant (GridDiffusion)
@@ -92,20 +99,26 @@ vec3 radianceInside(vec3 p, vec3 n, out vec3 albedo, out vec3 jt[3]) {
             c1 += w * texelFetch(u_c1, cell, 0).rgb;
             c2 += w * texelFetch(u_c2, cell, 0).rgb;
             c3 += w * texelFetch(u_c3, cell, 0).rgb;
+#if DIFFUSION
             if (u_surfaceFlux != 0) c4 += w * texelFetch(u_c4, cell, 0).rgb;
+#endif
         }
         if (wsum > 1e-4) {
             c0 /= wsum;
             c1 /= wsum;
             c2 /= wsum;
             c3 /= wsum;
+            float invA = 1.0 / (u_h * u_h);
+#if DIFFUSION
             c4 /= wsum;
             // Per channel k: J_t = (x, y, z) from slots 2, 3, 4 (rgb = the channels).
             for (int k = 0; k < 3; ++k) jt[k] = vec3(c2[k], c3[k], c4[k]);
-            float invA = 1.0 / (u_h * u_h);
-            vec3 c10n = u_diffusion != 0 ? vec3(0.0) : n.x * c3 + n.y * c1 + n.z * c2;
-            if (u_diffusion != 0) albedo = c1;  // the LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF slot
+            albedo = c1;  // the LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF slot
+            return max(vec3(0.0), 2.0 * invA * (u_Y00 * c0));
+#else
+            vec3 c10n = n.x * c3 + n.y * c1 + n.z * c2;
             return max(vec3(0.0), 2.0 * invA * (u_Y00 * c0 + 0.5 * u_K1 * c10n));
+#endif
         }
     }
     return vec3(0.0);
@@ -129,6 +142,7 @@ void main() {
             vec3 jt[3];
             vec3 Li = radianceInside(p, n, albedo, jt);
             L = (u_exitScale * (1.0 - dielectricReflectance(cosO, u_eta))) * Li;
+#if DIFFUSION
             if (u_exitCorrection != 0)
                 for (int c = 0; c < 3; ++c)
                     if (albedo[c] > 0.0) L[c] *= exitCorrection(albedo[c], cosO);
@@ -150,6 +164,7 @@ void main() {
                         L[c] *= max(0.0, 1.0 + 3.0 * dot(j, wt) / (jn[c] * (u_twoA + 3.0 * mu)));
                     }
             }
+#endif
         }
     }
     imageStore(u_target, px, vec4(L, 1.0));

@@ -80,7 +80,10 @@ struct SslpvSubsurfaceProvider::Impl {
 
     // GL
     bool created = false;
-    gpu::GlProgram program;
+    /// sslpv_sample.comp for the propagation modes, and with DIFFUSION=1 for mode diffusion
+    /// (compiled at its first frame).
+    gpu::GlProgram program, diffusionProgram;
+    std::optional<gpu::ShaderLibrary> library;  ///< create()'s, for diffusionProgram
     gpu::GlObject coeffTex[UPLOADED_COEFFS_DIFFUSION];
     int texRes = 0;
     gpu::GlObject timeQuery;
@@ -130,6 +133,7 @@ void SslpvSubsurfaceProvider::create(const gpu::ShaderLibrary& library) {
     if (m->created)
         return;
     m->program = gpu::GlProgram::compute(library, "sslpv_sample.comp");
+    m->library = library;
     m->timeQuery = gpu::GlObject::create(gpu::GlObjectKind::Query, GL_TIME_ELAPSED);
     m->created = true;
     m->uploadDirty = true;
@@ -141,6 +145,7 @@ void SslpvSubsurfaceProvider::create(const gpu::ShaderLibrary& library) {
 
 void SslpvSubsurfaceProvider::destroy() {
     m->program.destroy();
+    m->diffusionProgram.destroy();
     for (auto& t : m->coeffTex)
         t.destroy();
     m->texRes = 0;
@@ -448,7 +453,12 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
     const bool query = !s.queryPending;
     if (query)
         glBeginQuery(GL_TIME_ELAPSED, s.timeQuery.id());
-    const GLuint p = s.program.id();
+    const bool diffusion = s.solver.options().mode == SslpvMode::Diffusion;
+    if (diffusion && !s.diffusionProgram.isValid())
+        s.diffusionProgram =
+            gpu::GlProgram::compute(*s.library, "sslpv_sample.comp", {"DIFFUSION=1"});
+    const gpu::GlProgram& program = diffusion ? s.diffusionProgram : s.program;
+    const GLuint p = program.id();
     glUseProgram(p);
     glBindTextureUnit(0, g.positionTexture);
     glBindTextureUnit(1, g.normalTexture);
@@ -460,23 +470,22 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
     const bool ortho = clip[0][3] == 0.f && clip[1][3] == 0.f && clip[2][3] == 0.f;
     const Mat4f& v = g.viewFromWorld;
     const Vector3f forward = -Vector3f(v[0][2], v[1][2], v[2][2]);  // −(view z) in world
-    glProgramUniformMatrix4fv(p, s.program.uniformLocation("u_objectFromWorld"), 1, GL_FALSE,
+    glProgramUniformMatrix4fv(p, program.uniformLocation("u_objectFromWorld"), 1, GL_FALSE,
                               &s.objectFromWorld[0][0]);
-    glProgramUniform3f(p, s.program.uniformLocation("u_eye"), g.cameraPosition.x,
-                       g.cameraPosition.y, g.cameraPosition.z);
-    glProgramUniform3f(p, s.program.uniformLocation("u_forward"), forward.x, forward.y, forward.z);
-    glProgramUniform1i(p, s.program.uniformLocation("u_ortho"), ortho ? 1 : 0);
-    glProgramUniform2i(p, s.program.uniformLocation("u_size"), g.width, g.height);
-    glProgramUniform1i(p, s.program.uniformLocation("u_meshId"), s.opt.meshId);
-    glProgramUniform3f(p, s.program.uniformLocation("u_origin"), spec.origin.x, spec.origin.y,
+    glProgramUniform3f(p, program.uniformLocation("u_eye"), g.cameraPosition.x, g.cameraPosition.y,
+                       g.cameraPosition.z);
+    glProgramUniform3f(p, program.uniformLocation("u_forward"), forward.x, forward.y, forward.z);
+    glProgramUniform1i(p, program.uniformLocation("u_ortho"), ortho ? 1 : 0);
+    glProgramUniform2i(p, program.uniformLocation("u_size"), g.width, g.height);
+    glProgramUniform1i(p, program.uniformLocation("u_meshId"), s.opt.meshId);
+    glProgramUniform3f(p, program.uniformLocation("u_origin"), spec.origin.x, spec.origin.y,
                        spec.origin.z);
-    glProgramUniform1f(p, s.program.uniformLocation("u_h"), spec.voxelSize);
-    glProgramUniform1i(p, s.program.uniformLocation("u_res"), N);
-    glProgramUniform1f(p, s.program.uniformLocation("u_eta"), s.eta);
-    glProgramUniform1f(p, s.program.uniformLocation("u_exitScale"), s.solver.exitScale());
-    glProgramUniform1f(p, s.program.uniformLocation("u_Y00"), SH_Y00);
-    glProgramUniform1f(p, s.program.uniformLocation("u_K1"), SH_K1);
-    const bool diffusion = s.solver.options().mode == SslpvMode::Diffusion;
+    glProgramUniform1f(p, program.uniformLocation("u_h"), spec.voxelSize);
+    glProgramUniform1i(p, program.uniformLocation("u_res"), N);
+    glProgramUniform1f(p, program.uniformLocation("u_eta"), s.eta);
+    glProgramUniform1f(p, program.uniformLocation("u_exitScale"), s.solver.exitScale());
+    glProgramUniform1f(p, program.uniformLocation("u_Y00"), SH_Y00);
+    glProgramUniform1f(p, program.uniformLocation("u_K1"), SH_K1);
     // Non-null only after a diffusion solve with the exit table on (SslpvSolver::exitTable).
     const std::shared_ptr<const dipole::DirpoleExitTable>& table = s.solver.exitTable();
     const bool exitCorrection = table != nullptr;
@@ -490,11 +499,10 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, LUCENT_SSLPV_BINDING_EXIT_TABLE,
                          s.exitTableBuffer.id());
     }
-    glProgramUniform1i(p, s.program.uniformLocation("u_diffusion"), diffusion ? 1 : 0);
-    glProgramUniform1i(p, s.program.uniformLocation("u_exitCorrection"), exitCorrection ? 1 : 0);
+    glProgramUniform1i(p, program.uniformLocation("u_exitCorrection"), exitCorrection ? 1 : 0);
     const bool surfaceFlux = diffusion && s.solver.surfaceFluxReadout();
-    glProgramUniform1i(p, s.program.uniformLocation("u_surfaceFlux"), surfaceFlux ? 1 : 0);
-    glProgramUniform1f(p, s.program.uniformLocation("u_twoA"),
+    glProgramUniform1i(p, program.uniformLocation("u_surfaceFlux"), surfaceFlux ? 1 : 0);
+    glProgramUniform1f(p, program.uniformLocation("u_twoA"),
                        surfaceFlux ? float(2.0 * s.solver.diffusion().boundaryConstant()) : 0.f);
     glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
     // The target is written with imageStore: visible to texture fetches (the shade pass), image
