@@ -351,23 +351,23 @@ struct DipoleSubsurfaceProvider::Impl {
         glNamedBufferSubData(updateBuffer.id(), 0, sizeof(init), init);
         const uint32_t none[UPDATE_HEADER_WORDS] = {};
         glNamedBufferSubData(lookupBuffer.id(), 0, sizeof(none), none);
-        for (const gpu::GlProgram* p : {&materialScanProgram, &materialUpdateProgram}) {
-            glUseProgram(p->id());
-            volume.bind(*p, 3, 4);
-            glUniform2i(p->uniformLocation("u_size"), g.width, g.height);
-            setProfileUniforms(*p, settings.meshId);
-            glUniform1i(p->uniformLocation("u_level"), stats.frames);
-            if (p == &materialScanProgram) {
-                bindReachedBricks(*p);
-                glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
-                glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-            } else {
-                uint32_t lookups = 0;
-                glGetNamedBufferSubData(lookupBuffer.id(), 0, sizeof(lookups), &lookups);
-                stats.pixelsLookedUp = int(lookups);
-                if (lookups > 0)
-                    gpu::dispatchLine((lookups + 63u) / 64u);
-            }
+        const auto use = [&](const gpu::GlProgram& p) {  // what both passes read
+            glUseProgram(p.id());
+            volume.bind(p, 3, 4);
+            glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
+            setProfileUniforms(p, settings.meshId);
+            glUniform1i(p.uniformLocation("u_level"), stats.frames);
+        };
+        use(materialScanProgram);
+        bindReachedBricks(materialScanProgram);
+        glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+        uint32_t lookups = 0;
+        glGetNamedBufferSubData(lookupBuffer.id(), 0, sizeof(lookups), &lookups);
+        stats.pixelsLookedUp = int(lookups);
+        if (lookups > 0) {
+            use(materialUpdateProgram);
+            gpu::dispatchLine((lookups + 63u) / 64u);
         }
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
                         GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);

@@ -127,6 +127,24 @@ protected:
         EXPECT_LT(std::abs(z), 4.0);
     }
 
+    /// load(s, ps), the volume's dirty bricks taken, then frames until converged (at most 20):
+    /// the accumulation image (GL rows) and its covered pixels.
+    struct Converged {
+        std::vector<glm::vec4> accumulation;
+        int covered = 0;
+    };
+    Converged loadAndConverge(Scene& s, const ProviderSettings& ps) {
+        load(s, ps);
+        (void)s.objects[0].material->takeDirtyBricks();
+        renderUntilConverged(20);
+        Converged c;
+        c.accumulation =
+            readRgba(provider.debugTextures().accumulation, s.camera.width, s.camera.height);
+        for (const glm::vec4& a : c.accumulation)
+            c.covered += a.a > 0.f ? 1 : 0;
+        return c;
+    }
+
     /// Every pixel's stored material (σt, and σs′ with R′) equals what a fresh provider's
     /// irradiance pass looks up for the painted volume, bit for bit: the material update skips
     /// the look-up only where it cannot change (pixels out of reach of the written bricks).
@@ -600,18 +618,12 @@ TEST_F(ProviderFixture, MaterialChangeRestartsOnlyThePixelsItChanges) {
     ps.samplesPerFrame = 8;
     ps.maxFrames = 8;
     ps.convergenceThreshold = 0.f;
-    load(s, ps);
+    const auto [before, covered] = loadAndConverge(s, ps);
     MaterialVolume& vol = *s.objects[0].material;
-    (void)vol.takeDirtyBricks();
-    renderUntilConverged(20);
     ASSERT_TRUE(provider.stats().converged);
     ASSERT_EQ(provider.stats().frames, ps.maxFrames);
     const int w = s.camera.width, h = s.camera.height;
     const unsigned accumTex = provider.debugTextures().accumulation;
-    const auto before = readRgba(accumTex, w, h);
-    int covered = 0;
-    for (const glm::vec4& a : before)
-        covered += a.a > 0.f ? 1 : 0;
     const int resets = provider.stats().resets, viewPasses = provider.stats().lightViewPasses;
 
     (void)paintFront(vol);
@@ -694,16 +706,9 @@ TEST_F(ProviderFixture, StrokeLooksUpOnlyThePixelsWithinReachOfItsBricks) {
     ps.samplesPerFrame = 8;
     ps.maxFrames = 4;
     ps.convergenceThreshold = 0.f;
-    load(s, ps);
+    const int covered = loadAndConverge(s, ps).covered;
     MaterialVolume& vol = *s.objects[0].material;
-    (void)vol.takeDirtyBricks();
-    renderUntilConverged(20);
     ASSERT_TRUE(provider.stats().converged);
-    const auto before =
-        readRgba(provider.debugTextures().accumulation, s.camera.width, s.camera.height);
-    int covered = 0;
-    for (const glm::vec4& a : before)
-        covered += a.a > 0.f ? 1 : 0;
 
     // A denser 10³-voxel dab (1.8 mm) at the front of the sphere (radius 10 mm, camera on +z).
     MaterialSample painted = testutil::skinMaterial();
