@@ -413,6 +413,10 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
 
     for (const Variant& v : variants) {
         const int n = std::min(options.levels, int(v.settings.size()));
+        // The previous (coarser) setting's image and its result, for blockRelL1ToFiner.
+        ImageRgb coarserImage;
+        constexpr size_t NONE = size_t(-1);
+        size_t coarserResult = NONE;
         for (int q = 0; q < n; ++q) {
             const methods::ParamPreset& s = v.settings[size_t(q)];
             const std::string label = evalCase.name + ": " + v.name + " (" + s.name + ")";
@@ -436,8 +440,14 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
             } catch (const ValueError& e) {  // size mismatch, a non-finite pixel
                 run.skipped.push_back(label + ": " + e.what());
                 say("skipping " + run.skipped.back());
+                coarserResult = NONE;
                 continue;
             }
+            if (coarserResult != NONE)
+                run.results[coarserResult].blockRelL1ToFiner =
+                    bench::compareImages(coarserImage, image.radiance, nullptr, nullptr, &ref.mask)
+                        .blocks[bench::ErrorReport::LUMINANCE]
+                        .relL1;
             r.backend = methods::backendName(image.backend);
             r.msMedian = median(times.wall);
             r.msMin = *std::min_element(times.wall.begin(), times.wall.end());
@@ -463,6 +473,8 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
                           v.name.c_str(), s.name.c_str(), r.msMedian, r.metrics.blockRelL1(),
                           r.metrics.blockRelRmse(), r.metrics.p95(), r.metrics.meanRatio());
             say(buf);
+            coarserImage = std::move(image.radiance);
+            coarserResult = run.results.size();
             run.results.push_back(std::move(r));
         }
     }

@@ -117,6 +117,8 @@ std::vector<Field> fields(const Result& r) {
         {"p95", fmt(m.p95())},
         {"noise_floor", fmt(lum.relL1Floor)},
         {"noise_floor_rmse", fmt(lum.relRmseFloor)},
+        // Empty for the finest setting (nothing finer to compare with).
+        {"block_rel_l1_to_finer", r.blockRelL1ToFiner >= 0 ? fmt(r.blockRelL1ToFiner) : ""},
         {"pixel_rel_rmse", fmt(m.report.channels[Metrics::LUM].relRmse)},
         {"pixel_rel_rmse_floor", fmt(m.report.channels[Metrics::LUM].relRmseFloor)},
     };
@@ -466,6 +468,10 @@ std::vector<Result> parseResultsCsv(const std::string& text, const std::string& 
         }
         rep.pixelCount = size_t(number("pixels"));
         r.noiseFloor = lum.relL1Floor;
+        // Files written before the level check have no such column.
+        if (std::find(header.begin(), header.end(), "block_rel_l1_to_finer") != header.end() &&
+            !text("block_rel_l1_to_finer").empty())
+            r.blockRelL1ToFiner = number("block_rel_l1_to_finer");
         if (!text("feature_size_mm").empty()) {
             planner::SceneFeatures f;
             for (const FeatureColumn& c : featureColumns()) {

@@ -44,6 +44,11 @@ endfunction()
 # A CSV row as a list; a quoted field ("grid 16, 16 steps") becomes Q.
 function(csv_columns row out)
     string(REGEX REPLACE "\"[^\"]*\"" "Q" flat "${row}")
+    # Empty cells (block_rel_l1_to_finer of the finest setting) as "E": CMake lists drop empty
+    # elements. Twice, for runs of empty cells.
+    string(REPLACE ",," ",E," flat "${flat}")
+    string(REPLACE ",," ",E," flat "${flat}")
+    string(REGEX REPLACE ",$" ",E" flat "${flat}")
     string(REPLACE "," ";" cols "${flat}")
     set(${out} "${cols}" PARENT_SCOPE)
 endfunction()

@@ -7,6 +7,7 @@
 #include <lucent/evaluation/Report.h>
 #include <lucent/evaluation/Suite.h>
 #include <lucent/material/Brush.h>
+#include <lucent/methods/RenderImage.h>
 
 #include <gtest/gtest.h>
 
@@ -182,14 +183,25 @@ TEST(EvaluationReference, SceneHashSeesEveryInput) {
     EXPECT_EQ(hashScene(s), h) << "the original volume is unchanged";
 }
 
-TEST(EvaluationReference, CacheIsReusedOnlyForTheSameScene) {
-    const fs::path dir = fs::path(LUCENT_TEST_EVAL_DIR) / "cache";
+/// LUCENT_TEST_EVAL_DIR/name, emptied.
+fs::path emptyTestDir(const char* name) {
+    const fs::path dir = fs::path(LUCENT_TEST_EVAL_DIR) / name;
     fs::remove_all(dir);
     fs::create_directories(dir);
+    return dir;
+}
+
+/// The smoke suite's first case at size × size pixels.
+EvalCase smokeCase(int size) {
     SuiteOptions o;
-    o.width = 8;
-    o.height = 8;
-    const Scene scene = buildSuite("smoke", o).front().scene;
+    o.width = size;
+    o.height = size;
+    return buildSuite("smoke", o).front();
+}
+
+TEST(EvaluationReference, CacheIsReusedOnlyForTheSameScene) {
+    const fs::path dir = emptyTestDir("cache");
+    const Scene scene = smokeCase(8).scene;
     const ReferenceSettings settings{4, false};
     const CachedReference first = referenceFor(scene, "c", dir.string(), settings);
     EXPECT_FALSE(first.cached);
@@ -203,12 +215,43 @@ TEST(EvaluationReference, CacheIsReusedOnlyForTheSameScene) {
     EXPECT_FALSE(referenceFor(other, "c", dir.string(), settings).cached);
 }
 
+TEST(EvaluationRun, EachSettingIsComparedWithTheNextFinerOne) {
+    // What the planner's level check replays (planner/LevelCheck.h): a setting's image
+    // against the same variant's next finer one, the block metric over the reference's mask.
+    const fs::path dir = emptyTestDir("to-finer");
+    const EvalCase c = smokeCase(16);
+    RunOptions run;
+    run.outDir = dir.string();
+    run.refSpp = 4;
+    run.repeats = 1;
+    run.levels = 2;
+    run.writeImages = false;
+    const Variant v = parseVariant("sslpv:diffusion");
+    const CaseRun out = evaluateCase(c, {v}, run);
+    ASSERT_EQ(out.results.size(), 2u);
+    const auto render = [&](int q) {
+        methods::ParamSet params = v.variant.values;
+        params.merge(v.settings[size_t(q)].values);
+        methods::RenderOptions ro;
+        ro.backend = v.variant.backend;
+        return methods::renderImage(c.scene, v.method, params, ro).radiance;
+    };
+    const double expected =
+        bench::compareImages(render(0), render(1), nullptr, nullptr, &out.reference.mask)
+            .blocks[bench::ErrorReport::LUMINANCE]
+            .relL1;
+    EXPECT_GT(expected, 0.0);  // grid 16 and grid 32 differ
+    EXPECT_NEAR(out.results[0].blockRelL1ToFiner, expected, 1e-12);
+    EXPECT_LT(out.results[1].blockRelL1ToFiner, 0.0);  // nothing finer was rendered
+}
+
 TEST(EvaluationReport, CsvHasTheColumnsThePlannerFitNeeds) {
     const std::string header = csvHeader();
     for (const char* column :
          {"case,", "method,", "setting,", "time_ms,", "direct_ms,", "cost_ratio,", "block_rel_l1,",
-          "block_rel_rmse,", "mean_ratio,", "p95,", "noise_floor,", "block_rel_l1_r,",
-          "feature_optical_size,", "feature_back_lit_fraction,", "feature_lights"})
+          "block_rel_rmse,", "mean_ratio,", "p95,", "noise_floor,", "block_rel_l1_to_finer,",
+          "block_rel_l1_r,", "feature_optical_size,", "feature_back_lit_fraction,",
+          "feature_lights"})
         EXPECT_NE(header.find(column), std::string::npos) << column;
     // Two results of one case: the CSV rows have the header's columns (a quoted setting with a
     // comma stays one field), the summary names the better one, the front holds both.
@@ -281,18 +324,22 @@ TEST(EvaluationReport, ResultsReadBackAsWritten) {
     test.at(1, 1) = Rgb(2.f, 1.f, 0.5f);
     r.metrics = scoreImage(test, ref);
     r.noiseFloor = r.metrics.report.blocks[Metrics::LUM].relL1Floor;
+    r.blockRelL1ToFiner = 0.0375;
     planner::SceneFeatures f;
     f.opticalSize = 123.5;
     f.insideVoxels = 4096;
     r.features = f;
     Result noFeatures = r;
     noFeatures.features.reset();
+    noFeatures.blockRelL1ToFiner = -1.0;  // the finest setting: an empty cell
     const std::string csv = toCsv({r, noFeatures});
     const std::vector<Result> back = parseResultsCsv(csv, "results.csv");
     ASSERT_EQ(back.size(), 2u);
     EXPECT_EQ(toCsv(back), csv);
     ASSERT_TRUE(back[0].features);
     EXPECT_EQ(back[0].features->insideVoxels, 4096);
+    EXPECT_DOUBLE_EQ(back[0].blockRelL1ToFiner, 0.0375);
+    EXPECT_LT(back[1].blockRelL1ToFiner, 0.0);
     EXPECT_FALSE(back[1].features);
     EXPECT_THROW(parseResultsCsv(csvHeader() + "a,b\n", "bad.csv"), IoError);
 

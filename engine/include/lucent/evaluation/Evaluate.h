@@ -145,6 +145,11 @@ struct Result {
     double cpuCostRatio = 0.0;
     Metrics metrics;
     double noiseFloor = 0.0;  ///< the reference's block rel. L1 floor (luminance)
+    /// Block relative L1 (luminance, over the reference's mask) of this setting's image
+    /// against the same variant's next finer setting: what refining buys on this case (the
+    /// planner's level check, lucent/planner/LevelCheck.h). < 0 for the finest setting
+    /// measured, or when the finer one was not rendered.
+    double blockRelL1ToFiner = -1.0;
     std::optional<planner::SceneFeatures> features;  ///< of the case (empty if not analysable)
     std::string image;                               ///< EXR written (empty if none)
 };
