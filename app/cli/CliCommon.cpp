@@ -93,6 +93,35 @@ void overrideImageSize(const CLI::App& app, int width, int height, int& cameraWi
         cameraHeight = height;
 }
 
+void addLevelCheckOptions(CLI::App& app, planner::LevelTolerance& tolerance,
+                          const std::string& group) {
+    CLI::Option* absolute =
+        app.add_option("--level-tolerance", tolerance.absolute,
+                       "the level check: after the plan, the chosen level and the method's cheaper "
+                       "ones are rendered on a 64-pixel-wide frame and the cheapest whose image "
+                       "differs from the chosen one by at most max(T, K x its predicted error) "
+                       "(4x4-block rel. L1, summed over the steps) is taken (default T 0.02)")
+            ->type_name("T")
+            ->check(finiteRange(0.0, 1.0))
+            ->group(group);
+    CLI::Option* relative =
+        app.add_option("--level-relative", tolerance.relative,
+                       "the level check's K (default 1: a cheaper image within the chosen one's "
+                       "own predicted error)")
+            ->type_name("K")
+            ->check(finiteRange(0.0, 10.0))
+            ->group(group);
+    app.add_flag_callback(
+           "--no-level-check",
+           [&tolerance] {
+               tolerance = {0.0, 0.0};
+           },
+           "keep the level the models chose")
+        ->excludes(absolute)
+        ->excludes(relative)
+        ->group(group);
+}
+
 CLI::Validator finiteRange(double lo, double hi) {
     const std::string range = "[" + numberText(lo) + ", " + numberText(hi) + "]";
     return CLI::Validator(

@@ -6,6 +6,7 @@
 /// in the order `lucent-cli --help` lists the commands). CLI-only: CLI11 stays out of the engine.
 
 #include <lucent/core/Types.h>
+#include <lucent/planner/Planner.h>
 
 #include <CLI/CLI.hpp>
 
@@ -43,6 +44,11 @@ void overrideImageSize(const CLI::App& app, int width, int height, int& cameraWi
 /// A finite number in [lo, hi]. (CLI::Range alone lets "nan" through: every comparison with
 /// NaN is false.)
 CLI::Validator finiteRange(double lo, double hi);
+
+/// Auto's level check (lucent/planner/LevelCheck.h): --level-tolerance T, --level-relative K
+/// and --no-level-check into `tolerance` (off() after --no-level-check).
+void addLevelCheckOptions(CLI::App& app, planner::LevelTolerance& tolerance,
+                          const std::string& group);
 
 /// An option that takes one of `choices`' names and stores the matching value in `target`.
 /// (CLI::IsMember's error lists the names; CLI::CheckedTransformer's would list the enum's

@@ -10,6 +10,7 @@
 #include <lucent/core/Error.h>
 #include <lucent/gpu/GlContext.h>
 #include <lucent/planner/AutoMethod.h>
+#include <lucent/planner/LevelCheck.h>
 #include <lucent/scene/SceneFile.h>
 
 #include <cstdio>
@@ -48,6 +49,7 @@ struct PlanOptions {
     std::vector<std::string> fit, check;
     float budgetMs = 1000.f, maxError = 0.f, directMs = 1.f, ridge = 0.05f, budgetRatio = 20.f,
           errorTolerance = float(planner::Budget{}.errorTolerance);
+    planner::LevelTolerance levelTolerance;
     int width = 0, height = 0;
     bool cpu = false;
     const CLI::App* app = nullptr;
@@ -97,14 +99,20 @@ void runCheck(const PlanOptions& args) {
         std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv, args.costMeasure());
         rows.insert(rows.end(), r.begin(), r.end());
     }
-    const std::vector<planner::FrontCheck> checks =
-        planner::checkAgainstFront(rows, models, budgetRatio, args.errorTolerance);
+    const std::vector<planner::FrontCheck> checks = planner::checkAgainstFront(
+        rows, models, budgetRatio, args.errorTolerance, args.levelTolerance);
     if (checks.empty())
         LUCENT_THROW(ValueError, "plan --check: no case has a measured candidate with a model");
     std::printf(
         "budget: %g x the Direct frame; times are measured cost ratios, errors measured\n"
-        "block rel. L1\n\n",
-        budgetRatio);
+        "block rel. L1; level check %s\n\n",
+        budgetRatio,
+        args.levelTolerance.off()
+            ? "off"
+            : ("max(" + std::to_string(args.levelTolerance.absolute).substr(0, 5) + ", " +
+               std::to_string(args.levelTolerance.relative).substr(0, 4) +
+               " x the predicted error); \"<\" marks a choice it moved to a cheaper level")
+                  .c_str());
     std::printf("%-28s %-36s %8s %7s  %-36s %6s  %s\n", "case", "Auto's choice", "cost", "error",
                 "cheapest at that error", "ratio", "best in budget");
     int within = 0, best = 0;
@@ -112,8 +120,9 @@ void runCheck(const PlanOptions& args) {
         within += c.timeRatio <= 1.2 ? 1 : 0;
         best += c.choseBest ? 1 : 0;
         std::printf("%-28s %-36s %8.2f %7.3f  %-36s %6.2f  %s%s\n", c.caseName.c_str(),
-                    c.chosen.c_str(), c.chosenCost, c.chosenError, c.cheapestAtError.c_str(),
-                    c.timeRatio, c.choseBest ? "= chosen" : c.bestInBudget.c_str(),
+                    (c.chosen + (c.planned.empty() ? "" : " <")).c_str(), c.chosenCost,
+                    c.chosenError, c.cheapestAtError.c_str(), c.timeRatio,
+                    c.choseBest ? "= chosen" : c.bestInBudget.c_str(),
                     c.choseBest
                         ? ""
                         : (" (error " + std::to_string(c.bestError).substr(0, 5) + ")").c_str());
@@ -142,9 +151,17 @@ void runPlan(const PlanOptions& args) {
     budget.frameMs = args.budgetMs;
     budget.maxError = args.maxError;
     budget.directMs = args.has("--direct-ms") ? double(args.directMs) : 0.0;
-    const planner::AutoChoice c = planner::chooseOffline(
-        scene, models, budget, gl,
-        [](const std::string& m) { std::fprintf(stderr, "plan: %s\n", m.c_str()); });
+    const methods::Log log = [](const std::string& m) {
+        std::fprintf(stderr, "plan: %s\n", m.c_str());
+    };
+    planner::AutoChoice c = planner::chooseOffline(scene, models, budget, gl, log);
+    const size_t planned = c.plan.choice;
+    if (!args.levelTolerance.off()) {
+        planner::LevelCheckOptions lo;
+        lo.tolerance = args.levelTolerance;
+        lo.render.log = log;
+        planner::applyLevelCheck(c, models, planner::checkLevels(scene, models, c, lo));
+    }
     printFeatures(c.features);
     std::printf("scene class: %s\n", planner::describe(c.plan.sceneClass, c.features.eta).c_str());
     std::printf("Direct frame: %s; %s\n",
@@ -160,7 +177,10 @@ void runPlan(const PlanOptions& args) {
     for (const planner::Option& o : c.plan.options) {
         const planner::CandidateModel& m = models.candidates[o.index];
         std::printf("%-22s %-20s %12.1f %12.3f %5s%s\n", m.method.c_str(), m.setting.c_str(), o.ms,
-                    o.error, o.fits ? "yes" : "no", o.index == c.plan.choice ? "  <- chosen" : "");
+                    o.error, o.fits ? "yes" : "no",
+                    o.index == c.plan.choice ? "  <- chosen"
+                    : o.index == planned     ? "  <- planned (level check: see the plan)"
+                                             : "");
     }
     std::printf("\nplan: %s\n", c.plan.reason.c_str());
     std::printf("render: lucent-cli render %s --method %s%s", args.scene.c_str(), c.method.c_str(),
@@ -181,11 +201,15 @@ void addPlanCommand(CLI::App& cli, const CommandContext&) {
         "usage: lucent-cli plan SCENE.json [--budget-ms B | --max-error E] [--direct-ms D]\n"
         "                       [--models models.json] [--width W] [--height H] [--cpu]\n"
         "       lucent-cli plan --fit suite.csv [--fit more.csv ...] -o models.json [--ridge R]\n"
-        "       lucent-cli plan --check suite.csv [--models F] [--budget-ratio R]\n",
+        "       lucent-cli plan --check suite.csv [--models F] [--budget-ratio R]\n"
+        "  SCENE and --check: [--level-tolerance T] [--level-relative K] [--no-level-check]\n",
         "Prints the scene's features and class, every candidate (a method at one quality level)\n"
         "with its predicted time and 4x4-block error against the exact reference, the choice and\n"
         "its one-line reason, and the `lucent-cli render` command that renders it\n"
-        "(`render --method auto` does both). docs/planner.md explains the models.\n");
+        "(`render --method auto` does both). The level check then renders the chosen level and\n"
+        "the method's cheaper ones on a 64-pixel-wide frame and takes the cheapest whose image\n"
+        "differs from the chosen one by at most max(T, K x its predicted error) (block rel. L1).\n"
+        "docs/planner.md explains the models and the check.\n");
     auto args = std::make_shared<PlanOptions>();
     args->app = sub;
     CLI::Option* scene =
@@ -254,6 +278,8 @@ void addPlanCommand(CLI::App& cli, const CommandContext&) {
         ->type_name("T")
         ->check(finiteRange(0.0, 0.99))
         ->needs(check);
+    // --check replays the level check on the CSV's block_rel_l1_to_finer column.
+    addLevelCheckOptions(*sub, args->levelTolerance, "Level check (SCENE and --check)");
     sub->callback([args] { runPlan(*args); });
 }
 

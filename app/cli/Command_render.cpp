@@ -12,6 +12,7 @@
 #include <lucent/methods/Registry.h>
 #include <lucent/methods/RenderImage.h>
 #include <lucent/planner/AutoMethod.h>
+#include <lucent/planner/LevelCheck.h>
 #include <lucent/scene/SceneFile.h>
 
 #include <algorithm>
@@ -34,6 +35,7 @@ struct RenderOptions {
     std::string scene, method = "direct", output, backend = "auto";
     int width = 0, height = 0;
     float exposure = 1.f, budgetMs = 1000.f, maxError = 0.f;
+    planner::LevelTolerance levelTolerance;
     ToneMap::Curve curve = ToneMap::Curve::Aces;
     std::string models;
     std::vector<std::string> assignments;             ///< --param NAME=VALUE
@@ -50,7 +52,8 @@ void runRender(const RenderOptions& args) {
     const bool autoMethod = requested == "auto";
     if (!autoMethod) {
         const methods::MethodInfo& info = methods::find(requested);  // lists the valid names
-        for (const char* option : {"--budget-ms", "--max-error", "--models"})
+        for (const char* option : {"--budget-ms", "--max-error", "--models", "--level-tolerance",
+                                   "--level-relative", "--no-level-check"})
             if (args.has(option))
                 LUCENT_THROW(ValueError, option, " applies to --method auto only");
         for (const auto& [name, value] : args.methodParams)
@@ -99,8 +102,15 @@ void runRender(const RenderOptions& args) {
         budget.directMs = 0;  // measured
         const planner::Models models =
             args.has("--models") ? planner::loadModels(args.models) : planner::defaultModels();
-        const planner::AutoChoice c =
-            planner::chooseOffline(scene, models, budget, gl, options.log);
+        planner::AutoChoice c = planner::chooseOffline(scene, models, budget, gl, options.log);
+        if (!args.levelTolerance.off()) {
+            planner::LevelCheckOptions lo;
+            lo.tolerance = args.levelTolerance;
+            lo.render.log = options.log;
+            lo.render.subsurfaceOnly = options.subsurfaceOnly;
+            lo.render.backend = options.backend;
+            planner::applyLevelCheck(c, models, planner::checkLevels(scene, models, c, lo));
+        }
         std::fprintf(stderr, "render: auto: %s\n", c.plan.reason.c_str());
         methodName = c.method;
         params = c.params;
@@ -143,7 +153,8 @@ void addRenderCommand(CLI::App& cli, const CommandContext&) {
         "                         [--width W] [--height H] [--subsurface-only] [--all-lights]\n"
         "                         [--exposure E] [--tonemap clamp|reinhard|aces]\n"
         "       lucent-cli render SCENE.json --method auto [--budget-ms B | --max-error E]\n"
-        "                         [--models F] -o OUT ...\n",
+        "                         [--models F] [--level-tolerance T] [--level-relative K]\n"
+        "                         [--no-level-check] -o OUT ...\n",
         "Renders the scene with a registered method (`lucent-cli methods` lists them and their\n"
         "parameters). GL methods run through an offscreen OpenGL 4.5 context (EGL, no display\n"
         "needed); without one, a method with a CPU renderer falls back to it (said on stderr).\n"
@@ -207,6 +218,7 @@ void addRenderCommand(CLI::App& cli, const CommandContext&) {
         ->type_name("F")
         ->check(existingFile())
         ->group(autoGroup);
+    addLevelCheckOptions(*sub, args->levelTolerance, autoGroup);
     // Every method's parameters as --NAME VALUE; runRender() rejects those the chosen method
     // lacks. (The method's own ranges are checked by the engine, which knows them.)
     std::map<std::string, std::string> users;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include <lucent/core/Error.h>
 #include <lucent/core/FileIO.h>
+#include <lucent/planner/LevelCheck.h>
 #include <lucent/planner/Models.h>
 
 #include "ModelData.h"
@@ -366,6 +367,7 @@ std::vector<MeasuredRow> readMeasurements(const std::string& csvPath, CostMeasur
     }
     const int lightsCol = column({"lights", "feature_lights"});
     const int floorCol = column({"noise_floor", "block_rel_l1_floor"});
+    const int toFinerCol = column({"block_rel_l1_to_finer"});
 
     std::vector<MeasuredRow> rows;
     int lineNo = 1;
@@ -394,6 +396,9 @@ std::vector<MeasuredRow> readMeasurements(const std::string& csvPath, CostMeasur
             r.features.*field = parseNumber(f[size_t(c)], header[size_t(c)], where);
         if (floorCol >= 0)
             r.noiseFloor = parseNumber(f[size_t(floorCol)], header[size_t(floorCol)], where);
+        if (toFinerCol >= 0 && !f[size_t(toFinerCol)].empty())
+            r.blockRelL1ToFiner =
+                parseNumber(f[size_t(toFinerCol)], "block_rel_l1_to_finer", where);
         if (lightsCol >= 0)
             r.features.lights = int(parseNumber(f[size_t(lightsCol)], "lights", where));
         rows.push_back(std::move(r));
@@ -508,8 +513,11 @@ const Models& defaultModels() {
 
 std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
                                           const Models& models, double budgetRatio,
-                                          double errorTolerance) {
+                                          double errorTolerance, LevelTolerance levelTolerance) {
     LUCENT_CHECK(budgetRatio > 0, "front check: the budget must be > 0 times the Direct frame");
+    LUCENT_CHECK(std::isfinite(levelTolerance.absolute) && levelTolerance.absolute >= 0 &&
+                     std::isfinite(levelTolerance.relative) && levelTolerance.relative >= 0,
+                 "front check: the level tolerances must be finite and >= 0");
     std::vector<std::string> cases;
     for (const MeasuredRow& r : rows)
         if (std::find(cases.begin(), cases.end(), r.caseName) == cases.end())
@@ -541,8 +549,33 @@ std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
         budget.frameMs = budgetRatio;
         budget.errorTolerance = errorTolerance;
         const Plan p = plan(candidates, measured.front()->features, budget);
-        const MeasuredRow& chosen = *measured[p.choice];
+        const MeasuredRow* pick = measured[p.choice];
         FrontCheck c;
+        // The level check on the case's measured differences between adjacent levels.
+        if (!levelTolerance.off()) {
+            const std::vector<std::string> levels = modelLevels(models, pick->method);
+            const auto row = [&](const std::string& setting) -> const MeasuredRow* {
+                for (const MeasuredRow* r : measured)
+                    if (r->method == pick->method && r->setting == setting)
+                        return r;
+                return nullptr;
+            };
+            const auto at = std::find(levels.begin(), levels.end(), pick->setting);
+            if (at != levels.end()) {
+                const size_t kept = coarsestEquivalentLevel(
+                    levels, size_t(at - levels.begin()),
+                    [&](size_t i) {
+                        const MeasuredRow* r = row(levels[i]);
+                        return r && row(levels[i + 1]) ? r->blockRelL1ToFiner : -1.0;
+                    },
+                    levelTolerance.at(p.chosen.error));
+                if (levels[kept] != pick->setting) {
+                    c.planned = label(pick->method, pick->setting);
+                    pick = row(levels[kept]);
+                }
+            }
+        }
+        const MeasuredRow& chosen = *pick;
         c.caseName = name;
         c.chosen = label(chosen.method, chosen.setting);
         c.chosenCost = chosen.costRatio;

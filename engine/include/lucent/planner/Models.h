@@ -36,6 +36,9 @@ struct MeasuredRow {
     /// The reference's own noise in the same metric (0 when unknown): errors closer than this
     /// are equal as far as the measurement can tell.
     double noiseFloor = 0.0;
+    /// Block relative L1 of this setting's image against the same method's next finer
+    /// setting on the case (< 0: not measured): the level check's input (LevelCheck.h).
+    double blockRelL1ToFiner = -1.0;
     SceneFeatures features;
 };
 
@@ -81,8 +84,8 @@ Models fitModels(const std::vector<MeasuredRow>& rows, double ridge = 0.05);
 /// the columns, then one row per case, method and setting. Columns are found by name:
 /// case (or scene), method, setting, cost_ratio (or time_ms with direct_ms), block_rel_l1,
 /// one column per SceneFeatures field (camelCase, snake_case or feature_snake_case); optional:
-/// lights, noise_floor
-/// (or block_rel_l1_floor). Rows of the `direct` and
+/// lights, noise_floor (or block_rel_l1_floor), block_rel_l1_to_finer (empty cells: not
+/// measured). Rows of the `direct` and
 /// `reference` methods are read like any other (the caller decides what to fit).
 /// @throw IoError naming the file; ValueError naming the missing column or the bad line.
 /// Which cost to read: the wall-time ratio (cost_ratio, or time_ms / direct_ms) or the process
@@ -109,6 +112,8 @@ const Models& defaultModels();
 struct FrontCheck {
     std::string caseName;
     std::string chosen;  ///< "method setting" Auto picked from the models' predictions
+    /// The models' pick before the level check stepped down ("" when it kept the level).
+    std::string planned;
     double chosenCost = 0.0, chosenError = 0.0;  ///< its measured cost ratio and block error
     /// The cheapest measured candidate at or under the chosen one's measured error plus the
     /// reference noise floor (errors closer than the floor are equal).
@@ -127,12 +132,15 @@ struct FrontCheck {
 
 /// For every case in `rows`, plans with `models` on the case's features (only candidates that
 /// were measured on that case take part) under a budget of `budgetRatio` × the Direct frame,
-/// then judges the choice by the measured rows. Rows of candidates without a model are left
-/// out. `errorTolerance`: the planner's Budget::errorTolerance. @throw ValueError if
-/// budgetRatio ≤ 0 or the tolerance is outside [0, 1).
+/// replays the level check (LevelCheck.h) on the rows' blockRelL1ToFiner unless
+/// `levelTolerance` is off, then judges the choice by the measured rows. Rows of candidates
+/// without a model are left out. `errorTolerance`: the planner's Budget::errorTolerance.
+/// @throw ValueError if budgetRatio ≤ 0, the error tolerance is outside [0, 1) or a level
+/// tolerance is negative.
 std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
                                           const Models& models, double budgetRatio,
-                                          double errorTolerance = Budget{}.errorTolerance);
+                                          double errorTolerance = Budget{}.errorTolerance,
+                                          LevelTolerance levelTolerance = {0.0, 0.0});
 
 /// The planner's candidates for `models` (costRatio and error bound to the models; `unusable`
 /// left empty: the caller knows what the scene and backend allow).

@@ -17,6 +17,7 @@
 
 #include <lucent/planner/SceneFeatures.h>
 
+#include <algorithm>
 #include <functional>
 #include <string>
 #include <vector>
@@ -65,6 +66,25 @@ struct Budget {
     /// candidate 20 % slower (SSLPV 16³ at 0.61 against the directional dipole at 0.24 on the
     /// default scene at 1920×1080). 0: the fastest.
     double overrunTolerance = 0.5;
+};
+
+/// How far a cheaper quality level's image may differ from the chosen level's for the level
+/// check (LevelCheck.h) to take it: the larger of an absolute block relative L1 and a fraction
+/// of the chosen candidate's predicted error, summed over the steps down.
+struct LevelTolerance {
+    /// 2 %: below what an artist sees side by side (a just-noticeable luminance step is 1–2 %),
+    /// and about the evaluation suite's median reference noise floor (0.016).
+    double absolute = 0.02;
+    /// × the chosen candidate's predicted error. A cheaper image within the chosen one's own
+    /// error of it is, by the triangle inequality, at most twice that error from the exact
+    /// one: the factor to which the models predict errors (Budget::errorTolerance). And where
+    /// refining moves the image less than the error left, that error is the method's, not
+    /// the level's (docs/planner.md, "Levels the scene does not need").
+    double relative = 1.0;
+    [[nodiscard]] double at(double predictedError) const {
+        return std::max(absolute, relative * std::max(predictedError, 0.0));
+    }
+    [[nodiscard]] bool off() const { return !(absolute > 0) && !(relative > 0); }
 };
 
 /// One scored candidate.
