@@ -11,6 +11,7 @@
 #include <lucent/gpu/Shader.h>
 #include <lucent/methods/Registry.h>
 #include <lucent/planner/AutoMethod.h>
+#include <lucent/planner/LevelCheck.h>
 #include <lucent/planner/LiveCosts.h>
 #include <lucent/scene/LightReach.h>
 
@@ -232,7 +233,34 @@ struct PreviewRenderer::Impl {
         std::shared_ptr<const planner::Models> measured;
         const LiveCostTable* liveCosts = nullptr;  ///< the table the last plan used
         bool planMeasured = false;                 ///< the current choice was made with `measured`
+        /// The planner's pick before a level decision applied (`choice` after it); the next
+        /// plan's hysteresis compares with this, so a decision never feeds a further step down.
+        planner::AutoChoice planned;
+        /// Level decisions (setAutoLevelDecision), one per method and planned level.
+        std::vector<AutoLevelDecision> levels;
+        /// The models `planned` was chosen from: the measured ones (shared), or the live table's
+        /// (not owned: a table lives for the process's life, liveCostTable()).
+        std::shared_ptr<const planner::Models> plannedWith;
     } autoPlan;
+
+    /// autoPlan.choice: the planned pick, at the level a decision for it keeps (none when the
+    /// plan used errors measured against a reference: they tell the levels apart already).
+    void applyLevelDecisions() {
+        AutoState& a = autoPlan;
+        if (!a.valid || !a.plannedWith)
+            return;
+        a.choice = a.planned;
+        if (a.planMeasured)
+            return;
+        for (const AutoLevelDecision& d : a.levels)
+            if (d.method == a.planned.candidate() && d.planned == a.planned.setting &&
+                d.sceneClass == a.planned.plan.sceneClass) {
+                planner::LevelCheck check;
+                check.setting = d.kept;
+                check.note = d.note;
+                planner::applyLevelCheck(a.choice, *a.plannedWith, check);
+            }
+    }
 
     /// One frame (PreviewRenderer::render).
     void renderFrame(PreviewFrame& f);
@@ -357,6 +385,28 @@ const planner::AutoChoice* PreviewRenderer::autoChoice() const {
     return m->autoPlan.valid ? &m->autoPlan.choice : nullptr;
 }
 
+const planner::AutoChoice* PreviewRenderer::autoPlannedChoice() const {
+    return m->autoPlan.valid ? &m->autoPlan.planned : nullptr;
+}
+
+void PreviewRenderer::setAutoLevelDecision(const AutoLevelDecision& decision) {
+    std::vector<AutoLevelDecision>& levels = m->autoPlan.levels;
+    std::erase_if(levels, [&](const AutoLevelDecision& d) {
+        return d.method == decision.method && d.planned == decision.planned &&
+               d.sceneClass == decision.sceneClass;
+    });
+    levels.push_back(decision);
+    m->applyLevelDecisions();  // the next frame renders with it
+}
+
+bool PreviewRenderer::hasAutoLevelDecisionFor(const planner::AutoChoice& planned) const {
+    return std::any_of(m->autoPlan.levels.begin(), m->autoPlan.levels.end(),
+                       [&](const AutoLevelDecision& d) {
+                           return d.method == planned.candidate() && d.planned == planned.setting &&
+                                  d.sceneClass == planned.plan.sceneClass;
+                       });
+}
+
 double PreviewRenderer::autoDirectMs() const {
     return m->autoPlan.directMs;
 }
@@ -457,6 +507,7 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
         a.directMs = 0.0;
         a.directSamples.clear();
         a.valid = false;
+        a.levels.clear();  // checked on another scene
     }
     const LiveCostTable& table = PreviewRenderer::liveCostTable();
     if (a.liveCosts != &table) {  // other live costs: plan from scratch with them
@@ -502,14 +553,20 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
     // swap): add what this viewport measures (docs/planner.md, "Calibrating on this machine").
     if (!table.inUse.costs.hostIncluded)
         budget.hostMs = std::max(0.0, f.hostMs);
-    // The previous plan of the same scene, for hysteresis (a new scene plans from scratch).
-    const planner::Plan previous = a.choice.plan;
+    // The previous plan of the same scene, for hysteresis (a new scene plans from scratch):
+    // the pick before any level decision.
+    const planner::Plan previous = a.planned.plan;
     const bool hasPrevious = a.valid && !f.sceneReplaced;
     const planner::Models& models = a.measured ? *a.measured : table.models;
     a.choice = planner::chooseMethod(scene, models, budget, /*glAvailable=*/true,
                                      hasPrevious ? &previous : nullptr, methods::Backend::Gl);
+    a.planned = a.choice;
+    a.plannedWith = a.measured ? a.measured
+                               : std::shared_ptr<const planner::Models>(
+                                     std::shared_ptr<const planner::Models>(), &table.models);
     a.planMeasured = a.measured != nullptr;
     a.valid = true;
+    applyLevelDecisions();
     a.stale = false;
     a.camera = f.camera;
     a.lights = lightKey;

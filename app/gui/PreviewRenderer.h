@@ -163,6 +163,23 @@ public:
     void pinAutoDirectMs(double ms);
     /// With Auto: the plan the last frame used (null before one, or with a fixed method).
     [[nodiscard]] const planner::AutoChoice* autoChoice() const;
+    /// With Auto: the planner's pick before the level check's decision (planner/LevelCheck.h)
+    /// replaced its level (the same as autoChoice() when none applies; null before a plan).
+    [[nodiscard]] const planner::AutoChoice* autoPlannedChoice() const;
+    /// What a level check of Auto's pick found: `planned` → `kept` of `method` (model name,
+    /// "sslpv:diffusion"), made for `sceneClass`.
+    struct AutoLevelDecision {
+        std::string method, planned, kept;
+        std::string note;  ///< planner::LevelCheck::note
+        planner::SceneClass sceneClass;
+    };
+    /// From the next plan on, a pick of decision.method at decision.planned in a scene of its
+    /// class renders at decision.kept (the plan's reason says why), until another decision for
+    /// that pick replaces it or the scene is replaced. Painting keeps it (no switch back and
+    /// forth while the artist paints); the viewport checks again when the painting pauses.
+    void setAutoLevelDecision(const AutoLevelDecision& decision);
+    /// Whether a decision for `planned` (an autoPlannedChoice()) is held.
+    [[nodiscard]] bool hasAutoLevelDecisionFor(const planner::AutoChoice& planned) const;
     /// The Direct frame Auto last planned with, ms (0 before one was timed or pinned).
     [[nodiscard]] double autoDirectMs() const;
     /// The live preview's candidates Auto plans with: the live costs in use (stroke → frame)

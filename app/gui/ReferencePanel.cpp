@@ -292,15 +292,7 @@ Scene ReferencePanel::frozenScene() const {
 
 Scene ReferencePanel::sceneAtView() const {
     Scene scene = m_doc->scene();
-    const OrbitCamera& cam = m_viewport->camera();
-    scene.camera.position = cam.eye();
-    scene.camera.target = cam.target;
-    scene.camera.up = Vector3f(0.f, 1.f, 0.f);
-    scene.camera.orthographic = false;
-    scene.camera.fovYDeg = cam.fovYDeg;
-    scene.camera.width = m_width->value();
-    const double aspect = double(m_viewport->height()) / double(std::max(m_viewport->width(), 1));
-    scene.camera.height = std::max(16, int(std::lround(m_width->value() * aspect)));
+    m_viewport->applyViewTo(scene.camera, m_width->value());
     return scene;
 }
 

@@ -211,7 +211,19 @@ Viewport::Viewport(Document* doc, QWidget* parent) : QWidget(parent), m_doc(doc)
         update();
     });
     m_clock.start();
+    m_levelChecker = new AutoLevelChecker(this, m_doc);
     onSceneReplaced();
+}
+
+void Viewport::applyViewTo(Camera& camera, int width) const {
+    camera.position = m_camera.eye();
+    camera.target = m_camera.target;
+    camera.up = Vector3f(0.f, 1.f, 0.f);
+    camera.orthographic = false;
+    camera.fovYDeg = m_camera.fovYDeg;
+    camera.width = width;
+    const double aspect = double(height()) / double(std::max(this->width(), 1));
+    camera.height = std::max(16, int(std::lround(width * aspect)));
 }
 
 Viewport::~Viewport() {
@@ -1088,6 +1100,7 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
         m_nextFrameChained = true;
     }
     m_sinceFrameEnd.start();
+    m_levelChecker->afterFrame();
     Q_EMIT frameRendered();
 }
 

@@ -26,6 +26,7 @@
 ///     vp->update();                           // schedules a GL frame
 ///     QImage frame = vp->grabFramebuffer();   // renders a frame offscreen and reads it back
 
+#include "AutoLevelCheck.h"
 #include "BrushTool.h"
 #include "PreviewRenderer.h"
 
@@ -103,15 +104,22 @@ public:
     [[nodiscard]] const ViewportStats& stats() const { return m_stats; }
     /// The renderer behind the GL window (its shader library, for tests and live editing).
     PreviewRenderer& previewRenderer() { return m_preview; }
+    /// Auto's level check, run on a worker after frames (AutoLevelCheck.h).
+    AutoLevelChecker& levelChecker() { return *m_levelChecker; }
     /// While paused, a progressive method does not refine in idle frames (a frame is drawn only
-    /// when something asks for one): the live-cost calibration then has the machine to itself.
+    /// when something asks for one) and Auto's level check starts no render: the live-cost
+    /// calibration then has the machine to itself.
     /// Resuming asks for a frame.
     void setRefinementPaused(bool paused) {
         m_refinementPaused = paused;
         if (!paused)
             update();
     }
+    [[nodiscard]] bool refinementPaused() const { return m_refinementPaused; }
 
+    /// `camera` set to this view: the orbit camera's eye, target and field of view (perspective,
+    /// y up), `width` pixels wide with the viewport's aspect (at least 16 pixels high).
+    void applyViewTo(Camera& camera, int width) const;
     /// Frames the object (F key): target at its centre, distance to fit its bounds.
     void frameObject();
     /// Whether the camera sees part of the object's bounding sphere at a visible size (more
@@ -268,6 +276,7 @@ private:
     QWidget* m_container = nullptr;      ///< child widget hosting m_window
     bool m_glReady = false;
     PreviewRenderer m_preview;
+    AutoLevelChecker* m_levelChecker = nullptr;  ///< a child QObject
     TriangleMesh m_posed;
     bool m_meshDirty = true, m_sceneReplaced = true;
 };

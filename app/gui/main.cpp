@@ -119,10 +119,18 @@ MethodTiming timeMethod(lucent::app::Viewport* vp) {
     return m;
 }
 
+/// Waits until Auto's level check of the first frames (a worker rendering the pick's levels,
+/// AutoLevelCheck.h) has finished: it would share the cores with the first timings.
+void waitForLevelCheck(lucent::app::Viewport* vp) {
+    while (vp->levelChecker().running())
+        QCoreApplication::processEvents(QEventLoop::AllEvents | QEventLoop::WaitForMoreEvents, 5);
+}
+
 /// Runs the latency harness on a shown window whose first frame has been rendered.
 void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath,
                   const QString& methodFilter) {
     lucent::app::Viewport* vp = w.viewport();
+    waitForLevelCheck(vp);
     lucent::app::RenderSettings rs = vp->renderSettings();
     struct Row {
         const char* name;
@@ -227,6 +235,7 @@ void runBenchmark(MainWindow& w, double startupMs, const QString& jsonPath,
 void measureLiveCosts(MainWindow& w, const QString& path) {
     constexpr int ROUNDS = 5;
     lucent::app::Viewport* vp = w.viewport();
+    waitForLevelCheck(vp);
     const lucent::app::RenderSettings defaults;  // half resolution, passes reused
     const auto timed = [&](const std::string& method, const lucent::methods::ParamSet& params) {
         lucent::app::RenderSettings rs = defaults;

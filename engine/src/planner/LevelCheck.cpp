@@ -82,8 +82,7 @@ LevelCheck checkLevels(const Scene& scene, const Models& models, const AutoChoic
                      std::isfinite(options.tolerance.relative) && options.tolerance.relative >= 0,
                  "level check: the tolerances must be finite and >= 0");
     LUCENT_CHECK(options.width >= 8, "level check: the frame must be at least 8 pixels wide");
-    const std::string method =
-        choice.variant.empty() ? choice.method : choice.method + ":" + choice.variant;
+    const std::string method = choice.candidate();
     LevelCheck out;
     out.setting = choice.setting;
     const std::vector<std::string> levels = modelLevels(models, method);
@@ -149,8 +148,7 @@ void applyLevelCheck(AutoChoice& choice, const Models& models, const LevelCheck&
         choice.plan.reason += "; level check: " + check.note;
     if (check.setting == choice.setting)
         return;
-    const std::string method =
-        choice.variant.empty() ? choice.method : choice.method + ":" + choice.variant;
+    const std::string method = choice.candidate();
     const CandidateRun run = resolveCandidate(method, check.setting);
     choice.setting = check.setting;
     choice.params = run.params;

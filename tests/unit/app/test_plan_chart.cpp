@@ -5,6 +5,8 @@
 /// plan Auto would make while a fixed method runs (that method marked), and "Measure this
 /// scene" on a small view with a finished reference: measured points and a measured plan; an
 /// edit or closing the dock stops a measurement.
+/// Auto's level check in the app (AutoLevelCheck.h): the pick renders at the level a check on a
+/// worker keeps, painting keeps it and checks again once quiet.
 /// Also writes the user guide's screenshot of the page when LUCENT_SCREENSHOT_DIR is set.
 
 #include "Document.h"
@@ -17,6 +19,7 @@
 #include "GuiTestMain.h"
 
 #include <lucent/planner/AutoMethod.h>
+#include <lucent/planner/LevelCheck.h>
 #include <lucent/planner/LiveCosts.h>
 
 #include <QApplication>
@@ -221,6 +224,56 @@ TEST(AppPlanChart, MeasuringASmallSceneGivesMeasuredPointsAndAPlan) {
         renderUntil(vp, [] { return false; });
         ASSERT_TRUE(vp->grabWithFrame(w.get()).save(dir + QStringLiteral("/app-plan-chart.png")));
     }
+}
+
+TEST(AppAutoLevelCheck, ThePickRendersAtTheLevelTheCheckKeepsAndPaintingRechecks) {
+    auto w = windowOnChart();
+    Viewport* vp = w->viewport();
+    PreviewRenderer& preview = vp->previewRenderer();
+    AutoLevelChecker& checker = vp->levelChecker();
+    // A tolerance every difference is within (summed block errors of 10): the check keeps the
+    // cheapest level.
+    checker.setTolerance({10.0, 0.0});
+    preview.pinAutoDirectMs(planner::defaultLiveCosts().directMs);
+    ASSERT_TRUE(renderUntil(vp, [&] { return preview.autoPlannedChoice() != nullptr; }));
+    const planner::AutoChoice planned = *preview.autoPlannedChoice();
+    const std::vector<std::string> levels =
+        planner::modelLevels(PreviewRenderer::liveModels(), planned.candidate());
+    ASSERT_GE(levels.size(), 2u);
+    ASSERT_NE(planned.setting, levels.front())
+        << "the default scene's pick has a cheaper level: " << planned.plan.reason;
+
+    // Off the UI thread: the viewport keeps drawing while the levels render.
+    ASSERT_TRUE(QTest::qWaitFor([&] { return checker.checksDone() >= 1; }, 240000));
+    EXPECT_NE(checker.lastNote().indexOf(QString::fromStdString(levels.front() + ": ")), -1)
+        << checker.lastNote().toStdString();
+    const std::string kept = planned.candidate() + " " + levels.front();
+    ASSERT_TRUE(renderUntil(vp, [&] { return vp->stats().preview.autoChoice == kept; }))
+        << preview.autoChoice()->plan.reason;
+    EXPECT_EQ(preview.autoChoice()->setting, levels.front());
+    EXPECT_EQ(preview.autoPlannedChoice()->setting, planned.setting);  // the models' pick kept
+    EXPECT_NE(vp->stats().preview.autoReason.find("level check: " + levels.front() + ": "),
+              std::string::npos)
+        << vp->stats().preview.autoReason;
+
+    // Painting keeps the decision (no switch mid-stroke) and, once quiet, checks again.
+    const int before = checker.checksDone();
+    const QPointF c(vp->width() / 2.0, vp->height() / 2.0);
+    ASSERT_EQ(vp->strokeBetween(c - QPointF(20, 0), c + QPointF(20, 0)), 1);
+    ASSERT_TRUE(renderUntil(vp, [&] { return vp->stats().frames > 0; }));
+    EXPECT_EQ(preview.autoChoice()->setting, levels.front());
+    ASSERT_TRUE(QTest::qWaitFor([&] { return checker.checksDone() > before; }, 240000));
+
+    // A tolerance nothing is within: the next check (after an edit) keeps the pick.
+    checker.setTolerance({1e-9, 0.0});
+    w->document()->setEta(w->document()->scene().eta + 0.01f);
+    const int edited = checker.checksDone();
+    ASSERT_TRUE(QTest::qWaitFor([&] { return checker.checksDone() > edited; }, 240000));
+    ASSERT_TRUE(renderUntil(vp, [&] {
+        return preview.autoChoice()->setting == preview.autoPlannedChoice()->setting;
+    })) << preview.autoChoice()->plan.reason;
+    EXPECT_NE(checker.lastNote().indexOf(QStringLiteral(" kept: ")), -1)
+        << checker.lastNote().toStdString();
 }
 
 }  // namespace lucent::app

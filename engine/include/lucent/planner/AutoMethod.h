@@ -39,6 +39,10 @@ struct AutoChoice {
     methods::ParamSet params;  ///< the variant's values, then the quality level's
     methods::Backend backend = methods::Backend::Auto;
     SceneFeatures features;
+    /// The models' name of the candidate: "method[:variant]" ("sslpv:diffusion").
+    [[nodiscard]] std::string candidate() const {
+        return variant.empty() ? method : method + ":" + variant;
+    }
     double directMs = 0.0;  ///< the Direct frame time planned with (Budget::directMs)
     Plan plan;
 };
