@@ -160,7 +160,7 @@ void runPlan(const PlanOptions& args) {
         planner::LevelCheckOptions lo;
         lo.tolerance = args.levelTolerance;
         lo.render.log = log;
-        planner::applyLevelCheck(c, models, planner::checkLevels(scene, models, c, lo));
+        planner::runLevelCheck(scene, models, c, lo);
     }
     printFeatures(c.features);
     std::printf("scene class: %s\n", planner::describe(c.plan.sceneClass, c.features.eta).c_str());

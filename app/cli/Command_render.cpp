@@ -109,7 +109,7 @@ void runRender(const RenderOptions& args) {
             lo.render.log = options.log;
             lo.render.subsurfaceOnly = options.subsurfaceOnly;
             lo.render.backend = options.backend;
-            planner::applyLevelCheck(c, models, planner::checkLevels(scene, models, c, lo));
+            planner::runLevelCheck(scene, models, c, lo);
         }
         std::fprintf(stderr, "render: auto: %s\n", c.plan.reason.c_str());
         methodName = c.method;

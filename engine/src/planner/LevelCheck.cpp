@@ -76,12 +76,20 @@ std::vector<uint8_t> litInEither(const ImageRgb& a, const ImageRgb& b) {
 
 }  // namespace
 
-LevelCheck checkLevels(const Scene& scene, const Models& models, const AutoChoice& choice,
-                       const LevelCheckOptions& options) {
+namespace {
+
+void checkOptions(const LevelCheckOptions& options) {
     LUCENT_CHECK(std::isfinite(options.tolerance.absolute) && options.tolerance.absolute >= 0 &&
                      std::isfinite(options.tolerance.relative) && options.tolerance.relative >= 0,
                  "level check: the tolerances must be finite and >= 0");
     LUCENT_CHECK(options.width >= 8, "level check: the frame must be at least 8 pixels wide");
+}
+
+}  // namespace
+
+LevelCheck checkLevels(const Scene& scene, const Models& models, const AutoChoice& choice,
+                       const LevelCheckOptions& options) {
+    checkOptions(options);
     const std::string method = choice.candidate();
     LevelCheck out;
     out.setting = choice.setting;
@@ -161,6 +169,21 @@ void applyLevelCheck(AutoChoice& choice, const Models& models, const LevelCheck&
                 if (o.index == i)
                     choice.plan.chosen = o;
         }
+}
+
+void runLevelCheck(const Scene& scene, const Models& models, AutoChoice& choice,
+                   const LevelCheckOptions& options) {
+    checkOptions(options);  // the caller's mistakes throw; a failed render does not
+    LevelCheck check;
+    try {
+        check = checkLevels(scene, models, choice, options);
+    } catch (const Error& e) {
+        if (options.render.log)
+            options.render.log(std::string("level check skipped (") + e.what() +
+                               "); the models' level is kept");
+        return;
+    }
+    applyLevelCheck(choice, models, check);
 }
 
 }  // namespace lucent::planner

@@ -209,3 +209,25 @@ TEST(LevelCheck, SceneCheckComparesTheLevelsRendersOfTheScenesFrame) {
     options.width = 4;
     EXPECT_THROW(checkLevels(scene, models, choice, options), ValueError);
 }
+
+TEST(LevelCheck, AFailedRenderKeepsTheModelsLevelAndSaysWhy) {
+    // The check only saves time: `render --method auto` must not fail because of it.
+    Scene empty = loadScene(std::string(LUCENT_SCENES_DIR) + "/minimal.json");
+    empty.objects.clear();  // nothing to render: every method throws
+    AutoChoice choice;
+    choice.method = "sslpv";
+    choice.variant = "diffusion";
+    choice.setting = "grid 32";
+    choice.params = resolveCandidate("sslpv:diffusion", "grid 32").params;
+    choice.plan.reason = "planned";
+    std::string said;
+    LevelCheckOptions options;
+    options.render.log = [&](const std::string& m) { said += m; };
+    runLevelCheck(empty, defaultModels(), choice, options);
+    EXPECT_EQ(choice.setting, "grid 32");
+    EXPECT_EQ(choice.plan.reason, "planned");
+    EXPECT_NE(said.find("level check skipped ("), std::string::npos) << said;
+    // The caller's own mistakes still throw.
+    options.width = 4;
+    EXPECT_THROW(runLevelCheck(empty, defaultModels(), choice, options), ValueError);
+}

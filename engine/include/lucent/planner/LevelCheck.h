@@ -85,4 +85,10 @@ LevelCheck checkLevels(const Scene& scene, const Models& models, const AutoChoic
 /// appended to the plan's reason. @throw ValueError if the registry has no such level.
 void applyLevelCheck(AutoChoice& choice, const Models& models, const LevelCheck& check);
 
+/// checkLevels, then applyLevelCheck. The check only saves time: when one of its renders fails,
+/// `choice` stays as the models planned it and options.render.log (if set) says why.
+/// @throw ValueError for bad options (as checkLevels).
+void runLevelCheck(const Scene& scene, const Models& models, AutoChoice& choice,
+                   const LevelCheckOptions& options = {});
+
 }  // namespace lucent::planner
