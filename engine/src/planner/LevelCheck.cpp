@@ -99,8 +99,9 @@ LevelCheck checkLevels(const Scene& scene, const Models& models, const AutoChoic
         return out;
     const double tolerance = options.tolerance.at(choice.plan.chosen.error);
 
-    // The check frame: the camera's view at a width the whole ladder renders in about the
-    // time of one preview frame; the height keeps the aspect.
+    // The check frame: the camera's view at the evaluation suite's width (the differences are
+    // measured as the suite measures the levels' errors, and the image is cheap next to a
+    // grid's solve); the height keeps the aspect.
     Scene small = scene;
     const double aspect = double(scene.camera.height) / double(std::max(scene.camera.width, 1));
     small.camera.width = std::min(options.width, scene.camera.width);
@@ -143,7 +144,7 @@ LevelCheck checkLevels(const Scene& scene, const Models& models, const AutoChoic
                " (at most " + percent(tolerance) + ")";
     else if (!out.steps.empty())
         note = choice.setting + " kept: " + out.steps.front().coarser + " differs by " +
-               percent(out.steps.front().difference);
+               percent(out.steps.front().difference) + " (more than " + percent(tolerance) + ")";
     for (const LevelStep& s : out.steps)
         if (!s.taken && kept != size_t(at - levels.begin()))
             note += "; " + s.coarser + " would by " + percent(summed + s.difference);
