@@ -48,12 +48,23 @@ void AutoLevelChecker::cancel() {
         m_cancel->store(true);
 }
 
+void AutoLevelChecker::setEnabled(bool enabled) {
+    if (enabled == m_enabled)
+        return;
+    m_enabled = enabled;
+    if (!enabled) {
+        cancel();
+        m_viewport->previewRenderer().clearAutoLevelDecisions();
+    }
+    m_viewport->update();  // off: the picks' own levels; on: the next frame starts a check
+}
+
 void AutoLevelChecker::afterFrame() {
     startIfDue(m_sinceEdit.elapsed() >= RECHECK_IDLE_MS);
 }
 
 void AutoLevelChecker::startIfDue(bool quiet) {
-    if (m_thread || !m_doc->hasObject() || m_viewport->refinementPaused())
+    if (!m_enabled || m_thread || !m_doc->hasObject() || m_viewport->refinementPaused())
         return;
     const PreviewRenderer& preview = m_viewport->previewRenderer();
     const planner::AutoChoice* planned = preview.autoPlannedChoice();

@@ -43,6 +43,10 @@ public:
     void afterFrame();
     /// The check's tolerance (default planner::LevelTolerance{}); for the checks started after.
     void setTolerance(const planner::LevelTolerance& tolerance) { m_tolerance = tolerance; }
+    /// Off (Edit ▸ Preferences ▸ Auto: Check Quality Levels): no check starts, a running one
+    /// is dropped, and the preview renders the models' picks at their own levels again.
+    void setEnabled(bool enabled);
+    [[nodiscard]] bool isEnabled() const { return m_enabled; }
     [[nodiscard]] bool running() const { return m_thread != nullptr; }
     /// Checks finished (decided or failed) since start.
     [[nodiscard]] int checksDone() const { return m_done; }
@@ -68,6 +72,7 @@ private:
     QElapsedTimer m_sinceEdit;
     QTimer m_quiet;  ///< fires RECHECK_IDLE_MS after the last edit (no frame may come then)
     planner::LevelTolerance m_tolerance;
+    bool m_enabled = true;
     int m_done = 0;
     QString m_lastNote;
 };

@@ -521,6 +521,20 @@ void MainWindow::createActions() {
     a->setToolTip(
         tr("Forget this machine's calibration: Auto plans with the costs shipped "
            "with Lucent."));
+    a = preferences->addAction(tr("Auto: Check &Quality Levels"));
+    a->setObjectName(QStringLiteral("actionAutoLevelCheck"));
+    a->setCheckable(true);
+    a->setChecked(!m_useSettings ||
+                  QSettings().value(QStringLiteral("auto/levelCheck"), true).toBool());
+    a->setToolTip(
+        tr("In the background, render Auto's choice against its method's cheaper levels and "
+           "take the cheapest that shows the same picture (docs/planner.md)."));
+    m_viewport->levelChecker().setEnabled(a->isChecked());
+    connect(a, &QAction::toggled, this, [this](bool on) {
+        m_viewport->levelChecker().setEnabled(on);
+        if (m_useSettings)
+            QSettings().setValue(QStringLiteral("auto/levelCheck"), on);
+    });
 
     // Brush shortcuts as in painting tools: [ and ] resize, B paints, I picks.
     QMenu* brush = menuBar()->addMenu(tr("&Brush"));

@@ -399,6 +399,11 @@ void PreviewRenderer::setAutoLevelDecision(const AutoLevelDecision& decision) {
     m->applyLevelDecisions();  // the next frame renders with it
 }
 
+void PreviewRenderer::clearAutoLevelDecisions() {
+    m->autoPlan.levels.clear();
+    m->applyLevelDecisions();
+}
+
 bool PreviewRenderer::hasAutoLevelDecisionFor(const planner::AutoChoice& planned) const {
     return std::any_of(m->autoPlan.levels.begin(), m->autoPlan.levels.end(),
                        [&](const AutoLevelDecision& d) {

@@ -178,6 +178,8 @@ public:
     /// that pick replaces it or the scene is replaced. Painting keeps it (no switch back and
     /// forth while the artist paints); the viewport checks again when the painting pauses.
     void setAutoLevelDecision(const AutoLevelDecision& decision);
+    /// Forgets every level decision: the picks render at their own levels from now on.
+    void clearAutoLevelDecisions();
     /// Whether a decision for `planned` (an autoPlannedChoice()) is held.
     [[nodiscard]] bool hasAutoLevelDecisionFor(const planner::AutoChoice& planned) const;
     /// The Direct frame Auto last planned with, ms (0 before one was timed or pinned).

@@ -6,7 +6,8 @@
 /// scene" on a small view with a finished reference: measured points and a measured plan; an
 /// edit or closing the dock stops a measurement.
 /// Auto's level check in the app (AutoLevelCheck.h): the pick renders at the level a check on a
-/// worker keeps, painting keeps it and checks again once quiet.
+/// worker keeps, painting keeps it and checks again once quiet, the Preferences switch turns it
+/// off.
 /// Also writes the user guide's screenshot of the page when LUCENT_SCREENSHOT_DIR is set.
 
 #include "Document.h"
@@ -22,6 +23,7 @@
 #include <lucent/planner/LevelCheck.h>
 #include <lucent/planner/LiveCosts.h>
 
+#include <QAction>
 #include <QApplication>
 #include <QChart>
 #include <QChartView>
@@ -274,6 +276,28 @@ TEST(AppAutoLevelCheck, ThePickRendersAtTheLevelTheCheckKeepsAndPaintingRechecks
     })) << preview.autoChoice()->plan.reason;
     EXPECT_NE(checker.lastNote().indexOf(QStringLiteral(" kept: ")), -1)
         << checker.lastNote().toStdString();
+
+    // Edit ▸ Preferences ▸ Auto: Check Quality Levels off: the decisions go, the pick renders
+    // at its own level, and edits start no check.
+    checker.setTolerance({10.0, 0.0});
+    w->document()->setEta(w->document()->scene().eta + 0.01f);
+    const int again = checker.checksDone();
+    ASSERT_TRUE(QTest::qWaitFor([&] { return checker.checksDone() > again; }, 240000));
+    ASSERT_TRUE(renderUntil(vp, [&] { return vp->stats().preview.autoChoice == kept; }));
+    auto* toggle = w->findChild<QAction*>(QStringLiteral("actionAutoLevelCheck"));
+    ASSERT_NE(toggle, nullptr);
+    ASSERT_TRUE(toggle->isChecked());
+    toggle->trigger();
+    EXPECT_FALSE(checker.isEnabled());
+    ASSERT_TRUE(renderUntil(vp, [&] {
+        return vp->stats().preview.autoChoice == planned.candidate() + " " + planned.setting;
+    })) << vp->stats().preview.autoChoice;
+    const int off = checker.checksDone();
+    w->document()->setEta(w->document()->scene().eta + 0.01f);
+    QTest::qWait(int(AutoLevelChecker::RECHECK_IDLE_MS) + 500);
+    EXPECT_FALSE(checker.running());
+    EXPECT_EQ(checker.checksDone(), off);
+    EXPECT_EQ(preview.autoChoice()->setting, preview.autoPlannedChoice()->setting);
 }
 
 }  // namespace lucent::app
