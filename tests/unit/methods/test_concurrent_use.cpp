@@ -1,13 +1,15 @@
 // SPDX-License-Identifier: MIT
 /// @file
 /// @brief The engine used from several threads at once, as the app uses it (issue 16, item 3).
-/// The app's worker threads (app/gui: ReferencePanel, MainWindow's VDB export, PlanChart) each
+/// The app's worker threads (app/gui: ReferencePanel, MainWindow's VDB export, PlanChart,
+/// AutoLevelCheck) each
 /// take a frozen copy of the scene or the material and run one engine call on it while the UI
 /// thread goes on painting the original and rendering the preview. This test does the same
 /// with std::threads and checks that every result equals the same call made alone:
 /// - the reference path tracer on a frozen copy (its image depends only on scene, seed and
 ///   spp, docs/reference.md), itself parallel, while
-/// - a VDB export of another copy runs (checked by reading the file back), while
+/// - a VDB export of another copy runs (checked by reading the file back), and
+/// - Auto's level check renders SSLPV's diffusion levels of a third copy, while
 /// - the "UI" thread paints strokes into the original and renders SSLPV (CPU) after each.
 /// On its own the test checks that the copies are deep (a shared volume would change the
 /// reference image and the export). Its real purpose is the ThreadSanitizer job (the `tsan`
@@ -18,6 +20,7 @@
 #include <lucent/io/VdbIO.h>
 #include <lucent/material/Brush.h>
 #include <lucent/methods/RenderImage.h>
+#include <lucent/planner/LevelCheck.h>
 #include <lucent/reference/PathTracer.h>
 #include <lucent/scene/SceneFile.h>
 
@@ -74,6 +77,21 @@ void paintDarkStroke(MaterialVolume& volume, int i, int n) {
     paintStroke(volume, brush, {Point3f(-4.f, y, 0.f), Point3f(4.f, y, 0.f)});
 }
 
+/// What the viewport's AutoLevelChecker runs (on the CPU here, as the other calls).
+planner::LevelCheck checkDiffusionLevels(const Scene& scene) {
+    planner::AutoChoice choice;
+    choice.method = "sslpv";
+    choice.variant = "diffusion";
+    choice.setting = "grid 64";
+    choice.params = planner::resolveCandidate("sslpv:diffusion", "grid 64").params;
+    choice.plan.chosen.error = 0.05;
+    planner::LevelCheckOptions o;
+    o.tolerance = {10.0, 0.0};  // every step within: both differences are measured
+    o.width = 32;
+    o.render.backend = methods::Backend::Cpu;
+    return planner::checkLevels(scene, planner::defaultModels(), choice, o);
+}
+
 bool sameImage(const ImageRgb& a, const ImageRgb& b) {
     return a.width() == b.width() && a.height() == b.height() && a.pixels() == b.pixels();
 }
@@ -85,6 +103,7 @@ TEST(ConcurrentUse, AppWorkerPatternsGiveWhatEachCallGivesAlone) {
 
     // Alone, one after the other.
     const reference::ReferenceImage referenceAlone = renderSmallReference(frozenCopy(scene));
+    const planner::LevelCheck levelsAlone = checkDiffusionLevels(frozenCopy(scene));
     Scene painted = frozenCopy(scene);
     for (int i = 0; i < STROKES; ++i)
         paintDarkStroke(*painted.objects[0].material, i, STROKES);
@@ -95,8 +114,10 @@ TEST(ConcurrentUse, AppWorkerPatternsGiveWhatEachCallGivesAlone) {
     Scene live = frozenCopy(scene);
     const Scene forReference = frozenCopy(live);
     const MaterialVolume forExport(*live.objects[0].material);
+    const Scene forLevelCheck = frozenCopy(live);
     reference::ReferenceImage referenceTogether;
-    std::exception_ptr referenceError, exportError;
+    planner::LevelCheck levelsTogether;
+    std::exception_ptr referenceError, exportError, levelError;
     std::thread referenceWorker([&] {
         try {
             referenceTogether = renderSmallReference(forReference);
@@ -111,6 +132,13 @@ TEST(ConcurrentUse, AppWorkerPatternsGiveWhatEachCallGivesAlone) {
             exportError = std::current_exception();
         }
     });
+    std::thread levelWorker([&] {
+        try {
+            levelsTogether = checkDiffusionLevels(forLevelCheck);
+        } catch (...) {
+            levelError = std::current_exception();
+        }
+    });
     ImageRgb previewTogether;
     for (int i = 0; i < STROKES; ++i) {
         paintDarkStroke(*live.objects[0].material, i, STROKES);
@@ -118,10 +146,13 @@ TEST(ConcurrentUse, AppWorkerPatternsGiveWhatEachCallGivesAlone) {
     }
     referenceWorker.join();
     exportWorker.join();
+    levelWorker.join();
     if (referenceError)
         std::rethrow_exception(referenceError);
     if (exportError)
         std::rethrow_exception(exportError);
+    if (levelError)
+        std::rethrow_exception(levelError);
 
     EXPECT_TRUE(sameImage(referenceTogether.mean, referenceAlone.mean))
         << "the reference of a frozen copy changed while the original was painted";
@@ -134,6 +165,12 @@ TEST(ConcurrentUse, AppWorkerPatternsGiveWhatEachCallGivesAlone) {
     EXPECT_NE(exported.volume.contentHash(), live.objects[0].material->contentHash())
         << "the strokes should have changed the original";
     std::remove(vdbPath.c_str());
+    ASSERT_EQ(levelsAlone.steps.size(), 2u);
+    ASSERT_EQ(levelsTogether.steps.size(), levelsAlone.steps.size());
+    for (size_t i = 0; i < levelsAlone.steps.size(); ++i)
+        EXPECT_DOUBLE_EQ(levelsTogether.steps[i].difference, levelsAlone.steps[i].difference)
+            << "the level check of a frozen copy changed while the original was painted";
+    EXPECT_EQ(levelsTogether.setting, levelsAlone.setting);
 }
 
 }  // namespace
