@@ -153,11 +153,20 @@ LevelCheck checkLevels(const Scene& scene, const Models& models, const AutoChoic
 }
 
 void applyLevelCheck(AutoChoice& choice, const Models& models, const LevelCheck& check) {
-    if (!check.note.empty())
-        choice.plan.reason += "; level check: " + check.note;
-    if (check.setting == choice.setting)
-        return;
     const std::string method = choice.candidate();
+    if (check.setting == choice.setting) {
+        if (!check.note.empty())
+            choice.plan.reason += "; level check: " + check.note;
+        return;
+    }
+    // The reason starts with what runs (the status bar cuts a long line at its end), then why,
+    // then the models' own reason for their pick.
+    const std::string head = check.setting + ": ";
+    const std::string why =
+        check.note.rfind(head, 0) == 0 ? check.note.substr(head.size()) : check.note;
+    choice.plan.reason = method + " " + check.setting + " by the level check" +
+                         (why.empty() ? "" : ": " + why) +
+                         "; the models' pick: " + choice.plan.reason;
     const CandidateRun run = resolveCandidate(method, check.setting);
     choice.setting = check.setting;
     choice.params = run.params;

@@ -254,8 +254,7 @@ TEST(AppAutoLevelCheck, ThePickRendersAtTheLevelTheCheckKeepsAndPaintingRechecks
         << preview.autoChoice()->plan.reason;
     EXPECT_EQ(preview.autoChoice()->setting, levels.front());
     EXPECT_EQ(preview.autoPlannedChoice()->setting, planned.setting);  // the models' pick kept
-    EXPECT_NE(vp->stats().preview.autoReason.find("level check: " + levels.front() + ": "),
-              std::string::npos)
+    EXPECT_EQ(vp->stats().preview.autoReason.rfind(kept + " by the level check: ", 0), 0u)
         << vp->stats().preview.autoReason;
 
     // Painting keeps the decision (no switch mid-stroke) and, once quiet, checks again.

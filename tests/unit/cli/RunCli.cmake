@@ -388,7 +388,8 @@ elseif(CASE STREQUAL "auto")
     # models' pick and the plan says so; --no-level-check keeps the pick.
     run(level plan ${SCENE} --cpu --width 32 --height 32 --level-tolerance 1)
     expect_ok(level)
-    expect_contains(level "${level_OUT}" "<- planned (level check" "; level check: ")
+    expect_contains(level "${level_OUT}" "<- planned (level check" " by the level check: "
+        "; the models' pick: ")
     run(nolevel plan ${SCENE} --cpu --width 32 --height 32 --no-level-check)
     expect_ok(nolevel)
     if(nolevel_OUT MATCHES "level check")

@@ -185,7 +185,13 @@ TEST(LevelCheck, SceneCheckComparesTheLevelsRendersOfTheScenesFrame) {
     EXPECT_EQ(applied.params.toString(),
               resolveCandidate("sslpv:diffusion", "grid 16").params.toString());
     EXPECT_EQ(models.candidates[applied.plan.choice].setting, "grid 16");
-    EXPECT_NE(applied.plan.reason.find("level check: grid 16"), std::string::npos);
+    // The reason leads with what runs, then why, then the models' reason for their pick.
+    EXPECT_EQ(applied.plan.reason.rfind("sslpv:diffusion grid 16 by the level check: grid 32 "
+                                        "changes the image by ",
+                                        0),
+              0u)
+        << applied.plan.reason;
+    EXPECT_NE(applied.plan.reason.find("; the models' pick: "), std::string::npos);
 
     // A tolerance below the difference keeps the choice and says by how much it differs.
     options.tolerance = {expected / 2, 0.0};

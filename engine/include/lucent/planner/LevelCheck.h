@@ -81,8 +81,11 @@ LevelCheck checkLevels(const Scene& scene, const Models& models, const AutoChoic
                        const LevelCheckOptions& options = {});
 
 /// `choice` at the level the check kept: its setting and params resolved again, the plan's
-/// choice and prediction those of that level's candidate in `models`, and the check's note
-/// appended to the plan's reason. @throw ValueError if the registry has no such level.
+/// choice and prediction those of that level's candidate in `models`, and the plan's reason
+/// led by what runs: "sslpv:diffusion grid 32 by the level check: grid 64 changes the image
+/// by 2.3 % (at most 6.5 %); the models' pick: sslpv:diffusion grid 64: …" (a kept level: the
+/// models' reason, then "; level check: " and the note). @throw ValueError if the registry has
+/// no such level.
 void applyLevelCheck(AutoChoice& choice, const Models& models, const LevelCheck& check);
 
 /// checkLevels, then applyLevelCheck. The check only saves time: when one of its renders fails,
