@@ -41,8 +41,10 @@ public:
     /// After each viewport frame (UI thread): starts a check when one is due (never while Auto
     /// plans with errors measured against a reference: those say more than the check).
     void afterFrame();
-    /// The check's tolerance (default planner::LevelTolerance{}); for the checks started after.
+    /// The check's tolerance (default planner::LevelTolerance::visibleOnly(): the artist judges
+    /// the preview by eye); for the checks started after.
     void setTolerance(const planner::LevelTolerance& tolerance) { m_tolerance = tolerance; }
+    [[nodiscard]] const planner::LevelTolerance& tolerance() const { return m_tolerance; }
     /// Off (Edit ▸ Preferences ▸ Auto: Check Quality Levels): no check starts, a running one
     /// is dropped, and the preview renders the models' picks at their own levels again.
     void setEnabled(bool enabled);
@@ -71,7 +73,7 @@ private:
     bool m_editedSinceCheck = false;  ///< paint, lights or η changed since the last check began
     QElapsedTimer m_sinceEdit;
     QTimer m_quiet;  ///< fires RECHECK_IDLE_MS after the last edit (no frame may come then)
-    planner::LevelTolerance m_tolerance;
+    planner::LevelTolerance m_tolerance = planner::LevelTolerance::visibleOnly();
     bool m_enabled = true;
     int m_done = 0;
     QString m_lastNote;

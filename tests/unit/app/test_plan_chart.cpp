@@ -233,6 +233,8 @@ TEST(AppAutoLevelCheck, ThePickRendersAtTheLevelTheCheckKeepsAndPaintingRechecks
     Viewport* vp = w->viewport();
     PreviewRenderer& preview = vp->previewRenderer();
     AutoLevelChecker& checker = vp->levelChecker();
+    EXPECT_EQ(checker.tolerance().absolute, planner::LevelTolerance::visibleOnly().absolute);
+    EXPECT_EQ(checker.tolerance().relative, 0.0) << "the live preview is judged by eye";
     // A tolerance every difference is within (summed block errors of 10): the check keeps the
     // cheapest level.
     checker.setTolerance({10.0, 0.0});

@@ -85,6 +85,12 @@ struct LevelTolerance {
         return std::max(absolute, relative * std::max(predictedError, 0.0));
     }
     [[nodiscard]] bool off() const { return !(absolute > 0) && !(relative > 0); }
+    /// The absolute part alone: a cheaper level is taken only where the picture does not
+    /// change visibly. The app's live preview uses it: the relative part admits a coarser
+    /// grid whose cell-sized patches an artist sees at the viewport's size although its block
+    /// error against the exact image is as small (docs/planner.md, "The level check in the
+    /// app").
+    [[nodiscard]] static LevelTolerance visibleOnly() { return {LevelTolerance{}.absolute, 0.0}; }
 };
 
 /// One scored candidate.
