@@ -58,11 +58,11 @@ void runCompare(const CompareOptions& args) {
         mask = bench::maskFromImage(*cov);
         maskFrom = refPath + " (coverage layer)";
     } else {
-        // No coverage information: pixels where either image is not black.
-        mask.resize(ref.pixels().size());
-        if (test.pixels().size() == mask.size())
-            for (size_t i = 0; i < mask.size(); ++i)
-                mask[i] = (luminance(ref.pixels()[i]) != 0.f || luminance(test.pixels()[i]) != 0.f);
+        // No coverage information: pixels where either image is not black (a size mismatch is
+        // compareImages' error below).
+        mask = test.width() == ref.width() && test.height() == ref.height()
+                   ? bench::maskOfNonBlack(ref, test)
+                   : std::vector<uint8_t>(ref.pixels().size());
         maskFrom = "non-black pixels";
     }
     const bench::ErrorReport r = bench::compareImages(test, ref, refVar ? &*refVar : nullptr,

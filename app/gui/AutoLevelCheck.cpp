@@ -21,7 +21,6 @@ AutoLevelChecker::AutoLevelChecker(Viewport* viewport, Document* doc)
     connect(&m_quiet, &QTimer::timeout, this, [this] { startIfDue(/*quiet=*/true); });
     const auto edited = [this] {
         m_editedSinceCheck = true;
-        m_sinceEdit.restart();
         m_quiet.start();
     };
     connect(m_doc, &Document::materialEdited, this, edited);
@@ -32,7 +31,6 @@ AutoLevelChecker::AutoLevelChecker(Viewport* viewport, Document* doc)
         cancel();
         m_editedSinceCheck = false;
     });
-    m_sinceEdit.start();
 }
 
 AutoLevelChecker::~AutoLevelChecker() {
@@ -60,7 +58,7 @@ void AutoLevelChecker::setEnabled(bool enabled) {
 }
 
 void AutoLevelChecker::afterFrame() {
-    startIfDue(m_sinceEdit.elapsed() >= RECHECK_IDLE_MS);
+    startIfDue(/*quiet=*/!m_quiet.isActive());  // running: an edit less than RECHECK_IDLE_MS ago
 }
 
 void AutoLevelChecker::startIfDue(bool quiet) {

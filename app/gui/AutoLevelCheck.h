@@ -11,7 +11,6 @@
 /// RECHECK_IDLE_MS, since paint can make a level needed that was not. A decision holds while
 /// the artist paints, so the preview does not switch levels mid-stroke.
 
-#include <QElapsedTimer>
 #include <QObject>
 #include <QString>
 #include <QTimer>
@@ -71,8 +70,9 @@ private:
     QThread* m_thread = nullptr;
     std::shared_ptr<std::atomic<bool>> m_cancel;
     bool m_editedSinceCheck = false;  ///< paint, lights or η changed since the last check began
-    QElapsedTimer m_sinceEdit;
-    QTimer m_quiet;  ///< fires RECHECK_IDLE_MS after the last edit (no frame may come then)
+    /// Runs for RECHECK_IDLE_MS after each edit, then starts a due check (no frame may come
+    /// then); while it runs, the scene is not quiet.
+    QTimer m_quiet;
     planner::LevelTolerance m_tolerance = planner::LevelTolerance::visibleOnly();
     bool m_enabled = true;
     int m_done = 0;

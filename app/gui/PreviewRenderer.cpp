@@ -243,6 +243,15 @@ struct PreviewRenderer::Impl {
         std::shared_ptr<const planner::Models> plannedWith;
     } autoPlan;
 
+    /// The decision held for `planned` (one at most), or null.
+    const AutoLevelDecision* levelDecisionFor(const planner::AutoChoice& planned) const {
+        for (const AutoLevelDecision& d : autoPlan.levels)
+            if (d.method == planned.candidate() && d.planned == planned.setting &&
+                d.sceneClass == planned.plan.sceneClass)
+                return &d;
+        return nullptr;
+    }
+
     /// autoPlan.choice: the planned pick, at the level a decision for it keeps (none when the
     /// plan used errors measured against a reference: they tell the levels apart already).
     void applyLevelDecisions() {
@@ -252,14 +261,12 @@ struct PreviewRenderer::Impl {
         a.choice = a.planned;
         if (a.planMeasured)
             return;
-        for (const AutoLevelDecision& d : a.levels)
-            if (d.method == a.planned.candidate() && d.planned == a.planned.setting &&
-                d.sceneClass == a.planned.plan.sceneClass) {
-                planner::LevelCheck check;
-                check.setting = d.kept;
-                check.note = d.note;
-                planner::applyLevelCheck(a.choice, *a.plannedWith, check);
-            }
+        if (const AutoLevelDecision* d = levelDecisionFor(a.planned)) {
+            planner::LevelCheck check;
+            check.setting = d->kept;
+            check.note = d->note;
+            planner::applyLevelCheck(a.choice, *a.plannedWith, check);
+        }
     }
 
     /// One frame (PreviewRenderer::render).
@@ -405,11 +412,7 @@ void PreviewRenderer::clearAutoLevelDecisions() {
 }
 
 bool PreviewRenderer::hasAutoLevelDecisionFor(const planner::AutoChoice& planned) const {
-    return std::any_of(m->autoPlan.levels.begin(), m->autoPlan.levels.end(),
-                       [&](const AutoLevelDecision& d) {
-                           return d.method == planned.candidate() && d.planned == planned.setting &&
-                                  d.sceneClass == planned.plan.sceneClass;
-                       });
+    return m->levelDecisionFor(planned) != nullptr;
 }
 
 double PreviewRenderer::autoDirectMs() const {

@@ -174,6 +174,15 @@ std::vector<uint8_t> maskFromImage(const ImageRgb& coverage) {
     return mask;
 }
 
+std::vector<uint8_t> maskOfNonBlack(const ImageRgb& a, const ImageRgb& b) {
+    LUCENT_CHECK(a.width() == b.width() && a.height() == b.height(), "maskOfNonBlack: ", a.width(),
+                 "x", a.height(), " against ", b.width(), "x", b.height());
+    std::vector<uint8_t> mask(a.pixels().size());
+    for (size_t i = 0; i < mask.size(); ++i)
+        mask[i] = (luminance(a.pixels()[i]) != 0.f || luminance(b.pixels()[i]) != 0.f) ? 1 : 0;
+    return mask;
+}
+
 std::string formatReport(const ErrorReport& report) {
     std::string s;
     char line[256];

@@ -10,7 +10,6 @@
 #include <epoxy/gl.h>
 
 #include <algorithm>
-
 #include <atomic>
 #include <utility>
 

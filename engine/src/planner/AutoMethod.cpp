@@ -127,6 +127,15 @@ CandidateRun resolveCandidate(const std::string& method, const std::string& sett
     return r;
 }
 
+methods::RenderResult renderCandidate(const Scene& scene, const std::string& method,
+                                      const std::string& setting, methods::RenderOptions options) {
+    const CandidateRun run = resolveCandidate(method, setting);
+    if (options.backend == methods::Backend::Auto)
+        options.backend = run.backend;
+    options.progress = nullptr;
+    return methods::renderImage(scene, run.method, run.params, options);
+}
+
 double measureDirectMs(const Scene& scene, const methods::RenderOptions& options) {
     methods::RenderOptions o = options;
     o.subsurfaceOnly = false;

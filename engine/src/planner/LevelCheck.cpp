@@ -61,23 +61,6 @@ std::string percent(double fraction) {
     return buf;
 }
 
-/// Pixels either image lights (the object and its reflection; the black background is not
-/// part of what the levels differ in).
-std::vector<uint8_t> litInEither(const ImageRgb& a, const ImageRgb& b) {
-    std::vector<uint8_t> mask(size_t(a.width()) * size_t(a.height()), 0);
-    for (int y = 0; y < a.height(); ++y)
-        for (int x = 0; x < a.width(); ++x) {
-            const Rgb pa = a.at(x, y), pb = b.at(x, y);
-            mask[size_t(y) * size_t(a.width()) + size_t(x)] =
-                (pa.r + pa.g + pa.b > 0.f || pb.r + pb.g + pb.b > 0.f) ? 1 : 0;
-        }
-    return mask;
-}
-
-}  // namespace
-
-namespace {
-
 void checkOptions(const LevelCheckOptions& options) {
     LUCENT_CHECK(std::isfinite(options.tolerance.absolute) && options.tolerance.absolute >= 0 &&
                      std::isfinite(options.tolerance.relative) && options.tolerance.relative >= 0,
@@ -109,14 +92,8 @@ LevelCheck checkLevels(const Scene& scene, const Models& models, const AutoChoic
 
     std::vector<std::optional<ImageRgb>> images(levels.size());
     const auto render = [&](size_t i) -> const ImageRgb& {
-        if (!images[i]) {
-            const CandidateRun run = resolveCandidate(method, levels[i]);
-            methods::RenderOptions o = options.render;
-            if (o.backend == methods::Backend::Auto)
-                o.backend = run.backend;
-            o.progress = nullptr;
-            images[i] = methods::renderImage(small, run.method, run.params, o).radiance;
-        }
+        if (!images[i])
+            images[i] = renderCandidate(small, method, levels[i], options.render).radiance;
         return *images[i];
     };
     const auto differenceToNext = [&](size_t i) -> double {
@@ -124,7 +101,8 @@ LevelCheck checkLevels(const Scene& scene, const Models& models, const AutoChoic
             return -1.0;
         const ImageRgb& finer = render(i + 1);
         const ImageRgb& coarser = render(i);
-        const std::vector<uint8_t> mask = litInEither(coarser, finer);
+        // The background is not what the levels differ in.
+        const std::vector<uint8_t> mask = bench::maskOfNonBlack(coarser, finer);
         if (std::find(mask.begin(), mask.end(), uint8_t(1)) == mask.end())
             return 0.0;  // both black: nothing to tell apart
         return bench::compareImages(coarser, finer, nullptr, nullptr, &mask)

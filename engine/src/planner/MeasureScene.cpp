@@ -47,12 +47,8 @@ SceneMeasurement measureCandidates(const Scene& scene, const Models& models,
         m.method = model.method;
         m.setting = model.setting;
         try {
-            const CandidateRun run = resolveCandidate(model.method, model.setting);
-            methods::RenderOptions o = options.render;
-            if (o.backend == methods::Backend::Auto)
-                o.backend = run.backend;
-            o.progress = nullptr;
-            const methods::RenderResult r = methods::renderImage(scene, run.method, run.params, o);
+            const methods::RenderResult r =
+                renderCandidate(scene, model.method, model.setting, options.render);
             m.ms = r.milliseconds;
             m.radiance = r.radiance;
             m.costRatio = r.milliseconds / std::max(out.directMs, 1e-9);

@@ -46,6 +46,15 @@ TEST(ErrorMetrics, MaskSelectsPixels) {
     EXPECT_THROW(compareImages(test, ref, nullptr, nullptr, &none), ValueError);
 }
 
+TEST(ErrorMetrics, NonBlackMaskIsEitherImagesNonBlackPixels) {
+    ImageRgb a(4, 1), b(4, 1);  // black
+    a.at(1, 0) = Rgb(0.f, 0.01f, 0.f);
+    b.at(2, 0) = Rgb(3.f);
+    a.at(3, 0) = b.at(3, 0) = Rgb(1.f);
+    EXPECT_EQ(maskOfNonBlack(a, b), (std::vector<uint8_t>{0, 1, 1, 1}));
+    EXPECT_THROW(maskOfNonBlack(a, ImageRgb(2, 2)), ValueError);
+}
+
 TEST(ErrorMetrics, RejectsMismatchedAndNonFinite) {
     ImageRgb a(2, 2), b(3, 2);
     EXPECT_THROW(compareImages(a, b, nullptr, nullptr, nullptr), ValueError);

@@ -158,19 +158,12 @@ TEST(LevelCheck, SceneCheckComparesTheLevelsRendersOfTheScenesFrame) {
     small.camera.width = 48;
     small.camera.height = 32;
     const auto render = [&](const std::string& level) {
-        const CandidateRun run = resolveCandidate("sslpv:diffusion", level);
-        methods::RenderOptions o;
-        o.backend = run.backend;
-        return methods::renderImage(small, run.method, run.params, o).radiance;
+        return renderCandidate(small, "sslpv:diffusion", level).radiance;
     };
     const ImageRgb coarse = render("grid 16"), fine = render("grid 32");
     ASSERT_EQ(coarse.width(), 48);
     ASSERT_EQ(coarse.height(), 32);
-    std::vector<uint8_t> mask = bench::maskFromImage(fine);
-    for (size_t i = 0; i < mask.size(); ++i) {
-        const Rgb p = coarse.pixels()[i];
-        mask[i] = mask[i] || p.r + p.g + p.b > 0.f;
-    }
+    const std::vector<uint8_t> mask = bench::maskOfNonBlack(coarse, fine);
     const double expected =
         bench::compareImages(coarse, fine, nullptr, nullptr, &mask).blocks[3].relL1;
     EXPECT_GT(expected, 0.0);  // the grids differ

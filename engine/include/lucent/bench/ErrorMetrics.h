@@ -87,6 +87,11 @@ ErrorReport compareImages(const ImageRgb& test, const ImageRgb& reference,
 /// any channel > 0.5.
 std::vector<uint8_t> maskFromImage(const ImageRgb& coverage);
 
+/// Mask of pixels that are not black (luminance ≠ 0) in `a` or in `b`: two renders of one frame
+/// compared where either shows something, the background left out. Sizes must agree.
+/// @throw ValueError if they do not.
+std::vector<uint8_t> maskOfNonBlack(const ImageRgb& a, const ImageRgb& b);
+
 /// A plain-text table of the report: per pixel, then per block (one row per channel, floors
 /// beside the errors).
 std::string formatReport(const ErrorReport& report);

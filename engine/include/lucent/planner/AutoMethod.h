@@ -31,6 +31,12 @@ struct CandidateRun {
 
 /// @throw ValueError if the registry has no such method, variant or quality level.
 CandidateRun resolveCandidate(const std::string& method, const std::string& setting);
+/// Renders a candidate of the models on `scene`: resolveCandidate's method and parameters, on
+/// options.backend, or the variant's backend when that is Auto; no progress callback.
+/// @throw ValueError as resolveCandidate; what methods::renderImage throws.
+methods::RenderResult renderCandidate(const Scene& scene, const std::string& method,
+                                      const std::string& setting,
+                                      methods::RenderOptions options = {});
 
 struct AutoChoice {
     std::string method;        ///< registry name, e.g. "dirpole"
