@@ -837,6 +837,11 @@ void SslpvSolver::inject() {
     m_stats.injectMs = timer.elapsedMs();
 }
 
+struct SslpvSolver::StepKernel {
+    std::vector<Term> terms[SSLPV_MAX_COEFFS];
+    StepCtx ctx;
+};
+
 void SslpvSolver::propagate() {
     const Timer timer;
     const GridSpec& s = m_material.spec;
@@ -866,79 +871,12 @@ void SslpvSolver::propagate() {
         if (cleared || f->size() != brickTotal)
             f->assign(brickTotal, 0);
     m_lastActive = m_active;
-    bool accWritten = false, exitWritten = false;
-
-    // Term lists of the gather: c_d,i += Σ_o Σ_j M_o[i][j] c_{d+o, j} (§4).
-    const auto& mats = propagationMatrices(m_opt.order);
-    const std::ptrdiff_t p = n + 2;
-    const std::ptrdiff_t offs[6] = {1, -1, p, -p, p * p, -p * p};
-    std::vector<Term> terms[SSLPV_MAX_COEFFS];
-    for (int i = 0; i < count; ++i)
-        for (int o = 0; o < 6; ++o)
-            for (int j = 0; j < count; ++j) {
-                const float w = mats[o].at(i, j);
-                // Entries that vanish by symmetry come out of the quadrature at ~1e−17.
-                if (std::abs(w) > 1e-7f)
-                    terms[i].push_back({j, offs[o], w});
-            }
-    // Pad every list to a multiple of 4 (the kernel's unroll) with zero-weight reads of the
-    // destination cell itself, which is always inside the allocation.
-    for (int i = 0; i < count; ++i)
-        while (terms[i].size() % 4 != 0)
-            terms[i].push_back({0, 0, 0.f});
-
-    StepCtx ctx;
-    ctx.coeffs = count;
-    if (m_opt.order == 1) {
-        // Check the sparsity the specialised gather relies on; otherwise use the term list.
-        const int axisCoeff[3] = {3, 1, 2};
-        ctx.l1 = true;
-        for (int o = 0; o < 6; ++o) {
-            const int axis = o / 2, k = axisCoeff[axis];
-            L1Weights& w = ctx.l1w[o];
-            w.offset = offs[o];
-            w.k = k;
-            w.a = k == 1 ? 2 : 1;
-            w.b = k == 3 ? 2 : 3;
-            w.w00 = mats[o].at(0, 0);
-            w.w0k = mats[o].at(0, k);
-            w.wk0 = mats[o].at(k, 0);
-            w.wkk = mats[o].at(k, k);
-            w.waa = mats[o].at(w.a, w.a);
-            w.wbb = mats[o].at(w.b, w.b);
-            for (int i = 0; i < 4; ++i)
-                for (int j = 0; j < 4; ++j) {
-                    const bool used = (i == j) || (i == 0 && j == k) || (i == k && j == 0);
-                    if (!used && std::abs(mats[o].at(i, j)) > 1e-7f)
-                        ctx.l1 = false;
-                }
-        }
-    }
-    ctx.terms = terms;
-    ctx.box = m_active;
-    // Per-brick stop: ε times the injected band-0 coefficient per cell that can hold light.
-    const Rgb injectedFlux = m_injection.flux();
-    const bool brickStop = m_opt.brickStopEpsilon > 0.f;
-    if (brickStop)
-        ctx.dark = m_opt.brickStopEpsilon *
-                   std::max({injectedFlux.x, injectedFlux.y, injectedFlux.z}) /
-                   (TWO_SQRT_PI * float(std::max<int64_t>(m_lightCells, 1)));
-    ctx.padded = int(p);
-    ctx.mask = m_opt.removeExitant ? m_mask.data() : nullptr;
-    for (int ch = 0; ch < 3; ++ch) {
-        for (int l = 0; l < 3; ++l) {
-            ctx.factor[ch][l] = m_homogeneous ? nullptr : m_factor[ch][l].data();
-            ctx.perCellFactors = !m_homogeneous;
-            ctx.homFactor[ch][l] = m_homFactor[ch][l];
-        }
-        ctx.homAbsorb[ch] = m_homAbsorb[ch];
-    }
+    m_run = PropagationRun{};
 
     // Step 0: the injected lights become the first sources, with their cells' factors folded in.
     // Only bricks holding injected light are computed; bricks of m_prop[0] lit by the previous
     // solve are cleared, so m_prop[0]'s bricks are exactly the injected ones afterwards.
-    Rgb absorbed(0.f), exitant(0.f), remaining(0.f), dropped(0.f);
-    const Rgb injected = injectedFlux;
+    m_run.injected = m_injection.flux();
     {
         if (cleared || m_brickLit[0].size() != brickTotal)
             m_brickLit[0].assign(brickTotal, 0);
@@ -978,13 +916,121 @@ void SslpvSolver::propagate() {
                     }
                 }
         for (int ch = 0; ch < 3; ++ch) {
-            absorbed[ch] = float(ab[ch] * TWO_SQRT_PI);
-            remaining[ch] = float(rem[ch] * TWO_SQRT_PI);
+            m_run.absorbed[ch] = float(ab[ch] * TWO_SQRT_PI);
+            m_run.remaining[ch] = float(rem[ch] * TWO_SQRT_PI);
         }
     }
     m_cur = 0;
+    m_stats.activeBricksPerStep.clear();
+    m_stats.cellsComputed = 0;
 
-    int steps = 0;
+    StepKernel kernel;
+    prepareStepKernel(kernel);
+    runSteps(kernel, m_opt.maxSteps);
+    m_stats.propagateMs = timer.elapsedMs();
+}
+
+bool SslpvSolver::propagationInFlight() const {
+    return m_opt.mode != SslpvMode::Diffusion && m_hasMaterial && !isDirty() && m_run.inFlight;
+}
+
+const SslpvStats& SslpvSolver::continuePropagation(int steps) {
+    LUCENT_CHECK(steps >= 1, "SSLPV: continuePropagation(", steps, "): need at least one step");
+    LUCENT_CHECK(propagationInFlight(),
+                 "SSLPV: continuePropagation() with no propagation in flight (call solve() first)");
+    const Timer timer;
+    m_stats.reinjected = m_stats.repropagated = false;
+    m_stats.refoldedRows = 0;
+    StepKernel kernel;
+    prepareStepKernel(kernel);
+    runSteps(kernel, m_run.steps + steps);
+    m_stats.repropagated = true;
+    m_stats.propagateMs = timer.elapsedMs();
+    return m_stats;
+}
+
+void SslpvSolver::prepareStepKernel(StepKernel& kernel) const {
+    const int n = m_material.spec.resolution;
+    const int count = shCount(m_opt.order);
+    StepCtx& ctx = kernel.ctx;
+    // Term lists of the gather: c_d,i += Σ_o Σ_j M_o[i][j] c_{d+o, j} (§4).
+    const auto& mats = propagationMatrices(m_opt.order);
+    const std::ptrdiff_t p = n + 2;
+    const std::ptrdiff_t offs[6] = {1, -1, p, -p, p * p, -p * p};
+    auto& terms = kernel.terms;
+    for (int i = 0; i < count; ++i)
+        for (int o = 0; o < 6; ++o)
+            for (int j = 0; j < count; ++j) {
+                const float w = mats[o].at(i, j);
+                // Entries that vanish by symmetry come out of the quadrature at ~1e−17.
+                if (std::abs(w) > 1e-7f)
+                    terms[i].push_back({j, offs[o], w});
+            }
+    // Pad every list to a multiple of 4 (the kernel's unroll) with zero-weight reads of the
+    // destination cell itself, which is always inside the allocation.
+    for (int i = 0; i < count; ++i)
+        while (terms[i].size() % 4 != 0)
+            terms[i].push_back({0, 0, 0.f});
+
+    ctx.coeffs = count;
+    if (m_opt.order == 1) {
+        // Check the sparsity the specialised gather relies on; otherwise use the term list.
+        const int axisCoeff[3] = {3, 1, 2};
+        ctx.l1 = true;
+        for (int o = 0; o < 6; ++o) {
+            const int axis = o / 2, k = axisCoeff[axis];
+            L1Weights& w = ctx.l1w[o];
+            w.offset = offs[o];
+            w.k = k;
+            w.a = k == 1 ? 2 : 1;
+            w.b = k == 3 ? 2 : 3;
+            w.w00 = mats[o].at(0, 0);
+            w.w0k = mats[o].at(0, k);
+            w.wk0 = mats[o].at(k, 0);
+            w.wkk = mats[o].at(k, k);
+            w.waa = mats[o].at(w.a, w.a);
+            w.wbb = mats[o].at(w.b, w.b);
+            for (int i = 0; i < 4; ++i)
+                for (int j = 0; j < 4; ++j) {
+                    const bool used = (i == j) || (i == 0 && j == k) || (i == k && j == 0);
+                    if (!used && std::abs(mats[o].at(i, j)) > 1e-7f)
+                        ctx.l1 = false;
+                }
+        }
+    }
+    ctx.terms = terms;
+    ctx.box = m_active;
+    // Per-brick stop: ε times the injected band-0 coefficient per cell that can hold light.
+    const Rgb injectedFlux = m_injection.flux();
+    if (m_opt.brickStopEpsilon > 0.f)
+        ctx.dark = m_opt.brickStopEpsilon *
+                   std::max({injectedFlux.x, injectedFlux.y, injectedFlux.z}) /
+                   (TWO_SQRT_PI * float(std::max<int64_t>(m_lightCells, 1)));
+    ctx.padded = int(p);
+    ctx.mask = m_opt.removeExitant ? m_mask.data() : nullptr;
+    for (int ch = 0; ch < 3; ++ch) {
+        for (int l = 0; l < 3; ++l) {
+            ctx.factor[ch][l] = m_homogeneous ? nullptr : m_factor[ch][l].data();
+            ctx.perCellFactors = !m_homogeneous;
+            ctx.homFactor[ch][l] = m_homFactor[ch][l];
+        }
+        ctx.homAbsorb[ch] = m_homAbsorb[ch];
+    }
+}
+
+void SslpvSolver::runSteps(StepKernel& kernel, int stepLimit) {
+    const int n = m_material.spec.resolution;
+    const int count = shCount(m_opt.order);
+    const int bricksX = (n + SSLPV_BRICK_X - 1) / SSLPV_BRICK_X;
+    const int bricksY = (n + SSLPV_BRICK_Y - 1) / SSLPV_BRICK_Y;
+    StepCtx& ctx = kernel.ctx;
+    const bool brickStop = m_opt.brickStopEpsilon > 0.f;
+    PropagationRun& run = m_run;
+    const Rgb injected = run.injected;
+    Rgb &absorbed = run.absorbed, &exitant = run.exitant, &remaining = run.remaining,
+        &dropped = run.dropped;
+    int& steps = run.steps;
+    bool &accWritten = run.accWritten, &exitWritten = run.exitWritten, &anyLit = run.anyLit;
     const bool empty = m_active.isEmpty();
     auto converged = [&] {
         if (m_opt.stopEpsilon <= 0.f)
@@ -1000,8 +1046,6 @@ void SslpvSolver::propagate() {
     const int bx0 = box.lo.x / SSLPV_BRICK_X, bx1 = box.hi.x / SSLPV_BRICK_X;
     const int by0 = box.lo.y / SSLPV_BRICK_Y, by1 = box.hi.y / SSLPV_BRICK_Y;
     m_stats.brickCount = empty ? 0 : (bx1 - bx0 + 1) * (by1 - by0 + 1) * (box.hi.z - box.lo.z + 1);
-    m_stats.activeBricksPerStep.clear();
-    m_stats.cellsComputed = 0;
     struct Run {
         int xs, xe;  // inclusive cell range in x
     };
@@ -1022,8 +1066,7 @@ void SslpvSolver::propagate() {
             seg[segs++] = {xs, xe};
     };
     const Timer stepTimer;
-    bool anyLit = true;  // some brick holds light (with the per-brick stop: above its threshold)
-    while (!empty && anyLit && steps < m_opt.maxSteps && !converged()) {
+    while (!empty && anyLit && steps < stepLimit && !converged()) {
         const int next = 1 - m_cur;
         const bool accumulate = steps + 1 > m_opt.skipAccumulateSteps;
         ctx.assignAcc = accumulate && !accWritten;
@@ -1210,6 +1253,7 @@ void SslpvSolver::propagate() {
         ++steps;
     }
     m_stats.stepsMs = stepTimer.elapsedMs();
+    run.inFlight = !empty && anyLit && !converged();
     if (!accWritten) {
         m_accum.clear();
         std::fill(m_accBrickLit.begin(), m_accBrickLit.end(), uint8_t(0));
@@ -1224,7 +1268,6 @@ void SslpvSolver::propagate() {
     m_stats.exitant = exitant;
     m_stats.absorbed = absorbed;
     m_stats.dropped = dropped;
-    m_stats.propagateMs = timer.elapsedMs();
 }
 
 const SslpvStats& SslpvSolver::solve() {

@@ -7,6 +7,7 @@
 #include <lucent/sslpv/SslpvSolver.h>
 #include <lucent/sslpv/Transfer.h>
 
+#include <lucent/core/Error.h>
 #include <lucent/core/Random.h>
 #include <lucent/scene/SceneFile.h>
 
@@ -14,6 +15,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -414,4 +416,110 @@ TEST(SslpvBricks, BrickStopIsLocalPaintDoesNotEndThePropagationElsewhere) {
         steps[1][1]);
     EXPECT_EQ(localB[1], localB[0]);
     EXPECT_LT(sumB[0][1] / sumB[0][0], 1.0 - 1e-5);
+}
+
+TEST(SslpvBricks, ContinuedPropagationIsOneLongerSolve) {
+    // SslpvSolver::continuePropagation, the live preview's idle frames: a solve of a few steps
+    // carried on, chunk by chunk, must run exactly the steps of one solve with the larger step
+    // limit — the same grids bit for bit, the same energy sums, the same stopping step — with
+    // each stop rule (none, the global stop, the per-brick stop), in both modes and orders.
+    // A bright heterogeneous ball (σs′ = σt in most cells) keeps light in flight for long.
+    struct Stop {
+        const char* name;
+        float global, brick;
+    };
+    const Stop stops[] = {
+        {"no stop", 0.f, 0.f}, {"global stop", 1e-3f, 0.f}, {"brick stop", 0.f, 1e-4f}};
+    const int limit = 150;
+    for (const Stop& stop : stops)
+        for (SslpvMode mode : {SslpvMode::Paper, SslpvMode::Calibrated})
+            for (int order : {1, 2})
+                for (int chunk : {1, 32}) {
+                    SCOPED_TRACE(std::string(stop.name) +
+                                 (mode == SslpvMode::Paper ? " paper" : " calibrated") + " order " +
+                                 std::to_string(order) + " chunk " + std::to_string(chunk));
+                    const int n = order == 1 ? 20 : 12;
+                    const CoarseMaterial m = hetBall(n, 1.f, 1.f, 1.2f, 0.3f, 29);
+                    SslpvOptions o{.order = order,
+                                   .maxSteps = limit,
+                                   .skipAccumulateSteps = 2,
+                                   .attenuation = SslpvAttenuation::Absorption};
+                    o.mode = mode;
+                    o.stopEpsilon = stop.global;
+                    o.brickStopEpsilon = stop.brick;
+                    SslpvSolver whole(o);
+                    o.maxSteps = chunk;
+                    SslpvSolver chunked(o);
+                    const auto texels = ballTexels(m, Vector3f(0.3f, -0.2f, -1.f));
+                    for (SslpvSolver* s : {&whole, &chunked}) {
+                        s->setMaterial(m, 1.3f);
+                        s->setInjectionSamples(texels);
+                        s->solve();
+                    }
+                    ASSERT_EQ(chunked.stats().stepsUsed, chunk);
+                    ASSERT_TRUE(chunked.propagationInFlight());
+                    int calls = 0;
+                    while (chunked.propagationInFlight() && chunked.stats().stepsUsed < limit) {
+                        const int more =
+                            std::min(chunk + calls % 3, limit - chunked.stats().stepsUsed);
+                        const SslpvStats& st = chunked.continuePropagation(more);
+                        EXPECT_TRUE(st.repropagated);
+                        EXPECT_FALSE(st.reinjected);
+                        ASSERT_LT(++calls, 1000);
+                    }
+                    const SslpvStats &a = chunked.stats(), &b = whole.stats();
+                    EXPECT_EQ(a.stepsUsed, b.stepsUsed);
+                    EXPECT_EQ(chunked.accumulation().raw(), whole.accumulation().raw());
+                    EXPECT_EQ(chunked.exitant().raw(), whole.exitant().raw());
+                    EXPECT_EQ(chunked.propagation().raw(), whole.propagation().raw());
+                    EXPECT_EQ(a.activeBricksPerStep, b.activeBricksPerStep);
+                    EXPECT_EQ(a.cellsComputed, b.cellsComputed);
+                    for (int c = 0; c < 3; ++c) {
+                        EXPECT_EQ(a.injected[c], b.injected[c]);
+                        EXPECT_EQ(a.remaining[c], b.remaining[c]);
+                        EXPECT_EQ(a.exitant[c], b.exitant[c]);
+                        EXPECT_EQ(a.absorbed[c], b.absorbed[c]);
+                        EXPECT_EQ(a.dropped[c], b.dropped[c]);
+                    }
+                    EXPECT_EQ(chunked.propagationInFlight(), whole.propagationInFlight());
+                    if (stop.global == 0.f && stop.brick == 0.f)
+                        EXPECT_EQ(b.stepsUsed, limit) << "no stop: the light is still in flight";
+                    else
+                        EXPECT_LT(b.stepsUsed, limit) << "a stop rule ended the solve";
+                }
+}
+
+TEST(SslpvBricks, OnlyAPropagationInFlightCanBeContinued) {
+    const CoarseMaterial m = hetBall(16, 1.f, 1.f, 0.98f, 0.f, 31);
+    SslpvOptions o{.maxSteps = 8};
+    SslpvSolver s(o);
+    EXPECT_FALSE(s.propagationInFlight());  // nothing solved yet
+    EXPECT_THROW(s.continuePropagation(8), ValueError);
+    s.setMaterial(m, 1.3f);
+    s.setInjectionSamples(ballTexels(m, Vector3f(0, 0, -1)));
+    EXPECT_FALSE(s.propagationInFlight());
+    s.solve();
+    EXPECT_TRUE(s.propagationInFlight());
+    EXPECT_THROW(s.continuePropagation(0), ValueError);
+    // A changed input makes the propagation start again: nothing to carry on until solved.
+    s.setMaterial(m, 1.4f);
+    EXPECT_FALSE(s.propagationInFlight());
+    EXPECT_THROW(s.continuePropagation(8), ValueError);
+    s.solve();
+    EXPECT_EQ(s.stats().stepsUsed, 8);
+    s.continuePropagation(8);
+    EXPECT_EQ(s.stats().stepsUsed, 16);
+    // Stopped by a stop rule (all light gone): nothing in flight.
+    o.maxSteps = 4096;
+    o.brickStopEpsilon = 1e-3f;
+    s.setOptions(o);
+    s.solve();
+    EXPECT_LT(s.stats().stepsUsed, 4096);
+    EXPECT_FALSE(s.propagationInFlight());
+    // Mode diffusion solves, it does not step.
+    o.mode = SslpvMode::Diffusion;
+    o.maxSteps = 1;
+    s.setOptions(o);
+    s.solve();
+    EXPECT_FALSE(s.propagationInFlight());
 }

@@ -263,6 +263,17 @@ public:
     /// Runs what is dirty: injection (§3.1) then propagation (§3.2).
     /// @throw ValueError if no material was set.
     const SslpvStats& solve();
+    /// True when the last propagation (modes Paper and Calibrated) stopped at maxSteps with
+    /// light still in flight (neither the stop rule nor the per-brick stop ended it) and no
+    /// input has changed since: continuePropagation() can carry it on.
+    [[nodiscard]] bool propagationInFlight() const;
+    /// Carries the last propagation on by at most `steps` more steps: the steps, to the bit, that
+    /// a solve with maxSteps larger by `steps` would have run after it, with the same stop rules
+    /// (stopEpsilon, brickStopEpsilon). stats() then describes the whole propagation (stepsUsed
+    /// in all; propagateMs and stepsMs of this call). The live preview carries a stroke's
+    /// propagation on over idle frames this way (docs/methods/sslpv.md, "Convergence").
+    /// @throw ValueError when !propagationInFlight() or steps < 1.
+    const SslpvStats& continuePropagation(int steps);
     [[nodiscard]] const SslpvStats& stats() const { return m_stats; }
 
     //! @{ \name Results
@@ -343,6 +354,25 @@ private:
     /// reinjectChangedDiffusionSources).
     bool reinjectChangedChords();
     void propagate();
+    /// The propagation steps' constants (term lists, per-cell factor pointers, the per-brick
+    /// stop's threshold), rebuilt from the solver's state for each run of steps
+    /// (SslpvSolver.cpp).
+    struct StepKernel;
+    void prepareStepKernel(StepKernel& kernel) const;
+    /// Steps the propagation until `stepLimit` steps in all, the stop rule or every brick dark,
+    /// from where m_run left it; then writes the stats.
+    void runSteps(StepKernel& kernel, int stepLimit);
+    /// Where the last propagation stands (fluxes in W per channel), so that
+    /// continuePropagation() can carry it on exactly as one longer run.
+    struct PropagationRun {
+        Rgb injected{0.f}, remaining{0.f}, exitant{0.f}, absorbed{0.f}, dropped{0.f};
+        int steps = 0;
+        bool accWritten = false;   ///< a step has written the accumulation grid
+        bool exitWritten = false;  ///< a step has written the exitant grid
+        bool anyLit = true;        ///< some brick holds light (above the per-brick stop)
+        bool inFlight = false;     ///< stopped by the step limit with light still propagating
+    };
+    PropagationRun m_run;
     /// Mode Diffusion's injection: each texel's refracted beam T·Φ_p is followed through the
     /// medium (half-cell midpoint steps, as interactingFraction) and the power of its first
     /// scattering, α′·(e^−τ(s) − e^−τ(s+ds))·T·Φ_p, is deposited in the cell where it happens:
