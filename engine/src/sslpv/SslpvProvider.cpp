@@ -38,6 +38,8 @@ constexpr int UPLOADED_COEFFS_DIFFUSION = LUCENT_SSLPV_DIFFUSION_FLUX_COEFF + 3;
 
 void validateOptions(const SslpvProviderOptions& o) {
     LUCENT_CHECK(o.meshId >= -1, "SSLPV provider option 'meshId' must be >= -1, got ", o.meshId);
+    LUCENT_CHECK(o.refineSteps >= 0 && o.refineSteps <= 4096,
+                 "SSLPV provider option 'refineSteps' must be in [0, 4096], got ", o.refineSteps);
     // Everything else is checked by SslpvRenderer::setOptions / SslpvSolver::setOptions.
     SslpvRenderer probe(o.render);
 }
@@ -354,10 +356,36 @@ bool SslpvSubsurfaceProvider::isDirty() const {
            m->glPropagateDirty;
 }
 
+bool SslpvSubsurfaceProvider::converged() const {
+    const Impl& s = *m;
+    return !(s.opt.refineSteps > 0 && !s.materialDirty && !s.rsmDirty &&
+             s.solver.propagationInFlight() && s.solver.stats().stepsUsed < s.opt.refineSteps);
+}
+
+bool SslpvSubsurfaceProvider::refine() {
+    Impl& s = *m;
+    if (converged())
+        return false;
+    // The same chunk as a change's frame, so an idle frame costs what a stroke's does.
+    const int steps = std::min(std::max(s.opt.render.solver.maxSteps, 1),
+                               s.opt.refineSteps - s.solver.stats().stepsUsed);
+    const SslpvStats& st = s.solver.continuePropagation(steps);
+    ++s.stats.refinements;
+    if (s.opt.backend == SslpvBackend::Cpu)
+        s.timings.propagateMs = st.propagateMs;
+    // The GL propagator re-runs the CPU solve's step count from the injection (SslpvGl.h).
+    s.glPropagateDirty = s.opt.backend == SslpvBackend::Gl;
+    s.uploadDirty = true;
+    return true;
+}
+
 void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsigned target) {
     LUCENT_CHECK(m->created, "SSLPV provider: create() was not called");
     Impl& s = *m;
+    const int solves = s.stats.solves;
     update();
+    if (s.stats.solves == solves)  // nothing changed: carry a propagation in flight on
+        refine();
     if (s.opt.backend == SslpvBackend::Gl && s.glPropagateDirty) {
         if (!s.gl)
             s.gl = std::make_unique<SslpvGlPropagator>(s.opt.glStorage);

@@ -9,6 +9,7 @@
 #include <lucent/gpu/SceneRenderer.h>
 #include <lucent/gpu/Shader.h>
 #include <lucent/methods/Registry.h>
+#include <lucent/methods/RenderImage.h>
 #include <lucent/scene/SceneFile.h>
 
 #include "GlTestContext.h"
@@ -16,21 +17,26 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace lucent::methods {
 namespace {
 
-/// Sum of the subsurface radiance of one frame (finite and > 0 when the method's pass ran).
-double frameSum(gpu::SceneRenderer& renderer) {
-    renderer.render();
-    const ImageRgb image = renderer.readRadiance();
+/// Sum of an image's radiance over every pixel and channel.
+double imageSum(const ImageRgb& image) {
     double sum = 0.0;
     for (int y = 0; y < image.height(); ++y)
         for (int x = 0; x < image.width(); ++x)
             for (int k = 0; k < 3; ++k)
                 sum += double(image.at(x, y)[k]);
     return sum;
+}
+
+/// Sum of the subsurface radiance of one frame (finite and > 0 when the method's pass ran).
+double frameSum(gpu::SceneRenderer& renderer) {
+    renderer.render();
+    return imageSum(renderer.readRadiance());
 }
 
 TEST(MethodsLive, GridChangeAtRunTimeKeepsRendering) {
@@ -72,6 +78,74 @@ TEST(MethodsLive, GridChangeAtRunTimeKeepsRendering) {
         renderer.setSubsurfaceProvider(nullptr);
         method->destroyGl();
         renderer.destroy();
+    }
+}
+
+// SSLPV's live refinement (parameter refine-steps): on the marble sphere (reduced albedo
+// ≈ 0.999) a stroke's 32 steps leave much of the light in flight, so the first frame is dark;
+// idle frames carry the propagation on until the per-brick stop ends it, and the refined live
+// frame is then the offline render with the same stop rules, pixel for pixel.
+TEST(MethodsLive, SslpvIdleFramesRefineToTheOfflineImage) {
+    std::string reason;
+    gpu::GlContext* context = lucent::test::sharedGlContext(&reason);
+    if (!context)
+        GTEST_SKIP() << "no OpenGL 4.5 context: " << reason;
+    Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + "/resources/scenes/minimal.json");
+    scene.camera.width = 64;
+    scene.camera.height = 48;
+    // Both variants as the evaluation runs them (paper with its absorption-only attenuation).
+    for (const char* mode : {"calibrated", "paper"}) {
+        SCOPED_TRACE(mode);
+        ParamSet params = ParamSet::fromAssignments({std::string("mode=") + mode, "grid=16"});
+        if (std::string(mode) == "paper")
+            params.set("attenuation", "absorption");
+        const gpu::ShaderLibrary library;
+        gpu::SceneRenderer renderer;
+        renderer.create(library);
+        std::unique_ptr<Method> method = create("sslpv", params, {Backend::Gl, /*live=*/true, {}});
+        method->createGl(library);
+        const int mesh = renderer.addMesh(scene.objects[0].mesh, method->surface(scene.eta));
+        renderer.setLights(scene.lights);
+        renderer.setCamera(scene.camera);
+        gpu::DirectSettings settings;
+        settings.subsurfaceOnly = true;
+        renderer.setSettings(settings);
+        renderer.setSubsurfaceProvider(method->subsurfacePass());
+        method->setScene({&scene.objects[0].mesh, scene.objects[0].material.get(), scene.eta,
+                          scene.lights, mesh});
+        method->cameraChanged(scene.camera);
+        renderer.render();
+        const double first = imageSum(renderer.readRadiance());
+        EXPECT_FALSE(method->converged()) << "light in flight after 32 steps: refine while idle";
+        int frames = 1;
+        while (!method->converged()) {
+            renderer.render();
+            ASSERT_LT(++frames, 64);
+        }
+        const ImageRgb refined = renderer.readRadiance();
+        renderer.setSubsurfaceProvider(nullptr);
+        method->destroyGl();
+        renderer.destroy();
+
+        // Offline, one solve with the live stop rules and bound (steps 1024, no global stop,
+        // the per-brick stop at its live default): the same propagation, so the same image.
+        ParamSet offline = params;
+        offline.set("steps", 1024);
+        offline.set("stop", "0");
+        offline.set("brick-stop", "0.0001");
+        RenderOptions ro;
+        ro.backend = Backend::Gl;
+        ro.subsurfaceOnly = true;
+        ro.context = context;
+        const ImageRgb expected = renderImage(scene, "sslpv", offline, ro).radiance;
+        const double refinedSum = imageSum(refined);
+        EXPECT_GT(refinedSum, 0.0);
+        EXPECT_EQ(refinedSum, imageSum(expected));
+        std::printf(
+            "sslpv %s grid 16, marble sphere: first frame %.4f of the refined one after "
+            "%d frames\n",
+            mode, first / refinedSum, frames);
+        EXPECT_LT(first, 0.97 * refinedSum) << "32 steps should leave light in flight here";
     }
 }
 

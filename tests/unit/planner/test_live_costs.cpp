@@ -126,13 +126,13 @@ TEST(LiveCosts, ShippedTableMatchesTheModelsAndTheRegistry) {
 // open; its error model is the offline render's. So every parameter that shapes the converged
 // picture must be the same live and offline. The exceptions, each how far the live preview
 // goes rather than what it converges to, or measured not to move the default scene:
-// SSLPV's steps, stop and brick-stop (the live propagation's length: 32 steps, within 0.8 % of
-// the converged paper image on backlit_thin_thick at grid 64, docs/planner.md), the
+// SSLPV's steps, stop, brick-stop and refine-steps (the live propagation's length: 32 steps per
+// frame, carried on over idle frames until the per-brick stop ends it, docs/planner.md), the
 // image-space dipoles' layered-depth (8 voxels live, 16 offline: 0 difference there) and
 // combined's auto-skip (off live: 0 difference there).
 TEST(LiveCosts, EveryCandidateRunsLiveWhatItWasEvaluatedAs) {
-    const std::set<std::string> progress = {"steps", "stop", "brick-stop", "layered-depth",
-                                            "auto-skip"};
+    const std::set<std::string> progress = {"steps",        "stop",          "brick-stop",
+                                            "refine-steps", "layered-depth", "auto-skip"};
     for (const LiveCost& c : defaultLiveCosts().entries) {
         SCOPED_TRACE(c.method + " " + c.setting);
         const CandidateRun run = resolveCandidate(c.method, c.setting);

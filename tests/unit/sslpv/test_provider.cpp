@@ -177,6 +177,72 @@ TEST(SslpvProvider, NewGridResolutionAsksForTheMaterialAgain) {
     EXPECT_EQ(p.solver().accumulation().raw(), fresh.solver().accumulation().raw());
 }
 
+// Live refinement (SslpvProviderOptions::refineSteps): a change's frame runs `maxSteps` steps;
+// while light is in flight each idle frame carries the propagation on by as many, and once
+// refined the grid is bit for bit the solve of the whole step count at once. A stroke starts
+// again from its own first frame.
+TEST(SslpvProvider, IdleFramesCarryTheStrokesPropagationOnToTheLongerSolve) {
+    TestScene s = makeScene();
+    s.volume = MaterialVolume(s.volume.spec(),  // a bright medium: light travels for long
+                              {Rgb(1.f), Rgb(0.995f, 0.99f, 0.98f), Rgb(0.f)});
+    s.volume.setInsideMask(voxelizeSolid(s.mesh, s.volume.spec()));
+    SslpvProviderOptions o = providerOptions(SslpvMode::Calibrated);
+    o.render.solver.maxSteps = 32;
+    o.render.solver.brickStopEpsilon = 1e-4f;  // the live defaults
+    o.refineSteps = 1024;
+    SslpvSubsurfaceProvider p(o);
+    setUp(p, s);
+    (void)p.update();
+    EXPECT_EQ(p.solver().stats().stepsUsed, 32);
+    EXPECT_FALSE(p.converged());
+    int frames = 0;
+    while (p.refine())
+        ASSERT_LT(++frames, 100);
+    EXPECT_TRUE(p.converged());
+    EXPECT_FALSE(p.refine());
+    const int steps = p.solver().stats().stepsUsed;
+    EXPECT_GT(steps, 64) << "the bright ball keeps light in flight beyond two frames";
+    EXPECT_LT(steps, 1024) << "the per-brick stop ends it";
+    EXPECT_EQ(frames, (steps - 32 + 31) / 32);
+    EXPECT_EQ(p.stats().refinements, frames);
+    EXPECT_EQ(p.stats().solves, 1);
+
+    SslpvProviderOptions once = o;
+    once.render.solver.maxSteps = 1024;
+    once.refineSteps = 0;
+    SslpvSubsurfaceProvider whole(once);
+    setUp(whole, s);
+    (void)whole.update();
+    EXPECT_TRUE(whole.converged());
+    EXPECT_EQ(whole.solver().stats().stepsUsed, steps);
+    EXPECT_EQ(p.solver().accumulation().raw(), whole.solver().accumulation().raw());
+
+    // A stroke: its frame runs 32 steps again, then the idle frames carry it on.
+    BrushSettings brush;
+    brush.radius = 3.f;
+    brush.value = {Rgb(2.f), Rgb(0.5f), Rgb(0.f)};
+    paintStroke(s.volume, brush, {Point3f(0, 0, 9), Point3f(3, 0, 8)});
+    p.updateMaterial(s.volume, s.volume.takeDirtyBricks());
+    EXPECT_FALSE(p.refine()) << "a change is solved first, by update()";
+    (void)p.update();
+    EXPECT_EQ(p.solver().stats().stepsUsed, 32);
+    EXPECT_FALSE(p.converged());
+    while (p.refine()) {
+    }
+    EXPECT_TRUE(p.converged());
+
+    // Off: a change's frame is the last.
+    o.refineSteps = 0;
+    SslpvSubsurfaceProvider off(o);
+    setUp(off, s);
+    (void)off.update();
+    EXPECT_TRUE(off.converged());
+    EXPECT_FALSE(off.refine());
+    EXPECT_EQ(off.solver().stats().stepsUsed, 32);
+    o.refineSteps = 5000;
+    EXPECT_THROW(SslpvSubsurfaceProvider{o}, ValueError);
+}
+
 TEST(SslpvProvider, RejectsBadInput) {
     SslpvProviderOptions o = providerOptions();
     o.meshId = -2;

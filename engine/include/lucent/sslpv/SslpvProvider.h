@@ -54,6 +54,13 @@ struct SslpvProviderOptions {
     SslpvBackend backend = SslpvBackend::Cpu;
     SslpvGlStorage glStorage = SslpvGlStorage::Float32;  ///< Gl backend grid precision
     int meshId = 0;  ///< SceneRenderer mesh id the term is written for; −1: every covered pixel
+    /// Live refinement (modes Paper and Calibrated): a change's frame propagates
+    /// render.solver.maxSteps steps; while light is still in flight after them, each later
+    /// frame with nothing else to do carries the propagation on by as many steps
+    /// (SslpvSolver::continuePropagation: the steps one longer solve would run), until the stop
+    /// rules end it or refineSteps steps in all. 0 (or ≤ maxSteps): off, a change's frame is
+    /// the last. [0, 4096].
+    int refineSteps = 0;
 };
 
 /// Per-pass milliseconds of the last work done for each pass (CPU wall time unless stated).
@@ -76,9 +83,10 @@ struct SslpvProviderStats {
     /// Material updates written into the solver's material cell by cell (strokes that kept
     /// the shape: SslpvSolver::markMaterialCellsDirty) instead of handing it a new one.
     int inPlaceUpdates = 0;
-    int solves = 0;   ///< solver runs that did work
-    int uploads = 0;  ///< grid uploads
-    int frames = 0;   ///< sample passes
+    int solves = 0;       ///< solver runs that did work
+    int refinements = 0;  ///< frames that carried the propagation on (refineSteps)
+    int uploads = 0;      ///< grid uploads
+    int frames = 0;       ///< sample passes
 };
 
 /// gpu::SubsurfaceProvider evaluating SSLPV per G-buffer pixel. Create/destroy explicitly with
@@ -137,6 +145,13 @@ public:
     const SslpvStats& update();
     /// True when update() or the upload has work to do.
     [[nodiscard]] bool isDirty() const;
+    /// Live refinement (SslpvProviderOptions::refineSteps): when nothing is dirty and the last
+    /// propagation stopped with light in flight, carries it on by render.solver.maxSteps steps
+    /// (at most up to refineSteps in all). renderSubsurface() calls it on a frame that had no
+    /// change to solve. Returns whether it propagated.
+    bool refine();
+    /// False while refine() would carry the propagation on (another frame changes the image).
+    [[nodiscard]] bool converged() const;
 
     /// gpu::SubsurfaceProvider: update(), GL propagation (Gl backend), upload when changed,
     /// then the per-pixel sample pass into `targetTexture`. Context current.

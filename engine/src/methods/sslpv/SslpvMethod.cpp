@@ -62,6 +62,12 @@ public:
 
     gpu::SubsurfaceProvider* subsurfacePass() override { return m_provider.get(); }
 
+    /// Live modes paper and calibrated refine over idle frames while light is in flight
+    /// (parameter refine-steps); every other use is done after one frame.
+    [[nodiscard]] bool converged() const override {
+        return backend() == Backend::Cpu || !m_provider || m_provider->converged();
+    }
+
     /// The CPU renderer (SslpvRenderer) of the whole scene.
     ImageRgb renderCpu(const Scene& scene, const CpuRequest& request) override {
         sslpv::SslpvRenderOptions opt = m_options.render;
@@ -88,6 +94,7 @@ public:
         return {{"grid", std::to_string(m_options.render.gridResolution)},
                 {"propagation", m_options.backend == sslpv::SslpvBackend::Gl ? "GL" : "CPU"},
                 {"steps", std::to_string(m_provider->solver().stats().stepsUsed)},
+                {"refinements", std::to_string(st.refinements)},
                 {"injected W (green)", num(m_provider->solver().stats().injected.y)},
                 {"resample ms", num(t.resampleMs, "%.2f")},
                 {"resampled cells", std::to_string(st.lastResampledCells)},
@@ -107,8 +114,13 @@ private:
         sslpv::SslpvProviderOptions o;
         o.render.gridResolution = p.getInt("grid");
         o.render.solver.maxSteps = p.getInt("steps");
-        if (isLive())  // the app's range (each step re-propagates on a stroke)
+        if (isLive()) {  // the app's range (each step re-propagates on a stroke)
             o.render.solver.maxSteps = std::clamp(o.render.solver.maxSteps, 1, 512);
+            // Idle frames carry a stroke's propagation on, `steps` per frame, while light is
+            // in flight: a stroke's frame stays bounded and the picture still converges (a
+            // high-albedo medium keeps 13 % of its light in flight after 32 steps).
+            o.refineSteps = p.getInt("refine-steps");
+        }
         // Run to convergence: a fixed step count leaves light in flight in a high-albedo
         // medium (13 % of the injected flux at grid 32 after 32 steps on the marble sphere),
         // and what has not reached the accumulation grid is missing from the image. The GL
@@ -139,6 +151,7 @@ private:
             o.render.solver.diffusionSurfaceFlux = p.getBool("diffusion-flux");
             o.render.solver.maxSteps = p.isGiven("steps") ? p.getInt("steps") : 1024;
             o.render.solver.stopEpsilon = p.isGiven("stop") ? float(p.getFloat("stop")) : 1e-3f;
+            o.refineSteps = 0;  // one solve to its stop per change
             LUCENT_CHECK(!p.isGiven("attenuation"),
                          "sslpv: attenuation applies to mode paper only");
             LUCENT_CHECK(backend() != Backend::Gl || p.getChoice("propagation") == "cpu",
@@ -198,15 +211,19 @@ MethodEntry sslpvMethod() {
     i.caps.gl = true;
     i.caps.cpu = true;
     i.caps.preferred = Backend::Cpu;  // offline: the CPU ray-cast image with its own direct term
+    // Live modes paper and calibrated carry a propagation in flight on over idle frames.
+    i.caps.progressive = true;
     i.params = {
         {"grid", ParamType::Int, "LPV cells per axis", 4, 256, {}, "32"},
-        // Live: a fixed 32 steps (the pre-convergence default), because the stop rule is
-        // global: paint that absorbs in one place ends the propagation sooner everywhere, and
-        // the far side of the object dimmed with each stroke (test
-        // AppPaint.StrokeChangesSslpvPixelsNearTheStroke). Offline: to convergence.
+        // Live: 32 steps per frame and no global stop, because the stop rule is global: paint
+        // that absorbs in one place ends the propagation sooner everywhere, and the far side of
+        // the object dimmed with each stroke (test AppPaint.StrokeChangesSslpvPixelsNearTheStroke).
+        // Idle frames carry the propagation on until the per-brick stop (local) ends it
+        // (refine-steps). Offline: to convergence in one solve.
         {"steps",
          ParamType::Int,
-         "maximum propagation steps; fewer once converged (see stop; live preview: at most 512)",
+         "maximum propagation steps; fewer once converged (see stop; live preview: steps per "
+         "frame, at most 512, carried on over idle frames up to refine-steps)",
          0,
          4096,
          {},
@@ -234,6 +251,18 @@ MethodEntry sslpvMethod() {
          "0",
          "",
          "0.0001"},
+        {"refine-steps",
+         ParamType::Int,
+         "live preview, modes paper and calibrated: while light is still in flight after a "
+         "change's frame, idle frames carry the propagation on (steps per frame) until the stop "
+         "rules end it or this many steps in all (0: a change's frame is the last)",
+         0,
+         4096,
+         {},
+         "0",
+         "",
+         "1024",
+         ParamScope::Live},
         {"sh",
          ParamType::Int,
          "spherical-harmonics order: 1 (4 coefficients) or 2 (9)",
