@@ -13,16 +13,17 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 
 namespace lucent::bench {
 
 struct LiveMethodHarness {
-    /// makeDefaultScene() at width×height, method `name` with its live defaults (and `params`)
-    /// on the GL backend, and one first frame (every upload and program in place; dirty bricks
-    /// taken).
+    /// `scene` (by default makeDefaultScene()) at width×height, method `name` with its live
+    /// defaults (and `params`) on the GL backend, and one first frame (every upload and program
+    /// in place; dirty bricks taken).
     LiveMethodHarness(const std::string& name, int width, int height,
-                      const methods::ParamSet& params = {})
-        : scene(makeDefaultScene()), volume(*scene.objects[0].material) {
+                      const methods::ParamSet& params = {}, Scene scene_ = makeDefaultScene())
+        : scene(std::move(scene_)), volume(*scene.objects[0].material) {
         scene.camera.width = width;
         scene.camera.height = height;
         renderer.create(library);

@@ -10,8 +10,9 @@
 /// can be found without the app. Not a Google Benchmark: results in docs/benchmarks.md ("Stroke
 /// frames of the image-space dipoles").
 ///
-///     live_stroke_frames [--strokes N] [--idle K] [--methods a,b,...] [--size WxH]
-///                        [--brush-mm R] [--stamps N] [--param key=value ...]
+///     live_stroke_frames [--strokes N] [--idle K | --until-converged] [--methods a,b,...]
+///                        [--size WxH] [--brush-mm R] [--stamps N] [--param key=value ...]
+///                        [--scene FILE]
 
 #include "LiveMethodHarness.h"
 
@@ -44,6 +45,10 @@ struct Options {
     int stamps = 8;                              ///< per stroke, half a radius apart
     methods::ParamSet params;                    ///< --param key=value, for every method
     bool idlePasses = false;  ///< also the first idle frame's passes (deferred work)
+    /// Idle frames after each stroke until the method has converged (at most 1000) instead of
+    /// --idle: SSLPV's refinement of a propagation in flight, the dipoles' progressive samples.
+    bool untilConverged = false;
+    std::string scenePath;  ///< empty: the default scene
 };
 
 double median(std::vector<double> v) {
@@ -54,7 +59,9 @@ double median(std::vector<double> v) {
 }
 
 void profile(const std::string& name, const Options& opt) {
-    bench::LiveMethodHarness live(name, opt.width, opt.height, opt.params);
+    bench::LiveMethodHarness live(
+        name, opt.width, opt.height, opt.params,
+        opt.scenePath.empty() ? makeDefaultScene() : loadScene(opt.scenePath));
     MaterialVolume& volume = live.volume;
     const methods::Method& method = *live.method;
     const GridSpec spec = volume.spec();
@@ -82,7 +89,7 @@ void profile(const std::string& name, const Options& opt) {
         return t.elapsedMs();
     };
     // Two warm-up strokes: llvmpipe compiles the preview programs on first use.
-    std::vector<double> strokeMs, idleMs;
+    std::vector<double> strokeMs, idleMs, idleFrames;
     std::map<std::string, std::vector<double>> passes, firstIdlePasses;
     uint32_t lcg = 12345;
     for (int s = -2; s < opt.strokes; ++s) {
@@ -108,13 +115,17 @@ void profile(const std::string& name, const Options& opt) {
                     into[stat.key].push_back(std::atof(stat.value.c_str()));
         };
         keep(passes);
-        for (int i = 0; i < opt.idle; ++i) {
+        int i = 0;
+        for (; opt.untilConverged ? !method.converged() && i < 1000 : i < opt.idle; ++i) {
             idleMs.push_back(frame());
             if (i == 0)
                 keep(firstIdlePasses);
         }
+        idleFrames.push_back(double(i));
     }
     std::printf("| %s | %.1f | %.1f |", name.c_str(), median(strokeMs), median(idleMs));
+    if (opt.untilConverged)
+        std::printf(" idle frames to converge %g;", median(idleFrames));
     for (const auto& [key, values] : passes)
         std::printf(" %s %.4g;", key.c_str(), median(values));
     if (opt.idlePasses) {
@@ -143,6 +154,11 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber);
     app.add_flag("--idle-passes", opt.idlePasses,
                  "also print the passes of the first idle frame after each stroke");
+    app.add_flag("--until-converged", opt.untilConverged,
+                 "idle frames after each stroke until the method has converged (at most 1000; "
+                 "replaces --idle)");
+    app.add_option("--scene", opt.scenePath, "scene file (default: the app's default scene)")
+        ->check(CLI::ExistingFile);
     std::vector<std::string> assignments;
     app.add_option("--param", assignments, "a method parameter, key=value (repeatable)");
     app.add_option("--methods", methodList,
