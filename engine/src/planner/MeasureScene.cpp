@@ -6,6 +6,7 @@
 #include <lucent/core/Error.h>
 #include <lucent/planner/AutoMethod.h>
 #include <lucent/planner/MeasureScene.h>
+#include <lucent/reference/PathTracer.h>
 
 #include <algorithm>
 #include <cmath>
@@ -55,8 +56,10 @@ SceneMeasurement measureCandidates(const Scene& scene, const Models& models,
             if (ref) {
                 const bench::ErrorReport e = bench::compareImages(
                     r.radiance, *ref, options.referenceVariance, nullptr, options.mask);
-                // The dock's number (ReferencePanel::compareWithPreview): luminance blocks.
-                m.blockRelL1 = e.blocks[bench::ErrorReport::LUMINANCE].relL1;
+                // The dock's number (ReferencePanel::compareWithPreview): luminance blocks;
+                // or the evaluation's, net of the reference's noise.
+                const auto& blocks = e.blocks[bench::ErrorReport::LUMINANCE];
+                m.blockRelL1 = options.netOfNoise ? blocks.relL1Net : blocks.relL1;
             }
         } catch (const Error& e) {
             m = CandidateMeasurement();
@@ -68,6 +71,49 @@ SceneMeasurement measureCandidates(const Scene& scene, const Models& models,
         if (options.progress)
             options.progress(done + 1, total, &out.candidates.back());
     }
+    return out;
+}
+
+OwnReferenceMeasurement measureWithOwnReference(const Scene& scene, const Models& models,
+                                                const OwnReferenceOptions& options) {
+    LUCENT_CHECK(options.width >= 8, "measureWithOwnReference: width must be at least 8, got ",
+                 options.width);
+    LUCENT_CHECK(options.referenceSpp >= 3,
+                 "measureWithOwnReference: the reference needs at least 3 samples per pixel, got ",
+                 options.referenceSpp);
+    Scene small = scene;
+    const double aspect = double(scene.camera.height) / double(std::max(scene.camera.width, 1));
+    small.camera.width = options.width;
+    small.camera.height = std::max(1, int(std::lround(options.width * aspect)));
+    OwnReferenceMeasurement out;
+    out.width = small.camera.width;
+    out.height = small.camera.height;
+    reference::ReferenceOptions ro;
+    ro.spp = options.referenceSpp;
+    ro.threads = options.referenceThreads;
+    ro.cancel = options.cancel;
+    ro.subsurfaceOnly = options.render.subsurfaceOnly;  // the same term the candidates render
+    const reference::ReferenceImage ref = reference::renderReference(small, ro);
+    out.referenceSeconds = ref.seconds;
+    out.referenceSpp = ref.spp;
+    if (ref.cancelled) {
+        out.measurement.cancelled = true;
+        return out;
+    }
+    const std::vector<uint8_t> mask = bench::maskFromImage(ref.coverage);
+    // What a perfect image reads against this reference: its own noise, per 4×4 block.
+    out.referenceNoise = bench::compareImages(ref.mean, ref.mean, &ref.variance, nullptr, &mask)
+                             .blocks[bench::ErrorReport::LUMINANCE]
+                             .relL1Floor;
+    MeasureOptions mo;
+    mo.reference = &ref.mean;
+    mo.referenceVariance = &ref.variance;
+    mo.mask = &mask;
+    mo.netOfNoise = true;  // as the evaluation scores, and the models predict
+    mo.which = options.which;
+    mo.render = options.render;
+    mo.cancel = options.cancel;
+    out.measurement = measureCandidates(small, models, mo);
     return out;
 }
 
@@ -99,6 +145,34 @@ Models measuredModels(const Models& models, const SceneMeasurement& measurement,
             }
         }
     }
+    return out;
+}
+
+MeasuredChoice chooseByMeasuring(const Scene& scene, const Models& models,
+                                 const AutoChoice& planned, const Budget& budget, bool glAvailable,
+                                 const OwnReferenceOptions& options, const methods::Log& log) {
+    MeasuredChoice out;
+    out.choice = planned;
+    OwnReferenceOptions o = options;
+    o.which.clear();
+    for (const Option& option : planned.plan.options)
+        if (option.fits)
+            o.which.push_back(option.index);
+    if (o.which.empty())  // nothing fits: the plan takes the least late, so measure them all
+        for (const Option& option : planned.plan.options)
+            o.which.push_back(option.index);
+    if (o.which.empty())
+        return out;
+    out.measurement = measureWithOwnReference(scene, models, o);
+    if (out.measurement.measurement.cancelled)
+        return out;
+    Budget b = budget;
+    b.directMs = planned.directMs;  // the frame planned for, not the small one measured
+    b.errorMargin = out.measurement.referenceNoise;  // what the reference can tell apart
+    out.choice = chooseOffline(
+        scene, measuredModels(models, out.measurement.measurement, MeasuredParts::ErrorsOnly), b,
+        glAvailable, log);
+    out.choice.plan.reason = "errors measured on this scene: " + out.choice.plan.reason;
     return out;
 }
 

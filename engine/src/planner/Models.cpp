@@ -513,7 +513,8 @@ const Models& defaultModels() {
 
 std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
                                           const Models& models, double budgetRatio,
-                                          double errorTolerance, LevelTolerance levelTolerance) {
+                                          double errorTolerance, LevelTolerance levelTolerance,
+                                          bool measuredErrors) {
     LUCENT_CHECK(budgetRatio > 0, "front check: the budget must be > 0 times the Direct frame");
     LUCENT_CHECK(std::isfinite(levelTolerance.absolute) && levelTolerance.absolute >= 0 &&
                      std::isfinite(levelTolerance.relative) && levelTolerance.relative >= 0,
@@ -544,15 +545,23 @@ std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
         }
         if (measured.empty())
             continue;
+        if (measuredErrors)  // the scene's own errors, as measuredModels(…, ErrorsOnly) gives
+            for (size_t k = 0; k < measured.size(); ++k) {
+                const double e = std::max(measured[k]->blockRelL1, 1e-6);
+                candidates[k].error = [e](const SceneFeatures&) { return e; };
+            }
         Budget budget;
         budget.directMs = 1.0;
         budget.frameMs = budgetRatio;
         budget.errorTolerance = errorTolerance;
+        if (measuredErrors)  // what the case's reference can tell apart (chooseByMeasuring)
+            for (const MeasuredRow* r : measured)
+                budget.errorMargin = std::max(budget.errorMargin, r->noiseFloor);
         const Plan p = plan(candidates, measured.front()->features, budget);
         const MeasuredRow* pick = measured[p.choice];
         FrontCheck c;
         // The level check on the case's measured differences between adjacent levels.
-        if (!levelTolerance.off()) {
+        if (!levelTolerance.off() && !measuredErrors) {
             const std::vector<std::string> levels = modelLevels(models, pick->method);
             const auto row = [&](const std::string& setting) -> const MeasuredRow* {
                 for (const MeasuredRow* r : measured)

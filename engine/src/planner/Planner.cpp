@@ -69,6 +69,8 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
                  "plan: hysteresis must be in [0, 1), got ", budget.hysteresis);
     LUCENT_CHECK(budget.errorTolerance >= 0 && budget.errorTolerance < 1,
                  "plan: the error tolerance must be in [0, 1), got ", budget.errorTolerance);
+    LUCENT_CHECK(budget.errorMargin >= 0 && std::isfinite(budget.errorMargin),
+                 "plan: the error margin must be a finite number >= 0, got ", budget.errorMargin);
     const bool errorTarget = budget.maxError > 0;
 
     Plan p;
@@ -124,7 +126,8 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
     p.chosen = p.options.front();
     bool cheaperAtEqualError = false;
     if (!errorTarget && p.chosen.fits) {
-        const double equalBelow = p.chosen.error * (1.0 + budget.errorTolerance);
+        const double equalBelow =
+            p.chosen.error * (1.0 + budget.errorTolerance) + budget.errorMargin;
         for (const Option& o : p.options)
             if (o.fits && o.error <= equalBelow && o.ms < p.chosen.ms) {
                 p.chosen = o;
@@ -171,8 +174,11 @@ Plan plan(const std::vector<Candidate>& candidates, const SceneFeatures& feature
     else if (!p.chosen.fits)
         p.reason += errorTarget ? ", no method reaches the target" : ", over budget";
     if (cheaperAtEqualError && !p.kept)
-        p.reason += format(", the cheapest within %.0f %% of the least error",
-                           100.0 * budget.errorTolerance);
+        p.reason += budget.errorMargin > 0
+                        ? format(", the cheapest within %.0f %% + %.3f of the least error",
+                                 100.0 * budget.errorTolerance, budget.errorMargin)
+                        : format(", the cheapest within %.0f %% of the least error",
+                                 100.0 * budget.errorTolerance);
     if (p.kept)
         p.reason +=
             ", kept: the best differs by less than " + format("%.0f %%", 100.0 * budget.hysteresis);

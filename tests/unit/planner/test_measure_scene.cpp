@@ -9,11 +9,15 @@
 #include <lucent/core/Error.h>
 #include <lucent/planner/LiveCosts.h>
 #include <lucent/planner/MeasureScene.h>
+#include <lucent/reference/PathTracer.h>
 #include <lucent/scene/SceneFile.h>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <limits>
 #include <string>
 
 using namespace lucent;
@@ -146,4 +150,90 @@ TEST(MeasureScene, CancelStopsBeforeTheNextRenderAndWrongSizesAreRefused) {
     MeasureOptions outOfRange;
     outOfRange.which = {live.candidates.size()};
     EXPECT_THROW(measureCandidates(scene, live, outOfRange), ValueError);
+}
+
+// Auto measuring on its own: the exact reference of the frame at the asked width (the camera's
+// aspect kept), then each candidate against it, net of the reference's noise (the
+// evaluation's number). Deterministic: the same reference rendered apart gives the same errors.
+TEST(MeasureScene, OwnReferenceIsTheExactImageOfTheFrameAtTheAskedWidth) {
+    const Scene scene = smallScene();  // 48 × 32
+    const Models live = liveModels(defaultModels(), defaultLiveCosts());
+    OwnReferenceOptions opt;
+    opt.width = 24;
+    opt.referenceSpp = 16;
+    opt.which = {cheapestLive(live)};
+    opt.render.backend = methods::Backend::Gl;
+    const OwnReferenceMeasurement m = measureWithOwnReference(scene, live, opt);
+    EXPECT_EQ(m.width, 24);
+    EXPECT_EQ(m.height, 16);
+    EXPECT_EQ(m.referenceSpp, 16);
+    EXPECT_GT(m.referenceNoise, 0.0);
+    ASSERT_EQ(m.measurement.candidates.size(), 1u);
+    const CandidateMeasurement& c = m.measurement.candidates[0];
+    ASSERT_TRUE(c.ok()) << c.failed;
+    ASSERT_EQ(c.radiance.width(), 24);
+
+    Scene small = scene;
+    small.camera.width = 24;
+    small.camera.height = 16;
+    reference::ReferenceOptions ro;
+    ro.spp = 16;
+    const reference::ReferenceImage ref = reference::renderReference(small, ro);
+    const std::vector<uint8_t> mask = bench::maskFromImage(ref.coverage);
+    const bench::ErrorReport e =
+        bench::compareImages(c.radiance, ref.mean, &ref.variance, nullptr, &mask);
+    EXPECT_DOUBLE_EQ(c.blockRelL1, e.blocks[bench::ErrorReport::LUMINANCE].relL1Net);
+    EXPECT_DOUBLE_EQ(m.referenceNoise, e.blocks[bench::ErrorReport::LUMINANCE].relL1Floor);
+
+    opt.width = 4;
+    EXPECT_THROW(measureWithOwnReference(scene, live, opt), ValueError);
+    opt.width = 24;
+    opt.referenceSpp = 2;
+    EXPECT_THROW(measureWithOwnReference(scene, live, opt), ValueError);
+}
+
+// chooseByMeasuring: the candidates within the budget measured, then the plan made with their
+// measured errors: the least measured error wins unless a cheaper one is within 10 % plus the
+// reference's noise of it. A cancelled measurement keeps the models' plan.
+TEST(MeasureScene, ChoosingByMeasuringTakesTheLeastMeasuredErrorWithinTheNoise) {
+    const Scene scene = smallScene();
+    Models three = liveModels(defaultModels(), defaultLiveCosts());
+    std::erase_if(three.candidates, [](const CandidateModel& c) {
+        return c.setting != "grid 16" || c.method == "sslpv:calibrated";
+    });
+    ASSERT_EQ(three.candidates.size(), 2u);  // paper and diffusion at grid 16
+    Budget budget;
+    budget.frameMs = std::numeric_limits<double>::infinity();
+    budget.directMs = 10.0;
+    const AutoChoice planned =
+        chooseMethod(scene, three, budget, true, nullptr, methods::Backend::Gl);
+    OwnReferenceOptions opt;
+    opt.width = 24;
+    opt.referenceSpp = 16;
+    opt.render.backend = methods::Backend::Gl;
+    const MeasuredChoice m = chooseByMeasuring(scene, three, planned, budget, true, opt, {});
+    ASSERT_EQ(m.measurement.measurement.candidates.size(), 2u);
+    double least = INFINITY;
+    for (const CandidateMeasurement& c : m.measurement.measurement.candidates) {
+        ASSERT_TRUE(c.ok()) << c.failed;
+        least = std::min(least, c.blockRelL1);
+    }
+    const CandidateModel& chosen = three.candidates[m.choice.plan.choice];
+    const auto it = std::find_if(
+        m.measurement.measurement.candidates.begin(), m.measurement.measurement.candidates.end(),
+        [&](const CandidateMeasurement& c) {
+            return c.method == chosen.method && c.setting == chosen.setting;
+        });
+    ASSERT_NE(it, m.measurement.measurement.candidates.end());
+    EXPECT_LE(it->blockRelL1, least * 1.1 + m.measurement.referenceNoise);
+    EXPECT_NEAR(m.choice.plan.chosen.error, std::max(it->blockRelL1, 1e-6), 1e-9);
+    EXPECT_EQ(m.choice.plan.reason.rfind("errors measured on this scene: ", 0), 0u)
+        << m.choice.plan.reason;
+
+    std::atomic<bool> cancel{true};
+    opt.cancel = &cancel;
+    const MeasuredChoice kept = chooseByMeasuring(scene, three, planned, budget, true, opt, {});
+    EXPECT_TRUE(kept.measurement.measurement.cancelled);
+    EXPECT_EQ(kept.choice.plan.choice, planned.plan.choice);
+    EXPECT_EQ(kept.choice.plan.reason, planned.plan.reason);
 }

@@ -360,4 +360,16 @@ TEST(PlannerModels, FrontCheckJudgesTheChoiceByMeasurement) {
     EXPECT_EQ(checkAgainstFront(worse, models, 20.0, 0.3)[0].chosen, "fast s");
     EXPECT_THROW(checkAgainstFront(rows, models, 0.0), ValueError);
     EXPECT_THROW(checkAgainstFront(rows, models, 20.0, 1.0), ValueError);
+    // Planning with the measured errors (Auto measuring on its own): on case a slow's 0.10
+    // beats fast's 0.30 whatever the models say; with a reference noise floor of 0.25 the two
+    // cannot be told apart (0.10 · 1.1 + 0.25 ≥ 0.30) and the cheaper wins.
+    models.candidates[0].error[0] = std::log(0.1);  // predicted better than slow again
+    std::vector<FrontCheck> m = checkAgainstFront(rows, models, 20.0, 0.1, {}, true);
+    EXPECT_EQ(m[0].chosen, "slow s");
+    EXPECT_TRUE(m[0].choseBest);
+    EXPECT_EQ(m[1].chosen, "fast s");
+    std::vector<MeasuredRow> noisy = rows;
+    for (MeasuredRow& r : noisy)
+        r.noiseFloor = 0.25;
+    EXPECT_EQ(checkAgainstFront(noisy, models, 20.0, 0.1, {}, true)[0].chosen, "fast s");
 }

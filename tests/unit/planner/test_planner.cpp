@@ -223,6 +223,26 @@ TEST(Planner, NoTimeLimitAndCostsAsRatiosWithoutADirectFrame) {
     EXPECT_THROW(plan(cands, frontLit(), budget(std::nan(""))), ValueError);
 }
 
+TEST(Planner, MeasuredErrorsWithinTheReferenceNoiseGoToTheCheaper) {
+    // Errors measured against a reference with noise floor 0.02 (Budget::errorMargin): 0.060
+    // and 0.075 cannot be told apart (0.060 · 1.1 + 0.02 = 0.086), so the cheaper wins; 0.095
+    // can. Without the margin the 10 % alone keeps the least error.
+    const std::vector<Candidate> cands = {fixed("fine", 9.0, 0.060), fixed("coarse", 3.0, 0.075),
+                                          fixed("cheap", 1.0, 0.095)};
+    Budget b = budget(100.0);
+    EXPECT_EQ(cands[plan(cands, frontLit(), b).choice].method, "fine");
+    b.errorMargin = 0.02;
+    const Plan p = plan(cands, frontLit(), b);
+    EXPECT_EQ(cands[p.choice].method, "coarse");
+    EXPECT_NE(p.reason.find("the cheapest within 10 % + 0.020 of the least error"),
+              std::string::npos)
+        << p.reason;
+    b.errorMargin = -0.01;
+    EXPECT_THROW(plan(cands, frontLit(), b), ValueError);
+    b.errorMargin = std::nan("");
+    EXPECT_THROW(plan(cands, frontLit(), b), ValueError);
+}
+
 TEST(Planner, SkippedSettingsOfOneMethodAreNamedOnce) {
     std::vector<Candidate> cands = {fixed("ok", 1.0, 0.2), fixed("dirpole", 1.0, 0.1, "no GL"),
                                     fixed("dirpole", 2.0, 0.1, "no GL"),

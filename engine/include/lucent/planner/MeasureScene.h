@@ -17,6 +17,7 @@
 
 #include <lucent/core/Image.h>
 #include <lucent/methods/RenderImage.h>
+#include <lucent/planner/AutoMethod.h>
 #include <lucent/planner/Models.h>
 #include <lucent/scene/Scene.h>
 
@@ -34,8 +35,8 @@ struct CandidateMeasurement {
     std::string setting;     ///< quality level name
     double ms = 0.0;         ///< wall time of its renderImage call
     double costRatio = 0.0;  ///< ms / the Direct render's ms
-    /// 4×4-block relative L1 of luminance against the reference over the mask; < 0 when no
-    /// reference was given.
+    /// 4×4-block relative L1 of luminance against the reference over the mask (net of the
+    /// reference's noise with MeasureOptions::netOfNoise); < 0 when no reference was given.
     double blockRelL1 = -1.0;
     /// Why it was not measured ("" when it was): the registry cannot resolve it, the render
     /// threw. Its other fields are then 0 / -1.
@@ -57,6 +58,10 @@ struct MeasureOptions {
     const ImageRgb* referenceVariance = nullptr;
     /// Pixels compared (width·height bytes; null: every pixel).
     const std::vector<uint8_t>* mask = nullptr;
+    /// Record each error with the reference's noise floor removed in quadrature (the
+    /// evaluation's block_rel_l1, what the models are fitted on) instead of as read (the
+    /// Reference dock's number). Needs referenceVariance.
+    bool netOfNoise = false;
     /// Indices into models.candidates to measure (empty: all of them).
     std::vector<size_t> which;
     methods::RenderOptions render;  ///< backend, context, log
@@ -72,6 +77,41 @@ struct MeasureOptions {
 /// range; GpuError/Error from the Direct render (without it there is no unit).
 SceneMeasurement measureCandidates(const Scene& scene, const Models& models,
                                    const MeasureOptions& options = {});
+
+/// Measuring a scene without a reference at hand (Auto measuring on its own): the exact
+/// reference of the frame is rendered first, at a small size, then every candidate against it.
+struct OwnReferenceOptions {
+    /// Pixels across of the reference and the renders; the height follows the camera's aspect.
+    /// Small, as the level check's frame: the measurement ranks whole images, and the
+    /// reference's cost grows with the pixels.
+    int width = 64;
+    /// The reference's samples per pixel: at 64 px its noise floor (the block error a perfect
+    /// image reads) is 0.02–0.05 on the shipped scenes at 128, far under the differences
+    /// between methods it has to tell apart (docs/planner.md, "Auto measuring on its own").
+    int referenceSpp = 128;
+    int referenceThreads = 0;       ///< the path tracer's worker threads (0: all)
+    std::vector<size_t> which;      ///< as MeasureOptions::which
+    methods::RenderOptions render;  ///< as MeasureOptions::render
+    const std::atomic<bool>* cancel = nullptr;
+};
+
+struct OwnReferenceMeasurement {
+    SceneMeasurement measurement;  ///< the candidates against the reference below
+    int width = 0, height = 0;     ///< the frame measured
+    double referenceSeconds = 0.0;
+    int referenceSpp = 0;
+    /// The reference's own block error (bench::ErrorReport noise floor of luminance blocks):
+    /// measured errors closer than this cannot be told apart.
+    double referenceNoise = 0.0;
+};
+
+/// Renders the exact reference of scene.camera's frame at options.width (reference::
+/// renderReference, dielectric boundary, seed 1), then measureCandidates against it over the
+/// pixels it covers.
+/// @throw ValueError for a width < 8 or spp < 3; what renderReference and measureCandidates
+/// throw.
+OwnReferenceMeasurement measureWithOwnReference(const Scene& scene, const Models& models,
+                                                const OwnReferenceOptions& options = {});
 
 /// Which predictions measuredModels replaces.
 enum class MeasuredParts {
@@ -89,5 +129,20 @@ enum class MeasuredParts {
 /// keep their models.
 Models measuredModels(const Models& models, const SceneMeasurement& measurement,
                       MeasuredParts parts = MeasuredParts::CostsAndErrors);
+
+/// Auto measuring on its own (`lucent-cli plan --measure`, `render --method auto --measure`):
+/// the candidates `planned` found usable and within its budget (every usable one when none
+/// fits) measured against an exact reference of the frame (measureWithOwnReference), then the
+/// plan made again with their measured errors in place of the predictions. The costs stay the
+/// models' (MeasuredParts::ErrorsOnly: the measured renders are of the small frame), scaled by
+/// the Direct frame `planned` was made with. A cancelled measurement keeps `planned`.
+struct MeasuredChoice {
+    AutoChoice choice;
+    OwnReferenceMeasurement measurement;
+};
+/// @throw what measureWithOwnReference and chooseOffline throw.
+MeasuredChoice chooseByMeasuring(const Scene& scene, const Models& models,
+                                 const AutoChoice& planned, const Budget& budget, bool glAvailable,
+                                 const OwnReferenceOptions& options, const methods::Log& log);
 
 }  // namespace lucent::planner

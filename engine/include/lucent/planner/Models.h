@@ -135,12 +135,16 @@ struct FrontCheck {
 /// replays the level check (LevelCheck.h) on the rows' blockRelL1ToFiner unless
 /// `levelTolerance` is off, then judges the choice by the measured rows. Rows of candidates
 /// without a model are left out. `errorTolerance`: the planner's Budget::errorTolerance.
+/// `measuredErrors`: plan with each case's measured errors in place of the predicted ones (the
+/// costs stay predicted), as Auto does when it measures the scene on its own
+/// (chooseByMeasuring, MeasureScene.h); the level check is then not replayed.
 /// @throw ValueError if budgetRatio ≤ 0, the error tolerance is outside [0, 1) or a level
 /// tolerance is negative.
 std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
                                           const Models& models, double budgetRatio,
                                           double errorTolerance = Budget{}.errorTolerance,
-                                          LevelTolerance levelTolerance = {0.0, 0.0});
+                                          LevelTolerance levelTolerance = {0.0, 0.0},
+                                          bool measuredErrors = false);
 
 /// The planner's candidates for `models` (costRatio and error bound to the models; `unusable`
 /// left empty: the caller knows what the scene and backend allow).

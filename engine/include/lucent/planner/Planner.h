@@ -60,6 +60,10 @@ struct Budget {
     /// cost twice the time for an error the measurement cannot tell apart (the suite's
     /// 8/32/128 spp rows).
     double errorTolerance = 0.1;
+    /// …plus this absolute block error (≥ 0). Errors measured against a Monte Carlo reference
+    /// closer than its noise floor cannot be told apart: Auto measuring on its own sets the
+    /// reference's floor here (chooseByMeasuring, MeasureScene.h). 0 for predictions.
+    double errorMargin = 0.0;
     /// When nothing fits frameMs (a slow machine, a large viewport), the budget becomes the
     /// fastest candidate's time × (1 + this) and the least error within that is chosen: the
     /// frame is late either way, and the fastest alone can be several times as wrong as a
