@@ -122,6 +122,28 @@ void addLevelCheckOptions(CLI::App& app, planner::LevelTolerance& tolerance,
         ->group(group);
 }
 
+void addMeasureOptions(CLI::App& app, bool& measure, planner::OwnReferenceOptions& options,
+                       const std::string& group) {
+    CLI::Option* flag =
+        app.add_flag("--measure", measure,
+                     "after the models' plan, render the exact reference of the frame at a small "
+                     "size and every candidate within the budget against it, and plan again with "
+                     "the measured errors (the level check is then not needed)")
+            ->group(group);
+    app.add_option("--measure-width", options.width,
+                   "--measure: pixels across of the reference and the renders (default 64)")
+        ->type_name("W")
+        ->check(CLI::Range(8, 1024))
+        ->needs(flag)
+        ->group(group);
+    app.add_option("--measure-spp", options.referenceSpp,
+                   "--measure: the reference's samples per pixel (default 128)")
+        ->type_name("N")
+        ->check(CLI::Range(3, 65536))
+        ->needs(flag)
+        ->group(group);
+}
+
 CLI::Validator finiteRange(double lo, double hi) {
     const std::string range = "[" + numberText(lo) + ", " + numberText(hi) + "]";
     return CLI::Validator(

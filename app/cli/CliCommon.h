@@ -6,6 +6,7 @@
 /// in the order `lucent-cli --help` lists the commands). CLI-only: CLI11 stays out of the engine.
 
 #include <lucent/core/Types.h>
+#include <lucent/planner/MeasureScene.h>
 #include <lucent/planner/Planner.h>
 
 #include <CLI/CLI.hpp>
@@ -49,6 +50,11 @@ CLI::Validator finiteRange(double lo, double hi);
 /// and --no-level-check into `tolerance` (off() after --no-level-check).
 void addLevelCheckOptions(CLI::App& app, planner::LevelTolerance& tolerance,
                           const std::string& group);
+
+/// Auto measuring on its own (planner::chooseByMeasuring): --measure into `measure`, and
+/// --measure-width W, --measure-spp N into `options`.
+void addMeasureOptions(CLI::App& app, bool& measure, planner::OwnReferenceOptions& options,
+                       const std::string& group);
 
 /// An option that takes one of `choices`' names and stores the matching value in `target`.
 /// (CLI::IsMember's error lists the names; CLI::CheckedTransformer's would list the enum's

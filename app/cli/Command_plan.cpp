@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,14 +45,39 @@ void printFeatures(const planner::SceneFeatures& f) {
                 f.backLitFraction, f.pixelsCovered, f.imagePixels);
 }
 
+/// --measure: the frame measured, the reference, and each candidate's measured error beside
+/// its prediction.
+void printMeasurement(const planner::OwnReferenceMeasurement& m, const planner::Models& models,
+                      const planner::AutoChoice& c) {
+    std::printf(
+        "\nmeasured on a %dx%d frame against the exact reference (%d spp, %.1f s; its "
+        "noise floor %.3f):\n",
+        m.width, m.height, m.referenceSpp, m.referenceSeconds, m.referenceNoise);
+    std::printf("%-22s %-20s %14s %12s\n", "candidate", "setting", "measured error", "render ms");
+    for (const planner::CandidateMeasurement& cm : m.measurement.candidates) {
+        if (!cm.ok()) {
+            std::printf("%-22s %-20s %14s  %s\n", cm.method.c_str(), cm.setting.c_str(), "failed",
+                        cm.failed.c_str());
+            continue;
+        }
+        const planner::CandidateModel& chosen = models.candidates[c.plan.choice];
+        const bool isChosen = chosen.method == cm.method && chosen.setting == cm.setting;
+        std::printf("%-22s %-20s %14.3f %12.1f%s\n", cm.method.c_str(), cm.setting.c_str(),
+                    cm.blockRelL1, cm.ms, isChosen ? "  <- chosen" : "");
+    }
+    if (m.measurement.cancelled)
+        std::printf("(stopped before every candidate was measured)\n");
+}
+
 struct PlanOptions {
     std::string scene, models, output, source, cost = "wall";
     std::vector<std::string> fit, check;
     float budgetMs = 1000.f, maxError = 0.f, directMs = 1.f, ridge = 0.05f, budgetRatio = 20.f,
           errorTolerance = float(planner::Budget{}.errorTolerance);
     planner::LevelTolerance levelTolerance;
+    planner::OwnReferenceOptions measureOptions;
     int width = 0, height = 0;
-    bool cpu = false;
+    bool cpu = false, measure = false;
     const CLI::App* app = nullptr;
     bool has(const std::string& option) const { return app->count(option) > 0; }
     planner::CostMeasure costMeasure() const {
@@ -100,17 +126,18 @@ void runCheck(const PlanOptions& args) {
         rows.insert(rows.end(), r.begin(), r.end());
     }
     const std::vector<planner::FrontCheck> checks = planner::checkAgainstFront(
-        rows, models, budgetRatio, args.errorTolerance, args.levelTolerance);
+        rows, models, budgetRatio, args.errorTolerance, args.levelTolerance, args.measure);
     if (checks.empty())
         LUCENT_THROW(ValueError, "plan --check: no case has a measured candidate with a model");
     std::printf(
         "budget: %g x the Direct frame; times are measured cost ratios, errors measured\n"
-        "block rel. L1; level check %s\n\n",
+        "block rel. L1; %s\n\n",
         budgetRatio,
-        args.levelTolerance.off()
-            ? "off"
-            : ("max(" + std::to_string(args.levelTolerance.absolute).substr(0, 5) + ", " +
-               std::to_string(args.levelTolerance.relative).substr(0, 4) +
+        args.measure ? "Auto plans with the measured errors (--measure: no level check)"
+        : args.levelTolerance.off()
+            ? "level check off"
+            : ("level check max(" + std::to_string(args.levelTolerance.absolute).substr(0, 5) +
+               ", " + std::to_string(args.levelTolerance.relative).substr(0, 4) +
                " x the predicted error); \"<\" marks a choice it moved to a cheaper level")
                   .c_str());
     std::printf("%-28s %-36s %8s %7s  %-36s %6s  %s\n", "case", "Auto's choice", "cost", "error",
@@ -156,7 +183,16 @@ void runPlan(const PlanOptions& args) {
     };
     planner::AutoChoice c = planner::chooseOffline(scene, models, budget, gl, log);
     const size_t planned = c.plan.choice;
-    if (!args.levelTolerance.off()) {
+    std::optional<planner::OwnReferenceMeasurement> measured;
+    if (args.measure) {
+        // Measured errors tell the levels apart: no level check after them.
+        planner::OwnReferenceOptions mo = args.measureOptions;
+        mo.render.log = log;
+        planner::MeasuredChoice m =
+            planner::chooseByMeasuring(scene, models, c, budget, gl, mo, log);
+        c = std::move(m.choice);
+        measured = std::move(m.measurement);
+    } else if (!args.levelTolerance.off()) {
         planner::LevelCheckOptions lo;
         lo.tolerance = args.levelTolerance;
         lo.render.log = log;
@@ -179,9 +215,12 @@ void runPlan(const PlanOptions& args) {
         std::printf("%-22s %-20s %12.1f %12.3f %5s%s\n", m.method.c_str(), m.setting.c_str(), o.ms,
                     o.error, o.fits ? "yes" : "no",
                     o.index == c.plan.choice ? "  <- chosen"
-                    : o.index == planned     ? "  <- planned (level check: see the plan)"
-                                             : "");
+                    : o.index != planned     ? ""
+                    : measured               ? "  <- the models' pick"
+                                             : "  <- planned (level check: see the plan)");
     }
+    if (measured)
+        printMeasurement(*measured, models, c);
     std::printf("\nplan: %s\n", c.plan.reason.c_str());
     std::printf("render: lucent-cli render %s --method %s%s", args.scene.c_str(), c.method.c_str(),
                 c.backend == methods::Backend::Auto
@@ -202,14 +241,17 @@ void addPlanCommand(CLI::App& cli, const CommandContext&) {
         "                       [--models models.json] [--width W] [--height H] [--cpu]\n"
         "       lucent-cli plan --fit suite.csv [--fit more.csv ...] -o models.json [--ridge R]\n"
         "       lucent-cli plan --check suite.csv [--models F] [--budget-ratio R]\n"
-        "  SCENE and --check: [--level-tolerance T] [--level-relative K] [--no-level-check]\n",
+        "  SCENE and --check: [--level-tolerance T] [--level-relative K] [--no-level-check]\n"
+        "  SCENE: [--measure [--measure-width W] [--measure-spp N]]; --check: [--measure]\n",
         "Prints the scene's features and class, every candidate (a method at one quality level)\n"
         "with its predicted time and 4x4-block error against the exact reference, the choice and\n"
         "its one-line reason, and the `lucent-cli render` command that renders it\n"
         "(`render --method auto` does both). The level check then renders the chosen level and\n"
         "the method's cheaper ones on a 64-pixel-wide frame and takes the cheapest whose image\n"
         "differs from the chosen one by at most max(T, K x its predicted error) (block rel. L1).\n"
-        "docs/planner.md explains the models and the check.\n");
+        "With --measure it instead renders the exact reference of the frame at W pixels across\n"
+        "and every candidate within the budget against it, and plans with the measured errors.\n"
+        "docs/planner.md explains the models, the check and the measurement.\n");
     auto args = std::make_shared<PlanOptions>();
     args->app = sub;
     CLI::Option* scene =
@@ -280,6 +322,8 @@ void addPlanCommand(CLI::App& cli, const CommandContext&) {
         ->needs(check);
     // --check replays the level check on the CSV's block_rel_l1_to_finer column.
     addLevelCheckOptions(*sub, args->levelTolerance, "Level check (SCENE and --check)");
+    // --check --measure replays Auto planning with each case's measured errors.
+    addMeasureOptions(*sub, args->measure, args->measureOptions, "Measuring (SCENE and --check)");
     sub->callback([args] { runPlan(*args); });
 }
 

@@ -36,6 +36,8 @@ struct RenderOptions {
     int width = 0, height = 0;
     float exposure = 1.f, budgetMs = 1000.f, maxError = 0.f;
     planner::LevelTolerance levelTolerance;
+    planner::OwnReferenceOptions measureOptions;
+    bool measure = false;
     ToneMap::Curve curve = ToneMap::Curve::Aces;
     std::string models;
     std::vector<std::string> assignments;             ///< --param NAME=VALUE
@@ -52,8 +54,9 @@ void runRender(const RenderOptions& args) {
     const bool autoMethod = requested == "auto";
     if (!autoMethod) {
         const methods::MethodInfo& info = methods::find(requested);  // lists the valid names
-        for (const char* option : {"--budget-ms", "--max-error", "--models", "--level-tolerance",
-                                   "--level-relative", "--no-level-check"})
+        for (const char* option :
+             {"--budget-ms", "--max-error", "--models", "--level-tolerance", "--level-relative",
+              "--no-level-check", "--measure", "--measure-width", "--measure-spp"})
             if (args.has(option))
                 LUCENT_THROW(ValueError, option, " applies to --method auto only");
         for (const auto& [name, value] : args.methodParams)
@@ -103,7 +106,13 @@ void runRender(const RenderOptions& args) {
         const planner::Models models =
             args.has("--models") ? planner::loadModels(args.models) : planner::defaultModels();
         planner::AutoChoice c = planner::chooseOffline(scene, models, budget, gl, options.log);
-        if (!args.levelTolerance.off()) {
+        if (args.measure) {  // measured errors tell the levels apart: no level check after
+            planner::OwnReferenceOptions mo = args.measureOptions;
+            mo.render.log = options.log;
+            mo.render.subsurfaceOnly = options.subsurfaceOnly;
+            mo.render.backend = options.backend;
+            c = planner::chooseByMeasuring(scene, models, c, budget, gl, mo, options.log).choice;
+        } else if (!args.levelTolerance.off()) {
             planner::LevelCheckOptions lo;
             lo.tolerance = args.levelTolerance;
             lo.render.log = options.log;
@@ -154,7 +163,8 @@ void addRenderCommand(CLI::App& cli, const CommandContext&) {
         "                         [--exposure E] [--tonemap clamp|reinhard|aces]\n"
         "       lucent-cli render SCENE.json --method auto [--budget-ms B | --max-error E]\n"
         "                         [--models F] [--level-tolerance T] [--level-relative K]\n"
-        "                         [--no-level-check] -o OUT ...\n",
+        "                         [--no-level-check | --measure [--measure-width W]\n"
+        "                         [--measure-spp N]] -o OUT ...\n",
         "Renders the scene with a registered method (`lucent-cli methods` lists them and their\n"
         "parameters). GL methods run through an offscreen OpenGL 4.5 context (EGL, no display\n"
         "needed); without one, a method with a CPU renderer falls back to it (said on stderr).\n"
@@ -219,6 +229,7 @@ void addRenderCommand(CLI::App& cli, const CommandContext&) {
         ->check(existingFile())
         ->group(autoGroup);
     addLevelCheckOptions(*sub, args->levelTolerance, autoGroup);
+    addMeasureOptions(*sub, args->measure, args->measureOptions, autoGroup);
     // Every method's parameters as --NAME VALUE; runRender() rejects those the chosen method
     // lacks. (The method's own ranges are checked by the engine, which knows them.)
     std::map<std::string, std::string> users;

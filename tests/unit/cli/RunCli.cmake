@@ -401,6 +401,23 @@ elseif(CASE STREQUAL "auto")
     expect_one_line_error(level_both "excludes")
     run(level_direct render ${SCENE} --no-level-check -o ${OUT}/x.png)
     expect_one_line_error(level_direct "--no-level-check applies to --method auto only")
+    # Auto measuring on its own: the exact reference of the frame at 16 px, the candidates within
+    # the budget (3 x a 10 ms Direct frame: SSLPV's cheap grids) against it, the plan made with
+    # the measured errors; no level check after it.
+    run(measure plan ${SCENE} --direct-ms 10 --budget-ms 30 --width 32 --height 32 --measure
+        --measure-width 16 --measure-spp 8)
+    expect_ok(measure)
+    expect_contains(measure "${measure_OUT}" "measured on a 16x16 frame against the exact reference"
+        "measured error" "plan: errors measured on this scene: " "<- chosen")
+    if(measure_OUT MATCHES "level check")
+        message(FATAL_ERROR "plan --measure also ran the level check:\n${measure_OUT}")
+    endif()
+    run(measure_spp plan ${SCENE} --measure --measure-spp 2)
+    expect_one_line_error(measure_spp "--measure-spp")
+    run(measure_needs plan ${SCENE} --measure-width 32)
+    expect_one_line_error(measure_needs "--measure")
+    run(measure_direct render ${SCENE} --measure -o ${OUT}/x.png)
+    expect_one_line_error(measure_direct "--measure applies to --method auto only")
     # A tiny budget: nothing fits, the cheapest is taken and the reason says so.
     run(tight plan ${SCENE} --direct-ms 10 --budget-ms 0.001 --width 32 --height 32)
     expect_ok(tight)
@@ -435,6 +452,9 @@ elseif(CASE STREQUAL "auto")
     run(check plan --check ${OUT}/suite.csv --models ${OUT}/models.json)
     expect_ok(check)
     expect_contains(check "${check_OUT}" "within 1.2x of the front at equal error: 2 of 2 cases")
+    run(check_measured plan --check ${OUT}/suite.csv --models ${OUT}/models.json --measure)
+    expect_ok(check_measured)
+    expect_contains(check_measured "${check_measured_OUT}" "Auto plans with the measured errors")
 else()
     message(FATAL_ERROR "unknown CASE '${CASE}'")
 endif()
