@@ -535,6 +535,23 @@ void MainWindow::createActions() {
         if (m_useSettings)
             QSettings().setValue(QStringLiteral("auto/levelCheck"), on);
     });
+    a = preferences->addAction(tr("Auto: &Measure the Scene"));
+    a->setObjectName(QStringLiteral("actionAutoMeasure"));
+    a->setCheckable(true);
+    // Off without settings: scripted runs (benchmarks, screenshots) and tests time and show
+    // the models' plan without a path tracer running beside them.
+    a->setChecked(m_useSettings &&
+                  QSettings().value(QStringLiteral("auto/measure"), true).toBool());
+    a->setToolTip(
+        tr("Once you pause, render the exact image of the view at 64 pixels across in the "
+           "background and each method that fits the frame budget against it, and let Auto "
+           "choose by the measured errors instead of the predicted ones (docs/planner.md)."));
+    m_viewport->autoMeasurer().setEnabled(a->isChecked());
+    connect(a, &QAction::toggled, this, [this](bool on) {
+        m_viewport->autoMeasurer().setEnabled(on);
+        if (m_useSettings)
+            QSettings().setValue(QStringLiteral("auto/measure"), on);
+    });
 
     // Brush shortcuts as in painting tools: [ and ] resize, B paints, I picks.
     QMenu* brush = menuBar()->addMenu(tr("&Brush"));

@@ -229,8 +229,11 @@ struct PreviewRenderer::Impl {
         std::vector<float> lights;    ///< lightsKey of the frame planned for
         float eta = 0.f;
         Timer sincePlan;
-        /// setMeasuredModels: plan with these until the scene changes (null: liveModels()).
+        /// setMeasuredModels: plan with these while `measuredHold` allows (null: liveModels()),
+        /// ties within `measuredMargin` (the reference's noise).
         std::shared_ptr<const planner::Models> measured;
+        double measuredMargin = 0.0;
+        MeasuredHold measuredHold = MeasuredHold::ThisView;
         const LiveCostTable* liveCosts = nullptr;  ///< the table the last plan used
         bool planMeasured = false;                 ///< the current choice was made with `measured`
         /// The planner's pick before a level decision applied (`choice` after it); the next
@@ -373,11 +376,16 @@ void PreviewRenderer::useLiveCosts(const planner::LiveCostsInUse& inUse) {
     liveCostTables().add(inUse);
 }
 
-void PreviewRenderer::setMeasuredModels(std::shared_ptr<const planner::Models> models) {
+void PreviewRenderer::setMeasuredModels(std::shared_ptr<const planner::Models> models,
+                                        double errorMargin, MeasuredHold hold) {
     LUCENT_CHECK(!models || models->candidates.size() == liveModels().candidates.size(),
                  "measured models must have the live candidates (", liveModels().candidates.size(),
                  "), got ", models ? models->candidates.size() : 0);
+    LUCENT_CHECK(errorMargin >= 0 && std::isfinite(errorMargin),
+                 "the measured errors' margin must be finite and >= 0, got ", errorMargin);
     m->autoPlan.measured = std::move(models);
+    m->autoPlan.measuredMargin = errorMargin;
+    m->autoPlan.measuredHold = hold;
     m->autoPlan.planMeasured = false;
     // Plan again at the next frame, from scratch: the measurements replace the predictions,
     // and hysteresis would keep a choice made on predictions.
@@ -386,6 +394,14 @@ void PreviewRenderer::setMeasuredModels(std::shared_ptr<const planner::Models> m
 
 bool PreviewRenderer::usesMeasuredModels() const {
     return m->autoPlan.valid && m->autoPlan.planMeasured;
+}
+
+bool PreviewRenderer::hasMeasuredModels() const {
+    return m->autoPlan.measured != nullptr;
+}
+
+PreviewRenderer::MeasuredHold PreviewRenderer::measuredHold() const {
+    return m->autoPlan.measuredHold;
 }
 
 const planner::AutoChoice* PreviewRenderer::autoChoice() const {
@@ -523,10 +539,13 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
         a.valid = false;
         a.measured.reset();  // measured errors sit in a copy of the old live models
     }
-    if (f.sceneReplaced || !f.dirtyBricks.empty() || lightKey != a.lights ||
-        f.scene->eta != a.eta || !sameCamera(f.camera, a.camera)) {
+    const bool otherScene = f.sceneReplaced || lightKey != a.lights || f.scene->eta != a.eta;
+    if (otherScene || !f.dirtyBricks.empty() || !sameCamera(f.camera, a.camera)) {
         a.stale = true;
-        a.measured.reset();  // measured on a scene and view that are no longer shown
+        // Measured on a scene (or view) that is no longer shown. Auto's own measurement holds
+        // through paint and orbits (it measures again once the artist pauses).
+        if (otherScene || a.measuredHold == MeasuredHold::ThisView)
+            a.measured.reset();
     }
     const bool sized =
         a.directMs > 0.0 && a.directWidth == f.camera.width && a.directHeight == f.camera.height;
@@ -557,6 +576,8 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
     scene.lights = lights;
     planner::Budget budget;  // the planner's live frame budget (50 ms) and hysteresis
     budget.directMs = a.directMs;
+    if (a.measured)  // errors closer than the reference's noise cannot be told apart
+        budget.errorMargin = a.measuredMargin;
     // A headless calibration's ratios leave out the app's own share of a frame (event loop,
     // swap): add what this viewport measures (docs/planner.md, "Calibrating on this machine").
     if (!table.inUse.costs.hostIncluded)
@@ -648,8 +669,11 @@ void PreviewRenderer::Impl::renderFrame(PreviewFrame& f) {
         if (const planner::AutoChoice* choice = r.planAuto(f, lights, key)) {
             name = choice->method;
             params = choice->params;
-            r.stats.autoReason = (r.autoPlan.planMeasured ? "errors measured on this view: " : "") +
-                                 choice->plan.reason;
+            const char* measured = !r.autoPlan.planMeasured ? ""
+                                   : r.autoPlan.measuredHold == MeasuredHold::ThisScene
+                                       ? "errors measured on this scene: "
+                                       : "errors measured on this view: ";
+            r.stats.autoReason = measured + choice->plan.reason;
             r.stats.liveCosts = r.autoPlan.liveCosts ? r.autoPlan.liveCosts->label : "";
             r.stats.autoChoice = choice->method +
                                  (choice->variant.empty() ? "" : ":" + choice->variant) + " " +

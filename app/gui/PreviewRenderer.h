@@ -195,13 +195,29 @@ public:
     /// scratch (hysteresis does not keep a choice made with other costs, and measured errors
     /// made against the old models are dropped). Call on the UI thread.
     static void useLiveCosts(const planner::LiveCostsInUse& inUse);
+    /// How long measured errors hold (setMeasuredModels).
+    enum class MeasuredHold {
+        /// Until anything the plan depends on changes (scene, paint, lights, η, view): the
+        /// Reference dock's measurement of its view ("errors measured on this view").
+        ThisView,
+        /// Through paint and view changes, until the scene, its lights or η change: Auto's own
+        /// measurement (AutoMeasurer), which measures again once the artist pauses, so the
+        /// preview does not fall back to the models' pick (another method) while painting
+        /// ("errors measured on this scene").
+        ThisScene,
+    };
     /// Auto plans with `models` instead of liveModels() from the next frame on (the same
     /// candidates in the same order: liveModels() with this scene's measured errors,
-    /// planner::measuredModels with MeasuredParts::ErrorsOnly), until anything the plan
-    /// depends on changes (scene, paint, lights, η, view). Null: the shipped models again.
-    void setMeasuredModels(std::shared_ptr<const planner::Models> models);
+    /// planner::measuredModels with MeasuredParts::ErrorsOnly), as long as `hold` says.
+    /// `errorMargin`: the reference's noise floor (planner::Budget::errorMargin: errors closer
+    /// than it count as equal). Null: the shipped models again.
+    void setMeasuredModels(std::shared_ptr<const planner::Models> models, double errorMargin = 0.0,
+                           MeasuredHold hold = MeasuredHold::ThisView);
     /// Whether the last plan was made with measured models.
     [[nodiscard]] bool usesMeasuredModels() const;
+    /// Whether measured models are set (the next plan uses them), and how long they hold.
+    [[nodiscard]] bool hasMeasuredModels() const;
+    [[nodiscard]] MeasuredHold measuredHold() const;
     [[nodiscard]] const PreviewStats& stats() const;
     /// The last frame's linear radiance at render resolution (camera width × height),
     /// W/(mm²·sr), before tone mapping and overlays, top row first (for EXR export). Reads the

@@ -212,6 +212,7 @@ Viewport::Viewport(Document* doc, QWidget* parent) : QWidget(parent), m_doc(doc)
     });
     m_clock.start();
     m_levelChecker = new AutoLevelChecker(this, m_doc);
+    m_autoMeasurer = new AutoMeasurer(this, m_doc);
     onSceneReplaced();
 }
 
@@ -1101,6 +1102,7 @@ void Viewport::renderFrame(unsigned framebuffer, int fullW, int fullH) {
     }
     m_sinceFrameEnd.start();
     m_levelChecker->afterFrame();
+    m_autoMeasurer->afterFrame();
     Q_EMIT frameRendered();
 }
 

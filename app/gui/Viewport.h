@@ -27,6 +27,7 @@
 ///     QImage frame = vp->grabFramebuffer();   // renders a frame offscreen and reads it back
 
 #include "AutoLevelCheck.h"
+#include "AutoMeasure.h"
 #include "BrushTool.h"
 #include "PreviewRenderer.h"
 
@@ -106,6 +107,8 @@ public:
     PreviewRenderer& previewRenderer() { return m_preview; }
     /// Auto's level check, run on a worker after frames (AutoLevelCheck.h).
     AutoLevelChecker& levelChecker() { return *m_levelChecker; }
+    /// Auto measuring the scene on its own, on a worker once the artist pauses (AutoMeasure.h).
+    AutoMeasurer& autoMeasurer() { return *m_autoMeasurer; }
     /// While paused, a progressive method does not refine in idle frames (a frame is drawn only
     /// when something asks for one) and Auto's level check starts no render: the live-cost
     /// calibration then has the machine to itself.
@@ -277,6 +280,7 @@ private:
     bool m_glReady = false;
     PreviewRenderer m_preview;
     AutoLevelChecker* m_levelChecker = nullptr;  ///< a child QObject
+    AutoMeasurer* m_autoMeasurer = nullptr;      ///< a child QObject
     TriangleMesh m_posed;
     bool m_meshDirty = true, m_sceneReplaced = true;
 };

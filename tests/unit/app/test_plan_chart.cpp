@@ -37,6 +37,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 namespace lucent::app {
@@ -299,6 +300,68 @@ TEST(AppAutoLevelCheck, ThePickRendersAtTheLevelTheCheckKeepsAndPaintingRechecks
     EXPECT_FALSE(checker.running());
     EXPECT_EQ(checker.checksDone(), off);
     EXPECT_EQ(preview.autoChoice()->setting, preview.autoPlannedChoice()->setting);
+}
+
+// Auto measuring the scene on its own (AutoMeasure.h): off without settings (tests, scripted
+// runs); switched on, it measures once the scene has been shown quietly, and Auto then plans
+// with the measured errors: on the default scene it leaves the models' pick for the candidate
+// the measurement puts first. The measured errors hold while the artist paints (the pick stays
+// a measured one), a pause measures again, and switching it off gives Auto its models back.
+TEST(AppAutoMeasure, AutoPlansWithTheErrorsItMeasuredAndKeepsThemWhilePainting) {
+    auto w = windowOnChart();
+    Viewport* vp = w->viewport();
+    PreviewRenderer& preview = vp->previewRenderer();
+    AutoMeasurer& measurer = vp->autoMeasurer();
+    auto* toggle = w->findChild<QAction*>(QStringLiteral("actionAutoMeasure"));
+    ASSERT_NE(toggle, nullptr);
+    EXPECT_FALSE(toggle->isChecked()) << "off without settings";
+    EXPECT_FALSE(measurer.isEnabled());
+    preview.pinAutoDirectMs(planner::defaultLiveCosts().directMs);
+    ASSERT_TRUE(renderUntil(vp, [&] { return preview.autoPlannedChoice() != nullptr; }));
+    const planner::AutoChoice modelsPick = *preview.autoPlannedChoice();
+    EXPECT_FALSE(preview.usesMeasuredModels());
+
+    measurer.setQuietMs(200);
+    toggle->trigger();
+    EXPECT_TRUE(measurer.isEnabled());
+    ASSERT_TRUE(QTest::qWaitFor([&] { return measurer.measurementsDone() >= 1; }, 240000));
+    EXPECT_NE(measurer.lastNote().indexOf(QStringLiteral("against the exact reference (64×")), -1)
+        << measurer.lastNote().toStdString();
+    ASSERT_TRUE(renderUntil(vp, [&] { return preview.usesMeasuredModels(); }));
+    EXPECT_EQ(vp->stats().preview.autoReason.rfind("errors measured on this scene: ", 0), 0u)
+        << vp->stats().preview.autoReason;
+    // The measured plan's pick: within the planner's tie rule (10 % plus the reference's noise)
+    // of the least measured error among the candidates that fit.
+    const planner::Plan& measuredPlan = preview.autoPlannedChoice()->plan;
+    double least = INFINITY;
+    for (const planner::Option& o : measuredPlan.options)
+        if (o.fits)
+            least = std::min(least, o.error);
+    EXPECT_GT(measurer.lastReferenceNoise(), 0.0);
+    EXPECT_LE(measuredPlan.chosen.error, least * 1.1 + measurer.lastReferenceNoise() + 1e-12);
+    std::printf("models' pick: %s; measured plan: %s\n", modelsPick.plan.reason.c_str(),
+                measuredPlan.reason.c_str());
+
+    // Painting keeps the measured errors (the preview does not fall back to the models' pick
+    // mid-stroke), and the pause after it measures again.
+    const int before = measurer.measurementsDone();
+    const QPointF c(vp->width() / 2.0, vp->height() / 2.0);
+    ASSERT_EQ(vp->strokeBetween(c - QPointF(20, 0), c + QPointF(20, 0)), 1);
+    ASSERT_TRUE(renderUntil(vp, [&] { return vp->stats().frames > 0; }));
+    EXPECT_TRUE(preview.usesMeasuredModels());
+    ASSERT_TRUE(QTest::qWaitFor([&] { return measurer.measurementsDone() > before; }, 240000));
+    ASSERT_TRUE(renderUntil(vp, [&] { return preview.usesMeasuredModels(); }));
+
+    // Off: the models again.
+    toggle->trigger();
+    EXPECT_FALSE(measurer.isEnabled());
+    ASSERT_TRUE(renderUntil(vp, [&] { return !preview.usesMeasuredModels(); }));
+    EXPECT_FALSE(preview.hasMeasuredModels());
+    const int off = measurer.measurementsDone();
+    w->document()->setEta(w->document()->scene().eta + 0.01f);
+    QTest::qWait(500);
+    EXPECT_FALSE(measurer.running());
+    EXPECT_EQ(measurer.measurementsDone(), off);
 }
 
 }  // namespace lucent::app
