@@ -82,9 +82,7 @@ void AutoLevelChecker::startIfDue(bool quiet) {
 void AutoLevelChecker::start() {
     const planner::AutoChoice choice = *m_viewport->previewRenderer().autoPlannedChoice();
     // A frozen copy of what the viewport shows: painting may go on while the worker renders.
-    Scene scene = m_doc->scene();
-    scene.objects[0].material = std::make_shared<MaterialVolume>(*m_doc->material());
-    m_viewport->applyViewTo(scene.camera, std::max(m_viewport->width(), 16));
+    const Scene scene = m_viewport->frozenSceneOfView(std::max(m_viewport->width(), 16));
     m_editedSinceCheck = false;
     m_cancel = std::make_shared<std::atomic<bool>>(false);
     auto cancel = m_cancel;

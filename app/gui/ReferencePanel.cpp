@@ -285,9 +285,7 @@ void ReferencePanel::showPage(int page) {
 }
 
 Scene ReferencePanel::frozenScene() const {
-    Scene scene = sceneAtView();
-    scene.objects[0].material = std::make_shared<MaterialVolume>(*m_doc->material());
-    return scene;
+    return m_viewport->frozenSceneOfView(m_width->value());
 }
 
 Scene ReferencePanel::sceneAtView() const {

@@ -227,6 +227,13 @@ void Viewport::applyViewTo(Camera& camera, int width) const {
     camera.height = std::max(16, int(std::lround(width * aspect)));
 }
 
+Scene Viewport::frozenSceneOfView(int width) const {
+    Scene scene = m_doc->scene();
+    scene.objects[0].material = std::make_shared<MaterialVolume>(*m_doc->material());
+    applyViewTo(scene.camera, width);
+    return scene;
+}
+
 Viewport::~Viewport() {
     if (m_glReady && m_window->context()) {
         m_window->makeCurrent();

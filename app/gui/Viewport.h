@@ -123,6 +123,10 @@ public:
     /// `camera` set to this view: the orbit camera's eye, target and field of view (perspective,
     /// y up), `width` pixels wide with the viewport's aspect (at least 16 pixels high).
     void applyViewTo(Camera& camera, int width) const;
+    /// The document's scene with its own copy of the painted material, seen through this view
+    /// (applyViewTo) `width` pixels wide: what a worker thread may render while painting goes
+    /// on (Auto's level check and measurement, the Reference dock). Requires an object.
+    [[nodiscard]] Scene frozenSceneOfView(int width) const;
     /// Frames the object (F key): target at its centre, distance to fit its bounds.
     void frameObject();
     /// Whether the camera sees part of the object's bounding sphere at a visible size (more
