@@ -2,14 +2,16 @@
 /// @file
 /// @brief The engine used from several threads at once, as the app uses it (issue 16, item 3).
 /// The app's worker threads (app/gui: ReferencePanel, MainWindow's VDB export, PlanChart,
-/// AutoLevelCheck) each
+/// AutoLevelCheck, AutoMeasure) each
 /// take a frozen copy of the scene or the material and run one engine call on it while the UI
 /// thread goes on painting the original and rendering the preview. This test does the same
 /// with std::threads and checks that every result equals the same call made alone:
 /// - the reference path tracer on a frozen copy (its image depends only on scene, seed and
 ///   spp, docs/reference.md), itself parallel, while
 /// - a VDB export of another copy runs (checked by reading the file back), and
-/// - Auto's level check renders SSLPV's diffusion levels of a third copy, while
+/// - Auto's level check renders SSLPV's diffusion levels of a third copy, and
+/// - Auto's own measurement renders the exact reference of a fourth copy and two candidates
+///   against it (GL, as the app runs it; left out without a headless context), while
 /// - the "UI" thread paints strokes into the original and renders SSLPV (CPU) after each.
 /// On its own the test checks that the copies are deep (a shared volume would change the
 /// reference image and the export). Its real purpose is the ThreadSanitizer job (the `tsan`
@@ -20,7 +22,9 @@
 #include <lucent/io/VdbIO.h>
 #include <lucent/material/Brush.h>
 #include <lucent/methods/RenderImage.h>
+#include <lucent/gpu/GlContext.h>
 #include <lucent/planner/LevelCheck.h>
+#include <lucent/planner/MeasureScene.h>
 #include <lucent/reference/PathTracer.h>
 #include <lucent/scene/SceneFile.h>
 
@@ -92,6 +96,22 @@ planner::LevelCheck checkDiffusionLevels(const Scene& scene) {
     return planner::checkLevels(scene, planner::defaultModels(), choice, o);
 }
 
+/// What the viewport's AutoMeasurer runs: the exact reference of a small frame (one thread),
+/// then SSLPV diffusion at grids 16 and 32 against it, on the preview's backend.
+planner::OwnReferenceMeasurement measureOnItsOwn(const Scene& scene) {
+    const planner::Models& models = planner::defaultModels();
+    planner::OwnReferenceOptions o;
+    for (size_t i = 0; i < models.candidates.size(); ++i)
+        if (models.candidates[i].method == "sslpv:diffusion" &&
+            models.candidates[i].setting != "grid 64")
+            o.which.push_back(i);
+    o.width = 16;
+    o.referenceSpp = 6;
+    o.referenceThreads = 1;
+    o.render.backend = methods::Backend::Gl;
+    return planner::measureWithOwnReference(scene, models, o);
+}
+
 bool sameImage(const ImageRgb& a, const ImageRgb& b) {
     return a.width() == b.width() && a.height() == b.height() && a.pixels() == b.pixels();
 }
@@ -104,6 +124,10 @@ TEST(ConcurrentUse, AppWorkerPatternsGiveWhatEachCallGivesAlone) {
     // Alone, one after the other.
     const reference::ReferenceImage referenceAlone = renderSmallReference(frozenCopy(scene));
     const planner::LevelCheck levelsAlone = checkDiffusionLevels(frozenCopy(scene));
+    const bool gl = gpu::GlContext::isHeadlessAvailable();
+    planner::OwnReferenceMeasurement measuredAlone;
+    if (gl)
+        measuredAlone = measureOnItsOwn(frozenCopy(scene));
     Scene painted = frozenCopy(scene);
     for (int i = 0; i < STROKES; ++i)
         paintDarkStroke(*painted.objects[0].material, i, STROKES);
@@ -115,9 +139,11 @@ TEST(ConcurrentUse, AppWorkerPatternsGiveWhatEachCallGivesAlone) {
     const Scene forReference = frozenCopy(live);
     const MaterialVolume forExport(*live.objects[0].material);
     const Scene forLevelCheck = frozenCopy(live);
+    const Scene forMeasurement = frozenCopy(live);
     reference::ReferenceImage referenceTogether;
     planner::LevelCheck levelsTogether;
-    std::exception_ptr referenceError, exportError, levelError;
+    planner::OwnReferenceMeasurement measuredTogether;
+    std::exception_ptr referenceError, exportError, levelError, measureError;
     std::thread referenceWorker([&] {
         try {
             referenceTogether = renderSmallReference(forReference);
@@ -139,6 +165,14 @@ TEST(ConcurrentUse, AppWorkerPatternsGiveWhatEachCallGivesAlone) {
             levelError = std::current_exception();
         }
     });
+    std::thread measureWorker([&] {
+        try {
+            if (gl)
+                measuredTogether = measureOnItsOwn(forMeasurement);
+        } catch (...) {
+            measureError = std::current_exception();
+        }
+    });
     ImageRgb previewTogether;
     for (int i = 0; i < STROKES; ++i) {
         paintDarkStroke(*live.objects[0].material, i, STROKES);
@@ -147,6 +181,9 @@ TEST(ConcurrentUse, AppWorkerPatternsGiveWhatEachCallGivesAlone) {
     referenceWorker.join();
     exportWorker.join();
     levelWorker.join();
+    measureWorker.join();
+    if (measureError)
+        std::rethrow_exception(measureError);
     if (referenceError)
         std::rethrow_exception(referenceError);
     if (exportError)
@@ -171,6 +208,18 @@ TEST(ConcurrentUse, AppWorkerPatternsGiveWhatEachCallGivesAlone) {
         EXPECT_DOUBLE_EQ(levelsTogether.steps[i].difference, levelsAlone.steps[i].difference)
             << "the level check of a frozen copy changed while the original was painted";
     EXPECT_EQ(levelsTogether.setting, levelsAlone.setting);
+    if (gl) {
+        const auto& alone = measuredAlone.measurement.candidates;
+        const auto& together = measuredTogether.measurement.candidates;
+        ASSERT_EQ(alone.size(), 2u);
+        ASSERT_EQ(together.size(), alone.size());
+        EXPECT_DOUBLE_EQ(measuredTogether.referenceNoise, measuredAlone.referenceNoise);
+        for (size_t i = 0; i < alone.size(); ++i) {
+            ASSERT_TRUE(alone[i].ok() && together[i].ok()) << alone[i].failed << together[i].failed;
+            EXPECT_DOUBLE_EQ(together[i].blockRelL1, alone[i].blockRelL1)
+                << "Auto's measurement of a frozen copy changed while the original was painted";
+        }
+    }
 }
 
 }  // namespace
