@@ -174,6 +174,11 @@ void runPlan(const PlanOptions& args) {
     const planner::Models models = args.loadModels();
     std::string glReason;
     const bool gl = !args.cpu && gpu::GlContext::isHeadlessAvailable(&glReason);
+    if (args.measure && !gl)  // the Direct frame, the costs' unit, renders with GL only
+        LUCENT_THROW(ValueError,
+                     "plan --measure renders the candidates and the Direct frame with OpenGL, "
+                     "which is not available (",
+                     args.cpu ? "--cpu" : glReason, ")");
     planner::Budget budget;
     budget.frameMs = args.budgetMs;
     budget.maxError = args.maxError;

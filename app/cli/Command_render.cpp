@@ -102,6 +102,11 @@ void runRender(const RenderOptions& args) {
         std::string glReason;
         const bool gl = options.backend != methods::Backend::Cpu &&
                         gpu::GlContext::isHeadlessAvailable(&glReason);
+        if (args.measure && !gl)  // the Direct frame, the costs' unit, renders with GL only
+            LUCENT_THROW(ValueError,
+                         "--measure renders the candidates and the Direct frame with OpenGL, "
+                         "which is not available (",
+                         options.backend == methods::Backend::Cpu ? "--cpu" : glReason, ")");
         budget.directMs = 0;  // measured
         const planner::Models models =
             args.has("--models") ? planner::loadModels(args.models) : planner::defaultModels();
