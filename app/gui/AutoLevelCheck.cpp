@@ -62,7 +62,9 @@ void AutoLevelChecker::afterFrame() {
 }
 
 void AutoLevelChecker::startIfDue(bool quiet) {
-    if (!m_enabled || m_thread || !m_doc->hasObject() || m_viewport->refinementPaused())
+    // One background render at a time (Auto's measurement starts this check when done).
+    if (!m_enabled || m_thread || !m_doc->hasObject() || m_viewport->refinementPaused() ||
+        m_viewport->autoMeasurer().running())
         return;
     const PreviewRenderer& preview = m_viewport->previewRenderer();
     const planner::AutoChoice* planned = preview.autoPlannedChoice();

@@ -48,6 +48,13 @@ void AutoMeasurer::cancel() {
         m_cancel->store(true);
 }
 
+void AutoMeasurer::stopForNow() {
+    if (!m_thread)
+        return;
+    cancel();
+    m_due = true;
+}
+
 void AutoMeasurer::setQuietMs(int ms) {
     m_quiet.setInterval(std::max(ms, 0));
     if (m_quiet.isActive())
@@ -82,8 +89,10 @@ void AutoMeasurer::afterFrame() {
 }
 
 void AutoMeasurer::startIfDue() {
+    // One background render at a time: the level check's worker renders with GL too, and two
+    // of them beside the preview oversubscribe a 2-core machine (it starts this one when done).
     if (!m_enabled || m_thread || !m_due || m_quiet.isActive() || !m_doc->hasObject() ||
-        m_viewport->refinementPaused())
+        m_viewport->refinementPaused() || m_viewport->levelChecker().running())
         return;
     const PreviewRenderer& preview = m_viewport->previewRenderer();
     if (!preview.autoPlannedChoice())

@@ -10,9 +10,11 @@
 /// so the preview does not switch back to the models' pick while the artist paints; the next
 /// pause measures again.
 ///
-/// When: RECHECK_IDLE_MS of quiet after the scene was loaded or edited (paint, lights, η), while
-/// Auto is the preview method. Edit ▸ Preferences ▸ Auto: Measure the Scene turns it on or off
-/// (on by default where the app keeps settings; off for scripted runs and tests).
+/// When: QUIET_MS of quiet after the scene was loaded or edited (paint, lights, η), while Auto is
+/// the preview method, not while the level check's worker runs (one background render at a
+/// time) nor while refinement is paused (the live-cost calibration stops a running one). Edit ▸
+/// Preferences ▸ Auto: Measure the Scene turns it on or off (on by default where the app keeps
+/// settings; off for scripted runs and tests).
 
 #include <QObject>
 #include <QString>
@@ -48,6 +50,9 @@ public:
     /// again (a measurement of the Reference dock's view is left alone).
     void setEnabled(bool enabled);
     [[nodiscard]] bool isEnabled() const { return m_enabled; }
+    /// Stops a running measurement (between two renders) without applying it; the scene is
+    /// measured again when due (Viewport::setRefinementPaused: the live-cost calibration).
+    void stopForNow();
     /// The quiet time before a measurement, ms (QUIET_MS; tests shorten it).
     void setQuietMs(int ms);
     [[nodiscard]] bool running() const { return m_thread != nullptr; }

@@ -213,6 +213,11 @@ Viewport::Viewport(Document* doc, QWidget* parent) : QWidget(parent), m_doc(doc)
     m_clock.start();
     m_levelChecker = new AutoLevelChecker(this, m_doc);
     m_autoMeasurer = new AutoMeasurer(this, m_doc);
+    // The two run one at a time: each finished one lets a waiting other start.
+    connect(m_levelChecker, &AutoLevelChecker::checked, m_autoMeasurer,
+            [this] { m_autoMeasurer->afterFrame(); });
+    connect(m_autoMeasurer, &AutoMeasurer::measured, m_levelChecker,
+            [this] { m_levelChecker->afterFrame(); });
     onSceneReplaced();
 }
 
@@ -225,6 +230,14 @@ void Viewport::applyViewTo(Camera& camera, int width) const {
     camera.width = width;
     const double aspect = double(height()) / double(std::max(this->width(), 1));
     camera.height = std::max(16, int(std::lround(width * aspect)));
+}
+
+void Viewport::setRefinementPaused(bool paused) {
+    m_refinementPaused = paused;
+    if (paused)
+        m_autoMeasurer->stopForNow();
+    else
+        update();
 }
 
 Scene Viewport::frozenSceneOfView(int width) const {

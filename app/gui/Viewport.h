@@ -110,14 +110,10 @@ public:
     /// Auto measuring the scene on its own, on a worker once the artist pauses (AutoMeasure.h).
     AutoMeasurer& autoMeasurer() { return *m_autoMeasurer; }
     /// While paused, a progressive method does not refine in idle frames (a frame is drawn only
-    /// when something asks for one) and Auto's level check starts no render: the live-cost
-    /// calibration then has the machine to itself.
-    /// Resuming asks for a frame.
-    void setRefinementPaused(bool paused) {
-        m_refinementPaused = paused;
-        if (!paused)
-            update();
-    }
+    /// when something asks for one), Auto's level check starts no render and a measurement of
+    /// Auto's in progress stops (to run again after): the live-cost calibration then has the
+    /// machine to itself. Resuming asks for a frame.
+    void setRefinementPaused(bool paused);
     [[nodiscard]] bool refinementPaused() const { return m_refinementPaused; }
 
     /// `camera` set to this view: the orbit camera's eye, target and field of view (perspective,
