@@ -276,9 +276,9 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
                 kernelMaterialClose(mean, m->kernelMaterial)) {
                 ++m->stats.kernelsKept;  // a stroke that hardly moved the mean: kernel and L̂ stay
             } else {
-                m->kernel = computeSslpvSurfaceKernel(mean, m->settings.eta,
-                                                      m->sslpv.options().render.solver,
-                                                      plan.cellSize, plan.splitRadius);
+                m->kernel = computeSslpvSurfaceKernel(
+                    mean, m->settings.eta, sslpv::refinedSolverOptions(m->sslpv.options()),
+                    plan.cellSize, plan.splitRadius);
                 m->kernelMaterial = mean;
                 std::vector<glm::vec4> rings;
                 for (size_t b = 0; b < m->kernel.ringOuter.size(); ++b)
@@ -319,8 +319,11 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
     m->stats.sslpv = m->sslpv.stats();
     // Only the Kernel split with SSLPV on has a kernel to wait for (a skipped SSLPV has none).
     const bool kernelNeeded = plan.mode == SplitMode::Kernel && plan.sslpvOn;
+    // SSLPV's live refinement (SslpvProviderOptions::refineSteps) changes the image on idle
+    // frames until its stop rules end it.
     m->stats.converged =
-        !plan.dipoleOn || (m->stats.dipole.converged && (!kernelNeeded || !m->kernelDirty));
+        (!plan.sslpvOn || m->sslpv.converged()) &&
+        (!plan.dipoleOn || (m->stats.dipole.converged && (!kernelNeeded || !m->kernelDirty)));
 }
 
 void CombinedSubsurfaceProvider::updateLocalEstimate(const gpu::GBufferView& g) {

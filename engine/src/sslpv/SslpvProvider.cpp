@@ -351,6 +351,12 @@ const SslpvStats& SslpvSubsurfaceProvider::update() {
     return st;
 }
 
+SslpvOptions refinedSolverOptions(const SslpvProviderOptions& options) {
+    SslpvOptions o = options.render.solver;
+    o.maxSteps = std::max(o.maxSteps, options.refineSteps);
+    return o;
+}
+
 bool SslpvSubsurfaceProvider::isDirty() const {
     return m->materialDirty || m->rsmDirty || m->solver.isDirty() || m->uploadDirty ||
            m->glPropagateDirty;

@@ -682,6 +682,15 @@ std::vector<glm::vec4> readRgba(unsigned tex, int w, int h) {
     return v;  // GL rows, bottom first
 }
 
+double imageSum(const ImageRgb& image) {
+    double sum = 0.0;
+    for (int y = 0; y < image.height(); ++y)
+        for (int x = 0; x < image.width(); ++x)
+            for (int c = 0; c < 3; ++c)
+                sum += double(image.at(x, y)[c]);
+    return sum;
+}
+
 /// Headless context, renderer and provider (dipole::testutil::GlProviderFixture: skips without
 /// EGL, fails on any GL error) with litSphere() at 64×48 loaded into the renderer.
 class CombinedGl : public dipole::testutil::GlProviderFixture<CombinedSubsurfaceProvider,
@@ -1047,4 +1056,53 @@ TEST_F(CombinedGl, StrokeReusesLocalEstimateAndDefersKernel) {
         const double sd = std::sqrt(std::max(sum2 / n - mean * mean, 0.0));
         EXPECT_LT(std::abs(mean) / (sd / std::sqrt(n)), 4.0);
     }
+}
+
+// Live refinement of the SSLPV part (SslpvProviderOptions::refineSteps): in a high-albedo
+// medium 24 steps leave light in flight, so the provider is not converged after the first
+// frame; idle frames carry the propagation on, and the picture they end with is the one a single
+// solve of as many steps gives, pixel for pixel: the SSLPV grid (continuePropagation is that
+// solve's steps), the kernel (computed for the refined solve from the start) and L̂ with it.
+TEST_F(CombinedGl, SslpvPartRefinesOverIdleFramesToOneLongerSolve) {
+    MaterialVolume& volume = *scene.objects[0].material;
+    MaterialVolume marble(volume.spec(), findPreset("marble").sample());
+    marble.setInsideMask(volume.insideMask());
+    marble.setEta(volume.eta());
+    volume = std::move(marble);
+
+    CombinedProviderSettings live = settings(-1.f);
+    live.sslpv.render.solver.brickStopEpsilon = 1e-4f;  // the live preview's stop rules
+    live.sslpv.refineSteps = 480;
+    const double first = imageSum(frame(live));
+    EXPECT_FALSE(provider.stats().converged) << "marble keeps light in flight after 24 steps";
+    int frames = 1;
+    while (!provider.stats().converged) {
+        renderer.render();
+        ASSERT_LT(++frames, 64);
+    }
+    const int refinements = provider.stats().sslpv.refinements;
+    EXPECT_GT(refinements, 0);
+    const int stepsUsed = provider.sslpvProvider().solver().stats().stepsUsed;
+    EXPECT_GT(stepsUsed, 24);
+    const ImageRgb refined = renderer.readRadiance();
+    const std::vector<Rgb> kernel = provider.kernel().ringValue;
+
+    CombinedProviderSettings once = live;  // one solve with the bound the refinement had
+    once.sslpv.refineSteps = 0;
+    once.sslpv.render.solver.maxSteps = live.sslpv.refineSteps;
+    (void)frame(once);
+    for (int i = 0; i < 20 && !provider.stats().converged; ++i)
+        renderer.render();
+    ASSERT_TRUE(provider.stats().converged);
+    EXPECT_EQ(provider.stats().sslpv.refinements, refinements) << "one solve, no refinement";
+    EXPECT_EQ(provider.sslpvProvider().solver().stats().stepsUsed, stepsUsed);
+    EXPECT_EQ(provider.kernel().ringValue, kernel);
+    const ImageRgb expected = renderer.readRadiance();
+    EXPECT_TRUE(refined.pixels() == expected.pixels()) << "not the longer solve's image";
+    const double refinedSum = imageSum(refined);
+    std::printf(
+        "combined, marble sphere: first frame %.4f of the refined one after %d frames "
+        "(%d SSLPV steps)\n",
+        first / refinedSum, frames, stepsUsed);
+    EXPECT_LT(first, 0.99 * refinedSum) << "24 steps should leave light in flight here";
 }

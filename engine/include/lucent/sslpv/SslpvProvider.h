@@ -63,6 +63,12 @@ struct SslpvProviderOptions {
     int refineSteps = 0;
 };
 
+/// The solver options a live propagation ends with: render.solver with maxSteps raised to
+/// refineSteps when refinement is on (refine() carries a change's propagation on to them, and
+/// SslpvSolver::continuePropagation runs the steps of that one longer solve). What a local
+/// model of the converged picture (combined's kernel) is computed with.
+[[nodiscard]] SslpvOptions refinedSolverOptions(const SslpvProviderOptions& options);
+
 /// Per-pass milliseconds of the last work done for each pass (CPU wall time unless stated).
 struct SslpvProviderTimings {
     double resampleMs = 0.0;    ///< last setMaterial (full) or updateMaterial (incremental)

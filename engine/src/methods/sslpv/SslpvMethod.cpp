@@ -230,39 +230,6 @@ MethodEntry sslpvMethod() {
          "1024",
          "",
          "32"},
-        {"stop",
-         ParamType::Float,
-         "stop propagating once the flux still in flight is below this fraction of the injected "
-         "flux (0: always run all steps; live preview default 0)",
-         0,
-         1,
-         {},
-         "0.01",
-         "",
-         "0"},
-        {"brick-stop",
-         ParamType::Float,
-         "modes paper and calibrated: a brick of cells whose light is below this fraction of "
-         "the injected light per cell stops propagating, and the solve ends once every brick "
-         "is dark (0: off; live preview default 0.0001)",
-         0,
-         1,
-         {},
-         "0",
-         "",
-         "0.0001"},
-        {"refine-steps",
-         ParamType::Int,
-         "live preview, modes paper and calibrated: while light is still in flight after a "
-         "change's frame, idle frames carry the propagation on (steps per frame) until the stop "
-         "rules end it or this many steps in all (0: a change's frame is the last)",
-         0,
-         4096,
-         {},
-         "0",
-         "",
-         "1024",
-         ParamScope::Live},
         {"sh",
          ParamType::Int,
          "spherical-harmonics order: 1 (4 coefficients) or 2 (9)",
@@ -324,6 +291,13 @@ MethodEntry sslpvMethod() {
          {"cpu", "gl"},
          "cpu"},
     };
+    // After "steps": its stop rules and live refinement.
+    const std::vector<ParamDescriptor> stops =
+        detail::propagationStopParams("", "modes paper and calibrated: ");
+    i.params.insert(std::find_if(i.params.begin(), i.params.end(),
+                                 [](const ParamDescriptor& d) { return d.name == "steps"; }) +
+                        1,
+                    stops.begin(), stops.end());
     // The paper variant pins the attenuation it is evaluated with (the offline default): the
     // live preview's own default is the paper's literal extinction, 0.06 of the brightness on
     // backlit_thin_thick at grid 64, so Auto's live "sslpv:paper" showed another picture than
