@@ -290,43 +290,56 @@ TEST(CombinedCpu, IntermediateStepsSplitIsTheSumOfBothWindowedParts) {
     EXPECT_LE(sl, slAll * (1 + 1e-6));
 }
 
+// Both SSLPV parts: the calibrated propagation and the diffusion mode (the method's default,
+// docs/methods/combined.md "The SSLPV part"), whose kernel is the diffusion solve's response.
 TEST(CombinedCpu, KernelSplitIsSslpvPlusDipoleMinusItsLocalPart) {
     const Scene s = litSphere();
-    const CombinedSettings cs = smallSettings(-1.f);
-    const CombinedResult r = renderCombined(s, cs);
-    ASSERT_TRUE(r.plan.dipoleOn && r.plan.sslpvOn);
-    EXPECT_EQ(r.plan.skipSteps, cs.sslpv.solver.skipAccumulateSteps);
-    expectImagesEqual(r.sslpv, sslpv::renderSslpv(s, cs.sslpv), 0.f, "sslpv part (unchanged)");
-    const SslpvSurfaceKernel k =
-        computeSslpvSurfaceKernel(meanInsideMaterial(*s.objects[0].material), s.eta,
-                                  cs.sslpv.solver, r.plan.cellSize, r.plan.splitRadius);
-    const dipole::SurfaceBuffers buf = dipole::buildSurfaceBuffers(s);
-    const ImageRgb lhat =
-        localSslpvEstimate(buf, k, r.plan.splitRadius, s.eta, cs.localSamples, cs.dipole.seed);
-    const ImageRgb f =
-        localSslpvFraction(buf, k, r.plan.splitRadius, cs.localSamples, cs.dipole.seed);
-    ImageRgb want(40, 40);
-    for (int y = 0; y < 40; ++y)
-        for (int x = 0; x < 40; ++x) {
-            for (int c = 0; c < 3; ++c)
-                ASSERT_TRUE(f.at(x, y)[c] >= 0.f && f.at(x, y)[c] <= 1.f);
-            want.at(x, y) = glm::min(lhat.at(x, y), f.at(x, y) * r.sslpv.at(x, y));
+    for (const bool diffusion : {false, true}) {
+        SCOPED_TRACE(diffusion ? "diffusion part" : "calibrated part");
+        CombinedSettings cs = smallSettings(-1.f);
+        if (diffusion) {  // as the combined method sets its default part
+            cs.sslpv.solver.mode = sslpv::SslpvMode::Diffusion;
+            cs.sslpv.injectionResolution = 64;
+            cs.sslpv.solver.maxSteps = 1024;
+            cs.sslpv.solver.stopEpsilon = 1e-3f;
         }
-    expectImagesEqual(r.local, want, 0.f, "local part min(L^, f * L_sslpv)");
-    double sl = 0, sloc = 0;
-    for (int y = 0; y < 40; ++y)
-        for (int x = 0; x < 40; ++x) {
-            const Rgb want =
-                glm::max(r.dipole.at(x, y) + r.sslpv.at(x, y) - r.local.at(x, y), Rgb(0.f));
-            for (int c = 0; c < 3; ++c)
-                ASSERT_EQ(r.radiance.at(x, y)[c], want[c]);
-            sl += luminance(r.sslpv.at(x, y));
-            sloc += luminance(r.local.at(x, y));
-        }
-    // The local estimate is a part of SSLPV's light, not all of it (the sphere's far side and
-    // the terminator are lit from beyond r_s).
-    EXPECT_GT(sloc, 0.0);
-    EXPECT_LT(sloc, sl);
+        const CombinedResult r = renderCombined(s, cs);
+        ASSERT_TRUE(r.plan.dipoleOn && r.plan.sslpvOn);
+        EXPECT_EQ(r.plan.skipSteps, cs.sslpv.solver.skipAccumulateSteps);
+        expectImagesEqual(r.sslpv, sslpv::renderSslpv(s, cs.sslpv), 0.f, "sslpv part (unchanged)");
+        const SslpvSurfaceKernel k =
+            computeSslpvSurfaceKernel(meanInsideMaterial(*s.objects[0].material), s.eta,
+                                      cs.sslpv.solver, r.plan.cellSize, r.plan.splitRadius);
+        ASSERT_FALSE(k.ringValue.empty());
+        EXPECT_GT(luminance(k.ringValue[0]), 0.f);
+        const dipole::SurfaceBuffers buf = dipole::buildSurfaceBuffers(s);
+        const ImageRgb lhat =
+            localSslpvEstimate(buf, k, r.plan.splitRadius, s.eta, cs.localSamples, cs.dipole.seed);
+        const ImageRgb f =
+            localSslpvFraction(buf, k, r.plan.splitRadius, cs.localSamples, cs.dipole.seed);
+        ImageRgb want(40, 40);
+        for (int y = 0; y < 40; ++y)
+            for (int x = 0; x < 40; ++x) {
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_TRUE(f.at(x, y)[c] >= 0.f && f.at(x, y)[c] <= 1.f);
+                want.at(x, y) = glm::min(lhat.at(x, y), f.at(x, y) * r.sslpv.at(x, y));
+            }
+        expectImagesEqual(r.local, want, 0.f, "local part min(L^, f * L_sslpv)");
+        double sl = 0, sloc = 0;
+        for (int y = 0; y < 40; ++y)
+            for (int x = 0; x < 40; ++x) {
+                const Rgb want =
+                    glm::max(r.dipole.at(x, y) + r.sslpv.at(x, y) - r.local.at(x, y), Rgb(0.f));
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_EQ(r.radiance.at(x, y)[c], want[c]);
+                sl += luminance(r.sslpv.at(x, y));
+                sloc += luminance(r.local.at(x, y));
+            }
+        // The local estimate is a part of SSLPV's light, not all of it (the sphere's far side
+        // and the terminator are lit from beyond r_s).
+        EXPECT_GT(sloc, 0.0);
+        EXPECT_LT(sloc, sl);
+    }
 }
 
 // Front-lit large slab, directional light along −n, orthographic camera from above: E is

@@ -170,8 +170,8 @@ TEST(MethodsLive, SslpvIdleFramesRefineToTheOfflineImage) {
     }
 }
 
-// Combined's SSLPV part refines as the sslpv method does (its live parameters steps 32 and
-// refine-steps 1024): the method is not converged while the part's light is in flight, idle
+// Combined's calibrated SSLPV part refines as the sslpv method does (its live parameters steps
+// 32 and refine-steps 1024): the method is not converged while the part's light is in flight, idle
 // frames carry it on, and the picture brightens towards the longer solve's (the provider's
 // exact check: CombinedGl.SslpvPartRefinesOverIdleFramesToOneLongerSolve).
 TEST(MethodsLive, CombinedIdleFramesCarryItsSslpvPartOn) {
@@ -181,7 +181,8 @@ TEST(MethodsLive, CombinedIdleFramesCarryItsSslpvPartOn) {
     Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + "/resources/scenes/minimal.json");
     scene.camera.width = 64;
     scene.camera.height = 48;
-    LiveView view(scene, "combined", ParamSet::fromAssignments({"grid=16"}));
+    LiveView view(scene, "combined",
+                  ParamSet::fromAssignments({"grid=16", "sslpv-mode=calibrated"}));
     const double first = frameSum(view.renderer);
     EXPECT_FALSE(view.method->converged());
     const int frames = 1 + view.renderUntilConverged(199);

@@ -8,8 +8,10 @@
 
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <set>
 #include <string>
+#include <vector>
 
 namespace lucent::methods {
 namespace {
@@ -82,6 +84,40 @@ TEST(MethodsParams, ReportsGivenValuesNobodyRead) {
     ASSERT_EQ(p.unused().size(), 1u);
     EXPECT_EQ(p.unused()[0], "seed");
     EXPECT_THROW(ParamSet::fromAssignments({"spp"}), ValueError);
+}
+
+// Combined's SSLPV part (docs/methods/combined.md, "The SSLPV part"): auto is the diffusion mode
+// unless the split or the propagation need propagation steps; an explicit diffusion part refuses
+// them, naming the parameter that allows them, instead of running something else.
+TEST(MethodsParams, CombinedDiffusionPartNamesWhatItCannotRun) {
+    const auto message = [](const std::vector<std::string>& assignments, Backend backend) {
+        try {
+            (void)create("combined", ParamSet::fromAssignments(assignments), {backend, false, {}});
+        } catch (const ValueError& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    EXPECT_NE(message({"split=steps", "sslpv-mode=diffusion"}, Backend::Cpu).find("sslpv-mode"),
+              std::string::npos);
+    EXPECT_NE(
+        message({"propagation=gl", "sslpv-mode=diffusion"}, Backend::Gl).find("propagation=cpu"),
+        std::string::npos);
+    for (const char* part : {"sslpv-mode=auto", "sslpv-mode=calibrated"}) {
+        EXPECT_EQ(message({"split=steps", part}, Backend::Cpu), "") << part;
+        EXPECT_EQ(message({"propagation=gl", part}, Backend::Gl), "") << part;
+    }
+    const auto partOf = [](const std::vector<std::string>& assignments) {
+        std::unique_ptr<Method> m =
+            create("combined", ParamSet::fromAssignments(assignments), {Backend::Cpu, false, {}});
+        for (const auto& [key, value] : m->stats())
+            if (key == "sslpv part")
+                return value;
+        return std::string("(missing)");
+    };
+    EXPECT_EQ(partOf({}), "diffusion");
+    EXPECT_EQ(partOf({"split=steps"}), "calibrated");
+    EXPECT_EQ(partOf({"sslpv-mode=calibrated"}), "calibrated");
 }
 
 TEST(MethodsRegistry, AutoPicksThePreferredBackendAndFallsBack) {

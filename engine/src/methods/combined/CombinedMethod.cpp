@@ -88,12 +88,16 @@ public:
     }
 
     [[nodiscard]] Stats stats() const override {
-        if (backend() == Backend::Cpu)
-            return m_cpuStats;
+        Stats s{{"sslpv part", m_diffusionPart ? "diffusion" : "calibrated"}};
+        if (backend() == Backend::Cpu) {
+            s.insert(s.end(), m_cpuStats.begin(), m_cpuStats.end());
+            return s;
+        }
         if (!m_provider)
-            return {};
+            return s;
         const combined::CombinedProviderStats& st = m_provider->stats();
-        Stats s = planStats(st.plan);
+        const Stats plan = planStats(st.plan);
+        s.insert(s.end(), plan.begin(), plan.end());
         s.push_back({"dipole frames", std::to_string(st.dipole.frames)});
         s.push_back({"dipole spp", std::to_string(st.dipole.samplesPerPixel)});
         s.push_back({"converged", st.converged ? "yes" : "no"});
@@ -141,6 +145,28 @@ private:
         if (isLive())
             s.sslpv.refineSteps = p.getInt("refine-steps");
         s.sslpv.render.solver.order = p.getInt("sh");
+        // auto: the diffusion part, unless the split or the propagation asked for need
+        // propagation steps (docs/methods/combined.md, "The SSLPV part").
+        const bool gl = backend() == Backend::Gl && p.getChoice("propagation") == "gl";
+        const std::string& part = p.getChoice("sslpv-mode");
+        m_diffusionPart =
+            part == "diffusion" || (part == "auto" && s.mode == combined::SplitMode::Kernel && !gl);
+        if (m_diffusionPart) {
+            // As the sslpv method's mode diffusion: CG iterations to an unbalanced power of
+            // 10⁻³ of the source unless given, its own injection texels, one solve per change.
+            LUCENT_CHECK(s.mode == combined::SplitMode::Kernel,
+                         "combined: sslpv-mode diffusion needs split kernel (the steps split "
+                         "skips propagation steps, which diffusion does not have)");
+            LUCENT_CHECK(!gl, "combined: sslpv-mode diffusion solves on the CPU (propagation=cpu)");
+            s.sslpv.render.solver.mode = sslpv::SslpvMode::Diffusion;
+            s.sslpv.render.injectionResolution =
+                std::clamp(4 * s.sslpv.render.gridResolution, 64, 256);
+            s.sslpv.render.solver.maxSteps = p.isGiven("steps") ? p.getInt("steps") : 1024;
+            s.sslpv.render.solver.stopEpsilon =
+                p.isGiven("stop") ? float(p.getFloat("stop")) : 1e-3f;
+            s.sslpv.render.solver.brickStopEpsilon = 0.f;
+            s.sslpv.refineSteps = 0;
+        }
         if (backend() == Backend::Gl) {
             s.sslpv.backend = p.getChoice("propagation") == "gl" ? sslpv::SslpvBackend::Gl
                                                                  : sslpv::SslpvBackend::Cpu;
@@ -192,6 +218,7 @@ private:
     SceneInputs m_scene;
     float m_eta = 1.3f, m_materialEta = 0.f;
     int m_meshId = 0, m_spp = 256;
+    bool m_diffusionPart = false;  ///< the SSLPV part is the diffusion mode (sslpv-mode)
     bool m_meshSet = false, m_lightsSet = false, m_materialSet = false, m_settingsSet = false;
     Stats m_cpuStats;
 };
@@ -240,6 +267,16 @@ MethodEntry combinedMethod() {
          "",
          "32"},
         {"sh", ParamType::Int, "SSLPV spherical-harmonics order", 1, 2, {}, "1"},
+        {"sslpv-mode",
+         ParamType::Choice,
+         "the SSLPV part: diffusion (the diffusion equation on the same grid, "
+         "docs/methods/sslpv.md), calibrated (propagation with the fitted per-step absorption "
+         "and gain) or auto (diffusion, unless split steps or propagation gl need propagation "
+         "steps: calibrated)",
+         0,
+         0,
+         {"auto", "diffusion", "calibrated"},
+         "auto"},
         {"propagation",
          ParamType::Choice,
          "GL backend: where the SSLPV part's propagation steps run (cpu: SslpvSolver; gl: "
@@ -287,7 +324,9 @@ MethodEntry combinedMethod() {
                                  [](const ParamDescriptor& d) { return d.name == "steps"; }) +
                         1,
                     stops.begin(), stops.end());
-    i.variants = {{"cpu", {}, Backend::Cpu}};
+    i.variants = {
+        {"cpu", {}, Backend::Cpu},
+        {"calibrated", ParamSet::fromAssignments({"sslpv-mode=calibrated"}), Backend::Auto}};
     for (int spp : {8, 32, 128})
         i.quality.push_back({std::to_string(spp) + " spp",
                              ParamSet::fromAssignments({"spp=" + std::to_string(spp)}),
