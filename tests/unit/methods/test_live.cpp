@@ -5,6 +5,7 @@
 /// grid, which drops the SSLPV pass's material (SslpvProvider::setOptions) while the method
 /// believed it still set, so every later frame threw "no material".
 
+#include <lucent/combined/CombinedProvider.h>
 #include <lucent/core/Image.h>
 #include <lucent/gpu/SceneRenderer.h>
 #include <lucent/gpu/Shader.h>
@@ -19,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 namespace lucent::methods {
 namespace {
@@ -110,6 +112,28 @@ TEST(MethodsLive, GridChangeAtRunTimeKeepsRendering) {
             double sum = 0.0;
             ASSERT_NO_THROW(sum = frameSum(view.renderer)) << "grid " << grid;
             EXPECT_TRUE(std::isfinite(sum) && sum > 0.0) << "grid " << grid << ": " << sum;
+        }
+        if (std::string(name) != "combined")
+            continue;
+        // Combined's SSLPV part switched at run time, with the same steps, stops and refinement
+        // either way (so only the mode differs): the provider's part follows, and each renders.
+        for (const char* part : {"calibrated", "diffusion", "calibrated"}) {
+            ParamSet params = ParamSet::fromAssignments({std::string("sslpv-mode=") + part,
+                                                         "steps=64", "stop=0.001", "brick-stop=0",
+                                                         "refine-steps=0", "grid=16"});
+            view.method->setParams(params);
+            view.method->setScene(view.inputs);
+            double sum = 0.0;
+            ASSERT_NO_THROW(sum = frameSum(view.renderer)) << part;
+            EXPECT_TRUE(std::isfinite(sum) && sum > 0.0) << part << ": " << sum;
+            EXPECT_EQ(view.stat("sslpv part"), part);
+            const auto* provider = dynamic_cast<const combined::CombinedSubsurfaceProvider*>(
+                view.method->subsurfacePass());
+            ASSERT_NE(provider, nullptr);
+            EXPECT_EQ(provider->sslpvProvider().options().render.solver.mode,
+                      std::string(part) == "diffusion" ? sslpv::SslpvMode::Diffusion
+                                                       : sslpv::SslpvMode::Calibrated)
+                << part;
         }
     }
 }

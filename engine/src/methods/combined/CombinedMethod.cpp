@@ -198,6 +198,8 @@ private:
             s.dipole.samplesPerFrame != o.dipole.samplesPerFrame ||
             s.dipole.maxFrames != o.dipole.maxFrames ||
             s.sslpv.render.gridResolution != o.sslpv.render.gridResolution ||
+            s.sslpv.render.solver.mode != o.sslpv.render.solver.mode ||
+            s.sslpv.render.injectionResolution != o.sslpv.render.injectionResolution ||
             s.sslpv.render.solver.maxSteps != o.sslpv.render.solver.maxSteps ||
             s.sslpv.render.solver.stopEpsilon != o.sslpv.render.solver.stopEpsilon ||
             s.sslpv.render.solver.brickStopEpsilon != o.sslpv.render.solver.brickStopEpsilon ||
