@@ -253,7 +253,7 @@ MethodEntry combinedMethod() {
          0,
          {"dipole", "better-dipole"},
          "dipole"},
-        {"grid", ParamType::Int, "SSLPV cells per axis (calibrated mode)", 4, 256, {}, "32"},
+        {"grid", ParamType::Int, "the SSLPV part's cells per axis", 4, 256, {}, "32"},
         // As the sslpv method's: a fixed step count leaves a high-albedo medium's far light in
         // flight (the marble sphere: block rel. L1 0.197 at 32 steps, 0.094 at 400), so
         // offline the SSLPV part runs to the stop; live, a change's frame runs 32 steps and
@@ -261,7 +261,8 @@ MethodEntry combinedMethod() {
         {"steps",
          ParamType::Int,
          "maximum SSLPV propagation steps; fewer once converged (see stop; live preview: steps "
-         "per frame, carried on over idle frames up to refine-steps)",
+         "per frame, carried on over idle frames up to refine-steps); the diffusion part: "
+         "conjugate-gradient iterations, 1024 unless given",
          0,
          4096,
          {},
