@@ -42,51 +42,6 @@ inline bool sameLights(const std::vector<Light>& a, const std::vector<Light>& b)
     return true;
 }
 
-/// The stop rules and live refinement of an SSLPV propagation (the sslpv method, combined's
-/// SSLPV part), with the same defaults: offline to the global stop; live no global stop (it is
-/// not local: paint in one place would end the propagation everywhere) but the per-brick one,
-/// and idle frames carry a change's propagation on. `subject` starts each description (e.g.
-/// "the SSLPV part: "); `propagationModes` names the modes the per-brick rules apply to.
-inline std::vector<ParamDescriptor> propagationStopParams(const std::string& subject,
-                                                          const std::string& propagationModes) {
-    return {{"stop",
-             ParamType::Float,
-             subject + "stop propagating once the flux still in flight is below this fraction "
-                       "of the injected flux (0: always run all steps; live preview default 0)",
-             0,
-             1,
-             {},
-             "0.01",
-             "",
-             "0"},
-            {"brick-stop",
-             ParamType::Float,
-             subject + propagationModes +
-                 "a brick of cells whose light is below this fraction of the injected light per "
-                 "cell stops propagating, and the solve ends once every brick is dark (0: off; "
-                 "live preview default 0.0001)",
-             0,
-             1,
-             {},
-             "0",
-             "",
-             "0.0001"},
-            {"refine-steps",
-             ParamType::Int,
-             subject + "live preview" +
-                 (propagationModes.empty() ? std::string(": ") : ", " + propagationModes) +
-                 "while light is still in flight after a change's frame, idle frames carry the "
-                 "propagation on (steps per frame) until the stop rules end it or this many steps "
-                 "in all (0: a change's frame is the last)",
-             0,
-             4096,
-             {},
-             "0",
-             "",
-             "1024",
-             ParamScope::Live}};
-}
-
 /// The parameters of the methods that read a half-space medium under each surface point (the
 /// dipoles, the directional dipole).
 inline std::vector<ParamDescriptor> layeredParams() {

@@ -11,6 +11,7 @@
 #include <lucent/methods/Registry.h>
 
 #include "../MethodUtil.h"
+#include "../sslpv/SslpvSettings.h"
 
 #include <algorithm>
 
@@ -152,20 +153,11 @@ private:
         m_diffusionPart =
             part == "diffusion" || (part == "auto" && s.mode == combined::SplitMode::Kernel && !gl);
         if (m_diffusionPart) {
-            // As the sslpv method's mode diffusion: CG iterations to an unbalanced power of
-            // 10⁻³ of the source unless given, its own injection texels, one solve per change.
             LUCENT_CHECK(s.mode == combined::SplitMode::Kernel,
                          "combined: sslpv-mode diffusion needs split kernel (the steps split "
                          "skips propagation steps, which diffusion does not have)");
-            LUCENT_CHECK(!gl, "combined: sslpv-mode diffusion solves on the CPU (propagation=cpu)");
-            s.sslpv.render.solver.mode = sslpv::SslpvMode::Diffusion;
-            s.sslpv.render.injectionResolution =
-                std::clamp(4 * s.sslpv.render.gridResolution, 64, 256);
-            s.sslpv.render.solver.maxSteps = p.isGiven("steps") ? p.getInt("steps") : 1024;
-            s.sslpv.render.solver.stopEpsilon =
-                p.isGiven("stop") ? float(p.getFloat("stop")) : 1e-3f;
-            s.sslpv.render.solver.brickStopEpsilon = 0.f;
-            s.sslpv.refineSteps = 0;
+            detail::useDiffusionMode(s.sslpv, p, "combined: sslpv-mode diffusion", gl);
+            s.sslpv.render.solver.brickStopEpsilon = 0.f;  // a propagation rule: none here
         }
         if (backend() == Backend::Gl) {
             s.sslpv.backend = p.getChoice("propagation") == "gl" ? sslpv::SslpvBackend::Gl

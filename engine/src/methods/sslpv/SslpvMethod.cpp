@@ -12,6 +12,7 @@
 #include <lucent/sslpv/SslpvRenderer.h>
 
 #include "../MethodUtil.h"
+#include "SslpvSettings.h"
 
 #include <algorithm>
 
@@ -134,28 +135,14 @@ private:
         // paper's literal extinction is 5–50× too dark).
         const std::string& mode = p.getChoice("mode");
         if (mode == "diffusion") {
-            // Not propagation: conjugate-gradient iterations of the diffusion solve, warm-started
-            // from the last solution (a stroke re-solves from the picture before it). The
-            // propagation's live defaults (32 fixed steps, no stop) would leave the first frame
-            // unconverged, so unless given, both live and offline run to an unbalanced power of
-            // 10⁻³ of the source, at most 1024 iterations (docs/methods/sslpv.md, "Diffusion
-            // mode").
-            o.render.solver.mode = sslpv::SslpvMode::Diffusion;
-            // The source is integrated over each beam's chord per cell, so a few texels per
-            // cell face carry it: 4 texels of RSM per grid cell across (≈ 5 per lit cell
-            // face) instead of the propagation's 256², which re-walked 25 beams per face on
-            // every stroke (docs/benchmarks.md, "Diffusion mode").
-            o.render.injectionResolution = std::clamp(4 * o.render.gridResolution, 64, 256);
             o.render.solver.diffusionExactTotal = p.getBool("diffusion-normalise");
             o.render.solver.diffusionExitTable = p.getChoice("diffusion-exit") == "exact";
             o.render.solver.diffusionSurfaceFlux = p.getBool("diffusion-flux");
-            o.render.solver.maxSteps = p.isGiven("steps") ? p.getInt("steps") : 1024;
-            o.render.solver.stopEpsilon = p.isGiven("stop") ? float(p.getFloat("stop")) : 1e-3f;
-            o.refineSteps = 0;  // one solve to its stop per change
             LUCENT_CHECK(!p.isGiven("attenuation"),
                          "sslpv: attenuation applies to mode paper only");
-            LUCENT_CHECK(backend() != Backend::Gl || p.getChoice("propagation") == "cpu",
-                         "sslpv: mode diffusion solves on the CPU (propagation=cpu)");
+            detail::useDiffusionMode(
+                o, p, "sslpv: mode diffusion",
+                backend() == Backend::Gl && p.getChoice("propagation") != "cpu");
         } else if (mode == "calibrated") {
             o.render.solver.mode = sslpv::SslpvMode::Calibrated;
             LUCENT_CHECK(!p.isGiven("attenuation"),
