@@ -398,18 +398,24 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
     }
 
     // The Direct render of the same frame: the unit of cost, at least 3 timed runs (a single
-    // one on a loaded box can be off by 2x); a "direct" variant's runs join them below.
-    Timings directTimes;
-    {
-        const Variant direct = parseVariant("direct");
-        RunOptions unitOptions = options;
-        unitOptions.repeats = std::max(options.repeats, 3);
+    // one on a loaded box can be off by 2x) before the case's methods and as many after them,
+    // so that a burst of load during one bracket moves the median, not every cost ratio of the
+    // case (2026-12-06: one case's three runs before read 145 ms of CPU where other runs of it
+    // read 33-40 ms); a "direct" variant's runs join them below.
+    const Variant directUnit = parseVariant("direct");
+    RunOptions unitOptions = options;
+    unitOptions.repeats = std::max(options.repeats, 3);
+    const auto timeDirectUnit = [&](Timings& times) {
         try {
-            timedRender(evalCase.scene, direct, direct.settings.front(), unitOptions, directTimes);
+            timedRender(evalCase.scene, directUnit, directUnit.settings.front(), unitOptions,
+                        times);
         } catch (const std::exception& e) {
             run.skipped.push_back(evalCase.name + ": direct (cost unit): " + e.what());
         }
-    }
+    };
+    Timings directTimes;
+    timeDirectUnit(directTimes);
+    const Timings directBefore = directTimes;
 
     for (const Variant& v : variants) {
         const int n = std::min(options.levels, int(v.settings.size()));
@@ -477,6 +483,22 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
             coarserResult = run.results.size();
             run.results.push_back(std::move(r));
         }
+    }
+    Timings directAfter;
+    if (!directBefore.cpu.empty())
+        timeDirectUnit(directAfter);
+    if (!directAfter.cpu.empty()) {
+        const double before = median(directBefore.cpu), after = median(directAfter.cpu);
+        if (std::max(before, after) > 1.5 * std::min(before, after)) {
+            char buf[200];
+            std::snprintf(buf, sizeof buf,
+                          "  warning: the Direct render took %.1f ms of CPU before the methods "
+                          "and %.1f ms after (the box's load changed): this case's cost "
+                          "ratios are uncertain",
+                          before, after);
+            say(buf);
+        }
+        directTimes.append(directAfter);
     }
     run.directMs = directTimes.wall.empty() ? 0.0 : median(directTimes.wall);
     run.directCpuMs = directTimes.cpu.empty() ? 0.0 : median(directTimes.cpu);

@@ -215,17 +215,22 @@ TEST(EvaluationReference, CacheIsReusedOnlyForTheSameScene) {
     EXPECT_FALSE(referenceFor(other, "c", dir.string(), settings).cached);
 }
 
+/// A quick run into a fresh test folder: 4-spp reference, one timed repeat, no images.
+RunOptions quickRun(const char* dirName, int levels) {
+    RunOptions run;
+    run.outDir = emptyTestDir(dirName).string();
+    run.refSpp = 4;
+    run.repeats = 1;
+    run.levels = levels;
+    run.writeImages = false;
+    return run;
+}
+
 TEST(EvaluationRun, EachSettingIsComparedWithTheNextFinerOne) {
     // What the planner's level check replays (planner/LevelCheck.h): a setting's image
     // against the same variant's next finer one, the block metric over the reference's mask.
-    const fs::path dir = emptyTestDir("to-finer");
     const EvalCase c = smokeCase(16);
-    RunOptions run;
-    run.outDir = dir.string();
-    run.refSpp = 4;
-    run.repeats = 1;
-    run.levels = 2;
-    run.writeImages = false;
+    const RunOptions run = quickRun("to-finer", 2);
     const Variant v = parseVariant("sslpv:diffusion");
     const CaseRun out = evaluateCase(c, {v}, run);
     ASSERT_EQ(out.results.size(), 2u);
@@ -243,6 +248,23 @@ TEST(EvaluationRun, EachSettingIsComparedWithTheNextFinerOne) {
     EXPECT_GT(expected, 0.0);  // grid 16 and grid 32 differ
     EXPECT_NEAR(out.results[0].blockRelL1ToFiner, expected, 1e-12);
     EXPECT_LT(out.results[1].blockRelL1ToFiner, 0.0);  // nothing finer was rendered
+}
+
+TEST(EvaluationRun, CostUnitIsTimedBeforeAndAfterTheMethods) {
+    // The Direct render is the unit of every cost ratio; timed only before the methods, one
+    // burst of load at the start skewed a whole case's ratios. At least 3 runs before and 3
+    // after, with a "direct" variant's own runs (here 1) among them.
+    RunOptions run = quickRun("cost-unit", 1);
+    std::vector<std::string> lines;
+    run.progress = [&](const std::string& line) { lines.push_back(line); };
+    const CaseRun out = evaluateCase(smokeCase(16), {parseVariant("direct")}, run);
+    ASSERT_EQ(out.results.size(), 1u);
+    EXPECT_GT(out.results[0].directCpuMs, 0.0);
+    const auto unit = std::find_if(lines.begin(), lines.end(), [](const std::string& l) {
+        return l.find("the unit of cost") != std::string::npos;
+    });
+    ASSERT_NE(unit, lines.end());
+    EXPECT_NE(unit->find("median of 7"), std::string::npos) << *unit;
 }
 
 TEST(EvaluationReport, CsvHasTheColumnsThePlannerFitNeeds) {
