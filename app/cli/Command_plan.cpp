@@ -88,6 +88,13 @@ struct PlanOptions {
     }
 };
 
+/// Cost ratios of one case taken against Direct units far apart (rows from differently loaded
+/// runs) would be fitted or judged as if comparable: say so before using them.
+void warnAboutCostUnits(const std::vector<planner::MeasuredRow>& rows) {
+    for (const std::string& w : planner::costUnitWarnings(rows))
+        std::fprintf(stderr, "warning: %s\n", w.c_str());
+}
+
 void runFit(const PlanOptions& args) {
     const std::string& out = args.output;
     if (out.empty())
@@ -100,6 +107,7 @@ void runFit(const PlanOptions& args) {
         rows.insert(rows.end(), r.begin(), r.end());
         source += " " + csv;
     }
+    warnAboutCostUnits(rows);
     // Ground truth and the unlit baseline are not previews to choose from.
     std::erase_if(rows, [](const planner::MeasuredRow& r) {
         return r.method == "reference" || r.method.rfind("reference:", 0) == 0 ||
@@ -125,6 +133,7 @@ void runCheck(const PlanOptions& args) {
         std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv, args.costMeasure());
         rows.insert(rows.end(), r.begin(), r.end());
     }
+    warnAboutCostUnits(rows);
     const std::vector<planner::FrontCheck> checks = planner::checkAgainstFront(
         rows, models, budgetRatio, args.errorTolerance, args.levelTolerance, args.measure);
     if (checks.empty())

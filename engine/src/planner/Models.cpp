@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <set>
@@ -385,6 +386,8 @@ std::vector<MeasuredRow> readMeasurements(const std::string& csvPath, CostMeasur
         r.method = f[size_t(methodCol)];
         r.setting = f[size_t(settingCol)];
         r.blockRelL1 = parseNumber(f[size_t(errorCol)], "block_rel_l1", where);
+        if (directCol >= 0 && !f[size_t(directCol)].empty())
+            r.directUnitMs = parseNumber(f[size_t(directCol)], header[size_t(directCol)], where);
         if (costCol >= 0) {
             r.costRatio = parseNumber(f[size_t(costCol)], costName, where);
         } else {
@@ -404,6 +407,42 @@ std::vector<MeasuredRow> readMeasurements(const std::string& csvPath, CostMeasur
         rows.push_back(std::move(r));
     }
     return rows;
+}
+
+std::vector<std::string> costUnitWarnings(const std::vector<MeasuredRow>& rows, double limit) {
+    std::map<std::string, std::vector<const MeasuredRow*>> byCase;
+    for (const MeasuredRow& r : rows)
+        if (r.directUnitMs > 0.0 && std::isfinite(r.directUnitMs))
+            byCase[r.caseName].push_back(&r);
+    std::vector<std::string> warnings;
+    for (const auto& [caseName, caseRows] : byCase) {
+        std::vector<double> units;
+        for (const MeasuredRow* r : caseRows)
+            units.push_back(r->directUnitMs);
+        std::nth_element(units.begin(), units.begin() + long(units.size() / 2), units.end());
+        const double median = units[units.size() / 2];
+        std::map<std::string, double> offByMethod;  // the method's unit furthest from the median
+        for (const MeasuredRow* r : caseRows) {
+            const double off = r->directUnitMs;
+            if (std::max(off, median) <= limit * std::min(off, median))
+                continue;
+            double& worst = offByMethod[r->method];
+            if (worst == 0.0 ||
+                std::abs(std::log(off / median)) > std::abs(std::log(worst / median)))
+                worst = off;
+        }
+        for (const auto& [method, unit] : offByMethod) {
+            char buf[320];
+            std::snprintf(buf, sizeof buf,
+                          "%s: %s's cost ratios were taken against a Direct render of %.1f ms "
+                          "where the case's median unit is %.1f ms (%.1fx apart): not "
+                          "comparable with the other methods' (re-measure them in one run)",
+                          caseName.c_str(), method.c_str(), unit, median,
+                          unit > median ? unit / median : median / unit);
+            warnings.emplace_back(buf);
+        }
+    }
+    return warnings;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -172,6 +172,39 @@ TEST(PlannerModels, ReadsEvaluationCsvByColumnName) {
     EXPECT_DOUBLE_EQ(readMeasurements(cpu)[0].features.opticalSize, 10.0);
 }
 
+TEST(PlannerModels, CostRatiosAgainstFarApartDirectUnitsAreNamed) {
+    // Rows merged from two runs: the second run's Direct render took 3x as long (a loaded
+    // machine), so its method's cost ratios look 3x too cheap next to the others'.
+    const std::string path = writeTemp(
+        "lucent_models_units.csv",
+        "case,method,setting,cpu_ms,direct_cpu_ms,block_rel_l1,feature_optical_size,"
+        "feature_albedo,feature_sigma_t_variation,feature_albedo_variation,feature_mean_abs_g,"
+        "feature_eta,feature_back_lit_fraction,feature_curvature,feature_thin_fraction,"
+        "feature_pixels_covered\n"
+        "a,direct,-,40,40,1,10,0.9,0,0,0,1.3,0,0.1,0.5,100\n"
+        "a,dipole,8 spp,160,40,0.2,10,0.9,0,0,0,1.3,0,0.1,0.5,100\n"
+        "a,sslpv:paper,grid 16,60,45,0.3,10,0.9,0,0,0,1.3,0,0.1,0.5,100\n"
+        "a,combined,8 spp,200,120,0.1,10,0.9,0,0,0,1.3,0,0.1,0.5,100\n"
+        "a,combined,32 spp,210,120,0.1,10,0.9,0,0,0,1.3,0,0.1,0.5,100\n"
+        "b,dipole,8 spp,160,40,0.2,10,0.9,0,0,0,1.3,0,0.1,0.5,100\n"
+        "b,combined,8 spp,200,50,0.1,10,0.9,0,0,0,1.3,0,0.1,0.5,100\n");
+    const std::vector<MeasuredRow> rows = readMeasurements(path, CostMeasure::CpuTime);
+    ASSERT_EQ(rows.size(), 7u);
+    EXPECT_DOUBLE_EQ(rows[3].directUnitMs, 120.0);
+    EXPECT_DOUBLE_EQ(rows[3].costRatio, 200.0 / 120.0);
+    const std::vector<std::string> w = costUnitWarnings(rows);
+    ASSERT_EQ(w.size(), 1u);  // one line for combined on case a; 45 vs 40 and case b are fine
+    EXPECT_NE(w[0].find("a: combined"), std::string::npos) << w[0];
+    EXPECT_NE(w[0].find("120.0 ms"), std::string::npos) << w[0];
+    EXPECT_NE(w[0].find("45.0 ms"), std::string::npos) << w[0];  // the median of 40,40,45,120,120
+    EXPECT_TRUE(costUnitWarnings(rows, 4.0).empty());
+    // Without a unit column nothing can be said.
+    for (MeasuredRow r : rows) {
+        r.directUnitMs = 0.0;
+        EXPECT_TRUE(costUnitWarnings({r}).empty());
+    }
+}
+
 TEST(PlannerModels, CsvErrorsNameTheProblem) {
     auto message = [](const std::string& text) {
         try {

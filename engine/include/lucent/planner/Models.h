@@ -39,6 +39,9 @@ struct MeasuredRow {
     /// Block relative L1 of this setting's image against the same method's next finer
     /// setting on the case (< 0: not measured): the level check's input (LevelCheck.h).
     double blockRelL1ToFiner = -1.0;
+    /// The Direct render's time the cost ratio was taken against (ms; 0 when the CSV has no
+    /// such column): rows of one case measured in different runs have different units.
+    double directUnitMs = 0.0;
     SceneFeatures features;
 };
 
@@ -94,6 +97,13 @@ Models fitModels(const std::vector<MeasuredRow>& rows, double ridge = 0.05);
 enum class CostMeasure { WallTime, CpuTime };
 std::vector<MeasuredRow> readMeasurements(const std::string& csvPath,
                                           CostMeasure cost = CostMeasure::WallTime);
+
+/// Rows whose cost ratios are not comparable with the rest of their case: a method whose rows
+/// were timed against a Direct unit more than `limit` times off the case's median unit (rows
+/// merged from runs on a differently loaded machine; load inflates llvmpipe's CPU time, so even
+/// CPU-time ratios move). One line per case and method, naming both units; empty when every
+/// row's unit is within the limit or unknown.
+std::vector<std::string> costUnitWarnings(const std::vector<MeasuredRow>& rows, double limit = 1.5);
 
 /// JSON (docs/planner.md, "Models file"). @throw IoError / ValueError naming the file, for an
 /// unreadable file, malformed JSON, another VERSION or a coefficient count that does not match
