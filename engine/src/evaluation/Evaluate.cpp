@@ -415,7 +415,7 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
     };
     Timings directTimes;
     timeDirectUnit(directTimes);
-    const Timings directBefore = directTimes;
+    const double unitCpuMsBefore = directTimes.cpu.empty() ? 0.0 : median(directTimes.cpu);
 
     for (const Variant& v : variants) {
         const int n = std::min(options.levels, int(v.settings.size()));
@@ -485,10 +485,10 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
         }
     }
     Timings directAfter;
-    if (!directBefore.cpu.empty())
+    if (unitCpuMsBefore > 0.0)
         timeDirectUnit(directAfter);
     if (!directAfter.cpu.empty()) {
-        const double before = median(directBefore.cpu), after = median(directAfter.cpu);
+        const double before = unitCpuMsBefore, after = median(directAfter.cpu);
         if (std::max(before, after) > 1.5 * std::min(before, after)) {
             char buf[200];
             std::snprintf(buf, sizeof buf,

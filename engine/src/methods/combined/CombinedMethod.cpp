@@ -157,7 +157,6 @@ private:
                          "combined: sslpv-mode diffusion needs split kernel (the steps split "
                          "skips propagation steps, which diffusion does not have)");
             detail::useDiffusionMode(s.sslpv, p, "combined: sslpv-mode diffusion", gl);
-            s.sslpv.render.solver.brickStopEpsilon = 0.f;  // a propagation rule: none here
         }
         if (backend() == Backend::Gl) {
             s.sslpv.backend = p.getChoice("propagation") == "gl" ? sslpv::SslpvBackend::Gl

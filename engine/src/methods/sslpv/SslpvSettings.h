@@ -64,7 +64,8 @@ inline std::vector<ParamDescriptor> propagationStopParams(const std::string& sub
 /// diffusion solve, warm-started from the last solution (a stroke re-solves from the picture
 /// before it). The propagation's live defaults (32 fixed steps, no stop) would leave the first
 /// frame unconverged, so unless given, both live and offline run to an unbalanced power of 10⁻³
-/// of the source, at most 1024 iterations; one solve per change (no refinement). The source is
+/// of the source, at most 1024 iterations; one solve per change (no refinement, no per-brick
+/// stop: `brick-stop` is the propagation's). The source is
 /// integrated over each beam's chord per cell, so a few texels per cell face carry it: 4 texels
 /// of RSM per grid cell across (≈ 5 per lit cell face) instead of the propagation's 256², which
 /// re-walked 25 beams per face on every stroke (docs/benchmarks.md, "Diffusion mode").
@@ -78,6 +79,7 @@ inline void useDiffusionMode(sslpv::SslpvProviderOptions& o, const Params& p,
     o.render.injectionResolution = std::clamp(4 * o.render.gridResolution, 64, 256);
     o.render.solver.maxSteps = p.isGiven("steps") ? p.getInt("steps") : 1024;
     o.render.solver.stopEpsilon = p.isGiven("stop") ? float(p.getFloat("stop")) : 1e-3f;
+    o.render.solver.brickStopEpsilon = 0.f;  // a propagation rule: the solve has no bricks
     o.refineSteps = 0;
 }
 
