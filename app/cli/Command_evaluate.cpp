@@ -74,7 +74,7 @@ void redrawReports(const std::string& dir) {
 struct EvaluateOptions {
     std::vector<std::string> scenes;
     std::string suite, cases, methods, out, presets, etas, report;
-    int refSpp = 256, repeats = 3, levels = 3, width = 0, height = 0, materialRes = 48;
+    int refSpp = 256, refSeed = 1, repeats = 3, levels = 3, width = 0, height = 0, materialRes = 48;
     bool subsurfaceOnly = false, json = false, verbose = false, noImages = false;
     const CLI::App* app = nullptr;
     bool has(const std::string& option) const { return app->count(option) > 0; }
@@ -109,6 +109,7 @@ void runEvaluate(const EvaluateOptions& args, const std::vector<std::string>& ar
     evaluation::RunOptions options;
     options.outDir = *outDir;
     options.refSpp = args.refSpp;
+    options.refSeed = args.refSeed;
     options.repeats = args.repeats;
     options.levels = args.levels;
     options.subsurfaceOnly = args.subsurfaceOnly;
@@ -171,6 +172,7 @@ void runEvaluate(const EvaluateOptions& args, const std::vector<std::string>& ar
     info.width = cases.front().scene.camera.width;
     info.height = cases.front().scene.camera.height;
     info.refSpp = options.refSpp;
+    info.refSeed = options.refSeed;
     info.repeats = options.repeats;
     info.subsurfaceOnly = options.subsurfaceOnly;
     std::vector<evaluation::Result> results;
@@ -241,13 +243,20 @@ void addEvaluateCommand(CLI::App& cli, const CommandContext& context) {
                     "comma-separated METHOD[:VARIANT] (default: each method's default evaluation "
                     "variants; `lucent-cli methods` lists the methods, their variants and quality "
                     "levels, e.g. sslpv:paper, dipole:cpu, dirpole:raw). The reference method "
-                    "runs with seed 7. A variant this binary or case cannot render is skipped "
+                    "runs with the reference's seed + 6 (7 by default). A variant this binary or "
+                    "case cannot render is skipped "
                     "with a message")
         ->type_name("LIST");
     sub->add_option("--out", args->out, "output directory (created if needed)")->type_name("DIR");
     sub->add_option("--ref-spp", args->refSpp, "reference samples per pixel (default 256)")
         ->type_name("N")
         ->check(CLI::Range(3, 1 << 20));
+    sub->add_option("--ref-seed", args->refSeed,
+                    "the reference's path-tracer seed (default 1). Another seed is an independent "
+                    "estimate of the same image, cached beside the first: evaluating against it "
+                    "shows how far each measured error moves with the reference's noise")
+        ->type_name("S")
+        ->check(CLI::Range(1, 1 << 30));
     sub->add_option("--width", args->width,
                     "image width (pixels; --suite: default 64, the height follows the width)")
         ->type_name("W")

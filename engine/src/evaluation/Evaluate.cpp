@@ -30,10 +30,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// The reference's seed; the "reference" method variant uses another one so that its error
-/// is the Monte Carlo noise of both estimates, not zero.
-constexpr int REFERENCE_SEED = 1;
-constexpr int TEST_PT_SEED = 7;
+/// The "reference" method variant runs with the reference's seed plus this, so that its error
+/// is the Monte Carlo noise of both estimates, not zero (seed 7 against the default 1).
+constexpr int TEST_PT_SEED_OFFSET = 6;
 
 /// Sends stderr to /dev/null while alive (the methods print per-pass logs), unless disabled.
 class StderrSilencer {
@@ -225,11 +224,13 @@ CachedReference referenceFor(const Scene& scene, const std::string& name, const 
     std::ostringstream stem;
     stem << name << "_ref_" << w << "x" << h << "_" << options.spp << "spp"
          << (options.subsurfaceOnly ? "_sss" : "");
+    if (options.seed != ReferenceSettings{}.seed)
+        stem << "_seed" << options.seed;
     const fs::path exr = fs::path(dir) / (stem.str() + ".exr");
     const fs::path keyFile = fs::path(dir) / (stem.str() + ".key");
     std::ostringstream key;
     key << "case=" << name << " scene-fnv1a=" << hex(hashScene(scene)) << " width=" << w
-        << " height=" << h << " spp=" << options.spp << " seed=" << REFERENCE_SEED
+        << " height=" << h << " spp=" << options.spp << " seed=" << options.seed
         << " boundary=dielectric estimator=" << reference::REFERENCE_ESTIMATOR_VERSION
         << " subsurface-only=" << options.subsurfaceOnly << "\n";
     CachedReference ref;
@@ -251,7 +252,7 @@ CachedReference referenceFor(const Scene& scene, const std::string& name, const 
     if (!loaded) {
         reference::ReferenceOptions opt;
         opt.spp = options.spp;
-        opt.seed = REFERENCE_SEED;
+        opt.seed = uint64_t(options.seed);
         opt.subsurfaceOnly = options.subsurfaceOnly;
         const reference::ReferenceImage img = reference::renderReference(scene, opt);
         reference::writeReferenceExr(img, exr.string());
@@ -319,7 +320,7 @@ methods::RenderResult renderVariant(const Scene& scene, const Variant& v,
     methods::ParamSet params = v.variant.values;
     params.merge(s.values);
     if (v.method == "reference")
-        params.set("seed", TEST_PT_SEED);
+        params.set("seed", options.refSeed + TEST_PT_SEED_OFFSET);
     methods::RenderOptions ro;
     ro.backend = s.backend != methods::Backend::Auto ? s.backend : v.variant.backend;
     ro.subsurfaceOnly = options.subsurfaceOnly;
@@ -372,7 +373,7 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
     };
     CaseRun run;
     run.reference = referenceFor(evalCase.scene, evalCase.name, options.outDir,
-                                 {options.refSpp, options.subsurfaceOnly});
+                                 {options.refSpp, options.subsurfaceOnly, options.refSeed});
     const CachedReference& ref = run.reference;
     if (options.writeImages) {
         ToneMap tm;

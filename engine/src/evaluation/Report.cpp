@@ -231,7 +231,7 @@ std::string toJson(const std::vector<Result>& results, const RunInfo& info) {
     s << "{\n  \"suite\": \"" << jsonEscape(info.suite) << "\",\n  \"command\": \""
       << jsonEscape(info.command) << "\",\n  \"width\": " << info.width
       << ",\n  \"height\": " << info.height << ",\n  \"ref_spp\": " << info.refSpp
-      << ",\n  \"repeats\": " << info.repeats
+      << ",\n  \"ref_seed\": " << info.refSeed << ",\n  \"repeats\": " << info.repeats
       << ",\n  \"subsurface_only\": " << (info.subsurfaceOnly ? "true" : "false")
       << ",\n  \"metric\": \"4x4-block relative L1 of luminance over object-covered pixels, "
          "reference noise floor removed in quadrature\",\n"
@@ -497,6 +497,7 @@ RunInfo parseRunInfoJson(const std::string& text, const std::string& origin) {
         info.width = j.value("width", 0);
         info.height = j.value("height", 0);
         info.refSpp = j.value("ref_spp", 0);
+        info.refSeed = j.value("ref_seed", 1);
         info.repeats = j.value("repeats", 0);
         info.subsurfaceOnly = j.value("subsurface_only", false);
         for (const nlohmann::json& c : j.at("cases")) {

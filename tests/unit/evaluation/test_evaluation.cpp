@@ -2,6 +2,7 @@
 // The evaluation module: per-case metrics against hand-computed values, the Pareto front, the
 // scene hash and reference cache, the suite's cases and the report files.
 
+#include <lucent/bench/ErrorMetrics.h>
 #include <lucent/core/Error.h>
 #include <lucent/evaluation/Evaluate.h>
 #include <lucent/evaluation/Report.h>
@@ -215,6 +216,27 @@ TEST(EvaluationReference, CacheIsReusedOnlyForTheSameScene) {
     EXPECT_FALSE(referenceFor(other, "c", dir.string(), settings).cached);
 }
 
+TEST(EvaluationReference, AnotherSeedIsAnIndependentEstimateCachedBesideTheFirst) {
+    // `evaluate --ref-seed`: how far measured errors move with the reference's own noise.
+    const fs::path dir = emptyTestDir("cache-seed");
+    const Scene scene = smokeCase(8).scene;
+    const CachedReference one = referenceFor(scene, "c", dir.string(), {4, false});
+    const CachedReference two = referenceFor(scene, "c", dir.string(), {4, false, 2});
+    EXPECT_FALSE(two.cached) << "the seed is part of the cache key";
+    EXPECT_NE(two.path, one.path);
+    EXPECT_NE(two.path.find("_seed2"), std::string::npos) << two.path;
+    EXPECT_NE(two.mean.pixels(), one.mean.pixels()) << "another seed, other samples";
+    // Both estimate the same image: they differ by about their noise, not by more.
+    const bench::ErrorReport d =
+        bench::compareImages(two.mean, one.mean, &one.variance, &two.variance, &one.mask);
+    const auto& lum = d.blocks[bench::ErrorReport::LUMINANCE];
+    EXPECT_LT(lum.relL1, 3.0 * lum.relL1Floor) << lum.relL1 << " vs floor " << lum.relL1Floor;
+    // Each is reused from its own file; the default seed's name is unchanged.
+    EXPECT_TRUE(referenceFor(scene, "c", dir.string(), {4, false}).cached);
+    EXPECT_TRUE(referenceFor(scene, "c", dir.string(), {4, false, 2}).cached);
+    EXPECT_EQ(fs::path(one.path).filename().string(), "c_ref_8x8_4spp.exr");
+}
+
 /// A quick run into a fresh test folder: 4-spp reference, one timed repeat, no images.
 RunOptions quickRun(const char* dirName, int levels) {
     RunOptions run;
@@ -371,12 +393,14 @@ TEST(EvaluationReport, ResultsReadBackAsWritten) {
     info.width = 64;
     info.height = 48;
     info.refSpp = 256;
+    info.refSeed = 2;
     info.cases = {"a", "b"};
     info.noiseFloors = {0.01, 0.02};
     info.referenceSeconds = {3.0, 0.0};
     info.skipped = {"b: combined (8 spp): no GL"};
     const RunInfo again = parseRunInfoJson(toJson({}, info), "results.json");
     EXPECT_EQ(toJson({}, again), toJson({}, info));
+    EXPECT_EQ(again.refSeed, 2);
     EXPECT_THROW(parseRunInfoJson("{", "bad.json"), IoError);
 }
 

@@ -67,6 +67,9 @@ uint64_t hashScene(const Scene& scene);
 struct ReferenceSettings {
     int spp = 256;
     bool subsurfaceOnly = false;
+    /// The path tracer's seed. Another seed gives an independent estimate of the same image:
+    /// evaluating against it shows how far a measured error moves with the reference's noise.
+    int seed = 1;
 };
 
 /// A case's reference with its noise floor.
@@ -85,9 +88,10 @@ struct CachedReference {
     double meanLuminance = 0.0;  ///< over the compared pixels
 };
 
-/// The reference of `scene`, from `dir` when DIR/<name>_ref_<W>x<H>_<spp>spp[_sss].key holds
-/// the same key (scene hash, size, spp, seed, boundary, REFERENCE_ESTIMATOR_VERSION,
-/// subsurface-only), else rendered (seed 1, dielectric boundary) and written there.
+/// The reference of `scene`, from `dir` when DIR/<name>_ref_<W>x<H>_<spp>spp[_sss][_seedS].key
+/// holds the same key (scene hash, size, spp, seed, boundary, REFERENCE_ESTIMATOR_VERSION,
+/// subsurface-only), else rendered (dielectric boundary) and written there. The stem names the
+/// seed only when it is not the default 1.
 /// @throw IoError when the cache cannot be read or written; ValueError from the renderer.
 CachedReference referenceFor(const Scene& scene, const std::string& name, const std::string& dir,
                              const ReferenceSettings& options);
@@ -157,6 +161,9 @@ struct Result {
 struct RunOptions {
     std::string outDir;  ///< references, images; must exist
     int refSpp = 256;
+    /// The reference's seed (ReferenceSettings::seed); the `reference` method, scored as a
+    /// method, runs with refSeed + 6 so that its error is the noise of two independent estimates.
+    int refSeed = 1;
     int repeats = 3;  ///< timed runs per setting after one warm-up
     int levels = 3;   ///< at most this many quality settings per variant
     bool subsurfaceOnly = false;

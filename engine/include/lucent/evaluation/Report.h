@@ -22,6 +22,7 @@ struct RunInfo {
     std::string suite;    ///< "default", "smoke" or "files"
     std::string command;  ///< the command line that reproduces the run
     int width = 0, height = 0, refSpp = 0, repeats = 0;
+    int refSeed = 1;  ///< the reference's seed (RunOptions::refSeed)
     bool subsurfaceOnly = false;
     std::vector<std::string> cases;
     std::vector<double> referenceSeconds;  ///< per case (0 when cached)
