@@ -71,13 +71,13 @@ void printMeasurement(const planner::OwnReferenceMeasurement& m, const planner::
 
 struct PlanOptions {
     std::string scene, models, output, source, cost = "wall";
-    std::vector<std::string> fit, check;
+    std::vector<std::string> fit, check, plannedErrors;
     float budgetMs = 1000.f, maxError = 0.f, directMs = 1.f, ridge = 0.05f, budgetRatio = 20.f,
           errorTolerance = float(planner::Budget{}.errorTolerance);
     planner::LevelTolerance levelTolerance;
     planner::OwnReferenceOptions measureOptions;
     int width = 0, height = 0;
-    bool cpu = false, measure = false;
+    bool cpu = false, measure = false, crossValidate = false;
     const CLI::App* app = nullptr;
     bool has(const std::string& option) const { return app->count(option) > 0; }
     planner::CostMeasure costMeasure() const {
@@ -108,11 +108,7 @@ void runFit(const PlanOptions& args) {
         source += " " + csv;
     }
     warnAboutCostUnits(rows);
-    // Ground truth and the unlit baseline are not previews to choose from.
-    std::erase_if(rows, [](const planner::MeasuredRow& r) {
-        return r.method == "reference" || r.method.rfind("reference:", 0) == 0 ||
-               r.method == "direct";
-    });
+    rows = planner::previewRows(std::move(rows));
     planner::Models models = planner::fitModels(rows, ridge);
     models.source = args.has("--source") ? args.source : source;
     planner::saveModels(models, out);
@@ -126,7 +122,16 @@ void runFit(const PlanOptions& args) {
 }
 
 void runCheck(const PlanOptions& args) {
-    const planner::Models models = args.loadModels();
+    if (!args.plannedErrors.empty() && !args.measure)
+        LUCENT_THROW(ValueError,
+                     "--planned-errors is what Auto plans with under --measure: give "
+                     "--measure too");
+    const bool crossValidate = args.crossValidate;
+    if (crossValidate && args.has("--models"))
+        LUCENT_THROW(ValueError,
+                     "plan --check --cross-validate fits its own models (one per case left out): "
+                     "give --models or --cross-validate, not both");
+    const planner::Models models = crossValidate ? planner::Models{} : args.loadModels();
     const double budgetRatio = args.budgetRatio;
     std::vector<planner::MeasuredRow> rows;
     for (const std::string& csv : args.check) {
@@ -134,15 +139,32 @@ void runCheck(const PlanOptions& args) {
         rows.insert(rows.end(), r.begin(), r.end());
     }
     warnAboutCostUnits(rows);
-    const std::vector<planner::FrontCheck> checks = planner::checkAgainstFront(
-        rows, models, budgetRatio, args.errorTolerance, args.levelTolerance, args.measure);
+    std::vector<planner::MeasuredRow> planning;  // --planned-errors: another reference's errors
+    for (const std::string& csv : args.plannedErrors) {
+        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv, args.costMeasure());
+        planning.insert(planning.end(), r.begin(), r.end());
+    }
+    const std::vector<planner::MeasuredRow>* planned = planning.empty() ? nullptr : &planning;
+    const std::vector<planner::FrontCheck> checks =
+        crossValidate
+            ? planner::crossValidatedCheck(rows, args.ridge, budgetRatio, args.errorTolerance,
+                                           args.levelTolerance, args.measure, planned)
+            : planner::checkAgainstFront(rows, models, budgetRatio, args.errorTolerance,
+                                         args.levelTolerance, args.measure, planned);
     if (checks.empty())
         LUCENT_THROW(ValueError, "plan --check: no case has a measured candidate with a model");
+    const std::string fitNote = crossValidate ? "each case planned by models fitted on the other "
+                                                "cases (ridge " +
+                                                    std::to_string(args.ridge).substr(0, 5) + "); "
+                                              : "";
     std::printf(
         "budget: %g x the Direct frame; times are measured cost ratios, errors measured\n"
-        "block rel. L1; %s\n\n",
-        budgetRatio,
-        args.measure ? "Auto plans with the measured errors (--measure: no level check)"
+        "block rel. L1; %s%s\n\n",
+        budgetRatio, fitNote.c_str(),
+        args.measure && planned
+            ? "Auto plans with the errors of --planned-errors, measured against another "
+              "reference, and is judged by --check's (--measure: no level check)"
+        : args.measure ? "Auto plans with the measured errors (--measure: no level check)"
         : args.levelTolerance.off()
             ? "level check off"
             : ("level check max(" + std::to_string(args.levelTolerance.absolute).substr(0, 5) +
@@ -170,6 +192,8 @@ void runCheck(const PlanOptions& args) {
 }
 
 void runPlan(const PlanOptions& args) {
+    if (args.has("--ridge") && args.fit.empty() && !args.crossValidate)
+        LUCENT_THROW(ValueError, "--ridge applies to --fit and --check --cross-validate");
     if (!args.fit.empty())
         return runFit(args);
     if (!args.check.empty())
@@ -254,9 +278,11 @@ void addPlanCommand(CLI::App& cli, const CommandContext&) {
         "usage: lucent-cli plan SCENE.json [--budget-ms B | --max-error E] [--direct-ms D]\n"
         "                       [--models models.json] [--width W] [--height H] [--cpu]\n"
         "       lucent-cli plan --fit suite.csv [--fit more.csv ...] -o models.json [--ridge R]\n"
-        "       lucent-cli plan --check suite.csv [--models F] [--budget-ratio R]\n"
+        "       lucent-cli plan --check suite.csv [--models F | --cross-validate [--ridge R]]\n"
+        "                       [--budget-ratio R]\n"
         "  SCENE and --check: [--level-tolerance T] [--level-relative K] [--no-level-check]\n"
-        "  SCENE: [--measure [--measure-width W] [--measure-spp N]]; --check: [--measure]\n",
+        "  SCENE: [--measure [--measure-width W] [--measure-spp N]];\n"
+        "  --check: [--measure [--planned-errors CSV]]\n",
         "Prints the scene's features and class, every candidate (a method at one quality level)\n"
         "with its predicted time and 4x4-block error against the exact reference, the choice and\n"
         "its one-line reason, and the `lucent-cli render` command that renders it\n"
@@ -300,10 +326,10 @@ void addPlanCommand(CLI::App& cli, const CommandContext&) {
     sub->add_option("-o,--output", args->output, "--fit: the models file to write")
         ->type_name("models.json")
         ->needs(fit);
-    sub->add_option("--ridge", args->ridge, "regularisation of the fit (default 0.05)")
+    sub->add_option("--ridge", args->ridge,
+                    "regularisation of the fit (--fit, --check --cross-validate; default 0.05)")
         ->type_name("R")
-        ->check(finiteRange(0, 100))
-        ->needs(fit);
+        ->check(finiteRange(0, 100));
     sub->add_option("--source", args->source, "--fit: the models' source note")
         ->type_name("TEXT")
         ->needs(fit);
@@ -334,10 +360,24 @@ void addPlanCommand(CLI::App& cli, const CommandContext&) {
         ->type_name("T")
         ->check(finiteRange(0.0, 0.99))
         ->needs(check);
+    sub->add_flag("--cross-validate", args->crossValidate,
+                  "--check: judge each case by models fitted on the other cases' rows (leave one "
+                  "case out, --ridge R) instead of --models: how Auto fares on a scene its "
+                  "models were not fitted on")
+        ->needs(check);
     // --check replays the level check on the CSV's block_rel_l1_to_finer column.
     addLevelCheckOptions(*sub, args->levelTolerance, "Level check (SCENE and --check)");
     // --check --measure replays Auto planning with each case's measured errors.
     addMeasureOptions(*sub, args->measure, args->measureOptions, "Measuring (SCENE and --check)");
+    sub->add_option("--planned-errors", args->plannedErrors,
+                    "--check --measure: Auto plans with the errors of these rows (the same cases "
+                    "scored against an independent reference, `evaluate --ref-seed 2`) and is "
+                    "judged by --check's, as its own measurement has its own reference "
+                    "(repeatable; default: the --check rows' own errors)")
+        ->type_name("CSV")
+        ->check(existingFile())
+        ->needs(check)
+        ->group("Measuring (SCENE and --check)");
     sub->callback([args] { runPlan(*args); });
 }
 

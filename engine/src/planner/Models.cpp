@@ -553,7 +553,8 @@ const Models& defaultModels() {
 std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
                                           const Models& models, double budgetRatio,
                                           double errorTolerance, LevelTolerance levelTolerance,
-                                          bool measuredErrors) {
+                                          bool measuredErrors,
+                                          const std::vector<MeasuredRow>* plannedErrors) {
     LUCENT_CHECK(budgetRatio > 0, "front check: the budget must be > 0 times the Direct frame");
     LUCENT_CHECK(std::isfinite(levelTolerance.absolute) && levelTolerance.absolute >= 0 &&
                      std::isfinite(levelTolerance.relative) && levelTolerance.relative >= 0,
@@ -584,17 +585,32 @@ std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
         }
         if (measured.empty())
             continue;
+        // With measured errors: the rows Auto plans by, one per measured candidate.
+        std::vector<const MeasuredRow*> planning = measured;
+        if (measuredErrors && plannedErrors)
+            for (const MeasuredRow*& p : planning) {
+                const MeasuredRow* judged = p;
+                const auto row =
+                    std::find_if(plannedErrors->begin(), plannedErrors->end(), [&](const auto& r) {
+                        return r.caseName == judged->caseName && r.method == judged->method &&
+                               r.setting == judged->setting && std::isfinite(r.blockRelL1);
+                    });
+                if (row == plannedErrors->end())
+                    LUCENT_THROW(ValueError, "front check: the planning errors have no row for ",
+                                 judged->caseName, ": ", judged->method, " ", judged->setting);
+                p = &*row;
+            }
         if (measuredErrors)  // the scene's own errors, as measuredModels(…, ErrorsOnly) gives
-            for (size_t k = 0; k < measured.size(); ++k) {
-                const double e = std::max(measured[k]->blockRelL1, 1e-6);
+            for (size_t k = 0; k < planning.size(); ++k) {
+                const double e = std::max(planning[k]->blockRelL1, 1e-6);
                 candidates[k].error = [e](const SceneFeatures&) { return e; };
             }
         Budget budget;
         budget.directMs = 1.0;
         budget.frameMs = budgetRatio;
         budget.errorTolerance = errorTolerance;
-        if (measuredErrors)  // what the case's reference can tell apart (chooseByMeasuring)
-            for (const MeasuredRow* r : measured)
+        if (measuredErrors)  // what the planning reference can tell apart (chooseByMeasuring)
+            for (const MeasuredRow* r : planning)
                 budget.errorMargin = std::max(budget.errorMargin, r->noiseFloor);
         const Plan p = plan(candidates, measured.front()->features, budget);
         const MeasuredRow* pick = measured[p.choice];
@@ -658,6 +674,44 @@ std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
             ((chosen.costRatio <= budgetRatio) == (best->costRatio <= budgetRatio) &&
              chosen.blockRelL1 <= best->blockRelL1 + std::max(chosen.noiseFloor, best->noiseFloor));
         out.push_back(std::move(c));
+    }
+    return out;
+}
+
+std::vector<MeasuredRow> previewRows(std::vector<MeasuredRow> rows) {
+    std::erase_if(rows, [](const MeasuredRow& r) {
+        return r.method == "reference" || r.method.rfind("reference:", 0) == 0 ||
+               r.method == "direct";
+    });
+    return rows;
+}
+
+std::vector<FrontCheck> crossValidatedCheck(const std::vector<MeasuredRow>& rows, double ridge,
+                                            double budgetRatio, double errorTolerance,
+                                            LevelTolerance levelTolerance, bool measuredErrors,
+                                            const std::vector<MeasuredRow>* plannedErrors) {
+    std::vector<std::string> cases;
+    for (const MeasuredRow& r : rows)
+        if (std::find(cases.begin(), cases.end(), r.caseName) == cases.end())
+            cases.push_back(r.caseName);
+    if (cases.size() < 2)
+        LUCENT_THROW(ValueError, "cross-validated check: ", cases.size(),
+                     " case(s); leaving one out needs at least 2");
+    std::vector<FrontCheck> out;
+    for (const std::string& name : cases) {
+        std::vector<MeasuredRow> train, test;
+        for (const MeasuredRow& r : rows)
+            (r.caseName == name ? test : train).push_back(r);
+        Models models;
+        try {
+            models = fitModels(previewRows(std::move(train)), ridge);
+        } catch (const ValueError&) {
+            continue;  // nothing to fit without this case
+        }
+        std::vector<FrontCheck> c =
+            checkAgainstFront(test, models, budgetRatio, errorTolerance, levelTolerance,
+                              measuredErrors, plannedErrors);
+        out.insert(out.end(), c.begin(), c.end());
     }
     return out;
 }

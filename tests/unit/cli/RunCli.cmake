@@ -457,6 +457,19 @@ elseif(CASE STREQUAL "auto")
     run(check_measured plan --check ${OUT}/suite.csv --models ${OUT}/models.json --measure)
     expect_ok(check_measured)
     expect_contains(check_measured "${check_measured_OUT}" "Auto plans with the measured errors")
+    # Leave one case out: three cases, each planned by models fitted on the other two.
+    file(WRITE ${OUT}/suite3.csv "case,method,setting,cost_ratio,block_rel_l1,${features}\n"
+        "a,dipole,8 spp,3,0.2,100,0.9,0,0,0,1.3,0,0.2,0.5,500,1024\n"
+        "b,dipole,8 spp,4,0.4,10,0.8,0,0,0,1.3,1,0.5,0.9,900,1024\n"
+        "c,dipole,8 spp,5,0.3,30,0.85,0,0,0,1.3,0.5,0.3,0.7,700,1024\n")
+    run(check_cv plan --check ${OUT}/suite3.csv --cross-validate --ridge 0.1)
+    expect_ok(check_cv)
+    expect_contains(check_cv "${check_cv_OUT}" "fitted on the other cases (ridge 0.100)")
+    expect_contains(check_cv "${check_cv_OUT}" "within 1.2x of the front at equal error: 3 of 3 cases")
+    run(check_cv_models plan --check ${OUT}/suite3.csv --cross-validate --models ${OUT}/models.json)
+    expect_one_line_error(check_cv_models "give --models or --cross-validate, not both")
+    run(ridge_alone plan --check ${OUT}/suite3.csv --ridge 0.1)
+    expect_one_line_error(ridge_alone "--ridge applies to --fit and --check --cross-validate")
 else()
     message(FATAL_ERROR "unknown CASE '${CASE}'")
 endif()

@@ -75,6 +75,40 @@ std::string writeTemp(const std::string& name, const std::string& text) {
     return path;
 }
 
+/// A measured row of candidate `method` at setting "s" for the front checks.
+MeasuredRow frontRow(const std::string& caseName, const std::string& method, double cost,
+                     double error, double opticalSize, double meanAbsG = 0.0) {
+    MeasuredRow r;
+    r.caseName = caseName;
+    r.method = method;
+    r.setting = "s";
+    r.costRatio = cost;
+    r.blockRelL1 = error;
+    r.features.opticalSize = opticalSize;
+    r.features.albedo = 0.9;
+    r.features.eta = 1.3;
+    r.features.meanAbsG = meanAbsG;
+    return r;
+}
+
+/// Two scene-independent candidates: "fast s" at 1× Direct and "slow s" at 10×, predicting
+/// the given errors.
+Models fastAndSlow(double fastError, double slowError) {
+    Models models;
+    CandidateModel fast, slow;
+    fast.method = "fast";
+    slow.method = "slow";
+    fast.setting = slow.setting = "s";
+    fast.cost = {std::log(1.0), 0, 0};
+    slow.cost = {std::log(10.0), 0, 0};
+    fast.error.assign(errorTermNames().size(), 0.0);
+    slow.error = fast.error;
+    fast.error[0] = std::log(fastError);
+    slow.error[0] = std::log(slowError);
+    models.candidates = {fast, slow};
+    return models;
+}
+
 }  // namespace
 
 TEST(PlannerModels, TermsMatchTheirNames) {
@@ -340,31 +374,9 @@ TEST(PlannerModels, FrontCheckJudgesTheChoiceByMeasurement) {
     // Two candidates on two cases; the models predict "fast" as accurate as "slow" on case a,
     // so Auto takes fast there. Measured: on a, fast is 0.30 and slow 0.10 at 10× the cost;
     // on b the models are right.
-    auto row = [](const std::string& c, const std::string& m, double cost, double err,
-                  double opticalSize) {
-        MeasuredRow r;
-        r.caseName = c;
-        r.method = m;
-        r.setting = "s";
-        r.costRatio = cost;
-        r.blockRelL1 = err;
-        r.features.opticalSize = opticalSize;
-        r.features.albedo = 0.9;
-        r.features.eta = 1.3;
-        return r;
-    };
-    Models models;
-    CandidateModel fast, slow;
-    fast.method = "fast";
-    slow.method = "slow";
-    fast.setting = slow.setting = "s";
-    fast.cost = {std::log(1.0), 0, 0};
-    slow.cost = {std::log(10.0), 0, 0};
-    fast.error.assign(errorTermNames().size(), 0.0);
-    slow.error = fast.error;
-    fast.error[0] = std::log(0.1);
-    slow.error[0] = std::log(0.2);
-    models.candidates = {fast, slow};
+    const auto row = [](const std::string& c, const std::string& m, double cost, double err,
+                        double opticalSize) { return frontRow(c, m, cost, err, opticalSize); };
+    Models models = fastAndSlow(0.1, 0.2);
     const std::vector<MeasuredRow> rows = {
         row("a", "fast", 1.0, 0.30, 10), row("a", "slow", 10.0, 0.10, 10),
         row("b", "fast", 1.2, 0.05, 100), row("b", "slow", 9.0, 0.20, 100),
@@ -405,4 +417,71 @@ TEST(PlannerModels, FrontCheckJudgesTheChoiceByMeasurement) {
     for (MeasuredRow& r : noisy)
         r.noiseFloor = 0.25;
     EXPECT_EQ(checkAgainstFront(noisy, models, 20.0, 0.1, {}, true)[0].chosen, "fast s");
+}
+
+TEST(PlannerModels, CrossValidatedCheckJudgesEachCaseByModelsFittedWithoutIt) {
+    // Two candidates on seven cases. On six (g = 0) fast is both cheaper and more accurate; on
+    // the seventh (g = 0.9) fast is ten times as wrong. Fitted on all seven, the g slope comes
+    // from that case alone and Auto takes slow there, as if it had foreseen it; with the case
+    // left out no case teaches the slope, Auto takes fast and the check says so.
+    const auto row = [](const std::string& c, const std::string& m, double cost, double err,
+                        double g) { return frontRow(c, m, cost, err, 100.0, g); };
+    std::vector<MeasuredRow> rows;
+    for (int i = 0; i < 6; ++i) {
+        const std::string c = "plain" + std::to_string(i);
+        rows.push_back(row(c, "fast", 1.0, 0.05, 0.0));
+        rows.push_back(row(c, "slow", 10.0, 0.10, 0.0));
+        rows.push_back(row(c, "direct", 1.0, 0.9, 0.0));  // a baseline: never a candidate
+    }
+    rows.push_back(row("forward", "fast", 1.0, 0.50, 0.9));
+    rows.push_back(row("forward", "slow", 10.0, 0.10, 0.9));
+
+    const Models inSample = fitModels(previewRows(rows), 0.05);
+    ASSERT_EQ(inSample.candidates.size(), 2u);  // fast and slow; direct left out
+    const std::vector<FrontCheck> seen = checkAgainstFront(rows, inSample, 20.0);
+    ASSERT_EQ(seen.size(), 7u);
+    EXPECT_EQ(seen.back().chosen, "slow s");
+    EXPECT_TRUE(seen.back().choseBest);
+
+    const std::vector<FrontCheck> unseen = crossValidatedCheck(rows, 0.05, 20.0);
+    ASSERT_EQ(unseen.size(), 7u);
+    for (size_t i = 0; i < 6; ++i) {
+        EXPECT_EQ(unseen[i].caseName, "plain" + std::to_string(i));
+        EXPECT_EQ(unseen[i].chosen, "fast s");
+        EXPECT_TRUE(unseen[i].choseBest);
+    }
+    EXPECT_EQ(unseen.back().caseName, "forward");
+    EXPECT_EQ(unseen.back().chosen, "fast s");
+    EXPECT_EQ(unseen.back().bestInBudget, "slow s");
+    EXPECT_FALSE(unseen.back().choseBest);
+
+    // One case leaves nothing to fit the others on.
+    const std::vector<MeasuredRow> one(rows.end() - 2, rows.end());
+    EXPECT_THROW(crossValidatedCheck(one, 0.05, 20.0), ValueError);
+}
+
+TEST(PlannerModels, MeasuredErrorsCanComeFromAnotherReference) {
+    // Auto's own measurement has its own reference: replayed with the errors of the same
+    // candidates scored against another one (`evaluate --ref-seed`), it is judged by the check's.
+    const Models models = fastAndSlow(1.0, 1.0);  // the errors Auto plans by are measured
+    const std::vector<MeasuredRow> judged = {frontRow("a", "fast", 1.0, 0.30, 10),
+                                             frontRow("a", "slow", 10.0, 0.10, 10)};
+    const FrontCheck own = checkAgainstFront(judged, models, 20.0, 0.1, {}, true)[0];
+    EXPECT_EQ(own.chosen, "slow s");  // planned and judged by one reference: the best, always
+    EXPECT_TRUE(own.choseBest);
+    // The other reference reads fast at 0.08: Auto takes it and the check sees 0.30.
+    std::vector<MeasuredRow> other = judged;
+    other[0].blockRelL1 = 0.08;
+    const FrontCheck replay = checkAgainstFront(judged, models, 20.0, 0.1, {}, true, &other)[0];
+    EXPECT_EQ(replay.chosen, "fast s");
+    EXPECT_DOUBLE_EQ(replay.chosenError, 0.30);
+    EXPECT_FALSE(replay.choseBest);
+    // The planning reference's floor is the tie margin: at 0.05 fast (0.08) and slow (0.10)
+    // are equal there and the cheaper is taken either way; a candidate it lacks is an error.
+    for (MeasuredRow& r : other)
+        r.noiseFloor = 0.05;
+    other[0].blockRelL1 = 0.12;
+    EXPECT_EQ(checkAgainstFront(judged, models, 20.0, 0.1, {}, true, &other)[0].chosen, "fast s");
+    other.pop_back();
+    EXPECT_THROW(checkAgainstFront(judged, models, 20.0, 0.1, {}, true, &other), ValueError);
 }

@@ -83,6 +83,10 @@ double predictError(const CandidateModel& model, const SceneFeatures& f);
 /// fit a scene dependence on). @throw ValueError if no candidate can be fitted.
 Models fitModels(const std::vector<MeasuredRow>& rows, double ridge = 0.05);
 
+/// `rows` without the `direct` and `reference` rows: the unlit baseline and the measuring stick
+/// are not previews to choose from, so no model is fitted for them.
+std::vector<MeasuredRow> previewRows(std::vector<MeasuredRow> rows);
+
 /// Reads an evaluation CSV (`lucent-cli evaluate --suite` writes one): a header row naming
 /// the columns, then one row per case, method and setting. Columns are found by name:
 /// case (or scene), method, setting, cost_ratio (or time_ms with direct_ms), block_rel_l1,
@@ -147,14 +151,28 @@ struct FrontCheck {
 /// without a model are left out. `errorTolerance`: the planner's Budget::errorTolerance.
 /// `measuredErrors`: plan with each case's measured errors in place of the predicted ones (the
 /// costs stay predicted), as Auto does when it measures the scene on its own
-/// (chooseByMeasuring, MeasureScene.h); the level check is then not replayed.
-/// @throw ValueError if budgetRatio ≤ 0, the error tolerance is outside [0, 1) or a level
-/// tolerance is negative.
+/// (chooseByMeasuring, MeasureScene.h); the level check is then not replayed. Those errors are
+/// `rows`' own unless `plannedErrors` gives other rows of the same cases and candidates (the
+/// suite scored against an independent reference, `evaluate --ref-seed`): Auto's measurement
+/// has its own reference, so planning and judging by one reference's errors flatters it.
+/// @throw ValueError if budgetRatio ≤ 0, the error tolerance is outside [0, 1), a level
+/// tolerance is negative, or `plannedErrors` lacks a candidate measured in `rows`.
 std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
                                           const Models& models, double budgetRatio,
                                           double errorTolerance = Budget{}.errorTolerance,
                                           LevelTolerance levelTolerance = {0.0, 0.0},
-                                          bool measuredErrors = false);
+                                          bool measuredErrors = false,
+                                          const std::vector<MeasuredRow>* plannedErrors = nullptr);
+
+/// checkAgainstFront with each case judged by models that have not seen it: for every case,
+/// fitModels(previewRows(the other cases' rows), ridge), then that case's check. The in-sample
+/// check (models fitted on the rows they are judged on) flatters them; this is how Auto fares
+/// on a scene outside its fit. Cases whose remaining rows fit no candidate are left out.
+/// @throw ValueError as checkAgainstFront, or if fewer than 2 cases are given.
+std::vector<FrontCheck> crossValidatedCheck(
+    const std::vector<MeasuredRow>& rows, double ridge, double budgetRatio,
+    double errorTolerance = Budget{}.errorTolerance, LevelTolerance levelTolerance = {0.0, 0.0},
+    bool measuredErrors = false, const std::vector<MeasuredRow>* plannedErrors = nullptr);
 
 /// The planner's candidates for `models` (costRatio and error bound to the models; `unusable`
 /// left empty: the caller knows what the scene and backend allow).
