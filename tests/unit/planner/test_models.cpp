@@ -293,6 +293,31 @@ TEST(PlannerModels, ModelsFileRoundTripsAndRefusesOthers) {
     EXPECT_TRUE(fails(nan, "not a finite number"));
 }
 
+TEST(PlannerModels, ShippedModelsAreTheFitOfTheShippedSuiteFile) {
+    // resources/planner/models.json must be what `lucent-cli plan --cost cpu --fit
+    // resources/evaluation/suite_default.csv` makes of the CSV shipped beside it: a CSV
+    // re-measured without a refit, or a models file edited by hand, fails here.
+    const std::string csv =
+        std::string(LUCENT_SOURCE_DIR) + "/resources/evaluation/suite_default.csv";
+    const Models& shipped = defaultModels();
+    const Models fitted =
+        fitModels(previewRows(readMeasurements(csv, CostMeasure::CpuTime)), shipped.ridge);
+    ASSERT_EQ(fitted.candidates.size(), shipped.candidates.size());
+    for (size_t i = 0; i < shipped.candidates.size(); ++i) {
+        const CandidateModel& a = shipped.candidates[i];
+        const CandidateModel& b = fitted.candidates[i];
+        const std::string name = a.method + " " + a.setting;
+        ASSERT_EQ(b.method + " " + b.setting, name);
+        EXPECT_EQ(a.cases, b.cases) << name;
+        // The file holds 6 decimals; a rebuild with other flags may move the last bits.
+        for (size_t k = 0; k < a.cost.size(); ++k)
+            EXPECT_NEAR(a.cost[k], b.cost[k], 1e-5) << name << " cost term " << k;
+        for (size_t k = 0; k < a.error.size(); ++k)
+            EXPECT_NEAR(a.error[k], b.error[k], 1e-5) << name << " error term " << k;
+        EXPECT_NEAR(a.errorLogRms, b.errorLogRms, 1e-3) << name;
+    }
+}
+
 TEST(PlannerModels, ShippedModelsMatchTheRegistry) {
     // Every shipped candidate names a registered method, variant and quality level, so a
     // renamed setting cannot silently drop out of Auto.
