@@ -41,8 +41,13 @@ struct CombinedSubsurfaceProvider::Impl {
     /// The kernel is dirty only because the material changed (a stroke), not the split: it is
     /// kept when the mean material is still close to `kernelMaterial` (kernelMaterialClose).
     bool kernelMaterialOnly = false;
-    MaterialSample kernelMaterial;  ///< the mean material the kernel was computed for
-    uint64_t kernelVersion = 0;     ///< counts kernel recomputes (part of the L̂ key)
+    MaterialSample kernelMaterial;  ///< the surface material the kernel was computed for
+    /// The volume's surface shell one SSLPV cell deep (surfaceShell), whose mean material the
+    /// kernel is solved for; the inside mask does not change under paint, so it is found once
+    /// per volume and cell size (an exact distance transform: tens of ms at 128³).
+    std::vector<Coord> shell;
+    float shellDepth = -1.f;     ///< the cell size `shell` was found for; < 0: none
+    uint64_t kernelVersion = 0;  ///< counts kernel recomputes (part of the L̂ key)
     /// L̂ = F_t/π ∫_{r≤r_s} R_lpv E dA (`local`) and the kernel's near fraction
     /// f = ∫_{r≤r_s} R_lpv E dA / ∫ R_lpv E dA (`fraction`, localSslpvFraction) per pixel
     /// (RGBA32F, a = the object's pixel). They depend
@@ -181,6 +186,7 @@ void CombinedSubsurfaceProvider::setMaterial(const MaterialVolume& volume, float
     m->sslpv.setMaterial(volume, eta);
     m->dipole.setMaterial(&volume);
     m->volume = &volume;
+    m->shellDepth = -1.f;      // another volume or mask: find the surface shell again
     m->pendingBricks.clear();  // the dipole uploads the whole volume at the next frame
     m->cellSize = sslpvCellSize(volume, m->settings.sslpv.render.gridResolution);
     m->settings.eta = eta;
@@ -270,16 +276,21 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
         m->kernelDeferred = false;
         if (kernel && (m->kernelDirty || !m->kernelBuffer.isValid()) && m->volume && !deferKernel) {
             const auto scope = m->profiler.scope("kernel");
-            // SSLPV's local kernel for the volume's mean material (docs/methods/combined.md).
-            const MaterialSample mean = meanInsideMaterial(*m->volume);
+            // SSLPV's local kernel for the material of the volume's surface cells
+            // (docs/methods/combined.md, "Painted volumes: the kernel of the surface cells").
+            if (m->shellDepth != plan.cellSize) {
+                m->shell = surfaceShell(*m->volume, plan.cellSize);
+                m->shellDepth = plan.cellSize;
+            }
+            const MaterialSample surface = surfaceMaterial(*m->volume, m->shell);
             if (m->kernelMaterialOnly && m->kernelBuffer.isValid() &&
-                kernelMaterialClose(mean, m->kernelMaterial)) {
+                kernelMaterialClose(surface, m->kernelMaterial)) {
                 ++m->stats.kernelsKept;  // a stroke that hardly moved the mean: kernel and L̂ stay
             } else {
                 m->kernel = computeSslpvSurfaceKernel(
-                    mean, m->settings.eta, sslpv::refinedSolverOptions(m->sslpv.options()),
+                    surface, m->settings.eta, sslpv::refinedSolverOptions(m->sslpv.options()),
                     plan.cellSize, plan.splitRadius);
-                m->kernelMaterial = mean;
+                m->kernelMaterial = surface;
                 std::vector<glm::vec4> rings;
                 for (size_t b = 0; b < m->kernel.ringOuter.size(); ++b)
                     rings.emplace_back(m->kernel.ringOuter[b], m->kernel.ringValue[b]);

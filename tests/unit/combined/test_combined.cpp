@@ -18,6 +18,7 @@
 #include <lucent/gpu/GlContext.h>
 #include <lucent/material/MaterialVolume.h>
 #include <lucent/material/Presets.h>
+#include <lucent/material/Procedural.h>
 #include <lucent/mesh/Procedural.h>
 #include <lucent/reference/PathTracer.h>
 #include <lucent/scene/SceneFile.h>
@@ -455,6 +456,65 @@ TEST(CombinedCpu, KernelSplitKeepsThePartsEnergyAtEtaOne) {
         // near fraction f is estimated by 32 samples per pixel on each side.
         EXPECT_GE(sumL[c], 0.95 * lower) << "channel " << c;
     }
+}
+
+TEST(CombinedCpu, KernelMaterialIsTheSurfaceCellsMean) {
+    // The local kernel is solved for the material of the volume's surface cells (surfaceShell,
+    // one SSLPV cell deep), not the whole inside's mean: a coat over another core is the coat's.
+    const Scene s = litSphere();
+    MaterialVolume vol = *s.objects[0].material;
+    const float h = vol.spec().voxelSize;
+    const std::vector<Coord> firstLayer = surfaceShell(vol, 0.f);  // at least the first layer
+    const std::vector<Coord> shell = surfaceShell(vol, 2.f * h);
+    ASSERT_FALSE(firstLayer.empty());
+    EXPECT_GT(shell.size(), firstLayer.size());
+    EXPECT_TRUE(std::includes(shell.begin(), shell.end(), firstLayer.begin(), firstLayer.end(),
+                              [&](const Coord& a, const Coord& b) {
+                                  return vol.spec().linearIndex(a) < vol.spec().linearIndex(b);
+                              }));
+    // The box of radius 2 voxels: every inside voxel within Euclidean distance 2 of an outside
+    // voxel centre is in it, none beyond 2√3 (distanceToSurface's depth is (d − ½)·h).
+    const std::vector<float> depth = distanceToSurface(vol);
+    std::vector<uint8_t> inShell(depth.size(), 0);
+    for (const Coord& c : shell)
+        inShell[vol.spec().linearIndex(c)] = 1;
+    const int n = vol.resolution();
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const Coord c(x, y, z);
+                const size_t i = vol.spec().linearIndex(c);
+                if (!vol.isInside(c))
+                    continue;
+                if (depth[i] <= 1.5f * h) {
+                    EXPECT_TRUE(inShell[i]) << x << "," << y << "," << z;
+                }
+                if (depth[i] > (2.f * std::sqrt(3.f) - 0.5f) * h + 1e-4f) {
+                    EXPECT_FALSE(inShell[i]) << x << "," << y << "," << z;
+                }
+            }
+    // Homogeneous: the same as the inside's mean.
+    const MaterialSample skin = skinMaterial();
+    EXPECT_NEAR(surfaceMaterial(vol, shell).sigma_t.g, meanInsideMaterial(vol).sigma_t.g,
+                1e-5f * skin.sigma_t.g);
+    // A dark core under a skin coat 3 voxels deep, which holds the whole shell.
+    MaterialSample core = skin;
+    core.sigma_t = core.sigma_s + Rgb(1.f);
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const Coord c(x, y, z);
+                if (vol.isInside(c) && depth[vol.spec().linearIndex(c)] > 3.f * h)
+                    vol.set(c, core);
+            }
+    const MaterialSample coat = surfaceMaterial(vol, surfaceShell(vol, 2.f * h));
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(coat.sigma_t[c], skin.sigma_t[c], 1e-5f * skin.sigma_t[c]) << c;
+        EXPECT_NEAR(coat.sigma_s[c], skin.sigma_s[c], 1e-5f * skin.sigma_s[c]) << c;
+        EXPECT_GT(meanInsideMaterial(vol).sigma_t[c], skin.sigma_t[c] + 0.1f) << c;
+    }
+    EXPECT_THROW(surfaceShell(vol, std::numeric_limits<float>::quiet_NaN()), ValueError);
+    EXPECT_THROW(surfaceMaterial(vol, {}), ValueError);
 }
 
 TEST(CombinedCpu, RejectsSceneWithoutMaterialAndNanSplit) {
@@ -961,15 +1021,17 @@ TEST_F(CombinedGl, SmallStrokeKeepsTheKernelWithinItsTolerance) {
     const int estimates = provider.stats().localEstimates;
     const SslpvSurfaceKernel before = provider.kernel();
     MaterialVolume& vol = *scene.objects[0].material;
-    const MaterialSample meanBefore = meanInsideMaterial(vol);
-    // Twice the absorption in a 3×3×4 block under the front: the mean σa moves by about 0.6 %.
+    const std::vector<Coord> shell = surfaceShell(vol, before.cellSize);
+    const MaterialSample surfaceBefore = surfaceMaterial(vol, shell);
+    // Twice the absorption in a 3×3×4 block under the front: the surface cells' mean σa moves by
+    // under the 1 % tolerance.
     MaterialSample denser = skinMaterial();
     denser.sigma_t = denser.sigma_s + 2.f * (denser.sigma_t - denser.sigma_s);
     for (int z = 28; z < 32; ++z)
         for (int y = 15; y < 18; ++y)
             for (int x = 15; x < 18; ++x)
                 vol.set(Coord(x, y, z), denser);
-    ASSERT_TRUE(kernelMaterialClose(meanInsideMaterial(vol), meanBefore));
+    ASSERT_TRUE(kernelMaterialClose(surfaceMaterial(vol, shell), surfaceBefore));
     ASSERT_GE(provider.syncMaterial(vol), 1u);
     for (int i = 0; i < 20 && (i < 2 || !provider.stats().converged); ++i)
         renderer.render();
@@ -1016,10 +1078,17 @@ TEST_F(CombinedGl, StrokeReusesLocalEstimateAndDefersKernel) {
     EXPECT_EQ(provider.stats().localEstimates, 1);
 
     MaterialVolume& vol = *scene.objects[0].material;
+    const std::vector<Coord> shell = surfaceShell(vol, provider.kernel().cellSize);
+    const MaterialSample surfaceBefore = surfaceMaterial(vol, shell);
     MaterialSample darker = skinMaterial();
     darker.sigma_t = darker.sigma_s + Rgb(1.f);
+    // A 4×4 patch of the front, 8 voxels deep: it reaches the surface cells the kernel's
+    // material is taken from (surfaceShell) and moves their mean well past the tolerance.
     for (int z = 24; z < 32; ++z)
-        vol.set(Coord(16, 16, z), darker);
+        for (int y = 14; y < 18; ++y)
+            for (int x = 14; x < 18; ++x)
+                vol.set(Coord(x, y, z), darker);
+    ASSERT_FALSE(kernelMaterialClose(surfaceMaterial(vol, shell), surfaceBefore));
     const SslpvSurfaceKernel before = provider.kernel();
     ASSERT_GE(provider.syncMaterial(vol), 1u);
     renderer.render();  // the stroke frame: old kernel, old L̂

@@ -160,9 +160,24 @@ SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, flo
                                              const sslpv::SslpvOptions& options, float cellSize,
                                              float radius);
 
-/// Mean reduced material over the inside voxels of `volume` (the kernel's material for
-/// painted volumes). @throw ValueError if no voxel is inside.
+/// Mean reduced material over the inside voxels of `volume`. @throw ValueError if no voxel is
+/// inside.
 MaterialSample meanInsideMaterial(const MaterialVolume& volume);
+
+/// The inside voxels with an outside voxel (or the grid's exterior) within k = max(1,
+/// round(depthMm / voxel size)) voxels along every axis, a (2k+1)³ box: the volume's surface
+/// layer about `depthMm` deep, the first voxel layer at least, in x-fastest order. The kernel's
+/// material is their mean (surfaceMaterial): the kernel stands for the SSLPV part's response to
+/// light that enters and leaves near x_o, which on the grid is set by what its surface cells
+/// hold, so with depthMm = one SSLPV cell a painted layer or coat counts as what it is there,
+/// not diluted by the core (docs/methods/combined.md, "Painted volumes: the kernel of the
+/// surface cells"). @throw ValueError for a volume without inside voxels or a depth that is not
+/// finite.
+std::vector<Coord> surfaceShell(const MaterialVolume& volume, float depthMm);
+
+/// Mean reduced material (σt′, σs′ ≤ σt′, g) over `shell` (surfaceShell's voxels).
+/// @throw ValueError if `shell` is empty.
+MaterialSample surfaceMaterial(const MaterialVolume& volume, const std::vector<Coord>& shell);
 
 /// SSLPV's local part at every covered pixel, L̂(x_o) = F_t(η, ω_o)/π ∫_{r ≤ r_s} R_lpv(r) E dA,
 /// by `samples` stratified uniform disc samples on the tangent plane (Hammersley with a

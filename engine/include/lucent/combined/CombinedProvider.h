@@ -71,12 +71,13 @@ struct CombinedProviderStats {
     /// stroke's kernel update runs at the frame after the stroke's)
     bool converged = false;
     int localEstimates = 0;  ///< Kernel split: computations of the local SSLPV estimate L̂
-    /// Kernel split: strokes after which the kernel (and L̂) was kept because the volume's
-    /// mean material stayed within KERNEL_MATERIAL_TOLERANCE of the kernel's.
+    /// Kernel split: strokes after which the kernel (and L̂) was kept because the mean material
+    /// of the volume's surface cells stayed within KERNEL_MATERIAL_TOLERANCE of the kernel's.
     int kernelsKept = 0;
 };
 
-/// A stroke moves the volume's mean material, which SSLPV's local kernel is computed for; the
+/// A stroke moves the mean material of the volume's surface cells (surfaceMaterial), which
+/// SSLPV's local kernel is computed for; the
 /// kernel (and with it L̂, 57 ms at 640×360 on llvmpipe) is recomputed only when the mean's σa,
 /// σs′ (relative, per channel) or g (absolute) has moved by more than this since the kernel's.
 constexpr float KERNEL_MATERIAL_TOLERANCE = 0.01f;
