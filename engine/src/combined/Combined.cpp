@@ -292,9 +292,9 @@ std::vector<Coord> surfaceShell(const MaterialVolume& volume, float depthMm) {
     const int n = spec.resolution;
     const int k = std::max(1, int(std::lround(double(depthMm) / double(spec.voxelSize))));
     // near[i]: an outside voxel, or the grid's exterior, lies within k voxels of i along the
-    // axes done so far; after the three separable passes, within the (2k+1)³ box around i (no
-    // distance transform: this runs per kernel solve offline, and at 128³ an exact one costs
-    // 160 ms of CPU).
+    // axes done so far; after the three separable passes, within the (2k+1)³ box around i. A
+    // box, not a Euclidean distance: "within about one cell" needs no more, and an exact
+    // distance transform gave the suite's errors within 0.002.
     const std::vector<uint8_t>& inside = volume.insideMask();
     const size_t nn = size_t(n), plane = nn * nn;
     std::vector<uint8_t> near(inside.size()), next(inside.size());
