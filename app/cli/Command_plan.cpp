@@ -95,18 +95,26 @@ void warnAboutCostUnits(const std::vector<planner::MeasuredRow>& rows) {
         std::fprintf(stderr, "warning: %s\n", w.c_str());
 }
 
+/// The rows of every CSV in `paths`, in order.
+std::vector<planner::MeasuredRow> readAll(const std::vector<std::string>& paths,
+                                          planner::CostMeasure cost) {
+    std::vector<planner::MeasuredRow> rows;
+    for (const std::string& csv : paths) {
+        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv, cost);
+        rows.insert(rows.end(), r.begin(), r.end());
+    }
+    return rows;
+}
+
 void runFit(const PlanOptions& args) {
     const std::string& out = args.output;
     if (out.empty())
         LUCENT_THROW(ValueError, "plan --fit: missing -o/--output models.json");
     const double ridge = args.ridge;
-    std::vector<planner::MeasuredRow> rows;
+    std::vector<planner::MeasuredRow> rows = readAll(args.fit, args.costMeasure());
     std::string source = "lucent-cli plan --cost " + args.cost + " --fit";
-    for (const std::string& csv : args.fit) {
-        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv, args.costMeasure());
-        rows.insert(rows.end(), r.begin(), r.end());
+    for (const std::string& csv : args.fit)
         source += " " + csv;
-    }
     warnAboutCostUnits(rows);
     rows = planner::previewRows(std::move(rows));
     planner::Models models = planner::fitModels(rows, ridge);
@@ -133,17 +141,11 @@ void runCheck(const PlanOptions& args) {
                      "give --models or --cross-validate, not both");
     const planner::Models models = crossValidate ? planner::Models{} : args.loadModels();
     const double budgetRatio = args.budgetRatio;
-    std::vector<planner::MeasuredRow> rows;
-    for (const std::string& csv : args.check) {
-        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv, args.costMeasure());
-        rows.insert(rows.end(), r.begin(), r.end());
-    }
+    const std::vector<planner::MeasuredRow> rows = readAll(args.check, args.costMeasure());
     warnAboutCostUnits(rows);
-    std::vector<planner::MeasuredRow> planning;  // --planned-errors: another reference's errors
-    for (const std::string& csv : args.plannedErrors) {
-        std::vector<planner::MeasuredRow> r = planner::readMeasurements(csv, args.costMeasure());
-        planning.insert(planning.end(), r.begin(), r.end());
-    }
+    // --planned-errors: the same candidates' errors against another reference.
+    const std::vector<planner::MeasuredRow> planning =
+        readAll(args.plannedErrors, args.costMeasure());
     const std::vector<planner::MeasuredRow>* planned = planning.empty() ? nullptr : &planning;
     const std::vector<planner::FrontCheck> checks =
         crossValidate

@@ -267,22 +267,33 @@ SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, flo
     return k;
 }
 
-MaterialSample meanInsideMaterial(const MaterialVolume& volume) {
-    glm::dvec3 st(0.0), ss(0.0), g(0.0);
+namespace {
+/// Running mean of reduced materials (σt′, σs′ clamped to σt′, g), in double precision.
+struct MaterialMean {
+    glm::dvec3 st{0.0}, ss{0.0}, g{0.0};
     size_t count = 0;
-    forEachInsideVoxel(volume, [&](const MaterialSample& v) {
+    void add(const MaterialSample& v) {
         st += glm::dvec3(v.sigma_t.r, v.sigma_t.g, v.sigma_t.b);
         ss += glm::dvec3(v.sigma_s.r, v.sigma_s.g, v.sigma_s.b);
         g += glm::dvec3(v.g.r, v.g.g, v.g.b);
         ++count;
-    });
-    LUCENT_CHECK(count > 0, "combined: the material volume has no inside voxel");
-    const double inv = 1.0 / double(count);
-    MaterialSample m;
-    m.sigma_t = Rgb(glm::vec3(st * inv));
-    m.sigma_s = glm::min(Rgb(glm::vec3(ss * inv)), m.sigma_t);
-    m.g = Rgb(glm::vec3(g * inv));
-    return m;
+    }
+    MaterialSample mean() const {
+        const double inv = 1.0 / double(count);
+        MaterialSample m;
+        m.sigma_t = Rgb(glm::vec3(st * inv));
+        m.sigma_s = glm::min(Rgb(glm::vec3(ss * inv)), m.sigma_t);
+        m.g = Rgb(glm::vec3(g * inv));
+        return m;
+    }
+};
+}  // namespace
+
+MaterialSample meanInsideMaterial(const MaterialVolume& volume) {
+    MaterialMean mean;
+    forEachInsideVoxel(volume, [&](const MaterialSample& v) { mean.add(v); });
+    LUCENT_CHECK(mean.count > 0, "combined: the material volume has no inside voxel");
+    return mean.mean();
 }
 
 std::vector<Coord> surfaceShell(const MaterialVolume& volume, float depthMm) {
@@ -348,19 +359,10 @@ std::vector<Coord> surfaceShell(const MaterialVolume& volume, float depthMm) {
 
 MaterialSample surfaceMaterial(const MaterialVolume& volume, const std::vector<Coord>& shell) {
     LUCENT_CHECK(!shell.empty(), "combined: the surface shell is empty");
-    glm::dvec3 st(0.0), ss(0.0), g(0.0);
-    for (const Coord& c : shell) {
-        const MaterialSample v = volume.at(c);
-        st += glm::dvec3(v.sigma_t.r, v.sigma_t.g, v.sigma_t.b);
-        ss += glm::dvec3(v.sigma_s.r, v.sigma_s.g, v.sigma_s.b);
-        g += glm::dvec3(v.g.r, v.g.g, v.g.b);
-    }
-    const double inv = 1.0 / double(shell.size());
-    MaterialSample m;
-    m.sigma_t = Rgb(glm::vec3(st * inv));
-    m.sigma_s = glm::min(Rgb(glm::vec3(ss * inv)), m.sigma_t);
-    m.g = Rgb(glm::vec3(g * inv));
-    return m;
+    MaterialMean mean;
+    for (const Coord& c : shell)
+        mean.add(volume.at(c));
+    return mean.mean();
 }
 
 Point2f pixelShift(int x, int y, uint32_t seed) {

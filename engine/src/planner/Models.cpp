@@ -550,6 +550,17 @@ const Models& defaultModels() {
     return models;
 }
 
+namespace {
+/// The cases of `rows`, in first-seen order.
+std::vector<std::string> caseNames(const std::vector<MeasuredRow>& rows) {
+    std::vector<std::string> cases;
+    for (const MeasuredRow& r : rows)
+        if (std::find(cases.begin(), cases.end(), r.caseName) == cases.end())
+            cases.push_back(r.caseName);
+    return cases;
+}
+}  // namespace
+
 std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
                                           const Models& models, double budgetRatio,
                                           double errorTolerance, LevelTolerance levelTolerance,
@@ -559,10 +570,7 @@ std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
     LUCENT_CHECK(std::isfinite(levelTolerance.absolute) && levelTolerance.absolute >= 0 &&
                      std::isfinite(levelTolerance.relative) && levelTolerance.relative >= 0,
                  "front check: the level tolerances must be finite and >= 0");
-    std::vector<std::string> cases;
-    for (const MeasuredRow& r : rows)
-        if (std::find(cases.begin(), cases.end(), r.caseName) == cases.end())
-            cases.push_back(r.caseName);
+    const std::vector<std::string> cases = caseNames(rows);
     auto label = [](const std::string& method, const std::string& setting) {
         return method + " " + setting;
     };
@@ -690,10 +698,7 @@ std::vector<FrontCheck> crossValidatedCheck(const std::vector<MeasuredRow>& rows
                                             double budgetRatio, double errorTolerance,
                                             LevelTolerance levelTolerance, bool measuredErrors,
                                             const std::vector<MeasuredRow>* plannedErrors) {
-    std::vector<std::string> cases;
-    for (const MeasuredRow& r : rows)
-        if (std::find(cases.begin(), cases.end(), r.caseName) == cases.end())
-            cases.push_back(r.caseName);
+    const std::vector<std::string> cases = caseNames(rows);
     if (cases.size() < 2)
         LUCENT_THROW(ValueError, "cross-validated check: ", cases.size(),
                      " case(s); leaving one out needs at least 2");
