@@ -74,7 +74,9 @@ void redrawReports(const std::string& dir) {
 struct EvaluateOptions {
     std::vector<std::string> scenes;
     std::string suite, cases, methods, out, presets, etas, report;
-    int refSpp = 256, refSeed = 1, repeats = 3, levels = 3, width = 0, height = 0, materialRes = 48;
+    int refSpp = 256, refSeed = 1, refMaxSpp = 8192, repeats = 3, levels = 3, width = 0, height = 0,
+        materialRes = 48;
+    double refFloor = 0.0;
     bool subsurfaceOnly = false, json = false, verbose = false, noImages = false;
     const CLI::App* app = nullptr;
     bool has(const std::string& option) const { return app->count(option) > 0; }
@@ -110,6 +112,13 @@ void runEvaluate(const EvaluateOptions& args, const std::vector<std::string>& ar
     options.outDir = *outDir;
     options.refSpp = args.refSpp;
     options.refSeed = args.refSeed;
+    if (args.has("--ref-max-spp") && !args.has("--ref-floor"))
+        LUCENT_THROW(ValueError, "--ref-max-spp caps --ref-floor's references: give --ref-floor");
+    if (args.has("--ref-floor") && args.refMaxSpp < args.refSpp)
+        LUCENT_THROW(ValueError, "--ref-max-spp ", args.refMaxSpp, " is below --ref-spp ",
+                     args.refSpp, ", the pilot's samples");
+    options.refFloor = args.refFloor;
+    options.refMaxSpp = args.refMaxSpp;
     options.repeats = args.repeats;
     options.levels = args.levels;
     options.subsurfaceOnly = args.subsurfaceOnly;
@@ -173,6 +182,8 @@ void runEvaluate(const EvaluateOptions& args, const std::vector<std::string>& ar
     info.height = cases.front().scene.camera.height;
     info.refSpp = options.refSpp;
     info.refSeed = options.refSeed;
+    info.refFloor = options.refFloor;
+    info.refMaxSpp = options.refFloor > 0 ? options.refMaxSpp : 0;
     info.repeats = options.repeats;
     info.subsurfaceOnly = options.subsurfaceOnly;
     std::vector<evaluation::Result> results;
@@ -181,6 +192,7 @@ void runEvaluate(const EvaluateOptions& args, const std::vector<std::string>& ar
         info.cases.push_back(c.name);
         info.referenceSeconds.push_back(run.reference.seconds);
         info.noiseFloors.push_back(run.reference.blockRelL1Floor);
+        info.referenceSpp.push_back(run.reference.spp);
         info.skipped.insert(info.skipped.end(), run.skipped.begin(), run.skipped.end());
         for (const std::string& s : run.skipped)
             std::fprintf(stderr, "evaluate: skipped %s\n", s.c_str());
@@ -257,6 +269,17 @@ void addEvaluateCommand(CLI::App& cli, const CommandContext& context) {
                     "shows how far each measured error moves with the reference's noise")
         ->type_name("S")
         ->check(CLI::Range(1, 1 << 30));
+    sub->add_option("--ref-floor", args->refFloor,
+                    "references at a stated noise floor: a case whose --ref-spp reference (the "
+                    "pilot) has a block rel. L1 floor above F is rendered again with the samples "
+                    "that reach F (the floor falls as 1/sqrt(spp)), at most --ref-max-spp; each "
+                    "case reports the floor it reached")
+        ->type_name("F")
+        ->check(CLI::Range(1e-6, 1.0));
+    sub->add_option("--ref-max-spp", args->refMaxSpp,
+                    "with --ref-floor: the most samples per pixel a reference gets (default 8192)")
+        ->type_name("N")
+        ->check(CLI::Range(3, 1 << 20));
     sub->add_option("--width", args->width,
                     "image width (pixels; --suite: default 64, the height follows the width)")
         ->type_name("W")

@@ -71,7 +71,7 @@ void printMeasurement(const planner::OwnReferenceMeasurement& m, const planner::
 
 struct PlanOptions {
     std::string scene, models, output, source, cost = "wall";
-    std::vector<std::string> fit, check, plannedErrors;
+    std::vector<std::string> fit, check, plannedErrors, judgedErrors;
     float budgetMs = 1000.f, maxError = 0.f, directMs = 1.f, ridge = 0.05f, budgetRatio = 20.f,
           errorTolerance = float(planner::Budget{}.errorTolerance);
     planner::LevelTolerance levelTolerance;
@@ -141,8 +141,16 @@ void runCheck(const PlanOptions& args) {
                      "give --models or --cross-validate, not both");
     const planner::Models models = crossValidate ? planner::Models{} : args.loadModels();
     const double budgetRatio = args.budgetRatio;
-    const std::vector<planner::MeasuredRow> rows = readAll(args.check, args.costMeasure());
+    if (!args.judgedErrors.empty() && crossValidate)
+        LUCENT_THROW(ValueError,
+                     "--judged-errors with --cross-validate: the models would be fitted on the "
+                     "judging errors too; judge the shipped (or --models) fit instead");
+    std::vector<planner::MeasuredRow> rows = readAll(args.check, args.costMeasure());
     warnAboutCostUnits(rows);
+    // --judged-errors: the same renders scored against another (e.g. a sharper) reference.
+    if (!args.judgedErrors.empty())
+        rows =
+            planner::withErrorsOf(std::move(rows), readAll(args.judgedErrors, args.costMeasure()));
     // --planned-errors: the same candidates' errors against another reference.
     const std::vector<planner::MeasuredRow> planning =
         readAll(args.plannedErrors, args.costMeasure());
@@ -161,8 +169,10 @@ void runCheck(const PlanOptions& args) {
                                               : "";
     std::printf(
         "budget: %g x the Direct frame; times are measured cost ratios, errors measured\n"
-        "block rel. L1; %s%s\n\n",
-        budgetRatio, fitNote.c_str(),
+        "block rel. L1%s; %s%s\n\n",
+        budgetRatio,
+        args.judgedErrors.empty() ? "" : " against --judged-errors' reference (its floors)",
+        fitNote.c_str(),
         args.measure && planned
             ? "Auto plans with the errors of --planned-errors, measured against another "
               "reference, and is judged by --check's (--measure: no level check)"
@@ -284,7 +294,7 @@ void addPlanCommand(CLI::App& cli, const CommandContext&) {
         "                       [--budget-ratio R]\n"
         "  SCENE and --check: [--level-tolerance T] [--level-relative K] [--no-level-check]\n"
         "  SCENE: [--measure [--measure-width W] [--measure-spp N]];\n"
-        "  --check: [--measure [--planned-errors CSV]]\n",
+        "  --check: [--measure [--planned-errors CSV]] [--judged-errors CSV]\n",
         "Prints the scene's features and class, every candidate (a method at one quality level)\n"
         "with its predicted time and 4x4-block error against the exact reference, the choice and\n"
         "its one-line reason, and the `lucent-cli render` command that renders it\n"
@@ -380,6 +390,14 @@ void addPlanCommand(CLI::App& cli, const CommandContext&) {
         ->check(existingFile())
         ->needs(check)
         ->group("Measuring (SCENE and --check)");
+    sub->add_option("--judged-errors", args->judgedErrors,
+                    "--check: judge Auto by the errors and noise floors of these rows (the same "
+                    "cases scored against another reference, e.g. a sharper one from `evaluate "
+                    "--ref-floor`); costs, features and the level check stay --check's "
+                    "(repeatable; not with --cross-validate)")
+        ->type_name("CSV")
+        ->check(existingFile())
+        ->needs(check);
     sub->callback([args] { runPlan(*args); });
 }
 

@@ -218,6 +218,21 @@ uint64_t hashScene(const Scene& scene) {
     return h.digest();
 }
 
+int sppForNoiseFloor(int pilotSpp, double pilotFloor, double targetFloor, int maxSpp) {
+    LUCENT_CHECK(pilotSpp > 0 && maxSpp > 0, "reference samples must be > 0, got ", pilotSpp,
+                 " and ", maxSpp);
+    LUCENT_CHECK(std::isfinite(targetFloor) && targetFloor > 0,
+                 "the reference's target noise floor must be a number > 0, got ", targetFloor);
+    LUCENT_CHECK(std::isfinite(pilotFloor) && pilotFloor >= 0,
+                 "a reference's noise floor must be a finite number >= 0, got ", pilotFloor);
+    if (pilotFloor <= targetFloor || maxSpp <= pilotSpp)
+        return pilotSpp;
+    const double ratio = pilotFloor / targetFloor;
+    const double pilots = std::ceil(ratio * ratio);
+    const double wanted = pilots * double(pilotSpp);
+    return wanted >= double(maxSpp) ? maxSpp : int(wanted);
+}
+
 CachedReference referenceFor(const Scene& scene, const std::string& name, const std::string& dir,
                              const ReferenceSettings& options) {
     const int w = scene.camera.width, h = scene.camera.height;
@@ -374,6 +389,24 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
     CaseRun run;
     run.reference = referenceFor(evalCase.scene, evalCase.name, options.outDir,
                                  {options.refSpp, options.subsurfaceOnly, options.refSeed});
+    if (options.refFloor > 0) {
+        // A stated-noise reference: the refSpp render is the pilot that says how many samples
+        // the case needs (its own render, cached under its own spp, so a later run at another
+        // target reuses whichever it has).
+        const int spp = sppForNoiseFloor(options.refSpp, run.reference.blockRelL1Floor,
+                                         options.refFloor, options.refMaxSpp);
+        if (spp != options.refSpp) {
+            char buf[256];
+            std::snprintf(buf, sizeof buf,
+                          "%s: pilot reference %d spp, block rel. L1 noise floor %.4f; %d spp "
+                          "for a floor of %.4f",
+                          evalCase.name.c_str(), options.refSpp, run.reference.blockRelL1Floor, spp,
+                          options.refFloor);
+            say(buf);
+            run.reference = referenceFor(evalCase.scene, evalCase.name, options.outDir,
+                                         {spp, options.subsurfaceOnly, options.refSeed});
+        }
+    }
     const CachedReference& ref = run.reference;
     if (options.writeImages) {
         ToneMap tm;

@@ -231,7 +231,8 @@ std::string toJson(const std::vector<Result>& results, const RunInfo& info) {
     s << "{\n  \"suite\": \"" << jsonEscape(info.suite) << "\",\n  \"command\": \""
       << jsonEscape(info.command) << "\",\n  \"width\": " << info.width
       << ",\n  \"height\": " << info.height << ",\n  \"ref_spp\": " << info.refSpp
-      << ",\n  \"ref_seed\": " << info.refSeed << ",\n  \"repeats\": " << info.repeats
+      << ",\n  \"ref_seed\": " << info.refSeed << ",\n  \"ref_floor\": " << fmt(info.refFloor)
+      << ",\n  \"ref_max_spp\": " << info.refMaxSpp << ",\n  \"repeats\": " << info.repeats
       << ",\n  \"subsurface_only\": " << (info.subsurfaceOnly ? "true" : "false")
       << ",\n  \"metric\": \"4x4-block relative L1 of luminance over object-covered pixels, "
          "reference noise floor removed in quadrature\",\n"
@@ -243,6 +244,8 @@ std::string toJson(const std::vector<Result>& results, const RunInfo& info) {
             s << ", \"noise_floor\": " << fmt(info.noiseFloors[i]);
         if (i < info.referenceSeconds.size())
             s << ", \"reference_seconds\": " << fmt(info.referenceSeconds[i]);
+        if (i < info.referenceSpp.size())
+            s << ", \"reference_spp\": " << info.referenceSpp[i];
         s << "}";
     }
     s << "],\n  \"skipped\": [";
@@ -498,12 +501,15 @@ RunInfo parseRunInfoJson(const std::string& text, const std::string& origin) {
         info.height = j.value("height", 0);
         info.refSpp = j.value("ref_spp", 0);
         info.refSeed = j.value("ref_seed", 1);
+        info.refFloor = j.value("ref_floor", 0.0);
+        info.refMaxSpp = j.value("ref_max_spp", 0);
         info.repeats = j.value("repeats", 0);
         info.subsurfaceOnly = j.value("subsurface_only", false);
         for (const nlohmann::json& c : j.at("cases")) {
             info.cases.push_back(c.at("name").get<std::string>());
             info.noiseFloors.push_back(c.value("noise_floor", 0.0));
             info.referenceSeconds.push_back(c.value("reference_seconds", 0.0));
+            info.referenceSpp.push_back(c.value("reference_spp", info.refSpp));
         }
         for (const nlohmann::json& s : j.at("skipped"))
             info.skipped.push_back(s.get<std::string>());

@@ -721,6 +721,22 @@ std::vector<FrontCheck> crossValidatedCheck(const std::vector<MeasuredRow>& rows
     return out;
 }
 
+std::vector<MeasuredRow> withErrorsOf(std::vector<MeasuredRow> rows,
+                                      const std::vector<MeasuredRow>& errors) {
+    for (MeasuredRow& r : rows) {
+        const auto e = std::find_if(errors.begin(), errors.end(), [&](const MeasuredRow& o) {
+            return o.caseName == r.caseName && o.method == r.method && o.setting == r.setting &&
+                   std::isfinite(o.blockRelL1);
+        });
+        if (e == errors.end())
+            LUCENT_THROW(ValueError, "the other reference's errors have no row for ", r.caseName,
+                         ": ", r.method, " ", r.setting);
+        r.blockRelL1 = e->blockRelL1;
+        r.noiseFloor = e->noiseFloor;
+    }
+    return rows;
+}
+
 std::vector<Candidate> toCandidates(const Models& models) {
     std::vector<Candidate> out;
     for (const CandidateModel& m : models.candidates) {

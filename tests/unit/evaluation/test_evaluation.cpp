@@ -248,6 +248,33 @@ RunOptions quickRun(const char* dirName, int levels) {
     return run;
 }
 
+TEST(EvaluationRun, AStatedNoiseFloorRendersTheReferenceTheSamplesItNeeds) {
+    // `evaluate --ref-floor`: the --ref-spp render is the pilot; a floor half the pilot's takes
+    // four times its samples and reads about half of it (the floor falls as 1/√spp).
+    const EvalCase c = smokeCase(16);
+    RunOptions run = quickRun("ref-floor", 1);
+    run.refSpp = 8;
+    const CaseRun pilot = evaluateCase(c, {}, run);
+    ASSERT_EQ(pilot.reference.spp, 8);
+    const double floor8 = pilot.reference.blockRelL1Floor;
+    ASSERT_GT(floor8, 0.0);
+    run.refFloor = floor8 / 2;
+    run.refMaxSpp = 1024;
+    const CaseRun sharp = evaluateCase(c, {}, run);
+    EXPECT_EQ(sharp.reference.spp, 32);
+    EXPECT_FALSE(sharp.reference.cached) << "its own render, cached under its own spp";
+    EXPECT_GT(sharp.reference.blockRelL1Floor, 0.3 * floor8);
+    EXPECT_LT(sharp.reference.blockRelL1Floor, 0.7 * floor8);
+    // The cap wins over the floor; a floor the pilot already meets keeps the pilot.
+    run.refFloor = floor8 / 100;
+    run.refMaxSpp = 16;
+    EXPECT_EQ(evaluateCase(c, {}, run).reference.spp, 16);
+    run.refFloor = 2 * floor8;
+    const CaseRun kept = evaluateCase(c, {}, run);
+    EXPECT_EQ(kept.reference.spp, 8);
+    EXPECT_TRUE(kept.reference.cached);
+}
+
 TEST(EvaluationRun, EachSettingIsComparedWithTheNextFinerOne) {
     // What the planner's level check replays (planner/LevelCheck.h): a setting's image
     // against the same variant's next finer one, the block metric over the reference's mask.
@@ -397,11 +424,33 @@ TEST(EvaluationReport, ResultsReadBackAsWritten) {
     info.cases = {"a", "b"};
     info.noiseFloors = {0.01, 0.02};
     info.referenceSeconds = {3.0, 0.0};
+    info.referenceSpp = {256, 2048};
+    info.refFloor = 0.007;
+    info.refMaxSpp = 8192;
     info.skipped = {"b: combined (8 spp): no GL"};
     const RunInfo again = parseRunInfoJson(toJson({}, info), "results.json");
     EXPECT_EQ(toJson({}, again), toJson({}, info));
     EXPECT_EQ(again.refSeed, 2);
+    EXPECT_EQ(again.referenceSpp, (std::vector<int>{256, 2048}));
+    EXPECT_DOUBLE_EQ(again.refFloor, 0.007);
     EXPECT_THROW(parseRunInfoJson("{", "bad.json"), IoError);
+}
+
+TEST(Evaluation, SppForANoiseFloorFallsAsOneOverTheRootOfTheSamples) {
+    // Half the floor takes four times the samples; a third of it nine.
+    EXPECT_EQ(sppForNoiseFloor(256, 0.02, 0.01, 8192), 1024);
+    EXPECT_EQ(sppForNoiseFloor(256, 0.03, 0.01, 8192), 2304);
+    // Rounded up to whole pilots: (0.02/0.015)² = 1.78 pilots -> 2.
+    EXPECT_EQ(sppForNoiseFloor(256, 0.02, 0.015, 8192), 512);
+    // Already there, or no room above the pilot: the pilot.
+    EXPECT_EQ(sppForNoiseFloor(256, 0.005, 0.01, 8192), 256);
+    EXPECT_EQ(sppForNoiseFloor(256, 0.0, 0.01, 8192), 256);
+    EXPECT_EQ(sppForNoiseFloor(256, 0.05, 0.01, 128), 256);
+    // Capped: 0.08 -> 0.005 would take 256 pilots.
+    EXPECT_EQ(sppForNoiseFloor(256, 0.08, 0.005, 8192), 8192);
+    EXPECT_THROW((void)sppForNoiseFloor(256, 0.02, 0.0, 8192), ValueError);
+    EXPECT_THROW((void)sppForNoiseFloor(0, 0.02, 0.01, 8192), ValueError);
+    EXPECT_THROW((void)sppForNoiseFloor(256, std::nan(""), 0.01, 8192), ValueError);
 }
 
 }  // namespace

@@ -485,6 +485,39 @@ TEST(PlannerModels, CrossValidatedCheckJudgesEachCaseByModelsFittedWithoutIt) {
     EXPECT_THROW(crossValidatedCheck(one, 0.05, 20.0), ValueError);
 }
 
+TEST(PlannerModels, ASharperReferenceCanTellApartWhatANoisyOneCannot) {
+    // Auto takes slow (predicted better). Against a reference with a floor of 0.05 fast's 0.13
+    // is within the floor of slow's 0.10, so the check finds fast as good for a tenth of the
+    // time; the same renders against a sharper reference (floor 0.01) read 0.14 and 0.10: slow
+    // is better and Auto's choice is the cheapest at its error.
+    const Models models = fastAndSlow(0.3, 0.1);
+    std::vector<MeasuredRow> rows = {frontRow("a", "fast", 1.0, 0.13, 10),
+                                     frontRow("a", "slow", 10.0, 0.10, 10)};
+    for (MeasuredRow& r : rows)
+        r.noiseFloor = 0.05;
+    const FrontCheck noisy = checkAgainstFront(rows, models, 20.0)[0];
+    EXPECT_EQ(noisy.chosen, "slow s");
+    EXPECT_DOUBLE_EQ(noisy.timeRatio, 10.0);
+
+    std::vector<MeasuredRow> sharper = rows;
+    sharper[0].blockRelL1 = 0.14;
+    for (MeasuredRow& r : sharper) {
+        r.noiseFloor = 0.01;
+        r.costRatio = 99.0;  // not taken: the costs stay the judged rows'
+    }
+    const std::vector<MeasuredRow> judged = withErrorsOf(rows, sharper);
+    EXPECT_DOUBLE_EQ(judged[0].blockRelL1, 0.14);
+    EXPECT_DOUBLE_EQ(judged[0].noiseFloor, 0.01);
+    EXPECT_DOUBLE_EQ(judged[0].costRatio, 1.0);
+    const FrontCheck sharp = checkAgainstFront(judged, models, 20.0)[0];
+    EXPECT_EQ(sharp.chosen, "slow s");
+    EXPECT_DOUBLE_EQ(sharp.timeRatio, 1.0);
+    EXPECT_TRUE(sharp.choseBest);
+    // A candidate the other reference did not score is an error, not a silent keep.
+    sharper.pop_back();
+    EXPECT_THROW((void)withErrorsOf(rows, sharper), ValueError);
+}
+
 TEST(PlannerModels, MeasuredErrorsCanComeFromAnotherReference) {
     // Auto's own measurement has its own reference: replayed with the errors of the same
     // candidates scored against another one (`evaluate --ref-seed`), it is judged by the check's.

@@ -72,6 +72,13 @@ struct ReferenceSettings {
     int seed = 1;
 };
 
+/// The samples per pixel a reference needs for its block rel. L1 noise floor to fall from
+/// `pilotFloor` (measured on a `pilotSpp` render) to `targetFloor`. The floor is the reference's
+/// Monte Carlo error, which falls as 1/√spp: pilotSpp·(pilotFloor/targetFloor)², rounded up to a
+/// whole number of pilots, never below the pilot, at most `maxSpp` (when it is ≥ the pilot).
+/// @throw ValueError for a non-positive spp or target, or a negative or non-finite floor.
+int sppForNoiseFloor(int pilotSpp, double pilotFloor, double targetFloor, int maxSpp);
+
 /// A case's reference with its noise floor.
 struct CachedReference {
     ImageRgb mean, variance, coverage;
@@ -164,6 +171,12 @@ struct RunOptions {
     /// The reference's seed (ReferenceSettings::seed); the `reference` method, scored as a
     /// method, runs with refSeed + 6 so that its error is the noise of two independent estimates.
     int refSeed = 1;
+    /// When > 0, each case's reference is a stated-noise reference: a case whose refSpp render
+    /// (the pilot) has a block rel. L1 floor above this is rendered again at the samples
+    /// sppForNoiseFloor predicts, at most refMaxSpp (so a very noisy case stops short of it;
+    /// the floor reached is what the case reports).
+    double refFloor = 0.0;
+    int refMaxSpp = 8192;
     int repeats = 3;  ///< timed runs per setting after one warm-up
     int levels = 3;   ///< at most this many quality settings per variant
     bool subsurfaceOnly = false;

@@ -22,11 +22,14 @@ struct RunInfo {
     std::string suite;    ///< "default", "smoke" or "files"
     std::string command;  ///< the command line that reproduces the run
     int width = 0, height = 0, refSpp = 0, repeats = 0;
-    int refSeed = 1;  ///< the reference's seed (RunOptions::refSeed)
+    int refSeed = 1;        ///< the reference's seed (RunOptions::refSeed)
+    double refFloor = 0.0;  ///< RunOptions::refFloor (0: every reference at refSpp)
+    int refMaxSpp = 0;      ///< RunOptions::refMaxSpp, with refFloor
     bool subsurfaceOnly = false;
     std::vector<std::string> cases;
     std::vector<double> referenceSeconds;  ///< per case (0 when cached)
     std::vector<double> noiseFloors;       ///< per case: the reference's block rel. L1 floor
+    std::vector<int> referenceSpp;         ///< per case: the reference's samples per pixel
     std::vector<std::string> skipped;
 };
 

@@ -174,6 +174,14 @@ std::vector<FrontCheck> crossValidatedCheck(
     double errorTolerance = Budget{}.errorTolerance, LevelTolerance levelTolerance = {0.0, 0.0},
     bool measuredErrors = false, const std::vector<MeasuredRow>* plannedErrors = nullptr);
 
+/// `rows` with each row's error (blockRelL1) and noise floor taken from the row of `errors`
+/// with the same case, method and setting: the same renders scored against another reference
+/// (`evaluate --ref-floor` for a sharper one, `--ref-seed` for an independent one). Costs,
+/// features and the level differences (image against image) stay `rows`'.
+/// @throw ValueError if `errors` has no finite error for one of `rows`' candidates.
+std::vector<MeasuredRow> withErrorsOf(std::vector<MeasuredRow> rows,
+                                      const std::vector<MeasuredRow>& errors);
+
 /// The planner's candidates for `models` (costRatio and error bound to the models; `unusable`
 /// left empty: the caller knows what the scene and backend allow).
 std::vector<Candidate> toCandidates(const Models& models);
