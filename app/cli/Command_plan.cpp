@@ -141,13 +141,10 @@ void runCheck(const PlanOptions& args) {
                      "give --models or --cross-validate, not both");
     const planner::Models models = crossValidate ? planner::Models{} : args.loadModels();
     const double budgetRatio = args.budgetRatio;
-    if (!args.judgedErrors.empty() && crossValidate)
-        LUCENT_THROW(ValueError,
-                     "--judged-errors with --cross-validate: the models would be fitted on the "
-                     "judging errors too; judge the shipped (or --models) fit instead");
     std::vector<planner::MeasuredRow> rows = readAll(args.check, args.costMeasure());
     warnAboutCostUnits(rows);
-    // --judged-errors: the same renders scored against another (e.g. a sharper) reference.
+    // --judged-errors: the same renders scored against another (e.g. a sharper) reference;
+    // with --cross-validate the left-out fits are made on those errors too.
     if (!args.judgedErrors.empty())
         rows =
             planner::withErrorsOf(std::move(rows), readAll(args.judgedErrors, args.costMeasure()));
@@ -393,8 +390,9 @@ void addPlanCommand(CLI::App& cli, const CommandContext&) {
     sub->add_option("--judged-errors", args->judgedErrors,
                     "--check: judge Auto by the errors and noise floors of these rows (the same "
                     "cases scored against another reference, e.g. a sharper one from `evaluate "
-                    "--ref-floor`); costs, features and the level check stay --check's "
-                    "(repeatable; not with --cross-validate)")
+                    "--ref-floor`); costs, features and the level check stay --check's; with "
+                    "--cross-validate the left-out models are fitted on these errors too "
+                    "(repeatable)")
         ->type_name("CSV")
         ->check(existingFile())
         ->needs(check);

@@ -318,6 +318,36 @@ TEST(PlannerModels, ShippedModelsAreTheFitOfTheShippedSuiteFile) {
     }
 }
 
+TEST(PlannerModels, ShippedSharperErrorsScoreTheShippedRenders) {
+    // resources/evaluation/*_ref_floor.csv score the renders of the files beside them against
+    // sharper references (`evaluate --ref-floor`), for `plan --check --judged-errors`. Each
+    // setting's image against the next finer one does not depend on the reference, so equal
+    // level differences say the images are the same; a file re-measured without re-scoring
+    // against the sharper references fails here.
+    const std::string dir = std::string(LUCENT_SOURCE_DIR) + "/resources/evaluation/";
+    for (const std::string name : {"suite_default", "holdout"}) {
+        const std::vector<MeasuredRow> rows =
+            readMeasurements(dir + name + ".csv", CostMeasure::CpuTime);
+        const std::vector<MeasuredRow> sharp =
+            readMeasurements(dir + name + "_ref_floor.csv", CostMeasure::CpuTime);
+        ASSERT_EQ(rows.size(), sharp.size()) << name;
+        const std::vector<MeasuredRow> judged = withErrorsOf(rows, sharp);
+        for (size_t i = 0; i < rows.size(); ++i) {
+            const MeasuredRow& r = rows[i];
+            const std::string what = name + ": " + r.caseName + " " + r.method + " " + r.setting;
+            const auto s = std::find_if(sharp.begin(), sharp.end(), [&](const MeasuredRow& o) {
+                return o.caseName == r.caseName && o.method == r.method && o.setting == r.setting;
+            });
+            ASSERT_NE(s, sharp.end()) << what;
+            EXPECT_NEAR(s->blockRelL1ToFiner, r.blockRelL1ToFiner,
+                        1e-4 * std::max(1.0, std::abs(r.blockRelL1ToFiner)))
+                << what;
+            EXPECT_LE(s->noiseFloor, r.noiseFloor) << what << ": not a sharper reference";
+            EXPECT_DOUBLE_EQ(judged[i].noiseFloor, s->noiseFloor) << what;
+        }
+    }
+}
+
 TEST(PlannerModels, ShippedModelsMatchTheRegistry) {
     // Every shipped candidate names a registered method, variant and quality level, so a
     // renamed setting cannot silently drop out of Auto.
