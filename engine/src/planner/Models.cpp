@@ -559,6 +559,16 @@ std::vector<std::string> caseNames(const std::vector<MeasuredRow>& rows) {
             cases.push_back(r.caseName);
     return cases;
 }
+
+/// The row of `rows` that scores the same candidate on the same case as `of` with a finite error
+/// (another reference's score of the same render), or nullptr.
+const MeasuredRow* sameCandidate(const std::vector<MeasuredRow>& rows, const MeasuredRow& of) {
+    const auto row = std::find_if(rows.begin(), rows.end(), [&](const MeasuredRow& r) {
+        return r.caseName == of.caseName && r.method == of.method && r.setting == of.setting &&
+               std::isfinite(r.blockRelL1);
+    });
+    return row == rows.end() ? nullptr : &*row;
+}
 }  // namespace
 
 std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
@@ -597,16 +607,11 @@ std::vector<FrontCheck> checkAgainstFront(const std::vector<MeasuredRow>& rows,
         std::vector<const MeasuredRow*> planning = measured;
         if (measuredErrors && plannedErrors)
             for (const MeasuredRow*& p : planning) {
-                const MeasuredRow* judged = p;
-                const auto row =
-                    std::find_if(plannedErrors->begin(), plannedErrors->end(), [&](const auto& r) {
-                        return r.caseName == judged->caseName && r.method == judged->method &&
-                               r.setting == judged->setting && std::isfinite(r.blockRelL1);
-                    });
-                if (row == plannedErrors->end())
+                const MeasuredRow* row = sameCandidate(*plannedErrors, *p);
+                if (!row)
                     LUCENT_THROW(ValueError, "front check: the planning errors have no row for ",
-                                 judged->caseName, ": ", judged->method, " ", judged->setting);
-                p = &*row;
+                                 p->caseName, ": ", p->method, " ", p->setting);
+                p = row;
             }
         if (measuredErrors)  // the scene's own errors, as measuredModels(…, ErrorsOnly) gives
             for (size_t k = 0; k < planning.size(); ++k) {
@@ -724,11 +729,8 @@ std::vector<FrontCheck> crossValidatedCheck(const std::vector<MeasuredRow>& rows
 std::vector<MeasuredRow> withErrorsOf(std::vector<MeasuredRow> rows,
                                       const std::vector<MeasuredRow>& errors) {
     for (MeasuredRow& r : rows) {
-        const auto e = std::find_if(errors.begin(), errors.end(), [&](const MeasuredRow& o) {
-            return o.caseName == r.caseName && o.method == r.method && o.setting == r.setting &&
-                   std::isfinite(o.blockRelL1);
-        });
-        if (e == errors.end())
+        const MeasuredRow* e = sameCandidate(errors, r);
+        if (!e)
             LUCENT_THROW(ValueError, "the other reference's errors have no row for ", r.caseName,
                          ": ", r.method, " ", r.setting);
         r.blockRelL1 = e->blockRelL1;
