@@ -82,12 +82,6 @@ private:
     uint64_t m_h = 1469598103934665603ull;
 };
 
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 std::string hex(uint64_t v) {
     char buf[20];
     std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
@@ -216,6 +210,18 @@ uint64_t hashScene(const Scene& scene) {
                     sizeof(float) * MaterialVolume::BRICK_VOXELS * MaterialVolume::COMPONENTS);
     }
     return h.digest();
+}
+
+double steadyMedian(std::vector<double> runsMs, int* dropped) {
+    LUCENT_CHECK(!runsMs.empty(), "steady time: no timed runs");
+    for (const double t : runsMs)
+        LUCENT_CHECK(std::isfinite(t) && t >= 0.0, "steady time: a run took ", t, " ms");
+    std::sort(runsMs.begin(), runsMs.end());
+    const double limit = STEADY_RUN_FACTOR * runsMs.front();
+    const size_t n = size_t(std::upper_bound(runsMs.begin(), runsMs.end(), limit) - runsMs.begin());
+    if (dropped)
+        *dropped = int(runsMs.size() - n);
+    return n % 2 ? runsMs[n / 2] : 0.5 * (runsMs[n / 2 - 1] + runsMs[n / 2]);
 }
 
 int sppForNoiseFloor(int pilotSpp, double pilotFloor, double targetFloor, int maxSpp) {
@@ -435,7 +441,8 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
     // one on a loaded box can be off by 2x) before the case's methods and as many after them,
     // so that a burst of load during one bracket moves the median, not every cost ratio of the
     // case (2026-12-06: one case's three runs before read 145 ms of CPU where other runs of it
-    // read 33-40 ms); a "direct" variant's runs join them below.
+    // read 33-40 ms); a "direct" variant's runs join them below. steadyMedian leaves out runs
+    // that compiled shaders (3x the others, at random, on llvmpipe).
     const Variant directUnit = parseVariant("direct");
     RunOptions unitOptions = options;
     unitOptions.repeats = std::max(options.repeats, 3);
@@ -449,7 +456,7 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
     };
     Timings directTimes;
     timeDirectUnit(directTimes);
-    const double unitCpuMsBefore = directTimes.cpu.empty() ? 0.0 : median(directTimes.cpu);
+    const double unitCpuMsBefore = directTimes.cpu.empty() ? 0.0 : steadyMedian(directTimes.cpu);
 
     for (const Variant& v : variants) {
         const int n = std::min(options.levels, int(v.settings.size()));
@@ -489,9 +496,9 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
                         .blocks[bench::ErrorReport::LUMINANCE]
                         .relL1;
             r.backend = methods::backendName(image.backend);
-            r.msMedian = median(times.wall);
+            r.msMedian = steadyMedian(times.wall);
             r.msMin = *std::min_element(times.wall.begin(), times.wall.end());
-            r.cpuMsMedian = median(times.cpu);
+            r.cpuMsMedian = steadyMedian(times.cpu);
             r.runs = int(times.wall.size());
             if (v.method == "direct" && v.variant.values.empty() && s.values.empty())
                 directTimes.append(times);
@@ -522,20 +529,21 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
     if (unitCpuMsBefore > 0.0)
         timeDirectUnit(directAfter);
     if (!directAfter.cpu.empty()) {
-        const double before = unitCpuMsBefore, after = median(directAfter.cpu);
-        if (std::max(before, after) > 1.5 * std::min(before, after)) {
+        const double before = unitCpuMsBefore, after = steadyMedian(directAfter.cpu);
+        if (std::max(before, after) > STEADY_RUN_FACTOR * std::min(before, after)) {
             char buf[200];
             std::snprintf(buf, sizeof buf,
                           "  warning: the Direct render took %.1f ms of CPU before the methods "
-                          "and %.1f ms after (the box's load changed): this case's cost "
-                          "ratios are uncertain",
+                          "and %.1f ms after (the box's load changed, or every run of one "
+                          "bracket compiled shaders): this case's cost ratios are uncertain",
                           before, after);
             say(buf);
         }
         directTimes.append(directAfter);
     }
-    run.directMs = directTimes.wall.empty() ? 0.0 : median(directTimes.wall);
-    run.directCpuMs = directTimes.cpu.empty() ? 0.0 : median(directTimes.cpu);
+    int droppedWall = 0, droppedCpu = 0;
+    run.directMs = directTimes.wall.empty() ? 0.0 : steadyMedian(directTimes.wall, &droppedWall);
+    run.directCpuMs = directTimes.cpu.empty() ? 0.0 : steadyMedian(directTimes.cpu, &droppedCpu);
     for (Result& r : run.results) {
         r.directMs = run.directMs;
         r.costRatio = run.directMs > 0.0 ? r.msMedian / run.directMs : 0.0;
@@ -543,12 +551,19 @@ CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& varia
         r.cpuCostRatio = run.directCpuMs > 0.0 ? r.cpuMsMedian / run.directCpuMs : 0.0;
     }
     {
-        char buf[160];
-        std::snprintf(
-            buf, sizeof buf,
-            "  Direct render (the unit of cost): %.1f ms wall, %.1f ms CPU, median of %zu",
-            run.directMs, run.directCpuMs, directTimes.wall.size());
-        say(buf);
+        char buf[240];
+        std::snprintf(buf, sizeof buf,
+                      "  Direct render (the unit of cost): %.1f ms wall, %.1f ms CPU, median of "
+                      "%zu runs",
+                      run.directMs, run.directCpuMs, directTimes.wall.size());
+        std::string line = buf;
+        if (droppedWall > 0 || droppedCpu > 0) {
+            std::snprintf(buf, sizeof buf,
+                          " less %d (wall) and %d (CPU) slower than %.1fx the fastest, left out",
+                          droppedWall, droppedCpu, STEADY_RUN_FACTOR);
+            line += buf;
+        }
+        say(line);
     }
     return run;
 }

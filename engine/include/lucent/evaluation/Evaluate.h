@@ -79,6 +79,21 @@ struct ReferenceSettings {
 /// @throw ValueError for a non-positive spp or target, or a negative or non-finite floor.
 int sppForNoiseFloor(int pilotSpp, double pilotFloor, double targetFloor, int maxSpp);
 
+/// Runs slower than this factor times the fastest are left out of a render's steady time.
+inline constexpr double STEADY_RUN_FACTOR = 1.5;
+
+/// The steady time of a render from its timed runs (ms): the median of the runs within
+/// STEADY_RUN_FACTOR × the fastest. Every run creates its own headless GL context, and on
+/// Mesa llvmpipe some of those contexts compile shaders that the shader cache did not serve:
+/// about 80 ms more, 3× the suite's 64×64 Direct render, in 1 to 5 of a case's 9 Direct runs
+/// in every one of ten processes measured (resources/evaluation/README.md). Such delays only
+/// ever add time, so the fastest run bounds the steady cost from above, and a run 1.5× slower
+/// than it is not the steady cost (the same factor as the Direct brackets' warning). Where
+/// every run is within the factor this is the plain median. @param dropped if given, the
+/// number of runs left out.
+/// @throw ValueError for no runs or a negative or non-finite time.
+double steadyMedian(std::vector<double> runsMs, int* dropped = nullptr);
+
 /// A case's reference with its noise floor.
 struct CachedReference {
     ImageRgb mean, variance, coverage;
@@ -140,17 +155,17 @@ std::string fileSafe(std::string name);
 struct Result {
     std::string caseName;
     std::string group;
-    std::string variant;  ///< "sslpv:paper"
-    std::string setting;  ///< the quality level's name
-    int quality = 0;      ///< index of the setting, cheapest first
-    std::string backend;  ///< "gl" or "cpu"
-    double msMedian = 0.0;
+    std::string variant;    ///< "sslpv:paper"
+    std::string setting;    ///< the quality level's name
+    int quality = 0;        ///< index of the setting, cheapest first
+    std::string backend;    ///< "gl" or "cpu"
+    double msMedian = 0.0;  ///< wall, steadyMedian of the timed runs
     double msMin = 0.0;
     int runs = 0;
-    double directMs = 0.0;   ///< the Direct render of the same frame, same run (median)
+    double directMs = 0.0;   ///< the Direct render of the same frame, same run (steadyMedian)
     double costRatio = 0.0;  ///< msMedian / directMs
-    /// Process CPU time (all threads, llvmpipe's included; median), and its ratio to the Direct
-    /// render's: unlike wall time, barely moved by other processes on a shared box.
+    /// Process CPU time (all threads, llvmpipe's included; steadyMedian), and its ratio to the
+    /// Direct render's: unlike wall time, barely moved by other processes on a shared box.
     double cpuMsMedian = 0.0;
     double directCpuMs = 0.0;
     double cpuCostRatio = 0.0;
@@ -189,16 +204,17 @@ struct RunOptions {
 /// What a case's run produced.
 struct CaseRun {
     CachedReference reference;
-    double directMs = 0.0;     ///< wall, median
-    double directCpuMs = 0.0;  ///< process CPU time, median
+    double directMs = 0.0;     ///< wall, steadyMedian
+    double directCpuMs = 0.0;  ///< process CPU time, steadyMedian
     std::optional<planner::SceneFeatures> features;
     std::vector<Result> results;
     std::vector<std::string> skipped;  ///< "case: variant (setting): why"
 };
 
 /// The reference (cached), the Direct render's time, then every variant at up to
-/// options.levels settings: median wall time of options.repeats renders after a warm-up, and
-/// the metrics. A variant that throws is skipped (with the reason) at its remaining settings.
+/// options.levels settings: steady wall and CPU time (steadyMedian) of options.repeats renders
+/// after a warm-up, and the metrics. A variant that throws is skipped (with the reason) at its
+/// remaining settings.
 CaseRun evaluateCase(const EvalCase& evalCase, const std::vector<Variant>& variants,
                      const RunOptions& options);
 
