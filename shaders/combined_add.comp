@@ -13,7 +13,8 @@
 // Combined.cpp). Two programs: with LOCAL_ESTIMATE, Lhat into u_local and f into u_fraction
 // (they depend on the G-buffer, the irradiance image and the kernel, not on the painted
 // material or the dipole's progress, so the provider computes them only when those change);
-// without, the per-frame sum (Lhat and f read only in the Kernel split).
+// without, the per-frame sum (Lhat and f read only in the Kernel split; with the diffusion
+// part, Lhat carried from the kernel's material to the albedo SSLPV reads at x_o).
 
 #include "dipole_fresnel.glsl"
 
@@ -27,6 +28,7 @@ layout(rgba32f, binding = 0) uniform image2D u_target;           // SSLPV term i
 layout(rgba32f, binding = 1) readonly uniform image2D u_addend;  // the dipole term
 layout(rgba32f, binding = 2) readonly uniform image2D u_local;     // Lhat (Kernel split)
 layout(rgba32f, binding = 3) readonly uniform image2D u_fraction;  // f (Kernel split)
+layout(rgba32f, binding = 4) readonly uniform image2D u_albedo;    // alpha' SSLPV reads
 #endif
 
 layout(binding = 0) uniform sampler2D u_position;    // xyz mm, a coverage
@@ -143,6 +145,32 @@ void main() {
     imageStore(u_fraction, xy, vec4(frac, own ? 1.0 : 0.0));  // a: the pixel is the object's
 }
 #else
+#include "shared/SslpvShared.h"
+
+uniform int u_albedoScale;  // 1: Lhat carried to the albedo SSLPV reads at x_o (u_albedo)
+uniform vec3 u_kernelTotal;  // exactTotal(alpha' of the kernel's material) per channel
+// The exact half-space's total at u_i = i/NODES, alpha' = 1 - u_i^2
+// (lucent::sslpv::ExactReflectanceRatio::exactTotals).
+uniform float u_exactTotal[LUCENT_SSLPV_EXACT_TOTAL_NODES + 1];
+
+// ExactReflectanceRatio::exactTotal: linear in u = sqrt(1 - alpha').
+float exactTotal(float albedo) {
+    float u = sqrt(1.0 - clamp(albedo, 0.0, 1.0)) * float(LUCENT_SSLPV_EXACT_TOTAL_NODES);
+    int i = min(int(u), LUCENT_SSLPV_EXACT_TOTAL_NODES - 1);
+    float f = u - float(i);
+    return (1.0 - f) * u_exactTotal[i] + f * u_exactTotal[i + 1];
+}
+
+// lucent::combined::localScaleToSurfaceAlbedo: R_exact(alpha'(x_o)) / R_exact(alpha'_kernel)
+// per channel, 1 where the read-out saw no cell or the kernel's total vanishes.
+vec3 localScaleToSurfaceAlbedo(vec3 albedo) {
+    vec3 scale = vec3(1.0);
+    for (int c = 0; c < 3; ++c)
+        if (albedo[c] > 0.0 && u_kernelTotal[c] > 0.0)
+            scale[c] = exactTotal(albedo[c]) / u_kernelTotal[c];
+    return scale;
+}
+
 void main() {
     const ivec2 xy = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(xy, u_size)))
@@ -155,7 +183,11 @@ void main() {
         // SSLPV's local part: the kernel's estimate Lhat, but at most the near share f of
         // SSLPV's own radiance (docs/methods/combined.md, "The split's fix").
         vec3 frac = imageLoad(u_fraction, xy).rgb;
-        if (local.a != 0.0) sum = max(sum - min(local.rgb, frac * a.rgb), vec3(0.0));
+        // At the albedo the SSLPV part reads at x_o (docs/methods/combined.md, "The kernel at
+        // the painted surface").
+        vec3 lhat = local.rgb;
+        if (u_albedoScale != 0) lhat *= localScaleToSurfaceAlbedo(imageLoad(u_albedo, xy).rgb);
+        if (local.a != 0.0) sum = max(sum - min(lhat, frac * a.rgb), vec3(0.0));
     }
     imageStore(u_target, xy, vec4(sum, max(a.a, d.a)));
 }

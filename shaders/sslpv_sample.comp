@@ -23,6 +23,15 @@
 #ifndef DIFFUSION
 #define DIFFUSION 0
 #endif
+// ALBEDO_OUT=1 (mode diffusion only; a third program): the albedo the read-out sees is also
+// written to u_albedoOut (SslpvSolver::readoutAlbedo; 0 where no cell is read), for the
+// combined method's local kernel (SslpvSubsurfaceProvider::setAlbedoOutput).
+#ifndef ALBEDO_OUT
+#define ALBEDO_OUT 0
+#endif
+#if ALBEDO_OUT && !DIFFUSION
+#error "ALBEDO_OUT needs DIFFUSION: the propagation modes hold no albedo"
+#endif
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -35,6 +44,9 @@ layout(binding = 5) uniform sampler3D u_c3;  // rgb: Y11
 layout(binding = 6) uniform sampler3D u_c4;  // rgb: Y2-2 (mode diffusion only: surface flux z)
 
 layout(rgba32f, binding = 0) writeonly uniform image2D u_target;  // W/(mm²·sr)
+#if ALBEDO_OUT
+layout(rgba32f, binding = 1) writeonly uniform image2D u_albedoOut;  // rgb: α′ read, a: 1
+#endif
 
 #include "shared/SslpvShared.h"
 #if LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF != 1 || LUCENT_SSLPV_DIFFUSION_FLUX_COEFF != 2
@@ -130,6 +142,7 @@ void main() {
     vec4 pos = texelFetch(u_position, px, 0);
     vec4 nrm = texelFetch(u_normal, px, 0);
     vec3 L = vec3(0.0);
+    vec3 albedoRead = vec3(0.0);
     bool mine = u_meshId < 0 || int(nrm.a + 0.5) == u_meshId + 1;
     if (pos.a > 0.5 && mine) {
         vec3 wo = u_ortho != 0 ? -normalize(u_forward) : normalize(u_eye - pos.xyz);
@@ -141,6 +154,7 @@ void main() {
             vec3 albedo;
             vec3 jt[3];
             vec3 Li = radianceInside(p, n, albedo, jt);
+            albedoRead = albedo;
             L = (u_exitScale * (1.0 - dielectricReflectance(cosO, u_eta))) * Li;
 #if DIFFUSION
             if (u_exitCorrection != 0)
@@ -168,4 +182,7 @@ void main() {
         }
     }
     imageStore(u_target, px, vec4(L, 1.0));
+#if ALBEDO_OUT
+    imageStore(u_albedoOut, px, vec4(albedoRead, 1.0));
+#endif
 }

@@ -23,3 +23,8 @@
 /// of shared/DirpoleShared.h: LUCENT_DIRPOLE_EXIT_ALBEDO_NODES rows of
 /// LUCENT_DIRPOLE_EXIT_COSINE_NODES floats) in sslpv_sample.comp.
 #define LUCENT_SSLPV_BINDING_EXIT_TABLE 0
+
+/// Intervals of the exact half-space's total reflectance table (lucent::sslpv::
+/// ExactReflectanceRatio::exactTotals: NODES + 1 values at u_i = i/NODES, α′ = 1 − u_i²), which
+/// combined_add.comp interpolates to carry the local kernel to the painted surface's albedo.
+#define LUCENT_SSLPV_EXACT_TOTAL_NODES 64

@@ -13,12 +13,16 @@
 #include <lucent/dipole/IrradiancePass.h>
 #include <lucent/dipole/Profiles.h>
 #include <lucent/material/MaterialVolume.h>
+#include <lucent/material/Medium.h>
 #include <lucent/material/Resample.h>
 #include <lucent/mesh/TriangleMesh.h>
+#include <lucent/sslpv/GridDiffusion.h>
 #include <lucent/sslpv/Transfer.h>
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <optional>
 
 namespace lucent::combined {
 
@@ -365,6 +369,17 @@ MaterialSample surfaceMaterial(const MaterialVolume& volume, const std::vector<C
     return mean.mean();
 }
 
+Rgb localScaleToSurfaceAlbedo(const Rgb& readoutAlbedo, const Rgb& kernelAlbedo,
+                              const sslpv::ExactReflectanceRatio& table) {
+    Rgb scale(1.f);
+    for (int c = 0; c < 3; ++c) {
+        const float kernelTotal = table.exactTotal(kernelAlbedo[c]);
+        if (readoutAlbedo[c] > 0.f && kernelTotal > 0.f)
+            scale[c] = table.exactTotal(readoutAlbedo[c]) / kernelTotal;
+    }
+    return scale;
+}
+
 Point2f pixelShift(int x, int y, uint32_t seed) {
     // PCG hash (Jarzynski & Olano 2020, "Hash Functions for GPU Rendering"), chained.
     const auto pcg = [](uint32_t v) {
@@ -523,17 +538,26 @@ CombinedResult renderCombined(const Scene& scene, const CombinedSettings& settin
         lv.enabled = settings.dipoleLightViews;
         out.dipole = dipole::renderImageSpaceDipole(scene, gs, lv).radiance;
     }
+    std::optional<sslpv::SslpvRenderer> sslpvPart;
     if (out.plan.sslpvOn) {
         sslpv::SslpvRenderOptions so = settings.sslpv;
         so.subsurface = true;
         so.direct = false;
         so.solver.skipAccumulateSteps = out.plan.skipSteps;
-        out.sslpv = sslpv::renderSslpv(scene, so);
+        // As renderSslpv, keeping the renderer: the Kernel split reads its albedo below.
+        const SceneObject& object = scene.objects.front();
+        sslpvPart.emplace(so);
+        sslpvPart->setMesh(object.mesh);
+        sslpvPart->setLights(scene.lights);
+        sslpvPart->setMaterial(volume, scene.eta);
+        out.sslpv = sslpvPart->render(scene.camera);
     }
     if (out.plan.mode == SplitMode::Kernel && out.plan.dipoleOn && out.plan.sslpvOn) {
-        const SslpvSurfaceKernel kernel = computeSslpvSurfaceKernel(
-            surfaceMaterial(volume, surfaceShell(volume, out.plan.cellSize)), scene.eta,
-            settings.sslpv.solver, out.plan.cellSize, out.plan.splitRadius);
+        const MaterialSample kernelMaterial =
+            surfaceMaterial(volume, surfaceShell(volume, out.plan.cellSize));
+        const SslpvSurfaceKernel kernel =
+            computeSslpvSurfaceKernel(kernelMaterial, scene.eta, settings.sslpv.solver,
+                                      out.plan.cellSize, out.plan.splitRadius);
         // SSLPV's local part: the kernel's estimate L̂, at most the kernel's near share f of
         // SSLPV's own radiance (docs/methods/combined.md, "The split's fix").
         const dipole::SurfaceBuffers buf = dipole::buildSurfaceBuffers(scene);
@@ -541,9 +565,24 @@ CombinedResult renderCombined(const Scene& scene, const CombinedSettings& settin
                                                  settings.localSamples, settings.dipole.seed);
         const ImageRgb f = localSslpvFraction(buf, kernel, out.plan.splitRadius,
                                               settings.localSamples, settings.dipole.seed);
+        // L̂ at the albedo the SSLPV part's read-out sees at x_o (mode diffusion; the
+        // propagation modes read none and keep the kernel's). A homogeneous volume reads the
+        // kernel's own albedo everywhere: the factor is 1 and is skipped, as on the GPU.
+        const std::shared_ptr<const sslpv::ExactReflectanceRatio> table =
+            sslpv::exactReflectanceRatio(scene.eta);
+        const Rgb kernelAlbedo = reducedAlbedo(kernelMaterial);
+        const sslpv::SslpvSolver& solver = sslpvPart->solver();
+        const bool painted = !volume.isHomogeneous();
         for (int y = 0; y < h; ++y)
-            for (int x = 0; x < w; ++x)
-                out.local.at(x, y) = glm::min(lhat.at(x, y), f.at(x, y) * out.sslpv.at(x, y));
+            for (int x = 0; x < w; ++x) {
+                const size_t i = buf.index(x, y);
+                Rgb lh = lhat.at(x, y);
+                if (painted && buf.covered[i])
+                    lh *= localScaleToSurfaceAlbedo(
+                        solver.readoutAlbedo(buf.position[i], glm::normalize(buf.normal[i])),
+                        kernelAlbedo, *table);
+                out.local.at(x, y) = glm::min(lh, f.at(x, y) * out.sslpv.at(x, y));
+            }
     }
     LUCENT_ASSERT(out.dipole.width() == w && out.sslpv.width() == w && out.local.width() == w);
     out.radiance = ImageRgb(w, h);

@@ -11,6 +11,8 @@
 #include <lucent/dipole/Profiles.h>
 #include <lucent/sslpv/GridDiffusion.h>
 
+#include <shared/SslpvShared.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -78,16 +80,20 @@ double surfaceFluxExitLean(double albedo, double eta) {
     return flux > 0.0 ? 1.5 / eta * lean / flux : 0.0;
 }
 
+static_assert(ExactReflectanceRatio::NODES == LUCENT_SSLPV_EXACT_TOTAL_NODES,
+              "combined_add.comp reads the exact totals with the shared node count");
+
 ExactReflectanceRatio::ExactReflectanceRatio(double eta) : m_eta(eta) {
     LUCENT_CHECK(std::isfinite(eta) && eta >= 1.0 && eta <= 3.0,
                  "exact reflectance ratio: eta must be in [1, 3], got ", eta);
-    constexpr int NODES = 64;
     m_ratio.resize(NODES + 1);
+    m_total.resize(NODES + 1);
     for (int i = 0; i <= NODES; ++i) {
         const double u = double(i) / NODES, albedo = 1.0 - u * u;
         const double model = diffusionHalfSpaceReflectance(albedo, eta);
         const double exact = dipole::halfSpaceReflectance(albedo, eta, 1.0);
         m_ratio[size_t(i)] = model > 1e-9 ? float(exact / model) : 1.f;
+        m_total[size_t(i)] = float(exact);
     }
     // α′ = 0: both vanish; take the limit from the first node inside.
     m_ratio[NODES] = m_ratio[NODES - 1];
@@ -97,11 +103,24 @@ std::shared_ptr<const ExactReflectanceRatio> exactReflectanceRatio(double eta) {
     return sharedTable<ExactReflectanceRatio>(eta, [&] { return ExactReflectanceRatio(eta); });
 }
 
-float ExactReflectanceRatio::operator()(float albedo) const {
-    const float u = std::sqrt(1.f - std::clamp(albedo, 0.f, 1.f)) * float(m_ratio.size() - 1);
-    const size_t i = std::min(size_t(u), m_ratio.size() - 2);
+namespace {
+
+/// Linear interpolation of a table at u_i = i/(size − 1) in u = √(1 − α′).
+float interpolateInU(const std::vector<float>& table, float albedo) {
+    const float u = std::sqrt(1.f - std::clamp(albedo, 0.f, 1.f)) * float(table.size() - 1);
+    const size_t i = std::min(size_t(u), table.size() - 2);
     const float f = u - float(i);
-    return (1.f - f) * m_ratio[i] + f * m_ratio[i + 1];
+    return (1.f - f) * table[i] + f * table[i + 1];
+}
+
+}  // namespace
+
+float ExactReflectanceRatio::operator()(float albedo) const {
+    return interpolateInU(m_ratio, albedo);
+}
+
+float ExactReflectanceRatio::exactTotal(float albedo) const {
+    return interpolateInU(m_total, albedo);
 }
 
 void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {

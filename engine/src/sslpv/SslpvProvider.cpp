@@ -83,8 +83,9 @@ struct SslpvSubsurfaceProvider::Impl {
     // GL
     bool created = false;
     /// sslpv_sample.comp for the propagation modes, and with DIFFUSION=1 for mode diffusion
-    /// (compiled at its first frame).
-    gpu::GlProgram program, diffusionProgram;
+    /// (compiled at its first frame), with ALBEDO_OUT=1 too when an albedo output is set.
+    gpu::GlProgram program, diffusionProgram, diffusionAlbedoProgram;
+    unsigned albedoOutput = 0;                  ///< setAlbedoOutput's texture; 0: none
     std::optional<gpu::ShaderLibrary> library;  ///< create()'s, for diffusionProgram
     gpu::GlObject coeffTex[UPLOADED_COEFFS_DIFFUSION];
     int texRes = 0;
@@ -148,6 +149,7 @@ void SslpvSubsurfaceProvider::create(const gpu::ShaderLibrary& library) {
 void SslpvSubsurfaceProvider::destroy() {
     m->program.destroy();
     m->diffusionProgram.destroy();
+    m->diffusionAlbedoProgram.destroy();
     for (auto& t : m->coeffTex)
         t.destroy();
     m->texRes = 0;
@@ -488,12 +490,19 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
     if (query)
         glBeginQuery(GL_TIME_ELAPSED, s.timeQuery.id());
     const bool diffusion = s.solver.options().mode == SslpvMode::Diffusion;
-    if (diffusion && !s.diffusionProgram.isValid())
+    const bool albedoOut = diffusion && s.albedoOutput != 0;
+    if (diffusion && !albedoOut && !s.diffusionProgram.isValid())
         s.diffusionProgram =
             gpu::GlProgram::compute(*s.library, "sslpv_sample.comp", {"DIFFUSION=1"});
-    const gpu::GlProgram& program = diffusion ? s.diffusionProgram : s.program;
+    if (albedoOut && !s.diffusionAlbedoProgram.isValid())
+        s.diffusionAlbedoProgram = gpu::GlProgram::compute(*s.library, "sslpv_sample.comp",
+                                                           {"DIFFUSION=1", "ALBEDO_OUT=1"});
+    const gpu::GlProgram& program =
+        albedoOut ? s.diffusionAlbedoProgram : (diffusion ? s.diffusionProgram : s.program);
     const GLuint p = program.id();
     glUseProgram(p);
+    if (albedoOut)
+        glBindImageTexture(1, s.albedoOutput, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glBindTextureUnit(0, g.positionTexture);
     glBindTextureUnit(1, g.normalTexture);
     for (int i = 0; i < UPLOADED_COEFFS_DIFFUSION; ++i)
@@ -551,6 +560,10 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
     }
     s.timings.sampleCpuMs = t.elapsedMs();
     ++s.stats.frames;
+}
+
+void SslpvSubsurfaceProvider::setAlbedoOutput(unsigned texture) {
+    m->albedoOutput = texture;
 }
 
 const SslpvSolver& SslpvSubsurfaceProvider::solver() const {

@@ -1413,6 +1413,14 @@ Rgb SslpvSolver::radiance(const Point3f& p, const Normal3f& n) const {
     return radianceFromCoefficients(c, n);
 }
 
+Rgb SslpvSolver::readoutAlbedo(const Point3f& p, const Normal3f& n) const {
+    float c[3][SSLPV_MAX_COEFFS];
+    if (m_opt.mode != SslpvMode::Diffusion || !interpolateCoefficients(p, n, c))
+        return Rgb(0.f);
+    return {c[0][LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF], c[1][LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF],
+            c[2][LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF]};
+}
+
 Rgb SslpvSolver::exitantRadiance(const Point3f& p, const Normal3f& n, float cosOut,
                                  const Vector3f& wo) const {
     float c[3][SSLPV_MAX_COEFFS];

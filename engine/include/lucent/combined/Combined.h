@@ -14,7 +14,9 @@
 ///    half-space with the same options, SslpvSurfaceKernel), E the Fresnel-transmitted
 ///    irradiance the dipole gathers, f the kernel's near share of ∫ R_lpv E dA
 ///    (localSslpvFraction): SSLPV's local part is never taken larger than the near share of
-///    SSLPV's own radiance. Exact bookkeeping for uniform irradiance on a flat surface.
+///    SSLPV's own radiance. Exact bookkeeping for uniform irradiance on a flat surface. With
+///    SSLPV's diffusion mode L̂ is carried to the albedo its read-out sees at x_o
+///    (localScaleToSurfaceAlbedo): one kernel, the surface cells' mean, for a painted body.
 ///  - SplitMode::Steps: L(x_o) = L_dipole,r≤r_s(x_o) + L_sslpv,n>k(x_o), k = max(k₀,
 ///    round(r_s/Δx)): SSLPV skips its first k propagation steps (SslpvOptions::
 ///    skipAccumulateSteps, §4). Light from beyond k·Δx needs more than k steps, so nothing
@@ -41,6 +43,9 @@
 namespace lucent {
 class MaterialVolume;
 struct TriangleMesh;
+namespace sslpv {
+class ExactReflectanceRatio;
+}
 }  // namespace lucent
 
 namespace lucent::combined {
@@ -198,6 +203,19 @@ ImageRgb localSslpvEstimate(const dipole::SurfaceBuffers& buffers, const SslpvSu
 ImageRgb localSslpvFraction(const dipole::SurfaceBuffers& buffers, const SslpvSurfaceKernel& kernel,
                             float splitRadius, int samples, uint32_t seed);
 
+/// The factor that carries L̂ from the kernel's material to the painted surface at x_o, per
+/// channel: R_exact(α′(x_o)) / R_exact(α′_kernel), R_exact the exact half-space's total
+/// (ExactReflectanceRatio::exactTotal). SSLPV's diffusion part normalises every surface cell to
+/// R_exact at that cell's albedo, so on a half-space of the cell's material its local part is
+/// the kernel's times this ratio; without it a vein darker than the surface's mean had the
+/// mean's local part subtracted (too much) and the marble around it the mean's (too little):
+/// docs/methods/combined.md, "The kernel at the painted surface". @param readoutAlbedo α′ the
+/// SSLPV read-out sees at x_o (SslpvSolver::readoutAlbedo); a channel at 0 (no cell read there,
+/// or a propagation mode, which holds no albedo) keeps the factor 1, as does a kernel whose
+/// total vanishes.
+Rgb localScaleToSurfaceAlbedo(const Rgb& readoutAlbedo, const Rgb& kernelAlbedo,
+                              const sslpv::ExactReflectanceRatio& table);
+
 /// Per-pixel shift pair in [0, 1)² of localSslpvEstimate (PCG hash of x, y, seed; the GLSL
 /// copy in shaders/combined_add.comp is bit-identical).
 Point2f pixelShift(int x, int y, uint32_t seed);
@@ -243,8 +261,10 @@ struct CombinedResult {
 
 /// CPU combined render of scene.objects[0]: CPU irradiance pass + image-space gather
 /// (dipole::renderImageSpaceDipole with maxRadius = r_s) and the CPU SslpvRenderer; Kernel mode
-/// subtracts min(localSslpvEstimate(), localSslpvFraction() · L_sslpv) (camera's surface
-/// buffers; `local` holds it; the sum clamped at 0 per channel),
+/// subtracts min(s·localSslpvEstimate(), localSslpvFraction() · L_sslpv), s =
+/// localScaleToSurfaceAlbedo at the albedo SSLPV's read-out sees there on a painted volume (1
+/// on a homogeneous one; camera's surface buffers; `local` holds it; the sum clamped at 0 per
+/// channel),
 /// Steps mode skips k propagation steps. @throw ValueError for a scene without
 /// object/material or bad settings (message names the field).
 CombinedResult renderCombined(const Scene& scene, const CombinedSettings& settings);

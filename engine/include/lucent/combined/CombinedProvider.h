@@ -135,8 +135,10 @@ public:
     //! @{ \name The parts (for tests, timings and the statistics panel)
     [[nodiscard]] const sslpv::SslpvSubsurfaceProvider& sslpvProvider() const;
     [[nodiscard]] const dipole::DipoleSubsurfaceProvider& dipoleProvider() const;
-    /// Kernel split: SSLPV's local kernel of the last frame (mean inside material).
+    /// Kernel split: SSLPV's local kernel of the last frame, solved for kernelMaterial().
     [[nodiscard]] const SslpvSurfaceKernel& kernel() const;
+    /// The mean material of the volume's surface cells the kernel was solved for (surfaceMaterial).
+    [[nodiscard]] const MaterialSample& kernelMaterial() const;
     //! @}
 
 private:

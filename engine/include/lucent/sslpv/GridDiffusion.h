@@ -61,10 +61,18 @@ public:
     [[nodiscard]] double eta() const { return m_eta; }
     /// The ratio at reduced albedo `albedo` (clamped to [0, 1]).
     [[nodiscard]] float operator()(float albedo) const;
+    /// The exact half-space's total reflectance itself (dipole::halfSpaceReflectance at normal
+    /// incidence, per unit entering flux) at `albedo` (clamped to [0, 1]), interpolated in
+    /// u = √(1 − α′) as the ratio.
+    [[nodiscard]] float exactTotal(float albedo) const;
+    /// exactTotal's nodes: NODES + 1 values at u_i = i/NODES, α′ = 1 − u_i² (for the GL passes).
+    [[nodiscard]] const std::vector<float>& exactTotals() const { return m_total; }
+    static constexpr int NODES = 64;
 
 private:
     double m_eta;
-    std::vector<float> m_ratio;  ///< at u_i = i/64, α′ = 1 − u_i²
+    std::vector<float> m_ratio;  ///< at u_i = i/NODES, α′ = 1 − u_i²
+    std::vector<float> m_total;  ///< the exact total at the same nodes
 };
 
 /// The table for `eta`, built once per process and η (65 adding–doubling solves, ≈ 15–20 ms)

@@ -162,6 +162,11 @@ public:
     /// gpu::SubsurfaceProvider: update(), GL propagation (Gl backend), upload when changed,
     /// then the per-pixel sample pass into `targetTexture`. Context current.
     void renderSubsurface(const gpu::GBufferView& gbuffer, unsigned targetTexture) override;
+    /// An RGBA32F texture of the G-buffer's size into which the sample pass of mode diffusion
+    /// also writes the albedo its read-out sees at every pixel it writes (rgb: α′ per
+    /// channel, SslpvSolver::readoutAlbedo; 0 where no cell is read); 0 (the default): none.
+    /// The propagation modes hold no albedo and leave the texture as it is.
+    void setAlbedoOutput(unsigned texture);
 
     //! @{ \name Results
     [[nodiscard]] const SslpvSolver& solver() const;

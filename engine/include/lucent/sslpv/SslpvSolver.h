@@ -305,6 +305,10 @@ public:
     /// weights). The GL sample pass (shaders/sslpv_sample.comp) computes the same.
     [[nodiscard]] Rgb exitantRadiance(const Point3f& p, const Normal3f& n, float cosOut,
                                       const Vector3f& wo) const;
+    /// Mode Diffusion: the reduced albedo α′ per channel of the cells exitantRadiance() reads
+    /// at p (the same cells and weights, so the albedo its exit-angle table is looked up at).
+    /// 0 in the other modes, where no cell is readable there, or before a solve.
+    [[nodiscard]] Rgb readoutAlbedo(const Point3f& p, const Normal3f& n) const;
     /// The exit-angle table exitantRadiance() applies (the process's table for η), or null when
     /// it applies none (not mode Diffusion, diffusionExitTable off, or before a solve).
     [[nodiscard]] const std::shared_ptr<const dipole::DirpoleExitTable>& exitTable() const {
