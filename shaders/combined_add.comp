@@ -14,7 +14,7 @@
 // (they depend on the G-buffer, the irradiance image and the kernel, not on the painted
 // material or the dipole's progress, so the provider computes them only when those change);
 // without, the per-frame sum (Lhat and f read only in the Kernel split; with the diffusion
-// part, Lhat carried from the kernel's material to the albedo SSLPV reads at x_o).
+// part on a painted volume, Lhat carried from the kernel's material to the one at x_o).
 
 #include "dipole_fresnel.glsl"
 
@@ -29,6 +29,8 @@ layout(rgba32f, binding = 1) readonly uniform image2D u_addend;  // the dipole t
 layout(rgba32f, binding = 2) readonly uniform image2D u_local;     // Lhat (Kernel split)
 layout(rgba32f, binding = 3) readonly uniform image2D u_fraction;  // f (Kernel split)
 layout(rgba32f, binding = 4) readonly uniform image2D u_albedo;    // alpha' SSLPV reads
+layout(rgba32f, binding = 5) readonly uniform image2D u_sigmaT;    // sigma_t' the dipole reads
+layout(rgba32f, binding = 6) readonly uniform image2D u_sigmaS;    // sigma_s' the dipole reads
 #endif
 
 layout(binding = 0) uniform sampler2D u_position;    // xyz mm, a coverage
@@ -86,6 +88,15 @@ vec3 kernelAt(float r) {
     return vec3(0.0);
 }
 
+// lucent::Frame (Duff et al. 2017 basis): the tangents fs, ft of unit normal no.
+void tangentFrame(vec3 no, out vec3 fs, out vec3 ft) {
+    float sgn = no.z >= 0.0 ? 1.0 : -1.0;
+    float aa = -1.0 / (sgn + no.z);
+    float bb = no.x * no.y * aa;
+    fs = vec3(1.0 + sgn * no.x * no.x * aa, sgn * bb, -sgn * no.x);
+    ft = vec3(bb, sgn + no.y * no.y * aa, -no.y);
+}
+
 bool ownPixel(ivec2 xy) {
     vec4 q = texelFetch(u_position, xy, 0);
     if (q.w == 0.0) return false;
@@ -102,11 +113,8 @@ void main() {
     if (own) {
         vec3 xo = texelFetch(u_position, xy, 0).xyz;
         vec3 no = normalize(texelFetch(u_normal, xy, 0).xyz);
-        float sgn = no.z >= 0.0 ? 1.0 : -1.0;  // Duff et al. 2017 basis (lucent::Frame)
-        float aa = -1.0 / (sgn + no.z);
-        float bb = no.x * no.y * aa;
-        vec3 fs = vec3(1.0 + sgn * no.x * no.x * aa, sgn * bb, -sgn * no.x);
-        vec3 ft = vec3(bb, sgn + no.y * no.y * aa, -no.y);
+        vec3 fs, ft;
+        tangentFrame(no, fs, ft);
         int yTop = u_size.y - 1 - xy.y;
         vec2 shift = pixelShift(xy.x, yTop);
         // lucent::combined::localSslpvFraction: near disc r <= r_s and far annulus
@@ -146,9 +154,12 @@ void main() {
 }
 #else
 #include "shared/SslpvShared.h"
+#include "shared/CombinedShared.h"
 
-uniform int u_albedoScale;  // 1: Lhat carried to the albedo SSLPV reads at x_o (u_albedo)
-uniform vec3 u_kernelTotal;  // exactTotal(alpha' of the kernel's material) per channel
+uniform int u_albedoScale;  // 1: Lhat carried to the material at x_o (u_albedo, u_sigma*)
+uniform vec3 u_kernelTotal;      // KernelSurfaceTerms::exactTotal
+uniform vec3 u_kernelNearShare;  // KernelSurfaceTerms::nearShare
+uniform float u_boundaryA;       // A = (1 + F_dr)/(1 - F_dr)
 // The exact half-space's total at u_i = i/NODES, alpha' = 1 - u_i^2
 // (lucent::sslpv::ExactReflectanceRatio::exactTotals).
 uniform float u_exactTotal[LUCENT_SSLPV_EXACT_TOTAL_NODES + 1];
@@ -161,13 +172,66 @@ float exactTotal(float albedo) {
     return (1.0 - f) * u_exactTotal[i] + f * u_exactTotal[i + 1];
 }
 
-// lucent::combined::localScaleToSurfaceAlbedo: R_exact(alpha'(x_o)) / R_exact(alpha'_kernel)
-// per channel, 1 where the read-out saw no cell or the kernel's total vanishes.
-vec3 localScaleToSurfaceAlbedo(vec3 albedo) {
+// lucent::combined::dipoleNearShare: the classical dipole's (Jensen et al. 2001) share of its
+// total diffuse reflectance within r_s of the entry point.
+float dipoleNearShare(float sigmaT, float albedo) {
+    if (!(sigmaT > 0.0)) return 0.0;
+    float zr = 1.0 / sigmaT;
+    float zv = zr + 4.0 * u_boundaryA / (3.0 * sigmaT);
+    float s = sigmaT * sqrt(3.0 * max(0.0, 1.0 - albedo));
+    float r = u_splitRadius;
+    float dr = sqrt(r * r + zr * zr), dv = sqrt(r * r + zv * zv);
+    float total = exp(-s * zr) + exp(-s * zv);
+    float beyond = zr * exp(-s * dr) / dr + zv * exp(-s * dv) / dv;
+    return total > 0.0 ? clamp(1.0 - beyond / total, 0.0, 1.0) : 0.0;
+}
+
+// lucent::combined::discMeanMaterial: sigma_t' and sigma_s' averaged over the object's pixels
+// holding material at the same Hammersley points of the disc r <= r_s on the tangent plane at x_o.
+void discMeanMaterial(ivec2 xy, out vec3 sigmaT, out vec3 sigmaS) {
+    sigmaT = vec3(0.0);
+    sigmaS = vec3(0.0);
+    vec3 xo = texelFetch(u_position, xy, 0).xyz;
+    vec3 fs, ft;
+    tangentFrame(normalize(texelFetch(u_normal, xy, 0).xyz), fs, ft);
+    const int samples = LUCENT_COMBINED_DISC_MEAN_SAMPLES;
+    int count = 0;
+    for (int i = 0; i < samples; ++i) {
+        vec2 h = vec2((float(i) + 0.5) / float(samples), radicalInverse2(uint(i)));
+        float r = u_splitRadius * sqrt(h.x), phi = 2.0 * PI * h.y;
+        ivec2 top;
+        if (!projectTop(xo + r * (cos(phi) * fs + sin(phi) * ft), top)) continue;
+        ivec2 pix = ivec2(top.x, u_size.y - 1 - top.y);
+        // The dipole's irradiance pass writes sigma_t' on the object's pixels only: a zero is
+        // another object, the background or no material (and costs no G-buffer fetches).
+        vec3 st = imageLoad(u_sigmaT, pix).rgb;
+        if (st == vec3(0.0)) continue;
+        sigmaT += st;
+        sigmaS += imageLoad(u_sigmaS, pix).rgb;
+        ++count;
+    }
+    if (count > 0) {
+        sigmaT /= float(count);
+        sigmaS /= float(count);
+    }
+}
+
+// lucent::combined::localScaleToSurfaceMaterial: R_exact(alpha'(x_o)) / R_exact(alpha'_kernel)
+// times the near shares' ratio per channel; 1 where the read-out saw no cell or the kernel's
+// total vanishes, the totals' ratio alone where the disc has no sigma_t' or the kernel no near
+// share.
+vec3 localScaleToSurfaceMaterial(ivec2 xy) {
+    vec3 albedo = imageLoad(u_albedo, xy).rgb;
+    vec3 sigmaT, sigmaS;
+    discMeanMaterial(xy, sigmaT, sigmaS);
     vec3 scale = vec3(1.0);
-    for (int c = 0; c < 3; ++c)
-        if (albedo[c] > 0.0 && u_kernelTotal[c] > 0.0)
-            scale[c] = exactTotal(albedo[c]) / u_kernelTotal[c];
+    for (int c = 0; c < 3; ++c) {
+        if (!(albedo[c] > 0.0 && u_kernelTotal[c] > 0.0)) continue;
+        scale[c] = exactTotal(albedo[c]) / u_kernelTotal[c];
+        if (sigmaT[c] > 0.0 && u_kernelNearShare[c] > 0.0)
+            scale[c] *=
+                dipoleNearShare(sigmaT[c], sigmaS[c] / sigmaT[c]) / u_kernelNearShare[c];
+    }
     return scale;
 }
 
@@ -183,11 +247,13 @@ void main() {
         // SSLPV's local part: the kernel's estimate Lhat, but at most the near share f of
         // SSLPV's own radiance (docs/methods/combined.md, "The split's fix").
         vec3 frac = imageLoad(u_fraction, xy).rgb;
-        // At the albedo the SSLPV part reads at x_o (docs/methods/combined.md, "The kernel at
-        // the painted surface").
-        vec3 lhat = local.rgb;
-        if (u_albedoScale != 0) lhat *= localScaleToSurfaceAlbedo(imageLoad(u_albedo, xy).rgb);
-        if (local.a != 0.0) sum = max(sum - min(lhat, frac * a.rgb), vec3(0.0));
+        // At the material at x_o (docs/methods/combined.md, "The kernel at the painted
+        // surface").
+        if (local.a != 0.0) {
+            vec3 lhat = local.rgb;
+            if (u_albedoScale != 0) lhat *= localScaleToSurfaceMaterial(xy);
+            sum = max(sum - min(lhat, frac * a.rgb), vec3(0.0));
+        }
     }
     imageStore(u_target, xy, vec4(sum, max(a.a, d.a)));
 }

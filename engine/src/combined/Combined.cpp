@@ -18,6 +18,7 @@
 #include <lucent/mesh/TriangleMesh.h>
 #include <lucent/sslpv/GridDiffusion.h>
 #include <lucent/sslpv/Transfer.h>
+#include <shared/CombinedShared.h>
 
 #include <algorithm>
 #include <cmath>
@@ -369,13 +370,84 @@ MaterialSample surfaceMaterial(const MaterialVolume& volume, const std::vector<C
     return mean.mean();
 }
 
-Rgb localScaleToSurfaceAlbedo(const Rgb& readoutAlbedo, const Rgb& kernelAlbedo,
-                              const sslpv::ExactReflectanceRatio& table) {
+float dipoleNearShare(float sigmaT, float albedo, float boundaryA, float radius) {
+    if (!(sigmaT > 0.f))
+        return 0.f;
+    const float zr = 1.f / sigmaT;
+    const float zv = zr + 4.f * boundaryA / (3.f * sigmaT);  // z_r + 4AD, D = 1/(3σt′)
+    const float s = sigmaT * std::sqrt(3.f * std::max(0.f, 1.f - albedo));  // σ_tr = √(3σaσt′)
+    const float dr = std::sqrt(radius * radius + zr * zr),
+                dv = std::sqrt(radius * radius + zv * zv);
+    // Twice the totals over α′ (Jensen et al. 2001: ∫_r^∞ R_d 2πr dr = α′/2 Σ z e^{−σ_tr d}/d).
+    const float total = std::exp(-s * zr) + std::exp(-s * zv);
+    const float beyond = zr * std::exp(-s * dr) / dr + zv * std::exp(-s * dv) / dv;
+    return total > 0.f ? std::clamp(1.f - beyond / total, 0.f, 1.f) : 0.f;
+}
+
+KernelSurfaceTerms kernelSurfaceTerms(const MaterialSample& kernelMaterial, float eta,
+                                      float splitRadius,
+                                      const sslpv::ExactReflectanceRatio& table) {
+    LUCENT_CHECK(eta >= 1.f && eta <= 3.f, "combined: eta must lie in [1, 3]");
+    const double fdr = dipole::fresnelDiffuseReflectanceJensen(eta);
+    KernelSurfaceTerms k;
+    k.boundaryA = float((1.0 + fdr) / (1.0 - fdr));
+    k.splitRadius = splitRadius;
+    const Rgb albedo = reducedAlbedo(kernelMaterial);
+    for (int c = 0; c < 3; ++c) {
+        k.exactTotal[c] = table.exactTotal(albedo[c]);
+        k.nearShare[c] =
+            dipoleNearShare(kernelMaterial.sigma_t[c], albedo[c], k.boundaryA, splitRadius);
+    }
+    return k;
+}
+
+MaterialSample discMeanMaterial(const dipole::SurfaceBuffers& buffers, int x, int y, float radius) {
+    MaterialSample mean;
+    const size_t idx = buffers.index(x, y);
+    if (!buffers.covered[idx])
+        return mean;
+    const Point3f xo = buffers.position[idx];
+    const Frame frame(glm::normalize(buffers.normal[idx]));
+    constexpr uint32_t samples = LUCENT_COMBINED_DISC_MEAN_SAMPLES;
+    int count = 0;
+    for (uint32_t i = 0; i < samples; ++i) {
+        const Point2f h = hammersley(i, samples);
+        const float r = radius * std::sqrt(h.x), phi = 2.f * PI * h.y;
+        Point2f pixel;
+        if (!buffers.project(xo + r * (std::cos(phi) * frame.s + std::sin(phi) * frame.t), pixel))
+            continue;
+        const int px = int(pixel.x), py = int(pixel.y);
+        if (px < 0 || py < 0 || px >= buffers.width || py >= buffers.height)
+            continue;
+        // A pixel without material (not covered, or outside the painted volume) is left out, as
+        // on the GPU, whose per-pixel material is zero there.
+        const MaterialSample& m = buffers.material[buffers.index(px, py)];
+        if (m.sigma_t == Rgb(0.f))
+            continue;
+        mean.sigma_t += m.sigma_t;
+        mean.sigma_s += m.sigma_s;
+        ++count;
+    }
+    if (count > 0) {
+        mean.sigma_t /= float(count);
+        mean.sigma_s /= float(count);
+    }
+    return mean;
+}
+
+Rgb localScaleToSurfaceMaterial(const Rgb& readoutAlbedo, const MaterialSample& discMean,
+                                const KernelSurfaceTerms& kernel,
+                                const sslpv::ExactReflectanceRatio& table) {
     Rgb scale(1.f);
     for (int c = 0; c < 3; ++c) {
-        const float kernelTotal = table.exactTotal(kernelAlbedo[c]);
-        if (readoutAlbedo[c] > 0.f && kernelTotal > 0.f)
-            scale[c] = table.exactTotal(readoutAlbedo[c]) / kernelTotal;
+        if (!(readoutAlbedo[c] > 0.f && kernel.exactTotal[c] > 0.f))
+            continue;
+        scale[c] = table.exactTotal(readoutAlbedo[c]) / kernel.exactTotal[c];
+        const float sigmaT = discMean.sigma_t[c];
+        if (sigmaT > 0.f && kernel.nearShare[c] > 0.f)
+            scale[c] *= dipoleNearShare(sigmaT, discMean.sigma_s[c] / sigmaT, kernel.boundaryA,
+                                        kernel.splitRadius) /
+                        kernel.nearShare[c];
     }
     return scale;
 }
@@ -565,12 +637,14 @@ CombinedResult renderCombined(const Scene& scene, const CombinedSettings& settin
                                                  settings.localSamples, settings.dipole.seed);
         const ImageRgb f = localSslpvFraction(buf, kernel, out.plan.splitRadius,
                                               settings.localSamples, settings.dipole.seed);
-        // L̂ at the albedo the SSLPV part's read-out sees at x_o (mode diffusion; the
-        // propagation modes read none and keep the kernel's). A homogeneous volume reads the
-        // kernel's own albedo everywhere: the factor is 1 and is skipped, as on the GPU.
+        // L̂ carried to the material at x_o: the albedo the SSLPV part's read-out sees there
+        // (mode diffusion; the propagation modes read none and keep the kernel's) and the
+        // surface's material within r_s. A homogeneous volume reads the kernel's own material
+        // everywhere: the factor is 1 and is skipped, as on the GPU.
         const std::shared_ptr<const sslpv::ExactReflectanceRatio> table =
             sslpv::exactReflectanceRatio(scene.eta);
-        const Rgb kernelAlbedo = reducedAlbedo(kernelMaterial);
+        const KernelSurfaceTerms kernelTerms =
+            kernelSurfaceTerms(kernelMaterial, scene.eta, out.plan.splitRadius, *table);
         const sslpv::SslpvSolver& solver = sslpvPart->solver();
         const bool painted = !volume.isHomogeneous();
         for (int y = 0; y < h; ++y)
@@ -578,9 +652,9 @@ CombinedResult renderCombined(const Scene& scene, const CombinedSettings& settin
                 const size_t i = buf.index(x, y);
                 Rgb lh = lhat.at(x, y);
                 if (painted && buf.covered[i])
-                    lh *= localScaleToSurfaceAlbedo(
+                    lh *= localScaleToSurfaceMaterial(
                         solver.readoutAlbedo(buf.position[i], glm::normalize(buf.normal[i])),
-                        kernelAlbedo, *table);
+                        discMeanMaterial(buf, x, y, out.plan.splitRadius), kernelTerms, *table);
                 out.local.at(x, y) = glm::min(lh, f.at(x, y) * out.sslpv.at(x, y));
             }
     }

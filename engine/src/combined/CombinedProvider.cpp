@@ -60,7 +60,7 @@ struct CombinedSubsurfaceProvider::Impl {
     std::vector<unsigned char> localKey;
     /// The albedo SSLPV's read-out sees per pixel (mode diffusion, Kernel split: the sample
     /// pass writes it, SslpvSubsurfaceProvider::setAlbedoOutput), which carries L̂ from the
-    /// kernel's material to the painted surface (localScaleToSurfaceAlbedo).
+    /// kernel's material to the painted surface (localScaleToSurfaceMaterial).
     gpu::GlObject albedo;
     int albedoW = 0, albedoH = 0;
     bool created = false;
@@ -251,9 +251,9 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
     const SplitPlan& plan = m->stats.plan;
     gpu::GpuProfiler::FrameScope frame(m->profiler);  // cancelled if a part throws
     // The Kernel split with the diffusion part on a painted volume: the sample pass also writes
-    // the albedo it reads, and L̂ is carried to it (localScaleToSurfaceAlbedo). A homogeneous
-    // volume reads the kernel's own albedo everywhere (the factor is 1): skipped, which saves
-    // the image write and the lookups (0.9–1.9 and 0.7 ms of a 640×360 frame on llvmpipe).
+    // the albedo it reads, and L̂ is carried to the material there (localScaleToSurfaceMaterial).
+    // A homogeneous volume reads the kernel's own material everywhere (the factor is 1):
+    // skipped, which saves the image write and the lookups (docs/benchmarks.md).
     const bool albedoScale = plan.sslpvOn && plan.dipoleOn && plan.mode == SplitMode::Kernel &&
                              m->sslpv.options().render.solver.mode == sslpv::SslpvMode::Diffusion &&
                              !m->sslpv.coarseMaterial().homogeneous;
@@ -343,11 +343,28 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
                 sslpv::exactReflectanceRatio(m->settings.eta);
             const std::vector<float>& totals = table->exactTotals();
             glUniform1fv(p.uniformLocation("u_exactTotal"), GLsizei(totals.size()), totals.data());
-            // The kernel's total once per frame (localScaleToSurfaceAlbedo's denominator).
-            const Rgb kernelAlbedo = reducedAlbedo(m->kernelMaterial);
-            glUniform3f(p.uniformLocation("u_kernelTotal"), table->exactTotal(kernelAlbedo.r),
-                        table->exactTotal(kernelAlbedo.g), table->exactTotal(kernelAlbedo.b));
+            // The kernel's terms once per frame (localScaleToSurfaceMaterial's denominators).
+            const KernelSurfaceTerms k =
+                kernelSurfaceTerms(m->kernelMaterial, m->settings.eta, plan.splitRadius, *table);
+            glUniform3f(p.uniformLocation("u_kernelTotal"), k.exactTotal.r, k.exactTotal.g,
+                        k.exactTotal.b);
+            glUniform3f(p.uniformLocation("u_kernelNearShare"), k.nearShare.r, k.nearShare.g,
+                        k.nearShare.b);
+            glUniform1f(p.uniformLocation("u_boundaryA"), k.boundaryA);
+            glUniform1f(p.uniformLocation("u_splitRadius"), plan.splitRadius);
+            // The disc around x_o is found as the local estimate finds it: the G-buffer and the
+            // camera's projection (shaders/combined_add.comp, projectTop).
+            glUniformMatrix4fv(p.uniformLocation("u_clipFromWorld"), 1, GL_FALSE,
+                               &g.clipFromWorld[0][0]);
+            glBindTextureUnit(0, g.positionTexture);
+            glBindTextureUnit(1, g.normalTexture);
             glBindImageTexture(4, m->albedo.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+            // The material around x_o: the dipole part's per-pixel σt′ and σs′, written by its
+            // irradiance pass (discMeanMaterial).
+            const dipole::DipoleSubsurfaceProvider::DebugTextures material =
+                m->dipole.debugTextures();
+            glBindImageTexture(5, material.sigmaT, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+            glBindImageTexture(6, material.sigmaS, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
         }
         glBindImageTexture(0, targetTexture, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         glBindImageTexture(1, m->scratch.id(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);

@@ -28,6 +28,7 @@
 
 #include <epoxy/gl.h>
 #include <gtest/gtest.h>
+#include <shared/CombinedShared.h>
 
 #include <algorithm>
 #include <cmath>
@@ -347,7 +348,7 @@ TEST(CombinedCpu, KernelSplitIsSslpvPlusDipoleMinusItsLocalPart) {
                 want.at(x, y) = glm::min(lhat.at(x, y), f.at(x, y) * r.sslpv.at(x, y));
             }
         // (With the diffusion part on a painted volume L̂ is carried to the albedo the read-out
-        // sees, localScaleToSurfaceAlbedo; on this homogeneous sphere that is skipped.)
+        // sees, localScaleToSurfaceMaterial; on this homogeneous sphere that is skipped.)
         expectImagesEqual(r.local, want, 0.f, "local part min(L^, f * L_sslpv)");
         double sl = 0, sloc = 0;
         for (int y = 0; y < 40; ++y)
@@ -540,27 +541,116 @@ TEST(CombinedCpu, KernelMaterialIsTheSurfaceCellsMean) {
     EXPECT_THROW(surfaceMaterial(vol, {}), ValueError);
 }
 
-TEST(CombinedCpu, LocalScaleIsTheRatioOfExactHalfSpaceTotals) {
+// dipoleNearShare against DipoleProfile's closed forms in double (totalReflectance,
+// reflectanceBeyond): float rounding only, at radii from a tenth of a mean free path to many
+// diffusion lengths and albedos from dark to white.
+TEST(CombinedCpu, NearShareIsTheClassicalDipolesShareWithinTheRadius) {
+    const dipole::Boundary boundary = dipole::Boundary::of(1.3);
+    const float A = float((1.0 + boundary.fdr) / (1.0 - boundary.fdr));
+    for (const float sigmaT : {0.2f, 1.f, 8.f})
+        for (const float albedo : {0.3f, 0.9f, 0.999f, 1.f})
+            for (const float r : {0.01f, 0.5f, 3.f, 40.f}) {
+                const dipole::DipoleProfile p = dipole::DipoleProfile::make(
+                    dipole::Model::Dipole, double(sigmaT) * (1.0 - albedo), double(sigmaT) * albedo,
+                    boundary);
+                const double want = 1.0 - p.reflectanceBeyond(r) / p.totalReflectance();
+                EXPECT_NEAR(dipoleNearShare(sigmaT, albedo, A, r), want, 2e-5)
+                    << sigmaT << ' ' << albedo << ' ' << r;
+            }
+    EXPECT_EQ(dipoleNearShare(0.f, 0.9f, A, 1.f), 0.f);
+    EXPECT_LT(dipoleNearShare(1.f, 0.99f, A, 1.f), dipoleNearShare(1.f, 0.5f, A, 1.f));
+    EXPECT_LT(dipoleNearShare(0.2f, 0.9f, A, 1.f), dipoleNearShare(2.f, 0.9f, A, 1.f));
+}
+
+// discMeanMaterial on a slab seen from above, painted in two halves at x = 0: a pixel further
+// than r_s from the seam reads its own half's material exactly; one on the seam reads the halves'
+// mean, the Hammersley points split by the seam as the disc's area is (half each, to within one
+// of the 16 points); the background's points (no material) are left out; an uncovered pixel reads
+// nothing.
+TEST(CombinedCpu, DiscMeanMaterialAveragesTheSurfaceWithinTheRadius) {
+    const MaterialSample skin = skinMaterial(), dark = darkerSkin();
+    const int n = 64;
+    dipole::SurfaceBuffers buf;
+    buf.resize(n, n);
+    buf.orthographic = true;
+    buf.viewDirection = Vector3f(0.f, 0.f, -1.f);
+    // x, y in [-32, 32] mm onto the pixels (1 mm each; row 0 at the top, y = +32).
+    buf.clipFromWorld = glm::ortho(-32.f, 32.f, -32.f, 32.f, -100.f, 100.f);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const size_t i = buf.index(x, y);
+            buf.position[i] = Point3f(float(x) - 31.5f, 31.5f - float(y), 0.f);
+            buf.normal[i] = Normal3f(0.f, 0.f, 1.f);
+            if (x >= n - 4)
+                continue;  // the last four columns are background: uncovered, no material
+            buf.covered[i] = 1;
+            buf.material[i] = x < n / 2 ? skin : dark;
+        }
+    const float rs = 6.f;
+    const MaterialSample own = discMeanMaterial(buf, 10, 30, rs);
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_FLOAT_EQ(own.sigma_t[c], skin.sigma_t[c]) << c;
+        EXPECT_FLOAT_EQ(own.sigma_s[c], skin.sigma_s[c]) << c;
+    }
+    const MaterialSample seam = discMeanMaterial(buf, n / 2, 30, rs);
+    const float step = 1.f / float(LUCENT_COMBINED_DISC_MEAN_SAMPLES);
+    for (int c = 0; c < 3; ++c) {
+        const float w = (seam.sigma_t[c] - skin.sigma_t[c]) / (dark.sigma_t[c] - skin.sigma_t[c]);
+        EXPECT_NEAR(w, 0.5f, step + 1e-4f) << c;
+        EXPECT_NEAR(seam.sigma_s[c], skin.sigma_s[c] + w * (dark.sigma_s[c] - skin.sigma_s[c]),
+                    1e-4f * skin.sigma_s[c])
+            << c;
+    }
+    const MaterialSample edge = discMeanMaterial(buf, n - 6, 30, rs);
+    for (int c = 0; c < 3; ++c)
+        EXPECT_FLOAT_EQ(edge.sigma_t[c], dark.sigma_t[c]) << c;
+    EXPECT_EQ(discMeanMaterial(buf, n - 1, 30, rs).sigma_t, Rgb(0.f));
+}
+
+TEST(CombinedCpu, LocalScaleIsTheRatioOfExactTotalsTimesNearShares) {
     const std::shared_ptr<const sslpv::ExactReflectanceRatio> table =
         sslpv::exactReflectanceRatio(1.3);
-    const Rgb kernel(0.9f, 0.8f, 0.95f);
-    const Rgb same = localScaleToSurfaceAlbedo(kernel, kernel, *table);
+    const float rs = 2.f;
+    const MaterialSample kernelMaterial{Rgb(2.f, 1.5f, 4.f), Rgb(1.8f, 1.2f, 3.8f), Rgb(0.f)};
+    const Rgb kernel = reducedAlbedo(kernelMaterial);
+    const KernelSurfaceTerms terms = kernelSurfaceTerms(kernelMaterial, 1.3f, rs, *table);
+    EXPECT_THROW(kernelSurfaceTerms(kernelMaterial, 0.5f, rs, *table), ValueError);
+    const Rgb same = localScaleToSurfaceMaterial(kernel, kernelMaterial, terms, *table);
     for (int c = 0; c < 3; ++c)
-        EXPECT_FLOAT_EQ(same[c], 1.f) << c;
-    // A darker, a lighter and a far darker surface: the exact half-space totals' ratio, within
-    // the table's linear interpolation over 64 intervals in u = sqrt(1 - alpha') (its error
-    // against the exact solve stays under 0.2 % at these albedos).
+        EXPECT_NEAR(same[c], 1.f, 1e-6f) << c;
+    // A darker, a lighter and a far darker surface without σt′: the exact half-space totals'
+    // ratio, within the table's linear interpolation over 64 intervals in u = sqrt(1 - alpha')
+    // (its error against the exact solve stays under 0.2 % at these albedos).
     const Rgb surface(0.5f, 0.99f, 0.1f);
-    const Rgb scale = localScaleToSurfaceAlbedo(surface, kernel, *table);
+    const Rgb totals = localScaleToSurfaceMaterial(surface, MaterialSample{}, terms, *table);
     for (int c = 0; c < 3; ++c) {
         const double want = dipole::halfSpaceReflectance(surface[c], 1.3) /
                             dipole::halfSpaceReflectance(kernel[c], 1.3);
-        EXPECT_NEAR(scale[c], want, 2e-3 * want) << c;
+        EXPECT_NEAR(totals[c], want, 2e-3 * want) << c;
     }
-    EXPECT_LT(scale.r, 1.f);
-    EXPECT_GT(scale.g, 1.f);
+    EXPECT_LT(totals.r, 1.f);
+    EXPECT_GT(totals.g, 1.f);
+    // With the material around x_o, times the near shares' ratio at its albedo: a surface as
+    // translucent as jade (σt′ a tenth of the kernel's) keeps less of its light within r_s than
+    // the kernel's material, a denser one more.
+    const Rgb sigmaT(0.2f, 15.f, 0.4f), discAlbedo(0.7f, 0.95f, 0.2f);
+    const MaterialSample disc{sigmaT, sigmaT * discAlbedo, Rgb(0.f)};
+    const Rgb scale = localScaleToSurfaceMaterial(surface, disc, terms, *table);
+    const dipole::Boundary boundary = dipole::Boundary::of(1.3);
+    const auto share = [&](double st, double a) {
+        const dipole::DipoleProfile p =
+            dipole::DipoleProfile::make(dipole::Model::Dipole, st * (1.0 - a), st * a, boundary);
+        return 1.0 - p.reflectanceBeyond(rs) / p.totalReflectance();
+    };
+    for (int c = 0; c < 3; ++c) {
+        const double want = double(totals[c]) * share(sigmaT[c], discAlbedo[c]) /
+                            share(kernelMaterial.sigma_t[c], kernel[c]);
+        EXPECT_NEAR(scale[c], want, 1e-4 * want) << c;
+    }
+    EXPECT_LT(scale.r, totals.r);
+    EXPECT_GT(scale.g, totals.g);
     // A channel where the read-out saw no cell keeps the kernel's part.
-    const Rgb none = localScaleToSurfaceAlbedo(Rgb(0.f, 0.5f, 0.f), kernel, *table);
+    const Rgb none = localScaleToSurfaceMaterial(Rgb(0.f, 0.5f, 0.f), disc, terms, *table);
     EXPECT_EQ(none.r, 1.f);
     EXPECT_EQ(none.b, 1.f);
     EXPECT_LT(none.g, 1.f);
@@ -632,9 +722,10 @@ TEST(CombinedCpu, KernelAtThePaintedSurfaceGivesEachHalfItsOwnMaterialsLight) {
                 "scale, %.4f without\n",
                 darkHalf ? "dark" : "skin", c, withScale / own, without / own);
             // Skin half: L̂ binds (it is below f·L_sslpv) and the scale takes away at least half
-            // of the mismatch (measured 64-92 %); what is left is the kernel's radial shape and
-            // near share, which a total cannot carry. Dark half: f·L_sslpv binds with or
-            // without the scale (the near share of the mean's kernel: 3 % dark either way).
+            // of the mismatch (measured 64-80 %); what is left is the discrete kernel's radial
+            // shape, which the classical dipole's near share stands for only roughly. Dark half:
+            // f·L_sslpv binds with or without the scale (the near share of the mean's kernel: 3 %
+            // dark either way).
             if (darkHalf)
                 EXPECT_LE(errWith, errWithout + 1e-4) << "dark " << c;
             else
@@ -982,6 +1073,8 @@ void CombinedGl::expectOutputMatchesCpuFormulas(const ImageRgb& gl) {
     const bool diffusionPart = solver.options().mode == sslpv::SslpvMode::Diffusion;
     const std::shared_ptr<const sslpv::ExactReflectanceRatio> table =
         sslpv::exactReflectanceRatio(scene.eta);
+    const KernelSurfaceTerms kernelTerms =
+        kernelSurfaceTerms(provider.kernelMaterial(), scene.eta, plan.splitRadius, *table);
     double sumCpu = 0.0, sumGl = 0.0, sumD = 0.0, sumS = 0.0, sumL = 0.0;
     std::vector<double> rel;
     for (int y = 0; y < h; ++y)
@@ -995,10 +1088,12 @@ void CombinedGl::expectOutputMatchesCpuFormulas(const ImageRgb& gl) {
             const float cosO = std::max(0.f, glm::dot(nn, wo));
             const Rgb lpv = solver.exitantRadiance(p, nn, cosO, wo);
             // SSLPV's local part min(s·L̂, f·L_sslpv), s = 1 but with the diffusion part
-            // (localScaleToSurfaceAlbedo at the albedo its read-out sees).
-            const Rgb scale = diffusionPart ? localScaleToSurfaceAlbedo(
+            // (localScaleToSurfaceMaterial at the albedo its read-out sees and the dipole part's
+            // material around x_o).
+            const Rgb scale = diffusionPart ? localScaleToSurfaceMaterial(
                                                   solver.readoutAlbedo(p, nn),
-                                                  reducedAlbedo(provider.kernelMaterial()), *table)
+                                                  discMeanMaterial(buf, x, y, plan.splitRadius),
+                                                  kernelTerms, *table)
                                             : Rgb(1.f);
             const Rgb cpuLocal = glm::min(scale * cpuLhat.at(x, y), cpuFrac.at(x, y) * lpv);
             const float a = luminance(glm::max(cpuDipole.at(x, y) + lpv - cpuLocal, Rgb(0.f))),
@@ -1063,8 +1158,8 @@ TEST_F(CombinedGl, OutputIsSumOfPartsAndMatchesCpuFormulasOnItsGBuffer) {
 
 // The same with the diffusion part on a sphere painted darker on one side: the sample pass
 // writes the albedo its read-out sees, and the add pass carries L̂ to it as the CPU renderer does
-// (localScaleToSurfaceAlbedo; docs/methods/combined.md, "The kernel at the painted surface").
-TEST_F(CombinedGl, DiffusionPartCarriesTheKernelToThePaintedAlbedo) {
+// (localScaleToSurfaceMaterial; docs/methods/combined.md, "The kernel at the painted surface").
+TEST_F(CombinedGl, DiffusionPartCarriesTheKernelToThePaintedSurface) {
     MaterialVolume& vol = *scene.objects[0].material;
     const MaterialSample dark = darkerSkin();
     paintHalfAbove(vol, dark);

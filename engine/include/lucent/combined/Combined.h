@@ -16,7 +16,7 @@
 ///    (localSslpvFraction): SSLPV's local part is never taken larger than the near share of
 ///    SSLPV's own radiance. Exact bookkeeping for uniform irradiance on a flat surface. With
 ///    SSLPV's diffusion mode L̂ is carried to the albedo its read-out sees at x_o
-///    (localScaleToSurfaceAlbedo): one kernel, the surface cells' mean, for a painted body.
+///    (localScaleToSurfaceMaterial): one kernel, the surface cells' mean, for a painted body.
 ///  - SplitMode::Steps: L(x_o) = L_dipole,r≤r_s(x_o) + L_sslpv,n>k(x_o), k = max(k₀,
 ///    round(r_s/Δx)): SSLPV skips its first k propagation steps (SslpvOptions::
 ///    skipAccumulateSteps, §4). Light from beyond k·Δx needs more than k steps, so nothing
@@ -203,18 +203,57 @@ ImageRgb localSslpvEstimate(const dipole::SurfaceBuffers& buffers, const SslpvSu
 ImageRgb localSslpvFraction(const dipole::SurfaceBuffers& buffers, const SslpvSurfaceKernel& kernel,
                             float splitRadius, int samples, uint32_t seed);
 
+/// Jensen et al. 2001's classical dipole's near share: the part of its total diffuse reflectance
+/// that leaves within `radius` (mm) of where the light entered,
+///   N(r) = 1 − (z_r e^{−σ_tr d_r}/d_r + z_v e^{−σ_tr d_v}/d_v) / (e^{−σ_tr z_r} + e^{−σ_tr z_v}),
+/// d = √(r² + z²), z_r = 1/σt′, z_v = z_r + 4AD, D = 1/(3σt′), σ_tr = σt′ √(3(1 − α′)), i.e.
+/// 1 − DipoleProfile::reflectanceBeyond(r) / totalReflectance() of the Dipole model, in float
+/// and line for line as the GLSL copy in shaders/combined_add.comp. @param sigmaT reduced σt′
+/// (mm⁻¹); @param albedo α′ ∈ [0, 1]; @param boundaryA A = (1 + F_dr)/(1 − F_dr). 0 where σt′
+/// ≤ 0 or the total underflows.
+float dipoleNearShare(float sigmaT, float albedo, float boundaryA, float radius);
+
+/// What localScaleToSurfaceMaterial needs of the kernel's material, once per kernel.
+struct KernelSurfaceTerms {
+    Rgb exactTotal{0.f};      ///< R_exact(α′_k), ExactReflectanceRatio::exactTotal per channel
+    Rgb nearShare{0.f};       ///< dipoleNearShare(σt′_k, α′_k, A, r_s) per channel
+    float boundaryA = 1.f;    ///< A = (1 + F_dr)/(1 − F_dr) of η (Jensen et al. 2001)
+    float splitRadius = 0.f;  ///< r_s, mm
+};
+
+/// The kernel's terms for its material at η and r_s. @throw ValueError if η ∉ [1, 3].
+KernelSurfaceTerms kernelSurfaceTerms(const MaterialSample& kernelMaterial, float eta,
+                                      float splitRadius, const sslpv::ExactReflectanceRatio& table);
+
+/// The mean material of the surface around pixel (x, y): σt′ and σs′ averaged over the pixels
+/// holding material (σt′ ≠ 0) at LUCENT_COMBINED_DISC_MEAN_SAMPLES Hammersley points of the disc r
+/// ≤ radius on the tangent plane at x_o (uniform in area, r = radius √u;
+/// shaders/shared/CombinedShared.h), the same points on every pixel, line for line as the GLSL copy
+/// in shaders/combined_add.comp. Zero if (x, y) is uncovered or no point holds material. The light
+/// L̂ integrates enters within r_s and crosses this material on its way to x_o, not x_o's alone: on
+/// marble veined finer than r_s the point's material overstated how far the light spreads
+/// (docs/methods/combined.md, "The kernel at the painted surface").
+MaterialSample discMeanMaterial(const dipole::SurfaceBuffers& buffers, int x, int y, float radius);
+
 /// The factor that carries L̂ from the kernel's material to the painted surface at x_o, per
-/// channel: R_exact(α′(x_o)) / R_exact(α′_kernel), R_exact the exact half-space's total
-/// (ExactReflectanceRatio::exactTotal). SSLPV's diffusion part normalises every surface cell to
+/// channel:
+///   s = R_exact(α′(x_o)) / R_exact(α′_k) · N(σ̄t′, σ̄s′/σ̄t′) / N(σt′_k, α′_k),
+/// R_exact the exact half-space's total (ExactReflectanceRatio::exactTotal), N the classical
+/// dipole's near share within r_s (dipoleNearShare) and σ̄ the material of the disc r ≤ r_s
+/// around x_o (discMeanMaterial). SSLPV's diffusion part normalises every surface cell to
 /// R_exact at that cell's albedo, so on a half-space of the cell's material its local part is
-/// the kernel's times this ratio; without it a vein darker than the surface's mean had the
-/// mean's local part subtracted (too much) and the marble around it the mean's (too little):
-/// docs/methods/combined.md, "The kernel at the painted surface". @param readoutAlbedo α′ the
-/// SSLPV read-out sees at x_o (SslpvSolver::readoutAlbedo); a channel at 0 (no cell read there,
-/// or a propagation mode, which holds no albedo) keeps the factor 1, as does a kernel whose
-/// total vanishes.
-Rgb localScaleToSurfaceAlbedo(const Rgb& readoutAlbedo, const Rgb& kernelAlbedo,
-                              const sslpv::ExactReflectanceRatio& table);
+/// the kernel's times the first ratio; without it a vein darker than the surface's mean had the
+/// mean's local part subtracted (too much) and the marble around it the mean's (too little).
+/// L̂ is the part within r_s, and a translucent surface (jade: a mean free path of several mm)
+/// keeps less of its total there than a denser kernel: the second ratio carries that share
+/// (docs/methods/combined.md, "The kernel at the painted surface").
+/// @param readoutAlbedo α′ the SSLPV read-out sees at x_o (SslpvSolver::readoutAlbedo); a
+/// channel at 0 (no cell read there, or a propagation mode, which holds no albedo) keeps the
+/// factor 1, as does a kernel whose total vanishes. @param discMean discMeanMaterial at x_o; a
+/// channel with σ̄t′ = 0, or a kernel without a near share, keeps the first ratio alone.
+Rgb localScaleToSurfaceMaterial(const Rgb& readoutAlbedo, const MaterialSample& discMean,
+                                const KernelSurfaceTerms& kernel,
+                                const sslpv::ExactReflectanceRatio& table);
 
 /// Per-pixel shift pair in [0, 1)² of localSslpvEstimate (PCG hash of x, y, seed; the GLSL
 /// copy in shaders/combined_add.comp is bit-identical).
@@ -262,7 +301,7 @@ struct CombinedResult {
 /// CPU combined render of scene.objects[0]: CPU irradiance pass + image-space gather
 /// (dipole::renderImageSpaceDipole with maxRadius = r_s) and the CPU SslpvRenderer; Kernel mode
 /// subtracts min(s·localSslpvEstimate(), localSslpvFraction() · L_sslpv), s =
-/// localScaleToSurfaceAlbedo at the albedo SSLPV's read-out sees there on a painted volume (1
+/// localScaleToSurfaceMaterial at the albedo SSLPV's read-out sees there on a painted volume (1
 /// on a homogeneous one; camera's surface buffers; `local` holds it; the sum clamped at 0 per
 /// channel),
 /// Steps mode skips k propagation steps. @throw ValueError for a scene without

@@ -217,9 +217,10 @@ public:
     void setSettings(const ProviderSettings& settings);
     [[nodiscard]] const ProviderSettings& settings() const;
 
-    /// GL names of the intermediate images (valid after a frame; for tests and debugging):
-    /// RGBA32F irradiance E (W/mm²), σt and σs′ (mm⁻¹) per pixel, running sum of B (W/mm²),
-    /// and the RGBA32F 3-D material textures (σt rgb + inside in a; σs′ rgb).
+    /// GL names of the intermediate images (valid after a frame; for tests and debugging, and
+    /// σt′, σs′ for the combined provider's add pass): RGBA32F irradiance E (W/mm²), reduced σt′
+    /// and σs′ (mm⁻¹) per pixel, running sum of B (W/mm²), and the RGBA32F 3-D material textures
+    /// (σt′ rgb + inside in a; σs′ rgb).
     struct DebugTextures {
         unsigned irradiance = 0, sigmaT = 0, sigmaS = 0, accumulation = 0;
         unsigned volumeSigmaT = 0, volumeSigmaS = 0;
