@@ -1438,6 +1438,12 @@ void checkBlockSizes(uint64_t blocks, uint64_t blockSize, uint64_t lastSize,
     // array).
     if (blockSize == 0)
         fail("the compression header" + where + " claims blocks of 0 bytes (corrupt)");
+    // No blocks but a partial last one: VTK takes the array's size as blocks · block size −
+    // block size + last size, which wraps around below zero, and then reads block 0 of a header
+    // that has none (SIGSEGV in vtkXMLDataParser::ReadBlock; CI fuzz smoke run, 2026-12-06).
+    if (blocks == 0 && lastSize != 0)
+        fail("the compression header" + where + " claims no blocks but a last block of " +
+             std::to_string(lastSize) + " bytes (corrupt)");
     if (blocks > 0 && lastSize > blockSize)
         fail("the compression header" + where + " claims a last block of " +
              std::to_string(lastSize) + " bytes, larger than its blocks of " +

@@ -316,6 +316,14 @@ TEST(MeshIO, FuzzFindingsAreClearErrors) {
     expectLoadError(fuzzFinding("vtp_unknown_format_with_offset.vtp"),
                     "the compression header of the appended array at offset 101 claims 1868759041 "
                     "blocks, more than the file holds");
+    // The CI fuzz smoke run of 2026-12-06: the points' compression header (base64 appended
+    // data) reads 0 blocks of 32768 bytes with a partial last block of 48. VTK computes the
+    // array's size as 0 · 32768 − 32768 + 48, which wraps around, and reads block 0 of a header
+    // without blocks (SIGSEGV in vtkXMLDataParser::ReadBlock; in the app the child process
+    // contained it). Refused before VTK.
+    expectLoadError(fuzzFinding("vtp_no_blocks_partial_last_block.vtp"),
+                    "the compression header of the appended array at offset 0 claims no blocks "
+                    "but a last block of 48 bytes (corrupt)");
     // The same header fault in an inline base64 array, whose headers were not checked at all.
     expectLoadError(robustInput("vtp_last_block_larger_inline_binary_zlib.vtp"),
                     "the compression header of the inline array 'Points' claims a last block of "
