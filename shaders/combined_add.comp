@@ -13,8 +13,9 @@
 // Combined.cpp). Two programs: with LOCAL_ESTIMATE, Lhat into u_local and f into u_fraction
 // (they depend on the G-buffer, the irradiance image and the kernel, not on the painted
 // material or the dipole's progress, so the provider computes them only when those change);
-// without, the per-frame sum (Lhat and f read only in the Kernel split; with the diffusion
-// part on a painted volume, Lhat carried from the kernel's material to the one at x_o).
+// without, the per-frame sum (Lhat and f read only in the Kernel split); with SURFACE_SCALE
+// as well (the diffusion part on a painted volume), Lhat carried from the kernel's material to
+// the one at x_o.
 
 #include "dipole_fresnel.glsl"
 
@@ -28,9 +29,11 @@ layout(rgba32f, binding = 0) uniform image2D u_target;           // SSLPV term i
 layout(rgba32f, binding = 1) readonly uniform image2D u_addend;  // the dipole term
 layout(rgba32f, binding = 2) readonly uniform image2D u_local;     // Lhat (Kernel split)
 layout(rgba32f, binding = 3) readonly uniform image2D u_fraction;  // f (Kernel split)
+#ifdef SURFACE_SCALE
 layout(rgba32f, binding = 4) readonly uniform image2D u_albedo;    // alpha' SSLPV reads
 layout(rgba32f, binding = 5) readonly uniform image2D u_sigmaT;    // sigma_t' the dipole reads
 layout(rgba32f, binding = 6) readonly uniform image2D u_sigmaS;    // sigma_s' the dipole reads
+#endif
 #endif
 
 layout(binding = 0) uniform sampler2D u_position;    // xyz mm, a coverage
@@ -153,10 +156,10 @@ void main() {
     imageStore(u_fraction, xy, vec4(frac, own ? 1.0 : 0.0));  // a: the pixel is the object's
 }
 #else
+#ifdef SURFACE_SCALE
 #include "shared/SslpvShared.h"
 #include "shared/CombinedShared.h"
 
-uniform int u_albedoScale;  // 1: Lhat carried to the material at x_o (u_albedo, u_sigma*)
 uniform vec3 u_kernelTotal;      // KernelSurfaceTerms::exactTotal
 uniform vec3 u_kernelNearShare;  // KernelSurfaceTerms::nearShare
 uniform float u_boundaryA;       // A = (1 + F_dr)/(1 - F_dr)
@@ -234,6 +237,7 @@ vec3 localScaleToSurfaceMaterial(ivec2 xy) {
     }
     return scale;
 }
+#endif
 
 void main() {
     const ivec2 xy = ivec2(gl_GlobalInvocationID.xy);
@@ -251,7 +255,9 @@ void main() {
         // surface").
         if (local.a != 0.0) {
             vec3 lhat = local.rgb;
-            if (u_albedoScale != 0) lhat *= localScaleToSurfaceMaterial(xy);
+#ifdef SURFACE_SCALE
+            lhat *= localScaleToSurfaceMaterial(xy);
+#endif
             sum = max(sum - min(lhat, frac * a.rgb), vec3(0.0));
         }
     }

@@ -26,6 +26,10 @@ struct CombinedSubsurfaceProvider::Impl {
         sslpv::SslpvProviderOptions{.render = CombinedSettings::defaultSslpvOptions()}};
     dipole::DipoleSubsurfaceProvider dipole;
     gpu::GlProgram addProgram;
+    /// combined_add.comp SURFACE_SCALE: the add pass with L̂ carried to the painted surface's
+    /// material, a program of its own so that a volume that is not painted does not pay for it
+    /// (llvmpipe runs a branch's body under a mask even when a uniform turns it off).
+    gpu::GlProgram addScaleProgram;
     gpu::GlProgram localProgram;  ///< combined_add.comp LOCAL_ESTIMATE: L̂, f
     gpu::GlObject scratch;        ///< RGBA32F, the dipole part before it is added to the target
     int scratchW = 0, scratchH = 0;
@@ -92,6 +96,7 @@ void CombinedSubsurfaceProvider::create(const gpu::ShaderLibrary& library) {
     m->sslpv.create(library);
     m->dipole.create(library);
     m->addProgram = gpu::GlProgram::compute(library, "combined_add.comp");
+    m->addScaleProgram = gpu::GlProgram::compute(library, "combined_add.comp", {"SURFACE_SCALE"});
     m->localProgram = gpu::GlProgram::compute(library, "combined_add.comp", {"LOCAL_ESTIMATE"});
     m->created = true;
 }
@@ -100,6 +105,7 @@ void CombinedSubsurfaceProvider::destroy() {
     m->sslpv.destroy();
     m->dipole.destroy();
     m->addProgram.destroy();
+    m->addScaleProgram.destroy();
     m->localProgram.destroy();
     m->profiler.destroy();
     m->scratch.destroy();
@@ -332,12 +338,11 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
             updateLocalEstimate(g);
         // target = max(0, target + scratch − min(L̂, f·target)) (shaders/combined_add.comp).
         const auto scope = m->profiler.scope("add");
-        const gpu::GlProgram& p = m->addProgram;
+        const bool scaleLocal = subtract && albedoScale;
+        const gpu::GlProgram& p = scaleLocal ? m->addScaleProgram : m->addProgram;
         glUseProgram(p.id());
         glUniform2i(p.uniformLocation("u_size"), g.width, g.height);
         glUniform1i(p.uniformLocation("u_kernel"), subtract ? 1 : 0);
-        const bool scaleLocal = subtract && albedoScale;
-        glUniform1i(p.uniformLocation("u_albedoScale"), scaleLocal ? 1 : 0);
         if (scaleLocal) {
             const std::shared_ptr<const sslpv::ExactReflectanceRatio> table =
                 sslpv::exactReflectanceRatio(m->settings.eta);
