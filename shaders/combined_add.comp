@@ -176,7 +176,8 @@ float exactTotal(float albedo) {
 }
 
 // lucent::combined::dipoleNearShare: the classical dipole's (Jensen et al. 2001) share of its
-// total diffuse reflectance within r_s of the entry point.
+// total diffuse reflectance within r_s (mm) of the entry point: its R_d integrated beyond r_s and
+// in all, in closed form (Mertens et al. 2005 Eq. 6-7); sigmaT in mm^-1.
 float dipoleNearShare(float sigmaT, float albedo) {
     if (!(sigmaT > 0.0)) return 0.0;
     float zr = 1.0 / sigmaT;

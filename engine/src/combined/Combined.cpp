@@ -402,6 +402,7 @@ KernelSurfaceTerms kernelSurfaceTerms(const MaterialSample& kernelMaterial, floa
 }
 
 MaterialSample discMeanMaterial(const dipole::SurfaceBuffers& buffers, int x, int y, float radius) {
+    LUCENT_ASSERT(x >= 0 && y >= 0 && x < buffers.width && y < buffers.height);
     MaterialSample mean;
     const size_t idx = buffers.index(x, y);
     if (!buffers.covered[idx])
@@ -416,12 +417,9 @@ MaterialSample discMeanMaterial(const dipole::SurfaceBuffers& buffers, int x, in
         Point2f pixel;
         if (!buffers.project(xo + r * (std::cos(phi) * frame.s + std::sin(phi) * frame.t), pixel))
             continue;
-        const int px = int(pixel.x), py = int(pixel.y);
-        if (px < 0 || py < 0 || px >= buffers.width || py >= buffers.height)
-            continue;
         // A pixel without material (not covered, or outside the painted volume) is left out, as
         // on the GPU, whose per-pixel material is zero there.
-        const MaterialSample& m = buffers.material[buffers.index(px, py)];
+        const MaterialSample& m = buffers.material[buffers.index(int(pixel.x), int(pixel.y))];
         if (m.sigma_t == Rgb(0.f))
             continue;
         mean.sigma_t += m.sigma_t;

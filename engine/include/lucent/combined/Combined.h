@@ -207,7 +207,9 @@ ImageRgb localSslpvFraction(const dipole::SurfaceBuffers& buffers, const SslpvSu
 /// that leaves within `radius` (mm) of where the light entered,
 ///   N(r) = 1 − (z_r e^{−σ_tr d_r}/d_r + z_v e^{−σ_tr d_v}/d_v) / (e^{−σ_tr z_r} + e^{−σ_tr z_v}),
 /// d = √(r² + z²), z_r = 1/σt′, z_v = z_r + 4AD, D = 1/(3σt′), σ_tr = σt′ √(3(1 − α′)), i.e.
-/// 1 − DipoleProfile::reflectanceBeyond(r) / totalReflectance() of the Dipole model, in float
+/// 1 − DipoleProfile::reflectanceBeyond(r) / totalReflectance() of the Dipole model (R_d of
+/// Jensen et al. 2001 integrated over the plane in closed form, Mertens et al. 2005 Eq. 6–7,
+/// beyond r and in all), in float
 /// and line for line as the GLSL copy in shaders/combined_add.comp. @param sigmaT reduced σt′
 /// (mm⁻¹); @param albedo α′ ∈ [0, 1]; @param boundaryA A = (1 + F_dr)/(1 − F_dr). 0 where σt′
 /// ≤ 0 or the total underflows.
