@@ -68,8 +68,11 @@ void copyIntoSandbox(const std::string& sourceFile) {
 
 void setFuzzImportLimits() {
     ImportLimits limits;
-    limits.maxFileBytes = uint64_t(16) << 20;      // libFuzzer's inputs are far smaller
-    limits.maxElements = uint64_t(1) << 22;        // 4 M elements: tens of MB per array
+    limits.maxFileBytes = uint64_t(16) << 20;  // libFuzzer's inputs are far smaller
+    // 2^19 elements: a 4 KiB zlib input can claim 4 M point ids of a triangle strip, and each
+    // triangle costs about 5 µs in the instrumented build; at 2^19 the largest input loads in
+    // about 2.5 s, an eighth of -timeout (tests/data/fuzz/vtp_strip_million_ids_*.vtp).
+    limits.maxElements = uint64_t(1) << 19;
     limits.maxDecodedBytes = uint64_t(256) << 20;  // 256 MiB, an eighth of -rss_limit_mb
     limits.maxReaderCpuSeconds = 10;               // unused in-process; -timeout bounds it
     setImportLimits(limits);

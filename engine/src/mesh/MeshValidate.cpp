@@ -24,6 +24,7 @@
 #include <set>
 #include <sstream>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <zlib.h>
@@ -1307,28 +1308,40 @@ bool readsAppended(const std::string& tag) {
 /// Receives the values of an integer array one by one; false stops the reading.
 using ValueSink = std::function<bool(int64_t)>;
 
-/// Assembles little-endian integers of VTK type Int32, UInt32, Int64 or UInt64 from bytes fed
-/// in pieces and passes each to a sink (false from the sink stops it).
+/// Assembles little-endian integers of a VTK integer type (Int8 … UInt64) from bytes fed in
+/// pieces and passes each to a sink (false from the sink stops it).
 class IntegerDecoder {
 public:
-    /// False for a type that is not one of the four (the array is then not checked).
+    /// False for a type that is not an integer type of VTK XML (the array is then not checked).
+    /// VTK 9.1 reads cell arrays of any integer type (a fuzzed strip of Int8 ids loaded), so all
+    /// eight widths and signs are decoded, and "Char" (VTK_CHAR, signed on the platforms Lucent
+    /// builds for) as Int8.
     bool setType(const std::string& type) {
-        wide_ = type == "Int64" || type == "UInt64";
-        signed_ = !type.empty() && type[0] == 'I';
-        return wide_ || type == "Int32" || type == "UInt32";
+        static constexpr std::pair<std::string_view, uint32_t> TYPES[] = {
+            {"Int8", 1},  {"UInt8", 1},  {"Char", 1},  {"Int16", 2}, {"UInt16", 2},
+            {"Int32", 4}, {"UInt32", 4}, {"Int64", 8}, {"UInt64", 8}};
+        for (const auto& [name, bytes] : TYPES)
+            if (type == name) {
+                width_ = bytes;
+                signed_ = type[0] != 'U';
+                return true;
+            }
+        return false;
     }
-    [[nodiscard]] uint64_t width() const { return wide_ ? 8 : 4; }
+    [[nodiscard]] uint64_t width() const { return width_; }
     /// Feeds `n` bytes; false once the sink has stopped.
     bool feed(const unsigned char* p, size_t n, const ValueSink& sink) {
         for (size_t i = 0; i < n && !stopped_; ++i) {
             word_ |= uint64_t(p[i]) << (8 * filled_);
-            if (++filled_ < width())
+            if (++filled_ < width_)
                 continue;
             int64_t value = int64_t(word_);
-            if (!wide_)
-                value = signed_ ? int64_t(int32_t(uint32_t(word_))) : int64_t(uint32_t(word_));
-            else if (!signed_ && word_ > uint64_t(INT64_MAX))
+            if (width_ < 8) {
+                const uint32_t unused = 64 - 8 * width_;  // sign- or zero-extended from width_
+                value = signed_ ? int64_t(word_ << unused) >> unused : int64_t(word_);
+            } else if (!signed_ && word_ > uint64_t(INT64_MAX)) {
                 value = -1;  // beyond any array: reported as out of range
+            }
             ++count_;
             stopped_ = !sink(value);
             word_ = 0;
@@ -1339,9 +1352,9 @@ public:
     [[nodiscard]] uint64_t count() const { return count_; }
 
 private:
-    bool wide_ = false, signed_ = false, stopped_ = false;
+    bool signed_ = false, stopped_ = false;
     uint64_t word_ = 0, count_ = 0;
-    uint32_t filled_ = 0;
+    uint32_t width_ = 4, filled_ = 0;
 };
 
 /// Decodes base64 (RFC 4648 §4) from `text`: whole groups of four characters, a group with
@@ -1425,7 +1438,7 @@ std::vector<uint64_t> headerWords(const StoredArray& a, uint64_t count, const Fa
     return words;
 }
 
-/// The block sizes of a zlib compression header as VTK 9.1 can read them
+/// The block sizes of a compression header (any compressor) as VTK 9.1 can read them
 /// (vtkXMLDataParser::ReadCompressedData): a full block of at least one byte (VTK divides by
 /// it) and a partial last block no larger than a full one. A larger last block makes VTK count
 /// one block more than the header has and read that block's compressed size past the end of
@@ -1584,16 +1597,23 @@ std::optional<uint64_t> storedValues(const StoredArray& a, IntegerDecoder& decod
 }
 
 /// Checks each cell section (Polys, Strips, Lines, Verts) of a VTK XML file before VTK reads
-/// it: its `offsets` (the end of each cell in `connectivity`) must not decrease and must stay
-/// within the connectivity array. VTK 9.1 sizes the connectivity array by the last offset
-/// and reads out of bounds on decreasing ones (fuzz findings vtp_cell_offsets_*.vtp). Arrays
-/// in ASCII and inline base64 (format "binary") are read from `xml`; `appended(tag)` gives
-/// an appended array's storage (nullopt when the file has none). Every encoding VTK writes is
-/// read (ASCII, base64, raw; uncompressed or zlib); other compressors are left to VTK's own
-/// checks in the child process.
+/// it.
+/// - The point ids of all `connectivity` arrays together are at most importLimits().maxElements:
+///   a polygon or strip of n ids becomes n − 2 triangles, and zlib stores a repeated id
+///   sequence at about 1000:1, so a 4 KiB file claiming one strip made 3.3 M triangles (a fuzz
+///   finding: 16 s and 620 MB in the instrumented build). The count is the array's header
+///   (byte count, or compression header), which every compressor shares: nothing is inflated.
+/// - With `inflatable` (no compressor, or zlib), its `offsets` (the end of each cell in
+///   `connectivity`) must not decrease and must stay within the connectivity array. VTK 9.1
+///   sizes the connectivity array by the last offset and reads out of bounds on decreasing ones
+///   (fuzz findings vtp_cell_offsets_*.vtp). Other compressors' offsets are left to VTK's own
+///   checks in the child process.
+/// Arrays in ASCII and inline base64 (format "binary") are read from `xml`; `appended(tag)`
+/// gives an appended array's storage (nullopt when the file has none). Every encoding VTK
+/// writes is read (ASCII, base64, raw; uncompressed or zlib).
 template <class Appended, class Fail>
-void checkCellOffsets(const std::string& xml, uint32_t word, bool compressed,
-                      const Appended& appended, const Fail& fail) {
+void checkCells(const std::string& xml, uint32_t word, bool compressed, bool inflatable,
+                const Appended& appended, const Fail& fail) {
     const auto values = [&](size_t at, const ValueSink& sink) -> std::optional<uint64_t> {
         const size_t close = xml.find('>', at);
         if (close == std::string::npos)
@@ -1625,6 +1645,7 @@ void checkCellOffsets(const std::string& xml, uint32_t word, bool compressed,
         }
         return n;
     };
+    uint64_t pointIds = 0;
     for (const char* section : {"<Polys", "<Strips", "<Lines", "<Verts"}) {
         for (size_t at = xml.find(section); at != std::string::npos;
              at = xml.find(section, at + 1)) {
@@ -1643,6 +1664,13 @@ void checkCellOffsets(const std::string& xml, uint32_t word, bool compressed,
                 continue;
             const std::optional<uint64_t> ids = values(connectivity, {});
             if (!ids)
+                continue;
+            pointIds += *ids;  // each within the file's size or the decoded-bytes limit
+            if (pointIds > importLimits().maxElements)
+                fail("the cells claim " + std::to_string(pointIds) +
+                     " point ids, more than the import limit of " +
+                     std::to_string(importLimits().maxElements));
+            if (!inflatable)
                 continue;
             int64_t previous = 0;
             uint64_t cell = 0;
@@ -1671,7 +1699,7 @@ void checkCellOffsets(const std::string& xml, uint32_t word, bool compressed,
 /// block size, compressed size of each block]) before it reads them: a mutated block count
 /// made vtkXMLDataParser::ReadCompressionHeader run for minutes at 4-13 GB. For raw appended
 /// data, every header is checked against the file size and the import limits here; the cell
-/// offsets are checked in every encoding (checkCellOffsets).
+/// offsets are checked in every encoding, the cells' point ids counted (checkCells).
 ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
     std::ifstream f(path, std::ios::binary);
     // The XML part: everything before the appended data (bounded: 64 MiB of text).
@@ -1707,7 +1735,15 @@ ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
     const uint32_t word = xmlAttribute(head, "header_type") == "UInt64" ? 8 : 4;
     const std::string compressor = xmlAttribute(head, "compressor");
     const bool compressed = !compressor.empty();
-    // Other compressors (LZ4, LZMA): their arrays are left to VTK in the child process.
+    // VTK's three compressors share the compression header, which is checked for each; only
+    // zlib arrays are inflated here (the cell offsets check), LZ4 and LZMA offsets are left to
+    // VTK in the child process. The headers of LZMA arrays reached VTK unchecked: a fuzzed last
+    // block larger than its blocks overflowed a heap buffer, a block count hung it (2026-12-07).
+    if (compressed && compressor != "vtkZLibDataCompressor" &&
+        compressor != "vtkLZ4DataCompressor" && compressor != "vtkLZMADataCompressor")
+        fail("unknown compressor '" + compressor.substr(0, 80) +
+             "' (VTK writes vtkZLibDataCompressor, vtkLZ4DataCompressor or "
+             "vtkLZMADataCompressor)");
     const bool zlib = !compressed || compressor == "vtkZLibDataCompressor";
     const uint64_t limit = importLimits().maxDecodedBytes;
     // The header of one binary array (appended, or inline base64) checked against what it is
@@ -1740,23 +1776,23 @@ ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
         }
     };
     // Inline base64 arrays (format "binary"): their text, up to the next tag.
-    if (zlib)
-        for (size_t at = xml.find("<DataArray"); at != std::string::npos;
-             at = xml.find("<DataArray", at + 1)) {
-            const size_t close = xml.find('>', at);
-            if (close == std::string::npos || xml[close - 1] == '/')
-                continue;
-            const std::string tag = xml.substr(at, close - at);
-            if (xmlAttribute(tag, "format") != "binary")
-                continue;
-            const size_t end = xml.find('<', close);
-            checkHeader(inlineBinaryArray(xml.substr(close + 1, end - close - 1), word, compressed),
-                        " of the inline array '" + xmlAttribute(tag, "Name") + "'");
-        }
+    for (size_t at = xml.find("<DataArray"); at != std::string::npos;
+         at = xml.find("<DataArray", at + 1)) {
+        const size_t close = xml.find('>', at);
+        if (close == std::string::npos || xml[close - 1] == '/')
+            continue;
+        const std::string tag = xml.substr(at, close - at);
+        if (xmlAttribute(tag, "format") != "binary")
+            continue;
+        const size_t end = xml.find('<', close);
+        const std::string name = xmlAttribute(tag, "Name");
+        checkHeader(inlineBinaryArray(xml.substr(close + 1, end - close - 1), word, compressed),
+                    name.empty() ? " of an unnamed inline " + xmlAttribute(tag, "type") + " array"
+                                 : " of the inline array '" + name + "'");
+    }
     const auto noAppendedArrays = [](const std::string&) { return std::optional<StoredArray>(); };
     if (appendedTag == std::string::npos) {
-        if (zlib)
-            checkCellOffsets(xml, word, compressed, noAppendedArrays, fail);
+        checkCells(xml, word, compressed, zlib, noAppendedArrays, fail);
         return c;
     }
     const size_t tagEnd = text.find('>', appendedTag);
@@ -1812,13 +1848,12 @@ ClaimedCounts xmlVtkClaims(const std::string& path, uint64_t size) {
     for (size_t at = xml.find("<DataArray"); at != std::string::npos;
          at = xml.find("<DataArray", at + 1)) {
         const std::string tag = xml.substr(at, xml.find('>', at) - at);
-        if (!readsAppended(tag) || !zlib)
+        if (!readsAppended(tag))
             continue;
         checkHeader(*appended(tag),
                     " of the appended array at offset " + xmlAttribute(tag, "offset"));
     }
-    if (zlib)
-        checkCellOffsets(xml, word, compressed, appended, fail);
+    checkCells(xml, word, compressed, zlib, appended, fail);
     return c;
 }
 

@@ -250,6 +250,11 @@ std::string fuzzFinding(const std::string& name) {
     return std::string(LUCENT_TEST_DATA_DIR) + "/fuzz/" + name;
 }
 
+std::string readBytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
 TEST(MeshIO, FuzzFindingsAreClearErrors) {
     // A PLY format line without its version number ("format ascii"): OpenMesh's header loop
     // printed "Unsupported keyword : format" forever (a frozen app). Now the header check
@@ -328,6 +333,32 @@ TEST(MeshIO, FuzzFindingsAreClearErrors) {
     expectLoadError(robustInput("vtp_last_block_larger_inline_binary_zlib.vtp"),
                     "the compression header of the inline array 'Points' claims a last block of "
                     "32780 bytes, larger than its blocks of 32768");
+    // The CI fuzz smoke run of 2026-12-06 (night): a unit ran past libFuzzer's 20 s at 708 MB.
+    // Rebuilt by hand: one triangle strip of 999 999 Int8 point ids in a file of 1.9 KB (zlib)
+    // or 1.0 KB (LZMA), which VTK expands to 999 997 triangles (4.6–5 s and about 400 MB each in
+    // the fuzz build). The point ids of the cells now count against maxElements, read from the
+    // compression header, whatever the compressor; one id over the limit is refused.
+    ImportLimits limits = importLimits();
+    limits.maxElements = 999998;
+    ScopedImportLimits scoped(limits);
+    for (const char* compressor : {"zlib", "lzma"})
+        expectLoadError(fuzzFinding(std::string("vtp_strip_million_ids_") + compressor + ".vtp"),
+                        "the cells claim 999999 point ids, more than the import limit of 999998");
+    // Found by fuzzing from the LZMA input above (2026-12-07): the compression headers of LZ4
+    // and LZMA arrays reached VTK unchecked. A last block larger than its blocks overflowed a
+    // heap buffer in vtkXMLDataParser::ReadCompressedData; a header read from mutated base64
+    // claimed 2.4·10⁹ blocks and hung ReadCompressionHeader. Every compressor's headers are
+    // checked now, and a compressor VTK does not know is refused.
+    expectLoadError(fuzzFinding("vtp_lzma_last_block_larger_than_blocks.vtp"),
+                    "the compression header of an unnamed inline Float32 array claims a last "
+                    "block of 16384 bytes, larger than its blocks of 36 (corrupt)");
+    expectLoadError(fuzzFinding("vtp_lzma_header_in_text.vtp"),
+                    "claims 2399141889 blocks, more than the file holds (corrupt)");
+    const std::string bogus = outPath("unknown_compressor.vtp");
+    std::string lzma = readBytes(fuzzFinding("vtp_strip_million_ids_lzma.vtp"));
+    lzma.replace(lzma.find("vtkLZMADataCompressor"), 21, "vtkXYZDataCompressor");
+    std::ofstream(bogus) << lzma;
+    expectLoadError(bogus, "unknown compressor 'vtkXYZDataCompressor'");
 }
 
 // Issue 16: the cell offsets of a VTK XML file are checked before VTK reads them in every
@@ -347,6 +378,31 @@ TEST(MeshIO, CellOffsetsAreCheckedInEveryVtkXmlEncoding) {
     }
 }
 
+// VTK 9.1 reads cell arrays of every integer type, so the offsets check decodes all of them:
+// the tetrahedron with its offsets as inline base64 Int16 and UInt8 ([UInt32 byte count][values]).
+TEST(MeshIO, CellOffsetsOfEveryIntegerTypeAreChecked) {
+    std::ifstream in(fuzzFinding("vtp_cell_offsets_decreasing.vtp"));
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const size_t from = text.find("<DataArray type=\"Int64\" Name=\"offsets\"");
+    const size_t to = text.find("</DataArray>", from) + std::string("</DataArray>").size();
+    ASSERT_NE(from, std::string::npos);
+    const auto withOffsets = [&](const std::string& name, const char* type, const char* base64) {
+        const std::string path = outPath(name);
+        std::ofstream(path) << text.substr(0, from) << "<DataArray type=\"" << type
+                            << "\" Name=\"offsets\" format=\"binary\">" << base64 << "</DataArray>"
+                            << text.substr(to);
+        return path;
+    };
+    // 3 6 9 12 loads; 3 6 −1 12 (0xFFFF sign-extended) is refused.
+    EXPECT_EQ(
+        loadMesh(withOffsets("offsets_int16.vtp", "Int16", "CAAAAAMABgAJAAwA")).triangleCount(),
+        4u);
+    EXPECT_EQ(loadMesh(withOffsets("offsets_uint8.vtp", "UInt8", "BAAAAAMGCQw=")).triangleCount(),
+              4u);
+    expectLoadError(withOffsets("offsets_int16_negative.vtp", "Int16", "CAAAAAMABgD//wwA"),
+                    "Polys: cell 2 ends at offset -1, before the previous cell's end 6");
+}
+
 /// Expects loadMesh(path) to be refused by the legacy VTK walk (MeshValidate.cpp), before VTK
 /// reads the file: its messages start "legacy VTK, <section>:"; the reader's child process
 /// would say "VTK reader".
@@ -354,11 +410,6 @@ void expectWalkError(const std::string& path, const std::string& fragment) {
     const std::string msg = expectLoadError(path, fragment);
     EXPECT_NE(msg.find("mesh file '" + path + "': legacy VTK, "), std::string::npos) << msg;
     EXPECT_EQ(msg.find("VTK reader"), std::string::npos) << msg;
-}
-
-std::string readBytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 // Issue 16: legacy .vtk files are walked completely before VTK 9.1's reader, which crashes
