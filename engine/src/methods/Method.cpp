@@ -59,12 +59,10 @@ Stats Method::stats() const {
 }
 
 gpu::SurfaceMaterial translucentSurface(float eta) {
-    const double e = std::clamp(double(eta), 1.0, 3.0);
-    const double r = (e - 1.0) / (e + 1.0);
+    (void)eta;  // the reflection at a smooth boundary is a delta whatever η (see the header)
     gpu::SurfaceMaterial surface;
     surface.diffuseAlbedo = Rgb(0.f);
-    surface.specularAlbedo = Rgb(float(r * r));
-    surface.shininess = 64.f;
+    surface.specularAlbedo = Rgb(0.f);
     return surface;
 }
 

@@ -17,6 +17,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -141,6 +142,45 @@ TEST(MethodsParity, EveryCaseMatchesThePreRegistryCli) {
         ++compared;
     }
     EXPECT_GT(compared, 0);
+}
+
+// Every translucent method draws no surface term (methods::translucentSurface, 2026-12-07): the
+// smooth boundary reflects the scene's delta lights as deltas no camera ray meets, as in the
+// exact reference. So each render equals its --subsurface-only render, bit for bit, on every
+// backend the method has; Direct (an opaque surface) and the reference (which draws the
+// boundary's reflection itself) are the exceptions.
+TEST(MethodsParity, TranslucentMethodsDrawNoSurfaceTerm) {
+    std::string reason;
+    gpu::GlContext* ctx = lucent::test::sharedGlContext(&reason);
+    Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + "/resources/scenes/skin_sphere.json");
+    scene.camera.width = 32;
+    scene.camera.height = 24;
+    EXPECT_EQ(translucentSurface(1.3f).specularAlbedo, Rgb(0.f));
+    EXPECT_EQ(translucentSurface(1.3f).diffuseAlbedo, Rgb(0.f));
+    int compared = 0;
+    for (const MethodInfo* info : all()) {
+        if (info->name == "direct" || info->caps.groundTruth)
+            continue;
+        for (const Backend backend : {Backend::Gl, Backend::Cpu}) {
+            if ((backend == Backend::Gl && (!info->caps.gl || !ctx)) ||
+                (backend == Backend::Cpu && !info->caps.cpu))
+                continue;
+            SCOPED_TRACE(info->name + (backend == Backend::Gl ? " gl" : " cpu"));
+            ParamSet params;
+            if (std::any_of(info->params.begin(), info->params.end(),
+                            [](const ParamDescriptor& d) { return d.name == "spp"; }))
+                params.set("spp", 4);
+            RenderOptions options;
+            options.backend = backend;
+            options.context = ctx;
+            const ImageRgb withSurface = renderImage(scene, info->name, params, options).radiance;
+            options.subsurfaceOnly = true;
+            const ImageRgb subsurface = renderImage(scene, info->name, params, options).radiance;
+            EXPECT_EQ(withSurface.pixels(), subsurface.pixels());
+            ++compared;
+        }
+    }
+    EXPECT_GE(compared, 6);
 }
 
 }  // namespace

@@ -183,11 +183,14 @@ private:
     Params m_params;
 };
 
-/// The surface of a translucent object in the direct pass: no diffuse albedo (the light that
-/// is not reflected enters the medium and comes back through the subsurface term) and a
-/// normalised Blinn-Phong lobe (exponent 64) of albedo F_r(0, η) = ((η − 1)/(η + 1))², the
-/// unpolarised Fresnel reflectance at normal incidence (Born & Wolf §1.5.3), η clamped to
-/// [1, 3]. Computed in double precision: bit-identical to fresnelDielectric(1, η).
+/// The surface of a translucent object in the direct pass: nothing. The light that is not
+/// reflected enters the medium and comes back through the subsurface term; the light that is
+/// reflected leaves the smooth dielectric boundary in the mirror direction only, and every
+/// light of a scene is a delta (point, spot, directional), so its reflection is a delta that no
+/// camera ray meets: the exact reference has no highlight (docs/reference.md). The normalised
+/// Blinn-Phong lobe of albedo ((η − 1)/(η + 1))² drawn here until 2026-12-07 added 1–7 % of
+/// light the boundary does not send to the camera (docs/evaluation.md, "The surface highlight
+/// removed").
 [[nodiscard]] gpu::SurfaceMaterial translucentSurface(float eta);
 
 }  // namespace lucent::methods

@@ -72,7 +72,11 @@ public:
     /// The CPU renderer (SslpvRenderer) of the whole scene.
     ImageRgb renderCpu(const Scene& scene, const CpuRequest& request) override {
         sslpv::SslpvRenderOptions opt = m_options.render;
-        opt.direct = !request.subsurfaceOnly;
+        // The translucent-surface rule of every method (methods::translucentSurface): the
+        // smooth boundary reflects the scene's delta lights as deltas no camera ray meets, so
+        // the paper's Phong direct term (Børlum 2011 §5) is not drawn; subsurface only.
+        (void)request;
+        opt.direct = false;
         sslpv::SslpvRenderTimings t;
         sslpv::SslpvStats st;
         ImageRgb image = sslpv::renderSslpv(scene, opt, &t, &st);
