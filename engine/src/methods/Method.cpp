@@ -58,8 +58,8 @@ Stats Method::stats() const {
     return {};
 }
 
-gpu::SurfaceMaterial translucentSurface(float eta) {
-    (void)eta;  // the reflection at a smooth boundary is a delta whatever η (see the header)
+gpu::SurfaceMaterial translucentSurface(float /*eta*/) {
+    // The reflection at a smooth boundary is a delta whatever η (see the header).
     gpu::SurfaceMaterial surface;
     surface.diffuseAlbedo = Rgb(0.f);
     surface.specularAlbedo = Rgb(0.f);

@@ -69,13 +69,13 @@ public:
         return backend() == Backend::Cpu || !m_provider || m_provider->converged();
     }
 
-    /// The CPU renderer (SslpvRenderer) of the whole scene.
-    ImageRgb renderCpu(const Scene& scene, const CpuRequest& request) override {
+    /// The CPU renderer (SslpvRenderer) of the whole scene; the subsurface term whatever the
+    /// request (CpuRequest::subsurfaceOnly changes nothing, see below).
+    ImageRgb renderCpu(const Scene& scene, const CpuRequest& /*request*/) override {
         sslpv::SslpvRenderOptions opt = m_options.render;
         // The translucent-surface rule of every method (methods::translucentSurface): the
         // smooth boundary reflects the scene's delta lights as deltas no camera ray meets, so
         // the paper's Phong direct term (Børlum 2011 §5) is not drawn; subsurface only.
-        (void)request;
         opt.direct = false;
         sslpv::SslpvRenderTimings t;
         sslpv::SslpvStats st;
