@@ -381,8 +381,7 @@ TEST(MeshIO, CellOffsetsAreCheckedInEveryVtkXmlEncoding) {
 // VTK 9.1 reads cell arrays of every integer type, so the offsets check decodes all of them:
 // the tetrahedron with its offsets as inline base64 Int16 and UInt8 ([UInt32 byte count][values]).
 TEST(MeshIO, CellOffsetsOfEveryIntegerTypeAreChecked) {
-    std::ifstream in(fuzzFinding("vtp_cell_offsets_decreasing.vtp"));
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string text = readBytes(fuzzFinding("vtp_cell_offsets_decreasing.vtp"));
     const size_t from = text.find("<DataArray type=\"Int64\" Name=\"offsets\"");
     const size_t to = text.find("</DataArray>", from) + std::string("</DataArray>").size();
     ASSERT_NE(from, std::string::npos);
