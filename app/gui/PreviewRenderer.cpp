@@ -521,11 +521,13 @@ const planner::AutoChoice* PreviewRenderer::Impl::planAuto(const PreviewFrame& f
     AutoState& a = autoPlan;
     // Direct frames of this size timed before a plan: its render time is the unit of the live
     // costs (planner/LiveCosts.h), measured here on the viewport's own context and passes, as
-    // the app's latency harness measures it: the median of three frames, the statistic the
-    // harness divides by (the fastest of three read 10–15 % lower, which let SSLPV 64³ at
-    // 64 ms "fit" 50 ms); the first frame is not counted (it builds shadow maps and the
-    // G-buffer).
-    constexpr size_t DIRECT_SAMPLES = 3;
+    // the app's latency harness measures it: the median, the statistic the harness divides by
+    // (the fastest of three read 10–15 % lower, which let SSLPV 64³ at 64 ms "fit" 50 ms); the
+    // first frame is not counted (it builds shadow maps and the G-buffer). Nine frames, not
+    // three: right after start one frame in three or four takes 1.3–2× the others, and the
+    // median of three read the default scene's unit anywhere from 4.9 to 7.3 ms in six starts
+    // on the idle box, so Auto's pick there changed from start to start (docs/planner.md).
+    constexpr size_t DIRECT_SAMPLES = 9;
     a.measuring = false;
     if (f.sceneReplaced) {  // another mesh: another Direct frame, and no choice to keep
         a.directMs = 0.0;

@@ -1283,7 +1283,7 @@ TEST(AppRender, AutoRunsAMethodAndTheStatusBarSaysWhy) {
     auto w = shownWindow(1);
     Viewport* vp = w->viewport();
     ASSERT_EQ(vp->renderSettings().method, AUTO_METHOD);
-    // Direct while the planner times a Direct frame of this size (four frames), then its choice.
+    // Direct while the planner times a Direct frame of this size (ten frames), then its choice.
     EXPECT_TRUE(QTest::qWaitFor(
         [&] {
             renderOneFrame(vp);

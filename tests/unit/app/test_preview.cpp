@@ -247,9 +247,9 @@ TEST_F(PreviewFixture, AutoRunsThePlannersChoiceAndSaysWhy) {
     RenderSettings s = directSettings();
     s.method = AUTO_METHOD;
     EXPECT_EQ(RenderSettings{}.method, AUTO_METHOD) << "Auto is the default";
-    // Direct while the planner times its unit, a Direct frame of this size: four frames (the
+    // Direct while the planner times its unit, a Direct frame of this size: ten frames (the
     // first is not counted), then its choice.
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < 10; ++i) {
         render(preview, s, /*first=*/i == 0);
         EXPECT_TRUE(preview.isPlanning()) << "frame " << i;
         EXPECT_EQ(preview.stats().method, "direct") << "frame " << i;
