@@ -573,7 +573,10 @@ int main(int argc, char** argv) {
                                   QPointF(cx + 0.1 * cx, cy - 0.35 * cy));
                 vp->update();
             });
-        } else if (!referenceStarted) {
+        } else if (!referenceStarted && !window.viewport()->previewRenderer().isPlanning()) {
+            // After Auto has timed its Direct frames, as when an artist starts a reference: the
+            // path tracer takes both cores, and a unit timed beside it would be kept for the
+            // scene (in a scripted run that made Auto take SSLPV 16³ on the default scene).
             referenceStarted = true;
             if (auto* ref = window.referencePanel()) {
                 ref->setParameters(200, std::max(3, parser.value(reference).toInt()));
