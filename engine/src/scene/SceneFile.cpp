@@ -436,21 +436,24 @@ Scene parseScene(const std::string& jsonText, const std::string& baseDir) {
     const MeshSource meshSrc = parseMeshSource(o.at("mesh"), baseDir);
     MaterialSource matSrc = parseMaterialSource(o.at("material"), baseDir);
     const bool resolutionGiven = o.has("resolution");
-    if (resolutionGiven) {
+    if (resolutionGiven)
         matSrc.resolution = integer(o.at("resolution"), "resolution", GridSpec::MIN_RESOLUTION,
                                     GridSpec::MAX_RESOLUTION);
-        // The voxel count is a claim the file makes, like an element count in a mesh header:
-        // it sets the voxelisation's work and the material's memory (≈ 40 bytes a voxel), so it
-        // meets the import limit before anything is allocated (at the default limit every
-        // resolution up to MAX_RESOLUTION passes).
+    // The voxel count is a claim the file makes, like an element count in a mesh header: it
+    // sets the voxelisation's work and the material's memory (≈ 40 bytes a voxel), so it meets
+    // the import limit before anything is allocated (at the default limit every resolution up
+    // to MAX_RESOLUTION passes). A file that gives none claims the default's 128³ voxels; a VDB
+    // material brings its own grid, which its reader checks.
+    if (resolutionGiven || matSrc.vdbFile.empty()) {
         const uint64_t voxels =
             uint64_t(matSrc.resolution) * uint64_t(matSrc.resolution) * uint64_t(matSrc.resolution);
         if (voxels > importLimits().maxElements)
-            valueError("resolution", std::to_string(matSrc.resolution) +
-                                         "^3 = " + std::to_string(voxels) +
-                                         " voxels is more than the import limit of " +
-                                         std::to_string(importLimits().maxElements) +
-                                         " elements; use a lower resolution");
+            valueError("resolution",
+                       std::string(resolutionGiven ? "" : "(not given: the default) ") +
+                           std::to_string(matSrc.resolution) + "^3 = " + std::to_string(voxels) +
+                           " voxels is more than the import limit of " +
+                           std::to_string(importLimits().maxElements) +
+                           " elements; use a lower resolution");
     }
     if (o.has("eta")) {
         scene.eta = number(o.at("eta"), "eta");

@@ -150,6 +150,36 @@ TEST(SceneFile, ResolutionMeetsTheImportLimitBeforeVoxelising) {
         EXPECT_NE(what.find("274625 voxels"), std::string::npos) << what;
         EXPECT_NE(what.find("262144"), std::string::npos) << what;
     }
+    // A file without a resolution claims the default's 128³ voxels, and meets the limit too:
+    // the fuzz build (limit 2^19) voxelised such files for 12 s, past fuzz_scene's timeout
+    // (tests/data/fuzz/README.md, scene_default_resolution.json).
+    try {
+        loadScene(std::string(LUCENT_TEST_DATA_DIR) + "/fuzz/scene_default_resolution.json");
+        ADD_FAILURE() << "the default resolution was accepted under a limit of 2^18 elements";
+    } catch (const ValueError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("(not given: the default) 128^3 = 2097152 voxels"), std::string::npos)
+            << what;
+    }
+}
+
+TEST(SceneFile, VdbMaterialWithoutResolutionMeetsOnlyItsOwnGrid) {
+    // A VDB material brings its grid: the default resolution a file without one would claim
+    // is not checked against the limit (the reader checks the VDB's own).
+    const std::string path = outDir() + "/vdb_no_resolution.json";
+    Scene s = parseScene(minimalWith([](json& j) { j["resolution"] = 16; }));
+    removeProject(path);
+    saveProject(s, path);
+    json saved = json::parse(std::ifstream(path));
+    ASSERT_TRUE(saved.contains("resolution"));
+    saved.erase("resolution");
+    std::ofstream(path) << saved.dump();
+    ImportLimits limits = importLimits();
+    limits.maxElements = uint64_t(1) << 13;  // 16³ = 4096 voxels pass, the default 128³ not
+    const ScopedImportLimits scoped(limits);
+    const Scene back = loadScene(path);
+    EXPECT_EQ(back.objects[0].material->resolution(), 16);
+    removeProject(path);
 }
 
 TEST(SceneFile, UnknownFieldsAreNamed) {
