@@ -209,7 +209,6 @@ struct PreviewRenderer::Impl {
     bool created = false;
     bool meshUploaded = false;
     bool surfaceSet = false;  ///< setSurfaceMaterial done for the active method
-    float surfaceEta = 0.f;   ///< η the surface was set with
     std::vector<float> lights;
     PreviewStats stats;
     /// Auto: the last choice and what it was planned for.
@@ -710,11 +709,10 @@ void PreviewRenderer::Impl::renderFrame(PreviewFrame& f) {
         method.cameraChanged(f.camera);
     }
     r.methodFresh = false;
-    if (haveMesh && (changedMethod || !r.surfaceSet || r.surfaceEta != f.scene->eta)) {
-        r.surfaceEta = f.scene->eta;
-        // The method's surface in the direct pass: for a translucent object only the specular
-        // Fresnel reflection (methods::translucentSurface), Direct's opaque grey otherwise.
-        sr.setSurfaceMaterial(0, method.surface(f.scene->eta));
+    if (haveMesh && (changedMethod || !r.surfaceSet)) {
+        // The method's surface in the direct pass: none for a translucent object whatever η
+        // (methods::translucentSurface), Direct's opaque grey otherwise.
+        sr.setSurfaceMaterial(0, method.surface());
         r.surfaceSet = true;
     }
     const double uploadMs = uploadTimer.elapsedMs();

@@ -29,7 +29,7 @@ struct LiveMethodHarness {
         renderer.create(library);
         method = methods::create(name, params, {methods::Backend::Gl, /*live=*/true, {}});
         method->createGl(library);
-        const int mesh = renderer.addMesh(scene.objects[0].mesh, method->surface(scene.eta));
+        const int mesh = renderer.addMesh(scene.objects[0].mesh, method->surface());
         renderer.setLights(scene.lights);
         renderer.setCamera(scene.camera);
         renderer.setSubsurfaceProvider(method->subsurfacePass());

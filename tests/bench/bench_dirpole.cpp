@@ -57,7 +57,7 @@ int loadDefaultScene(Scene& scene, gpu::SceneRenderer& renderer) {
     scene.camera.width = WIDTH;
     scene.camera.height = HEIGHT;
     renderer.create();
-    const int id = renderer.addMesh(scene.objects[0].mesh, methods::translucentSurface(scene.eta));
+    const int id = renderer.addMesh(scene.objects[0].mesh, methods::translucentSurface());
     renderer.setLights(scene.lights);
     renderer.setCamera(scene.camera);
     return id;

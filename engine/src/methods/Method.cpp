@@ -42,8 +42,8 @@ gpu::SubsurfaceProvider* Method::subsurfacePass() {
     return nullptr;
 }
 
-gpu::SurfaceMaterial Method::surface(float eta) const {
-    return translucentSurface(eta);
+gpu::SurfaceMaterial Method::surface() const {
+    return translucentSurface();
 }
 
 ImageRgb Method::renderCpu(const Scene&, const CpuRequest&) {
@@ -58,7 +58,7 @@ Stats Method::stats() const {
     return {};
 }
 
-gpu::SurfaceMaterial translucentSurface(float /*eta*/) {
+gpu::SurfaceMaterial translucentSurface() {
     // The reflection at a smooth boundary is a delta whatever η (see the header).
     gpu::SurfaceMaterial surface;
     surface.diffuseAlbedo = Rgb(0.f);

@@ -40,7 +40,7 @@ void renderGl(const Scene& scene, const std::vector<Light>& lights, Method& meth
     try {
         renderer.create(library);
         method.createGl(library);
-        const gpu::SurfaceMaterial surface = method.surface(scene.eta);
+        const gpu::SurfaceMaterial surface = method.surface();
         int objectMesh = -1;
         for (const SceneObject& object : scene.objects) {
             const int id = renderer.addMesh(object.mesh, surface);

@@ -110,7 +110,7 @@ public:
         m_method = methods::create(name, params, {methods::Backend::Gl, /*live=*/true, {}});
         m_method->createGl(m_library);
         m_method->setScene(inputs());
-        m_renderer.setSurfaceMaterial(0, m_method->surface(m_scene.eta));
+        m_renderer.setSurfaceMaterial(0, m_method->surface());
         (void)m_volume.takeDirtyBricks();  // setScene handed over the whole volume
     }
 

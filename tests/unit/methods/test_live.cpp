@@ -48,7 +48,7 @@ struct LiveView {
         renderer.create(library);
         method = create(name, params, {Backend::Gl, /*live=*/true, {}});
         method->createGl(library);
-        const int mesh = renderer.addMesh(scene.objects[0].mesh, method->surface(scene.eta));
+        const int mesh = renderer.addMesh(scene.objects[0].mesh, method->surface());
         renderer.setLights(scene.lights);
         renderer.setCamera(scene.camera);
         gpu::DirectSettings settings;

@@ -155,8 +155,8 @@ TEST(MethodsParity, TranslucentMethodsDrawNoSurfaceTerm) {
     Scene scene = loadScene(std::string(LUCENT_SOURCE_DIR) + "/resources/scenes/skin_sphere.json");
     scene.camera.width = 32;
     scene.camera.height = 24;
-    EXPECT_EQ(translucentSurface(1.3f).specularAlbedo, Rgb(0.f));
-    EXPECT_EQ(translucentSurface(1.3f).diffuseAlbedo, Rgb(0.f));
+    EXPECT_EQ(translucentSurface().specularAlbedo, Rgb(0.f));
+    EXPECT_EQ(translucentSurface().diffuseAlbedo, Rgb(0.f));
     int compared = 0;
     for (const MethodInfo* info : all()) {
         if (info->name == "direct" || info->caps.groundTruth)

@@ -11,7 +11,7 @@
 /// @code
 ///   auto m = methods::create("dipole", given, {Backend::Gl, /*live=*/true});
 ///   m->createGl(library);
-///   renderer.addMesh(mesh, m->surface(eta));                // the translucent-surface rule
+///   renderer.addMesh(mesh, m->surface());                   // the translucent-surface rule
 ///   m->setScene({&mesh, &volume, eta, lights, meshId});     // mesh, material, η, lights
 ///   renderer.setSubsurfaceProvider(m->subsurfacePass());
 ///   // per frame:
@@ -160,8 +160,8 @@ public:
     /// Gl: the pass gpu::SceneRenderer runs each frame (nullptr: direct lighting only).
     virtual gpu::SubsurfaceProvider* subsurfacePass();
     /// The object's surface in the direct pass: the translucent-surface rule
-    /// (translucentSurface(η)) unless the method draws an opaque surface.
-    [[nodiscard]] virtual gpu::SurfaceMaterial surface(float eta) const;
+    /// (translucentSurface(), whatever η) unless the method draws an opaque surface.
+    [[nodiscard]] virtual gpu::SurfaceMaterial surface() const;
     /// Cpu: renders scene.camera's image of scene.objects[0], W/(mm²·sr), top row first.
     /// @throw ValueError for a scene the method cannot render (the message says why).
     virtual ImageRgb renderCpu(const Scene& scene, const CpuRequest& request);
@@ -190,7 +190,7 @@ private:
 /// camera ray meets: the exact reference has no highlight (docs/reference.md). The normalised
 /// Blinn-Phong lobe of albedo ((η − 1)/(η + 1))² drawn here until 2026-12-07 added 1–7 % of
 /// light the boundary does not send to the camera (docs/evaluation.md, "The surface highlight
-/// removed").
-[[nodiscard]] gpu::SurfaceMaterial translucentSurface(float eta);
+/// removed"). So it takes no η: the boundary's Fresnel factors belong to the subsurface term.
+[[nodiscard]] gpu::SurfaceMaterial translucentSurface();
 
 }  // namespace lucent::methods

@@ -15,7 +15,7 @@ public:
     using Method::Method;
 
     /// Opaque grey: gpu::SurfaceMaterial's defaults (ρ_d 0.8, ρ_s 0.04, exponent 64).
-    [[nodiscard]] gpu::SurfaceMaterial surface(float) const override { return {}; }
+    [[nodiscard]] gpu::SurfaceMaterial surface() const override { return {}; }
 
 private:
     void applyParams(const Params&) override {}
