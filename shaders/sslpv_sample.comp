@@ -7,7 +7,8 @@
 //   L_o = S·(1 − F_r(cos θ_o, η))·max(0, L_i)                                     (Eq. 4/7)
 // S = SslpvSolver::exitScale(): 1/η² in Paper mode, gain/η² in Calibrated mode.
 // with the coefficients read at p − d·Δx·n, d = ½, 1, 3⁄2 (first depth whose inside weight
-// exceeds 1e-4), trilinear over the 8 nearest cell centres that are inside, renormalised.
+// exceeds 1e-4), trilinear over the 8 nearest cell centres that are inside, renormalised; a part
+// thinner than half a cell, with no inside cell, from its neighbours (radianceInside).
 // Only bands 0 and 1 are read: band 2's hemisphere integral vanishes (Eq. 7).
 // Mode diffusion (DIFFUSION=1): band 0 only; its band-1 slot holds each cell's reduced albedo
 // (shared/SslpvShared.h), read with the same weights, and with u_exitCorrection the light
@@ -37,7 +38,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0) uniform sampler2D u_position;  // world position (mm), a = coverage
 layout(binding = 1) uniform sampler2D u_normal;    // unit normal facing the camera, a = id + 1
-layout(binding = 2) uniform sampler3D u_c0;  // rgb: coefficient Y00 per channel, a: 1 inside
+layout(binding = 2) uniform sampler3D u_c0;  // rgb: coefficient Y00 per channel, a: read-out alpha
 layout(binding = 3) uniform sampler3D u_c1;  // rgb: Y1-1
 layout(binding = 4) uniform sampler3D u_c2;  // rgb: Y10
 layout(binding = 5) uniform sampler3D u_c3;  // rgb: Y11
@@ -84,6 +85,39 @@ float dielectricReflectance(float cosThetaI, float eta) {
     return clamp(0.5 * (rParl * rParl + rPerp * rPerp), 0.0, 1.0);
 }
 
+// The coefficients of cell `cell` times w, added to c0…c4 (c4: mode diffusion's surface flux z).
+void addCell(ivec3 cell, vec4 t0, float w, inout vec3 c0, inout vec3 c1, inout vec3 c2,
+             inout vec3 c3, inout vec3 c4) {
+    c0 += w * t0.rgb;
+    c1 += w * texelFetch(u_c1, cell, 0).rgb;
+    c2 += w * texelFetch(u_c2, cell, 0).rgb;
+    c3 += w * texelFetch(u_c3, cell, 0).rgb;
+#if DIFFUSION
+    if (u_surfaceFlux != 0) c4 += w * texelFetch(u_c4, cell, 0).rgb;
+#endif
+}
+
+// L_i from the summed coefficients: divided by their weight sum, the light's coefficients also
+// multiplied by `scale` (the thin-part read's thickness; mode diffusion's albedo is not light).
+vec3 radianceFrom(vec3 c0, vec3 c1, vec3 c2, vec3 c3, vec3 c4, float wsum, float scale, vec3 n,
+                  out vec3 albedo, out vec3 jt[3]) {
+    float light = scale / wsum;
+    float invA = 1.0 / (u_h * u_h);
+#if DIFFUSION
+    // Per channel k: J_t = (x, y, z) from slots 2, 3, 4 (rgb = the channels).
+    for (int k = 0; k < 3; ++k) jt[k] = light * vec3(c2[k], c3[k], c4[k]);
+    albedo = c1 / wsum;  // the LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF slot
+    return max(vec3(0.0), 2.0 * invA * (u_Y00 * light * c0));
+#else
+    vec3 c10n = n.x * c3 + n.y * c1 + n.z * c2;
+    return max(vec3(0.0), 2.0 * invA * light * (u_Y00 * c0 + 0.5 * u_K1 * c10n));
+#endif
+}
+
+bool inGrid(ivec3 cell) {
+    return all(greaterThanEqual(cell, ivec3(0))) && all(lessThan(cell, ivec3(u_res)));
+}
+
 vec3 radianceInside(vec3 p, vec3 n, out vec3 albedo, out vec3 jt[3]) {
     albedo = vec3(0.0);
     jt[0] = vec3(0.0);
@@ -99,41 +133,46 @@ vec3 radianceInside(vec3 p, vec3 n, out vec3 albedo, out vec3 jt[3]) {
         for (int corner = 0; corner < 8; ++corner) {
             ivec3 o = ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
             ivec3 cell = i0 + o;
-            if (any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, ivec3(u_res)))) continue;
-            // The inside flag and c00 in one fetch (a fetch each made the pass 5 % slower).
+            if (!inGrid(cell)) continue;
+            // The readable flag and c00 in one fetch (a fetch each made the pass 5 % slower).
             vec4 t0 = texelFetch(u_c0, cell, 0);
-            if (t0.a < 0.5) continue;
+            if (t0.a <= LUCENT_SSLPV_READABLE_ALPHA_MIN) continue;
             float w = (o.x != 0 ? f.x : 1.0 - f.x) * (o.y != 0 ? f.y : 1.0 - f.y) *
                       (o.z != 0 ? f.z : 1.0 - f.z);
             if (w <= 0.0) continue;
             wsum += w;
-            c0 += w * t0.rgb;
-            c1 += w * texelFetch(u_c1, cell, 0).rgb;
-            c2 += w * texelFetch(u_c2, cell, 0).rgb;
-            c3 += w * texelFetch(u_c3, cell, 0).rgb;
-#if DIFFUSION
-            if (u_surfaceFlux != 0) c4 += w * texelFetch(u_c4, cell, 0).rgb;
-#endif
+            addCell(cell, t0, w, c0, c1, c2, c3, c4);
         }
-        if (wsum > 1e-4) {
-            c0 /= wsum;
-            c1 /= wsum;
-            c2 /= wsum;
-            c3 /= wsum;
-            float invA = 1.0 / (u_h * u_h);
-#if DIFFUSION
-            c4 /= wsum;
-            // Per channel k: J_t = (x, y, z) from slots 2, 3, 4 (rgb = the channels).
-            for (int k = 0; k < 3; ++k) jt[k] = vec3(c2[k], c3[k], c4[k]);
-            albedo = c1;  // the LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF slot
-            return max(vec3(0.0), 2.0 * invA * (u_Y00 * c0));
-#else
-            vec3 c10n = n.x * c3 + n.y * c1 + n.z * c2;
-            return max(vec3(0.0), 2.0 * invA * (u_Y00 * c0 + 0.5 * u_K1 * c10n));
-#endif
-        }
+        if (wsum > 1e-4) return radianceFrom(c0, c1, c2, c3, c4, wsum, 1.0, n, albedo, jt);
     }
-    return vec3(0.0);
+    // A part thinner than half a cell (SslpvSolver::thinPartCoefficients, line for line): the
+    // readable cells within LUCENT_SSLPV_THIN_PART_REACH cells of the depth-½ point, Gaussian
+    // in distance (cells), scaled by 2f, f the largest alpha (the inside fraction, capped at ½)
+    // of the eight cells around that point.
+    vec3 u = (p - 0.5 * u_h * n - u_origin) / u_h - vec3(0.5);
+    ivec3 i0 = ivec3(floor(u));
+    float fraction = 0.0;
+    for (int corner = 0; corner < 8; ++corner) {
+        ivec3 cell = i0 + ivec3(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+        if (inGrid(cell)) fraction = max(fraction, min(texelFetch(u_c0, cell, 0).a, 0.5));
+    }
+    if (!(fraction > 0.0)) return vec3(0.0);
+    ivec3 centre = ivec3(floor(u + vec3(0.5)));
+    float wsum = 0.0;
+    vec3 c0 = vec3(0.0), c1 = vec3(0.0), c2 = vec3(0.0), c3 = vec3(0.0), c4 = vec3(0.0);
+    const int R = LUCENT_SSLPV_THIN_PART_REACH, W = 2 * R + 1;
+    for (int k = 0; k < W * W * W; ++k) {
+        ivec3 cell = centre + ivec3(k % W, (k / W) % W, k / (W * W)) - ivec3(R);
+        if (!inGrid(cell)) continue;
+        vec4 t0 = texelFetch(u_c0, cell, 0);
+        if (t0.a <= LUCENT_SSLPV_READABLE_ALPHA_MIN) continue;
+        vec3 d = u - vec3(cell);
+        float w = exp(-dot(d, d));
+        wsum += w;
+        addCell(cell, t0, w, c0, c1, c2, c3, c4);
+    }
+    if (!(wsum > 1e-6)) return vec3(0.0);
+    return radianceFrom(c0, c1, c2, c3, c4, wsum, 2.0 * fraction, n, albedo, jt);
 }
 
 void main() {

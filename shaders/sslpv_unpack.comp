@@ -4,7 +4,8 @@
 // [channel][coefficient][padded cell], fp32 or packed fp16) into the four RGBA32F N³ textures
 // sampled by sslpv_sample.comp (SslpvSubsurfaceProvider): texture i holds SH coefficient i of
 // the three channels in rgb (Børlum et al. 2011, §3.3, Eq. 5–7 read bands 0 and 1 only);
-// texture 0's alpha is the inside flag. Replaces a read-back + CPU re-upload.
+// texture 0's alpha is the read-out's (SslpvSolver::readoutAlpha). Replaces a read-back + CPU
+// re-upload.
 
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 
@@ -17,7 +18,7 @@ layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 #endif
 
 layout(std430, binding = 0) readonly buffer AccBlock { CELL b_acc[]; };
-layout(std430, binding = 1) readonly buffer InsideBlock { float b_inside[]; };  // padded plane
+layout(std430, binding = 1) readonly buffer InsideBlock { float b_inside[]; };  // read-out alphas (padded)
 
 layout(rgba32f, binding = 0) writeonly uniform image3D u_c0;
 layout(rgba32f, binding = 1) writeonly uniform image3D u_c1;

@@ -19,6 +19,16 @@
 #define LUCENT_SSLPV_DIFFUSION_ORDER 2
 #define LUCENT_SSLPV_DIFFUSION_FLUX_COEFF 2
 
+/// Texture 0's alpha in the read-out (sslpv_sample.comp, written from SslpvSolver::readoutAlpha):
+/// 1 in a cell the read-out interpolates (SslpvSolver::isReadable), else the cell's inside
+/// fraction capped at ½, which weights the thin-part read-out (SslpvSolver::
+/// thinPartCoefficients). A cell is readable iff its alpha exceeds this value.
+#define LUCENT_SSLPV_READABLE_ALPHA_MIN 0.75
+
+/// The thin-part read-out looks for readable cells up to this many cells from the cell nearest
+/// its sample point along each axis (a (2R + 1)³ block).
+#define LUCENT_SSLPV_THIN_PART_REACH 2
+
 /// Shader-storage binding of the exit-angle table (lucent::dipole::DirpoleExitTable, the layout
 /// of shared/DirpoleShared.h: LUCENT_DIRPOLE_EXIT_ALBEDO_NODES rows of
 /// LUCENT_DIRPOLE_EXIT_COSINE_NODES floats) in sslpv_sample.comp.

@@ -38,7 +38,7 @@ struct SslpvGlPropagator::Impl {
     gpu::GlObject acc, exit;  ///< accumulation and exitant grids
     gpu::GlObject factor;     ///< 9 fp32 planes [ch·3 + band]
     gpu::GlObject mask;       ///< sink mask plane (fp32)
-    gpu::GlObject inside;     ///< inside flags plane (fp32), for writeTextures()
+    gpu::GlObject inside;     ///< the read-out alphas plane (fp32), for writeTextures()
     gpu::GlObject terms;      ///< term list (ivec4)
     std::vector<uint8_t> shadowSource, shadowFactor, shadowMask, shadowInside;
     bool hasResult = false;
@@ -258,7 +258,7 @@ void SslpvGlPropagator::propagate(const SslpvSolver& solver) {
             termStart[i] = t;
     }
 
-    // Inputs: factors, sink mask, inside flags, step-0 sources (injection × folded factors, as
+    // Inputs: factors, sink mask, read-out alphas, step-0 sources (injection × folded factors, as
     // on the CPU); only their changed z-slices are uploaded (chunk = one padded slice).
     std::vector<float> factor(9 * gpuPlane, 0.f);
     for (int ch = 0; ch < 3; ++ch)
@@ -273,7 +273,7 @@ void SslpvGlPropagator::propagate(const SslpvSolver& solver) {
         for (int z = 0; z < n; ++z)
             for (int y = 0; y < n; ++y)
                 for (int x = 0; x < n; ++x)
-                    inside[inj.index({x, y, z})] = solver.isInside({x, y, z}) ? 1.f : 0.f;
+                    inside[inj.index({x, y, z})] = solver.readoutAlpha({x, y, z});
     }
     std::vector<float> prop0(planes * gpuPlane, 0.f);
     for (int ch = 0; ch < 3; ++ch)

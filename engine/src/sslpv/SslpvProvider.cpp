@@ -96,8 +96,8 @@ struct SslpvSubsurfaceProvider::Impl {
     std::shared_ptr<const dipole::DirpoleExitTable> exitTableUploaded;
     std::unique_ptr<SslpvGlPropagator> gl;
     std::vector<float> staging;
-    std::vector<uint8_t> readable;  ///< per cell, x fastest: SslpvSolver::isReadable
-    uint64_t readableVersion = 0;   ///< SslpvSolver::readableVersion() of `readable`
+    std::vector<float> readoutAlpha;  ///< per cell, x fastest: SslpvSolver::readoutAlpha
+    uint64_t readableVersion = 0;     ///< SslpvSolver::readableVersion() of `readoutAlpha`
 
     SslpvProviderTimings timings;
     SslpvProviderStats stats;
@@ -435,17 +435,17 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
         const bool diffusion = s.solver.options().mode == SslpvMode::Diffusion;
         const int uploaded =
             std::min(grid.coeffCount(), diffusion ? UPLOADED_COEFFS_DIFFUSION : UPLOADED_COEFFS);
-        // The readable flags (texture 0's alpha) only when they may have changed (a stroke
-        // keeps them), then each texture's texels slice by slice on the worker threads: the
+        // The read-out's alphas (texture 0's) only when they may have changed (a stroke keeps
+        // them), then each texture's texels slice by slice on the worker threads: the
         // repacking took 3.3 of the 5.6 ms of a 64³ upload on one thread.
-        if (s.readable.size() != cells || s.readableVersion != s.solver.readableVersion()) {
-            s.readable.resize(cells);
+        if (s.readoutAlpha.size() != cells || s.readableVersion != s.solver.readableVersion()) {
+            s.readoutAlpha.resize(cells);
             parallelFor(0, N, [&](int64_t z0, int64_t z1) {
                 for (int z = int(z0); z < int(z1); ++z)
                     for (int y = 0; y < N; ++y)
                         for (int x = 0; x < N; ++x)
-                            s.readable[(size_t(z) * N + size_t(y)) * N + size_t(x)] =
-                                uint8_t(s.solver.isReadable({x, y, z}));
+                            s.readoutAlpha[(size_t(z) * N + size_t(y)) * N + size_t(x)] =
+                                s.solver.readoutAlpha({x, y, z});
             });
             s.readableVersion = s.solver.readableVersion();
         }
@@ -461,7 +461,7 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
                             dst[0] = planes[0][pi + size_t(x)];
                             dst[1] = planes[1][pi + size_t(x)];
                             dst[2] = planes[2][pi + size_t(x)];
-                            dst[3] = i == 0 && s.readable[row + size_t(x)] ? 1.f : 0.f;
+                            dst[3] = i == 0 ? s.readoutAlpha[row + size_t(x)] : 0.f;
                         }
                     }
             });

@@ -393,6 +393,58 @@ TEST(SslpvSolver, RadianceFacesTheLight) {
     EXPECT_TRUE(isFinite(top));
 }
 
+// A fin thinner than half a cell has no cell of its own (insideFraction < ½), so the read-out's
+// depths find nothing there; it rendered black. It is read from the readable cells within two
+// cells, Gaussian-weighted by distance (in cells) and scaled by 2f, f the fin's inside fraction
+// (SslpvSolver::thinPartCoefficients): checked against that rule evaluated here from the grid.
+TEST(SslpvSolver, ThinPartsReadTheirNeighboursScaledByTheirThickness) {
+    constexpr int N = 24;
+    // The fin: the cells z = 12 (z ∈ [0, 1] mm), y 8…15, x 20…23, just past the ball's +x side
+    // (radius 8.4 cells; its cells reach x = 19). Read on its top face, 1 mm past the ball.
+    for (float f : {0.f, 0.2f, 0.4f}) {
+        CoarseMaterial m = ballMaterial(N, 1.f, Rgb(0.5f), Rgb(0.45f), Rgb(0.f));
+        for (int y = 8; y < 16; ++y)
+            for (int x = 20; x < N; ++x)
+                m.insideFraction[m.spec.linearIndex({x, y, 12})] = f;
+        SslpvSolver solver({.maxSteps = 32});
+        solver.setMaterial(m, 1.3f);
+        solver.setInjectionSamples(ballTexels(m, Vector3f(0, 0, -1), Rgb(1.f)));
+        solver.solve();
+        const Point3f p(8.5f, 0.5f, f);
+        const Rgb read = solver.radiance(p, Normal3f(0, 0, 1));
+        ASSERT_TRUE(isFinite(read));
+        if (f == 0.f) {
+            EXPECT_EQ(read, Rgb(0.f)) << "no fin, nothing to read";
+            continue;
+        }
+        // The depth-½ point p − ½·n is in cell (20, 12, 11); its eight cells' largest inside
+        // fraction is the fin's f. Paper mode, n = +z: L = (2/Δx²)(Y00·c00 + ½·K1·c10), Eq. 7.
+        const Vector3f u = (p - Vector3f(0, 0, 0.5f) - m.spec.origin) - Vector3f(0.5f);
+        float wsum = 0.f;
+        Rgb c00(0.f), c10(0.f);
+        for (int z = 9; z <= 13; ++z)
+            for (int y = 10; y <= 14; ++y)
+                for (int x = 18; x <= 22; ++x) {
+                    if (!solver.isReadable({x, y, z}))
+                        continue;
+                    const Vector3f d = u - Vector3f(x, y, z);
+                    const float w = std::exp(-glm::dot(d, d));
+                    wsum += w;
+                    for (int c = 0; c < 3; ++c) {
+                        c00[c] += w * solver.accumulation().at({x, y, z}, c, 0);
+                        c10[c] += w * solver.accumulation().at({x, y, z}, c, 2);
+                    }
+                }
+        ASSERT_GT(wsum, 0.f);
+        const float Y00 = 0.5f / std::sqrt(PI), K1 = std::sqrt(3.f / (4.f * PI));
+        for (int c = 0; c < 3; ++c) {
+            const float expected = 2.f * f * 2.f * (Y00 * c00[c] + 0.5f * K1 * c10[c]) / wsum;
+            EXPECT_GT(read[c], 0.f);
+            EXPECT_NEAR(read[c], expected, 1e-4f * expected) << "f " << f << " channel " << c;
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Stress (issue E): extreme parameters never produce NaN/Inf and never create energy.
 

@@ -61,8 +61,8 @@ public:
     /// The exitant grid, read back likewise.
     [[nodiscard]] const SslpvGrid& exitant() const;
     /// Writes the accumulation grid into four RGBA32F N³ 3-D textures on the GPU: texture i
-    /// holds SH coefficient i (i < 4) of the three channels in rgb; texture 0's alpha is 1 in
-    /// cells inside the object (SslpvSolver::isInside), else 0; the other alphas are 0. This
+    /// holds SH coefficient i (i < 4) of the three channels in rgb; texture 0's alpha is the
+    /// read-out's (SslpvSolver::readoutAlpha); the other alphas are 0. This
     /// is the layout SslpvSubsurfaceProvider samples. Context current.
     /// @throw ValueError before the first propagate().
     void writeTextures(const unsigned textures[4]) const;

@@ -287,6 +287,9 @@ public:
     /// Cell c is one radiance() (and the GL read-out) interpolates: an inside cell; in mode
     /// Diffusion only those with a boundary face (GridDiffusion::isBoundary).
     [[nodiscard]] bool isReadable(const Coord& c) const;
+    /// The read-out's per-cell value (texture 0's alpha, shared/SslpvShared.h): 1 where
+    /// isReadable, else the cell's inside fraction capped at ½ (0 outside the grid).
+    [[nodiscard]] float readoutAlpha(const Coord& c) const;
     /// Changes whenever isReadable() may answer differently: new options, grid or inside
     /// cells (a stroke that only changes σ keeps it), so a caller can keep a copy of the flags.
     [[nodiscard]] uint64_t readableVersion() const { return m_readableVersion; }
@@ -434,6 +437,11 @@ private:
     /// p − depth·Δx·n (radiance()); false where no readable cell is near.
     bool interpolateCoefficients(const Point3f& p, const Normal3f& n,
                                  float (&c)[3][SSLPV_MAX_COEFFS]) const;
+    /// interpolateCoefficients' read of a part thinner than half a cell, which has no inside
+    /// cell of its own: the nearest readable cells' coefficients scaled by the part's
+    /// thickness (see the definition); false where no readable cell is within a cell.
+    bool thinPartCoefficients(const Point3f& p, const Normal3f& n,
+                              float (&c)[3][SSLPV_MAX_COEFFS]) const;
     /// Eq. 7's L_i from interpolated coefficients (radiance()).
     [[nodiscard]] Rgb radianceFromCoefficients(const float (&c)[3][SSLPV_MAX_COEFFS],
                                                const Normal3f& n) const;
