@@ -18,7 +18,7 @@ layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 #endif
 
 layout(std430, binding = 0) readonly buffer AccBlock { CELL b_acc[]; };
-layout(std430, binding = 1) readonly buffer InsideBlock { float b_inside[]; };  // read-out alphas (padded)
+layout(std430, binding = 1) readonly buffer ReadoutAlphaBlock { float b_readoutAlpha[]; };  // padded plane
 
 layout(rgba32f, binding = 0) writeonly uniform image3D u_c0;
 layout(rgba32f, binding = 1) writeonly uniform image3D u_c1;
@@ -40,7 +40,7 @@ void main() {
     ivec3 c = ivec3(gl_GlobalInvocationID);
     if (any(greaterThanEqual(c, ivec3(u_res)))) return;
     int k = ((c.z + 1) * u_padded + c.y + 1) * u_padded + c.x + 1;
-    imageStore(u_c0, c, vec4(coefficient(0, k), b_inside[k]));
+    imageStore(u_c0, c, vec4(coefficient(0, k), b_readoutAlpha[k]));
     imageStore(u_c1, c, vec4(coefficient(1, k), 0.0));
     imageStore(u_c2, c, vec4(coefficient(2, k), 0.0));
     imageStore(u_c3, c, vec4(coefficient(3, k), 0.0));

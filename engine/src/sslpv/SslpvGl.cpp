@@ -33,14 +33,14 @@ struct SslpvGlPropagator::Impl {
     // propagate(); the shadows hold what each input buffer currently contains.
     int res = 0, order = 0;
     size_t cells = 0, gpuPlane = 0;
-    gpu::GlObject source;     ///< step-0 sources (injection × folded factors)
-    gpu::GlObject prop[2];    ///< ping-pong
-    gpu::GlObject acc, exit;  ///< accumulation and exitant grids
-    gpu::GlObject factor;     ///< 9 fp32 planes [ch·3 + band]
-    gpu::GlObject mask;       ///< sink mask plane (fp32)
-    gpu::GlObject inside;     ///< the read-out alphas plane (fp32), for writeTextures()
-    gpu::GlObject terms;      ///< term list (ivec4)
-    std::vector<uint8_t> shadowSource, shadowFactor, shadowMask, shadowInside;
+    gpu::GlObject source;        ///< step-0 sources (injection × folded factors)
+    gpu::GlObject prop[2];       ///< ping-pong
+    gpu::GlObject acc, exit;     ///< accumulation and exitant grids
+    gpu::GlObject factor;        ///< 9 fp32 planes [ch·3 + band]
+    gpu::GlObject mask;          ///< sink mask plane (fp32)
+    gpu::GlObject readoutAlpha;  ///< SslpvSolver::readoutAlpha plane (fp32), for writeTextures()
+    gpu::GlObject terms;         ///< term list (ivec4)
+    std::vector<uint8_t> shadowSource, shadowFactor, shadowMask, shadowReadoutAlpha;
     bool hasResult = false;
 
     // Read-back cache (filled on demand).
@@ -50,12 +50,12 @@ struct SslpvGlPropagator::Impl {
 
     void destroyGrids() {
         for (gpu::GlObject* b :
-             {&source, &prop[0], &prop[1], &acc, &exit, &factor, &mask, &inside, &terms})
+             {&source, &prop[0], &prop[1], &acc, &exit, &factor, &mask, &readoutAlpha, &terms})
             b->destroy();
         shadowSource.clear();
         shadowFactor.clear();
         shadowMask.clear();
-        shadowInside.clear();
+        shadowReadoutAlpha.clear();
         res = order = 0;
         hasResult = false;
     }
@@ -181,7 +181,7 @@ void SslpvGlPropagator::writeTextures(const unsigned textures[4]) const {
     glProgramUniform1i(p, s.unpack.uniformLocation("u_planeSize"), int(s.gpuPlane));
     glProgramUniform1i(p, s.unpack.uniformLocation("u_coeffs"), shCount(s.order));
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, s.acc.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, s.inside.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, s.readoutAlpha.id());
     for (unsigned i = 0; i < 4; ++i)
         glBindImageTexture(i, textures[i], 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     const unsigned g = unsigned(s.res + 3) / 4;
@@ -227,7 +227,7 @@ void SslpvGlPropagator::propagate(const SslpvSolver& solver) {
             *b = gpu::createBuffer(gridBytes, nullptr, GL_DYNAMIC_STORAGE_BIT);
         s.factor = gpu::createBuffer(9 * gpuPlane * 4, nullptr, GL_DYNAMIC_STORAGE_BIT);
         s.mask = gpu::createBuffer(gpuPlane * 4, nullptr, GL_DYNAMIC_STORAGE_BIT);
-        s.inside = gpu::createBuffer(gpuPlane * 4, nullptr, GL_DYNAMIC_STORAGE_BIT);
+        s.readoutAlpha = gpu::createBuffer(gpuPlane * 4, nullptr, GL_DYNAMIC_STORAGE_BIT);
         // The matrices as a term list (fixed for the order and grid size).
         std::vector<int> terms;  // ivec4 per term
         for (int i = 0; i < count; ++i)
@@ -266,14 +266,14 @@ void SslpvGlPropagator::propagate(const SslpvSolver& solver) {
             const std::vector<float> f = solver.foldedFactorPlane(ch, band);
             std::copy(f.begin(), f.end(), factor.begin() + long((ch * 3 + band) * gpuPlane));
         }
-    std::vector<float> mask(gpuPlane, 0.f), inside(gpuPlane, 0.f);
+    std::vector<float> mask(gpuPlane, 0.f), alpha(gpuPlane, 0.f);
     {
         const std::vector<float> m = solver.sinkMaskPlane();
         std::copy(m.begin(), m.end(), mask.begin());
         for (int z = 0; z < n; ++z)
             for (int y = 0; y < n; ++y)
                 for (int x = 0; x < n; ++x)
-                    inside[inj.index({x, y, z})] = solver.readoutAlpha({x, y, z});
+                    alpha[inj.index({x, y, z})] = solver.readoutAlpha({x, y, z});
     }
     std::vector<float> prop0(planes * gpuPlane, 0.f);
     for (int ch = 0; ch < 3; ++ch)
@@ -298,8 +298,8 @@ void SslpvGlPropagator::propagate(const SslpvSolver& solver) {
     uploaded +=
         Impl::uploadChanged(s.factor, s.shadowFactor, factor.data(), factor.size() * 4, slice * 4);
     uploaded += Impl::uploadChanged(s.mask, s.shadowMask, mask.data(), mask.size() * 4, slice * 4);
-    uploaded +=
-        Impl::uploadChanged(s.inside, s.shadowInside, inside.data(), inside.size() * 4, slice * 4);
+    uploaded += Impl::uploadChanged(s.readoutAlpha, s.shadowReadoutAlpha, alpha.data(),
+                                    alpha.size() * 4, slice * 4);
     uploaded +=
         Impl::uploadChanged(s.source, s.shadowSource, prop0Data, gridBytes, slice * cellBytes);
     s.timings.uploadedBytes = uploaded;
