@@ -8,7 +8,7 @@
 // S = SslpvSolver::exitScale(): 1/η² in Paper mode, gain/η² in Calibrated mode.
 // with the coefficients read at p − d·Δx·n, d = ½, 1, 3⁄2 (first depth whose inside weight
 // exceeds 1e-4), trilinear over the 8 nearest cell centres that are inside, renormalised; a part
-// thinner than half a cell, with no inside cell, from its neighbours (radianceInside).
+// thinner than half a cell, with no inside cell, from its neighbours (radianceThin, THIN_PASS).
 // Only bands 0 and 1 are read: band 2's hemisphere integral vanishes (Eq. 7).
 // Mode diffusion (DIFFUSION=1): band 0 only; its band-1 slot holds each cell's reduced albedo
 // (shared/SslpvShared.h), read with the same weights, and with u_exitCorrection the light
@@ -33,8 +33,21 @@
 #if ALBEDO_OUT && !DIFFUSION
 #error "ALBEDO_OUT needs DIFFUSION: the propagation modes hold no albedo"
 #endif
+// THIN_PASS=1: the second dispatch, over the pixels the first appended to the thin-part list
+// (shared/SslpvShared.h, LUCENT_SSLPV_BINDING_THIN_PIXELS), which it shades with the thin-part
+// read-out; the first pass (THIN_PASS=0) carries none of that code. Each pass writes only its
+// own pixels, so together they write the one pass's image (measured: docs/benchmarks.md).
+#ifndef THIN_PASS
+#define THIN_PASS 0
+#endif
 
+#include "shared/SslpvShared.h"
+
+#if THIN_PASS
+layout(local_size_x = LUCENT_SSLPV_THIN_PASS_GROUP_SIZE) in;
+#else
 layout(local_size_x = 8, local_size_y = 8) in;
+#endif
 
 layout(binding = 0) uniform sampler2D u_position;  // world position (mm), a = coverage
 layout(binding = 1) uniform sampler2D u_normal;    // unit normal facing the camera, a = id + 1
@@ -49,7 +62,12 @@ layout(rgba32f, binding = 0) writeonly uniform image2D u_target;  // W/(mm²·sr
 layout(rgba32f, binding = 1) writeonly uniform image2D u_albedoOut;  // rgb: α′ read, a: 1
 #endif
 
-#include "shared/SslpvShared.h"
+layout(std430, binding = LUCENT_SSLPV_BINDING_THIN_PIXELS) buffer ThinPixels {
+    uint b_thinGroups[3];  // glDispatchComputeIndirect's arguments for the thin pass
+    uint b_thinCount;
+    uint b_thinPixels[];   // x | y << 16
+};
+
 #if LUCENT_SSLPV_DIFFUSION_ALBEDO_COEFF != 1 || LUCENT_SSLPV_DIFFUSION_FLUX_COEFF != 2
 #error "radianceInside reads the albedo from u_c1 and the surface flux from u_c2, u_c3, u_c4"
 #endif
@@ -118,11 +136,19 @@ bool inGrid(ivec3 cell) {
     return all(greaterThanEqual(cell, ivec3(0))) && all(lessThan(cell, ivec3(u_res)));
 }
 
-vec3 radianceInside(vec3 p, vec3 n, out vec3 albedo, out vec3 jt[3]) {
+void clearReadout(out vec3 albedo, out vec3 jt[3]) {
     albedo = vec3(0.0);
     jt[0] = vec3(0.0);
     jt[1] = vec3(0.0);
     jt[2] = vec3(0.0);
+}
+
+#if !THIN_PASS
+// False when none of the three depths finds a readable cell: a part thinner than half a cell,
+// left to the thin pass.
+bool radianceInside(vec3 p, vec3 n, out vec3 Li, out vec3 albedo, out vec3 jt[3]) {
+    clearReadout(albedo, jt);
+    Li = vec3(0.0);
     const float depths[3] = float[3](0.5, 1.0, 1.5);
     for (int d = 0; d < 3; ++d) {
         vec3 u = (p - depths[d] * u_h * n - u_origin) / u_h - vec3(0.5);
@@ -143,12 +169,20 @@ vec3 radianceInside(vec3 p, vec3 n, out vec3 albedo, out vec3 jt[3]) {
             wsum += w;
             addCell(cell, t0, w, c0, c1, c2, c3, c4);
         }
-        if (wsum > 1e-4) return radianceFrom(c0, c1, c2, c3, c4, wsum, 1.0, n, albedo, jt);
+        if (wsum > 1e-4) {
+            Li = radianceFrom(c0, c1, c2, c3, c4, wsum, 1.0, n, albedo, jt);
+            return true;
+        }
     }
-    // A part thinner than half a cell (SslpvSolver::thinPartCoefficients, line for line): the
-    // readable cells within LUCENT_SSLPV_THIN_PART_REACH cells of the depth-½ point, Gaussian
-    // in distance (cells), scaled by 2f, f the largest alpha (the inside fraction, capped at ½)
-    // of the eight cells around that point.
+    return false;
+}
+#else
+// A part thinner than half a cell (SslpvSolver::thinPartCoefficients, line for line): the
+// readable cells within LUCENT_SSLPV_THIN_PART_REACH cells of the depth-½ point, Gaussian
+// in distance (cells), scaled by 2f, f the largest alpha (the inside fraction, capped at ½)
+// of the eight cells around that point.
+vec3 radianceThin(vec3 p, vec3 n, out vec3 albedo, out vec3 jt[3]) {
+    clearReadout(albedo, jt);
     vec3 u = (p - 0.5 * u_h * n - u_origin) / u_h - vec3(0.5);
     ivec3 i0 = ivec3(floor(u));
     float fraction = 0.0;
@@ -174,10 +208,9 @@ vec3 radianceInside(vec3 p, vec3 n, out vec3 albedo, out vec3 jt[3]) {
     if (!(wsum > 1e-6)) return vec3(0.0);
     return radianceFrom(c0, c1, c2, c3, c4, wsum, 2.0 * fraction, n, albedo, jt);
 }
+#endif
 
-void main() {
-    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
-    if (px.x >= u_size.x || px.y >= u_size.y) return;
+void shadePixel(ivec2 px) {
     vec4 pos = texelFetch(u_position, px, 0);
     vec4 nrm = texelFetch(u_normal, px, 0);
     vec3 L = vec3(0.0);
@@ -192,7 +225,22 @@ void main() {
             vec3 n = normalize(mat3(u_objectFromWorld) * nw);
             vec3 albedo;
             vec3 jt[3];
-            vec3 Li = radianceInside(p, n, albedo, jt);
+#if THIN_PASS
+            vec3 Li = radianceThin(p, n, albedo, jt);
+#else
+            vec3 Li;
+            if (!radianceInside(p, n, Li, albedo, jt)) {
+                // The thin pass shades (and writes) this pixel; one more group per
+                // LUCENT_SSLPV_THIN_PASS_GROUP_SIZE pixels.
+                uint slot = atomicAdd(b_thinCount, 1u);
+                b_thinPixels[slot] = uint(px.x) | (uint(px.y) << 16);
+                uint group = slot / uint(LUCENT_SSLPV_THIN_PASS_GROUP_SIZE);
+                if (slot % uint(LUCENT_SSLPV_THIN_PASS_GROUP_SIZE) == 0u &&
+                    group < uint(LUCENT_SSLPV_THIN_PASS_MAX_GROUPS))
+                    atomicAdd(b_thinGroups[0], 1u);
+                return;
+            }
+#endif
             albedoRead = albedo;
             L = (u_exitScale * (1.0 - dielectricReflectance(cosO, u_eta))) * Li;
 #if DIFFUSION
@@ -223,5 +271,19 @@ void main() {
     imageStore(u_target, px, vec4(L, 1.0));
 #if ALBEDO_OUT
     imageStore(u_albedoOut, px, vec4(albedoRead, 1.0));
+#endif
+}
+
+void main() {
+#if THIN_PASS
+    // Beyond LUCENT_SSLPV_THIN_PASS_MAX_GROUPS groups each invocation takes every stride-th pixel.
+    uint stride = gl_NumWorkGroups.x * uint(LUCENT_SSLPV_THIN_PASS_GROUP_SIZE);
+    for (uint i = gl_GlobalInvocationID.x; i < b_thinCount; i += stride) {
+        uint packedPx = b_thinPixels[i];
+        shadePixel(ivec2(packedPx & 0xffffu, packedPx >> 16));
+    }
+#else
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (px.x < u_size.x && px.y < u_size.y) shadePixel(px);
 #endif
 }

@@ -34,6 +34,20 @@
 /// LUCENT_DIRPOLE_EXIT_COSINE_NODES floats) in sslpv_sample.comp.
 #define LUCENT_SSLPV_BINDING_EXIT_TABLE 0
 
+/// Shader-storage binding of the thin-part pixel list (sslpv_sample.comp): the sample pass
+/// appends each pixel that the three read-out depths find no readable cell for, and a second
+/// dispatch, sized from the list (glDispatchComputeIndirect), reads only those, so the
+/// (2R + 1)³ search no longer runs under the execution mask of every work group that holds one
+/// (llvmpipe). Layout (std430, uints): the indirect dispatch's three group counts, the pixel
+/// count, then one uint per pixel (x | y << 16).
+#define LUCENT_SSLPV_BINDING_THIN_PIXELS 1
+#define LUCENT_SSLPV_THIN_PIXELS_HEADER_UINTS 4
+/// Work-group size of the thin-part pass (one pixel of the list per invocation), and the most
+/// groups the first pass asks for (GL 4.5's guaranteed GL_MAX_COMPUTE_WORK_GROUP_COUNT; past
+/// it each invocation takes several pixels).
+#define LUCENT_SSLPV_THIN_PASS_GROUP_SIZE 64
+#define LUCENT_SSLPV_THIN_PASS_MAX_GROUPS 65535
+
 /// Intervals of the exact half-space's total reflectance table (lucent::sslpv::
 /// ExactReflectanceRatio::exactTotals: NODES + 1 values at u_i = i/NODES, α′ = 1 − u_i²), which
 /// combined_add.comp interpolates to carry the local kernel to the painted surface's albedo.

@@ -19,7 +19,9 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <string>
 #include <utility>
+#include <vector>
 
 namespace lucent::sslpv {
 
@@ -43,6 +45,28 @@ void validateOptions(const SslpvProviderOptions& o) {
     // Everything else is checked by SslpvRenderer::setOptions / SslpvSolver::setOptions.
     SslpvRenderer probe(o.render);
 }
+
+static_assert(LUCENT_SSLPV_THIN_PASS_MAX_GROUPS == gpu::MAX_DISPATCH_GROUPS);
+
+/// sslpv_sample.comp's two passes of one variant: every covered pixel, then the pixels of parts
+/// thinner than half a cell that the first appended to the thin-part list (THIN_PASS=1).
+struct SamplePasses {
+    gpu::GlProgram pixels, thinParts;
+
+    static SamplePasses compile(const gpu::ShaderLibrary& library,
+                                std::vector<std::string> defines) {
+        SamplePasses passes;
+        passes.pixels = gpu::GlProgram::compute(library, "sslpv_sample.comp", defines);
+        defines.emplace_back("THIN_PASS=1");
+        passes.thinParts = gpu::GlProgram::compute(library, "sslpv_sample.comp", defines);
+        return passes;
+    }
+    [[nodiscard]] bool isValid() const { return pixels.isValid(); }
+    void destroy() {
+        pixels.destroy();
+        thinParts.destroy();
+    }
+};
 
 /// A tiny homogeneous volume around the mesh: the internal RSM renderer needs a material to
 /// run, but the injection texels depend only on mesh, lights and injectionResolution.
@@ -84,7 +108,11 @@ struct SslpvSubsurfaceProvider::Impl {
     bool created = false;
     /// sslpv_sample.comp for the propagation modes, and with DIFFUSION=1 for mode diffusion
     /// (compiled at its first frame), with ALBEDO_OUT=1 too when an albedo output is set.
-    gpu::GlProgram program, diffusionProgram, diffusionAlbedoProgram;
+    SamplePasses program, diffusionProgram, diffusionAlbedoProgram;
+    /// The thin-part pixel list (shared/SslpvShared.h): header, then one uint per pixel of the
+    /// largest target so far.
+    gpu::GlObject thinPixels;
+    std::size_t thinPixelsCapacity = 0;
     unsigned albedoOutput = 0;                  ///< setAlbedoOutput's texture; 0: none
     std::optional<gpu::ShaderLibrary> library;  ///< create()'s, for diffusionProgram
     gpu::GlObject coeffTex[UPLOADED_COEFFS_DIFFUSION];
@@ -135,7 +163,7 @@ void SslpvSubsurfaceProvider::create() {
 void SslpvSubsurfaceProvider::create(const gpu::ShaderLibrary& library) {
     if (m->created)
         return;
-    m->program = gpu::GlProgram::compute(library, "sslpv_sample.comp");
+    m->program = SamplePasses::compile(library, {});
     m->library = library;
     m->timeQuery = gpu::GlObject::create(gpu::GlObjectKind::Query, GL_TIME_ELAPSED);
     m->created = true;
@@ -150,6 +178,8 @@ void SslpvSubsurfaceProvider::destroy() {
     m->program.destroy();
     m->diffusionProgram.destroy();
     m->diffusionAlbedoProgram.destroy();
+    m->thinPixels.destroy();
+    m->thinPixelsCapacity = 0;
     for (auto& t : m->coeffTex)
         t.destroy();
     m->texRes = 0;
@@ -492,15 +522,31 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
     const bool diffusion = s.solver.options().mode == SslpvMode::Diffusion;
     const bool albedoOut = diffusion && s.albedoOutput != 0;
     if (diffusion && !albedoOut && !s.diffusionProgram.isValid())
-        s.diffusionProgram =
-            gpu::GlProgram::compute(*s.library, "sslpv_sample.comp", {"DIFFUSION=1"});
+        s.diffusionProgram = SamplePasses::compile(*s.library, {"DIFFUSION=1"});
     if (albedoOut && !s.diffusionAlbedoProgram.isValid())
-        s.diffusionAlbedoProgram = gpu::GlProgram::compute(*s.library, "sslpv_sample.comp",
-                                                           {"DIFFUSION=1", "ALBEDO_OUT=1"});
-    const gpu::GlProgram& program =
+        s.diffusionAlbedoProgram =
+            SamplePasses::compile(*s.library, {"DIFFUSION=1", "ALBEDO_OUT=1"});
+    const SamplePasses& passes =
         albedoOut ? s.diffusionAlbedoProgram : (diffusion ? s.diffusionProgram : s.program);
-    const GLuint p = program.id();
-    glUseProgram(p);
+
+    // The thin-part list: grown to this target's pixels (never shrunk, so a steady frame
+    // creates no GL object), its header reset to no pixels and no groups.
+    LUCENT_CHECK(g.width <= 0xffff && g.height <= 0xffff,
+                 "SSLPV sample pass: a target of at most 65535 × 65535 pixels, got ", g.width,
+                 " × ", g.height);
+    const std::size_t pixelCount = std::size_t(g.width) * std::size_t(g.height);
+    if (pixelCount > s.thinPixelsCapacity) {
+        s.thinPixels.destroy();
+        s.thinPixels =
+            gpu::createBuffer((LUCENT_SSLPV_THIN_PIXELS_HEADER_UINTS + pixelCount) * sizeof(GLuint),
+                              nullptr, GL_DYNAMIC_STORAGE_BIT);
+        s.thinPixelsCapacity = pixelCount;
+    }
+    const GLuint emptyList[LUCENT_SSLPV_THIN_PIXELS_HEADER_UINTS] = {0, 1, 1, 0};
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // after the last frame's shader writes
+    glNamedBufferSubData(s.thinPixels.id(), 0, sizeof(emptyList), emptyList);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, LUCENT_SSLPV_BINDING_THIN_PIXELS, s.thinPixels.id());
+
     if (albedoOut)
         glBindImageTexture(1, s.albedoOutput, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glBindTextureUnit(0, g.positionTexture);
@@ -513,22 +559,6 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
     const bool ortho = clip[0][3] == 0.f && clip[1][3] == 0.f && clip[2][3] == 0.f;
     const Mat4f& v = g.viewFromWorld;
     const Vector3f forward = -Vector3f(v[0][2], v[1][2], v[2][2]);  // −(view z) in world
-    glProgramUniformMatrix4fv(p, program.uniformLocation("u_objectFromWorld"), 1, GL_FALSE,
-                              &s.objectFromWorld[0][0]);
-    glProgramUniform3f(p, program.uniformLocation("u_eye"), g.cameraPosition.x, g.cameraPosition.y,
-                       g.cameraPosition.z);
-    glProgramUniform3f(p, program.uniformLocation("u_forward"), forward.x, forward.y, forward.z);
-    glProgramUniform1i(p, program.uniformLocation("u_ortho"), ortho ? 1 : 0);
-    glProgramUniform2i(p, program.uniformLocation("u_size"), g.width, g.height);
-    glProgramUniform1i(p, program.uniformLocation("u_meshId"), s.opt.meshId);
-    glProgramUniform3f(p, program.uniformLocation("u_origin"), spec.origin.x, spec.origin.y,
-                       spec.origin.z);
-    glProgramUniform1f(p, program.uniformLocation("u_h"), spec.voxelSize);
-    glProgramUniform1i(p, program.uniformLocation("u_res"), N);
-    glProgramUniform1f(p, program.uniformLocation("u_eta"), s.eta);
-    glProgramUniform1f(p, program.uniformLocation("u_exitScale"), s.solver.exitScale());
-    glProgramUniform1f(p, program.uniformLocation("u_Y00"), SH_Y00);
-    glProgramUniform1f(p, program.uniformLocation("u_K1"), SH_K1);
     // Non-null only after a diffusion solve with the exit table on (SslpvSolver::exitTable).
     const std::shared_ptr<const dipole::DirpoleExitTable>& table = s.solver.exitTable();
     const bool exitCorrection = table != nullptr;
@@ -542,12 +572,43 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, LUCENT_SSLPV_BINDING_EXIT_TABLE,
                          s.exitTableBuffer.id());
     }
-    glProgramUniform1i(p, program.uniformLocation("u_exitCorrection"), exitCorrection ? 1 : 0);
     const bool surfaceFlux = diffusion && s.solver.surfaceFluxReadout();
-    glProgramUniform1i(p, program.uniformLocation("u_surfaceFlux"), surfaceFlux ? 1 : 0);
-    glProgramUniform1f(p, program.uniformLocation("u_twoA"),
-                       surfaceFlux ? float(2.0 * s.solver.diffusion().boundaryConstant()) : 0.f);
+    // Both passes take the same uniforms.
+    auto setUniforms = [&](const gpu::GlProgram& program) {
+        const GLuint p = program.id();
+        glProgramUniformMatrix4fv(p, program.uniformLocation("u_objectFromWorld"), 1, GL_FALSE,
+                                  &s.objectFromWorld[0][0]);
+        glProgramUniform3f(p, program.uniformLocation("u_eye"), g.cameraPosition.x,
+                           g.cameraPosition.y, g.cameraPosition.z);
+        glProgramUniform3f(p, program.uniformLocation("u_forward"), forward.x, forward.y,
+                           forward.z);
+        glProgramUniform1i(p, program.uniformLocation("u_ortho"), ortho ? 1 : 0);
+        glProgramUniform2i(p, program.uniformLocation("u_size"), g.width, g.height);
+        glProgramUniform1i(p, program.uniformLocation("u_meshId"), s.opt.meshId);
+        glProgramUniform3f(p, program.uniformLocation("u_origin"), spec.origin.x, spec.origin.y,
+                           spec.origin.z);
+        glProgramUniform1f(p, program.uniformLocation("u_h"), spec.voxelSize);
+        glProgramUniform1i(p, program.uniformLocation("u_res"), N);
+        glProgramUniform1f(p, program.uniformLocation("u_eta"), s.eta);
+        glProgramUniform1f(p, program.uniformLocation("u_exitScale"), s.solver.exitScale());
+        glProgramUniform1f(p, program.uniformLocation("u_Y00"), SH_Y00);
+        glProgramUniform1f(p, program.uniformLocation("u_K1"), SH_K1);
+        glProgramUniform1i(p, program.uniformLocation("u_exitCorrection"), exitCorrection ? 1 : 0);
+        glProgramUniform1i(p, program.uniformLocation("u_surfaceFlux"), surfaceFlux ? 1 : 0);
+        glProgramUniform1f(
+            p, program.uniformLocation("u_twoA"),
+            surfaceFlux ? float(2.0 * s.solver.diffusion().boundaryConstant()) : 0.f);
+    };
+    setUniforms(passes.pixels);
+    setUniforms(passes.thinParts);
+    glUseProgram(passes.pixels.id());
     glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
+    // The thin pass reads the list the first wrote, and its group count as its arguments.
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    glUseProgram(passes.thinParts.id());
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, s.thinPixels.id());
+    glDispatchComputeIndirect(0);
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
     // The target is written with imageStore: visible to texture fetches (the shade pass), image
     // loads, framebuffer clears/draws (the next frame's clear) and glGetTexImage read-backs
     // (GL 4.5 §7.13.2), also when the provider is used without gpu::SceneRenderer.
