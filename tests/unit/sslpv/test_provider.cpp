@@ -7,6 +7,7 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/gpu/GlContext.h>
+#include <lucent/gpu/GlResources.h>
 #include <lucent/material/Brush.h>
 #include <lucent/mesh/Procedural.h>
 #include <lucent/mesh/Voxelize.h>
@@ -367,6 +368,31 @@ TEST_F(SslpvProviderGl, PixelsMatchCpuFormulaAndCpuImage) {
                         << "pixel " << x << "," << y << " channel " << c;
             }
         EXPECT_GT(compared, PIXELS * PIXELS / 5);
+        p.destroy();
+    }
+}
+
+TEST_F(SslpvProviderGl, ThinPartListIsKeptAndResetAcrossFrames) {
+    // The thin parts' pixels go through a list the sample pass fills and a second, indirect
+    // dispatch reads (shaders/sslpv_sample.comp, THIN_PASS). The list is made once for the
+    // target's size and emptied before each frame: steady frames create no GL object, raise no
+    // GL error and read the same image (PixelsMatchCpuFormulaAndCpuImage checks one frame's
+    // thin pixels against the CPU read-out).
+    const TestScene s = makeScene(Shape::ThinThick);
+    for (SslpvMode mode : {SslpvMode::Paper, SslpvMode::Diffusion}) {
+        SslpvSubsurfaceProvider p(providerOptions(mode, 32));
+        p.create();
+        setUp(p, s);
+        const ImageRgb first = render(p, s);
+        m_renderer.render();  // the GPU profiler pools its queries from the second frame on
+        const size_t created = gpu::createdGlObjectCount();
+        for (int frame = 0; frame < 4; ++frame) {
+            m_renderer.render();
+            EXPECT_EQ(test::largestDifference(first, m_renderer.readRadiance()), 0.f)
+                << "frame " << frame;
+        }
+        EXPECT_EQ(gpu::createdGlObjectCount(), created);
+        EXPECT_EQ(glGetError(), GLenum(GL_NO_ERROR));
         p.destroy();
     }
 }
