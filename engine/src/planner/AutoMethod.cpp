@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: MIT
 #include <lucent/core/Error.h>
+#include <lucent/material/Resample.h>
 #include <lucent/methods/Registry.h>
 #include <lucent/planner/AutoMethod.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
+#include <map>
 
 namespace lucent::planner {
 
@@ -41,8 +44,46 @@ std::string resolveInRegistry(const std::string& method, const std::string& sett
     return {};
 }
 
+/// Why SSLPV with a grid of `grid` cells would read nothing of object 0 ("" when it can): its
+/// read-out takes light only from cells at least half inside, and from there into parts
+/// thinner than half a cell (docs/methods/sslpv.md, "Parts thinner than half a cell"), so an
+/// object thinner than half a cell everywhere renders black. Answers are kept per grid.
+class SslpvReadability {
+public:
+    SslpvReadability(const Scene& scene, const SceneFeatures& features)
+        : m_scene(scene), m_features(features) {}
+
+    const std::string& unreadable(int grid) {
+        const auto known = m_answers.find(grid);
+        if (known != m_answers.end())
+            return known->second;
+        return m_answers[grid] = measure(grid);
+    }
+
+private:
+    [[nodiscard]] std::string measure(int grid) const {
+        const MaterialVolume& volume = *m_scene.objects.front().material;
+        const int resolution = std::min(grid, volume.resolution());
+        const double cellMm =
+            double(volume.spec().voxelSize) * volume.resolution() / double(resolution);
+        // A ball of radius √3 cells holds a whole cell of any grid: no resample needed.
+        if (m_features.maxDepthMm >= std::sqrt(3.0) * cellMm)
+            return {};
+        const CoarseMaterial coarse = resampleForPropagation(volume, resolution);
+        if (std::any_of(coarse.insideFraction.begin(), coarse.insideFraction.end(),
+                        [](float f) { return f >= 0.5f; }))
+            return {};
+        return "the object is thinner than half a cell of grid " + std::to_string(resolution) +
+               " everywhere (it would render black)";
+    }
+
+    const Scene& m_scene;
+    const SceneFeatures& m_features;
+    std::map<int, std::string> m_answers;
+};
+
 Resolved resolve(const CandidateModel& model, const Scene& scene, bool glAvailable,
-                 methods::Backend required) {
+                 methods::Backend required, SslpvReadability& sslpv) {
     Resolved r;
     r.unusable = resolveInRegistry(model.method, model.setting, r);
     if (!r.unusable.empty())
@@ -69,6 +110,9 @@ Resolved resolve(const CandidateModel& model, const Scene& scene, bool glAvailab
             r.unusable = std::string("ignores the scene's ") + lightTypeName(l.type) + " light";
             return r;
         }
+    if (r.method == "sslpv")
+        if (const std::string* grid = r.params.find("grid"))
+            r.unusable = sslpv.unreadable(std::stoi(*grid));
     return r;
 }
 
@@ -81,8 +125,9 @@ AutoChoice chooseMethod(const Scene& scene, const Models& models, const Budget& 
     choice.directMs = budget.directMs;
     std::vector<Candidate> candidates = toCandidates(models);
     std::vector<Resolved> resolved;
+    SslpvReadability sslpv(scene, choice.features);
     for (size_t i = 0; i < candidates.size(); ++i) {
-        resolved.push_back(resolve(models.candidates[i], scene, glAvailable, backend));
+        resolved.push_back(resolve(models.candidates[i], scene, glAvailable, backend, sslpv));
         const std::string why = resolved.back().unusable;
         candidates[i].unusable = [why](const SceneFeatures&) { return why; };
     }

@@ -425,6 +425,58 @@ TEST(PlannerAuto, ChoiceResolvesToRegistryParametersAndSkipsWhatCannotRender) {
     }
 }
 
+TEST(PlannerAuto, SkipsSslpvGridsTheObjectIsThinnerThanHalfACellOf) {
+    // SSLPV reads light only from cells at least half inside (and from them into thinner
+    // parts), so an object thinner than half a cell everywhere renders black at that grid
+    // (docs/methods/sslpv.md, measured: a 0.5 mm marble slab at grids 16 and 32). Auto must
+    // skip those grids, say why, and keep the grids that hold a readable cell.
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / "lucent_planner_thin_slab";
+    std::filesystem::create_directories(dir);
+    const auto sceneWithSlab = [&](double thicknessMm) {
+        const std::filesystem::path file = dir / "slab.json";
+        std::ofstream(file) << R"({"version": 1,
+            "mesh": {"procedural": "box", "size": [30, 30, )"
+                            << thicknessMm << R"(]},
+            "material": {"preset": "marble"}, "resolution": 128, "eta": 1.3,
+            "lights": [{"type": "directional", "direction": [0, 0, 1], "irradiance": [1, 1, 1]}],
+            "camera": {"position": [0, 0, 70], "target": [0, 0, 0], "up": [0, 1, 0],
+                       "fov_y_deg": 12, "width": 64, "height": 48}})";
+        return loadScene(file.string());
+    };
+    Budget budget;
+    budget.frameMs = 1e9;
+    budget.directMs = 1.0;
+    const Models& models = defaultModels();
+    const auto usable = [&](const AutoChoice& c, const std::string& method, int grid) {
+        const std::string setting = "grid " + std::to_string(grid);
+        return std::any_of(c.plan.options.begin(), c.plan.options.end(), [&](const Option& o) {
+            return models.candidates[o.index].method == method &&
+                   models.candidates[o.index].setting == setting;
+        });
+    };
+
+    const AutoChoice thin = chooseMethod(sceneWithSlab(0.5), models, budget, true);
+    for (const char* method : {"sslpv:paper", "sslpv:calibrated", "sslpv:diffusion"}) {
+        EXPECT_FALSE(usable(thin, method, 16)) << method;
+        EXPECT_FALSE(usable(thin, method, 32)) << method;
+        EXPECT_TRUE(usable(thin, method, 64)) << method;
+    }
+    EXPECT_NE(thin.plan.reason.find("thinner than half a cell of grid 32"), std::string::npos)
+        << thin.plan.reason;
+    EXPECT_NE(thin.plan.reason.find("thinner than half a cell of grid 16"), std::string::npos)
+        << thin.plan.reason;
+    EXPECT_EQ(thin.plan.reason.find("of grid 64"), std::string::npos) << thin.plan.reason;
+
+    // 2 mm is two cells of grid 32 and one of grid 16: every grid holds readable cells.
+    const AutoChoice thick = chooseMethod(sceneWithSlab(2.0), models, budget, true);
+    for (int grid : {16, 32, 64})
+        EXPECT_TRUE(usable(thick, "sslpv:diffusion", grid)) << grid;
+    EXPECT_EQ(thick.plan.reason.find("thinner than half a cell"), std::string::npos)
+        << thick.plan.reason;
+    std::filesystem::remove_all(dir);
+}
+
 TEST(PlannerModels, FrontCheckJudgesTheChoiceByMeasurement) {
     // Two candidates on two cases; the models predict "fast" as accurate as "slow" on case a,
     // so Auto takes fast there. Measured: on a, fast is 0.30 and slow 0.10 at 10× the cost;
