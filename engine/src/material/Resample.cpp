@@ -101,6 +101,20 @@ public:
                       size_t(comp) * MaterialVolume::BRICK_VOXELS];
     }
 
+    /// insideFraction of coarse cell (I,J,K) as evaluate() computes it (the same sum, in the
+    /// same order), from the mask alone.
+    [[nodiscard]] float insideFraction(int I, int J, int K) const {
+        double insideVol = 0.0;
+        for (const Overlap& z : m_lists[size_t(K)])
+            for (const Overlap& y : m_lists[size_t(J)]) {
+                const size_t row = (size_t(z.fine) * m_n + size_t(y.fine)) * m_n;
+                for (const Overlap& x : m_lists[size_t(I)])
+                    if (m_inside[row + size_t(x.fine)])
+                        insideVol += x.length * y.length * z.length;
+            }
+        return float(insideVol / m_cellVolume);
+    }
+
     /// Evaluates coarse cell (I,J,K) into `out` (the arithmetic, its order included, of the
     /// original dense implementation: results are bit-identical to it).
     void evaluate(int I, int J, int K, CoarseMaterial& out, Scratch& scratch) const {
@@ -284,6 +298,20 @@ CoarseMaterial resampleForPropagation(const MaterialVolume& volume, int resoluti
         4);
     out.homogeneous = isHomogeneous(out);
     return out;
+}
+
+bool anyCoarseCellInside(const MaterialVolume& volume, int resolution, float fraction) {
+    LUCENT_CHECK(volume.brickCount() > 0, "anyCoarseCellInside: the material volume is empty");
+    LUCENT_CHECK(resolution >= 1 && resolution <= volume.resolution(),
+                 "anyCoarseCellInside: resolution = ", resolution, " is outside [1, ",
+                 volume.resolution(), "]");
+    const CellEvaluator eval(volume, resolution);
+    for (int K = 0; K < resolution; ++K)
+        for (int J = 0; J < resolution; ++J)
+            for (int I = 0; I < resolution; ++I)
+                if (eval.insideFraction(I, J, K) >= fraction)
+                    return true;
+    return false;
 }
 
 size_t updateCoarseMaterial(CoarseMaterial& coarse, const MaterialVolume& volume,

@@ -69,9 +69,7 @@ private:
         // A ball of radius √3 cells holds a whole cell of any grid: no resample needed.
         if (m_features.maxDepthMm >= std::sqrt(3.0) * cellMm)
             return {};
-        const CoarseMaterial coarse = resampleForPropagation(volume, resolution);
-        if (std::any_of(coarse.insideFraction.begin(), coarse.insideFraction.end(),
-                        [](float f) { return f >= 0.5f; }))
+        if (anyCoarseCellInside(volume, resolution, 0.5f))
             return {};
         return "the object is thinner than half a cell of grid " + std::to_string(resolution) +
                " everywhere (it would render black)";

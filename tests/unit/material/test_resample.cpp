@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 using namespace lucent;
 using lucent::test::unitGrid;
@@ -94,4 +96,40 @@ TEST(Resample, InvalidResolutionThrows) {
     EXPECT_THROW(resampleForPropagation(v, 0), ValueError);
     EXPECT_THROW(resampleForPropagation(v, 17), ValueError);
     EXPECT_THROW(resampleForPropagation(MaterialVolume(), 4), ValueError);
+}
+
+TEST(Resample, AnyCoarseCellInsideReadsTheResamplesFractions) {
+    // anyCoarseCellInside answers from the mask what resampleForPropagation's insideFraction
+    // says, at every threshold: a slab whose thickness (2 of 32 fine voxels) is under half a
+    // cell of the coarser grids, and one thick enough, at divisible and fractional ratios.
+    for (int thickness : {2, 5}) {
+        MaterialVolume v(unitGrid(32), UNIFORM);
+        std::vector<uint8_t> mask(size_t(32) * 32 * 32, 0);
+        for (int z = 13; z < 13 + thickness; ++z)
+            for (int y = 0; y < 32; ++y)
+                for (int x = 0; x < 32; ++x)
+                    mask[(size_t(z) * 32 + size_t(y)) * 32 + size_t(x)] = 1;
+        v.setInsideMask(mask);
+        for (int res : {32, 16, 8, 5, 3}) {
+            const CoarseMaterial c = resampleForPropagation(v, res);
+            const float largest =
+                *std::max_element(c.insideFraction.begin(), c.insideFraction.end());
+            for (float fraction : {0.1f, 0.25f, 0.5f, 0.75f, 1.f, largest}) {
+                SCOPED_TRACE(testing::Message() << "thickness " << thickness << ", grid " << res
+                                                << ", fraction " << fraction);
+                EXPECT_EQ(anyCoarseCellInside(v, res, fraction), largest >= fraction);
+            }
+            EXPECT_FALSE(anyCoarseCellInside(v, res, std::nextafter(largest, 2.f)));
+        }
+    }
+    // A slab of fine layers 15–16: half of grid 16's cells 14–15 and 16–17, but a quarter of
+    // grid 8's 12–15 and 16–19, so nothing to read there.
+    MaterialVolume v(unitGrid(32), UNIFORM);
+    std::vector<uint8_t> mask(size_t(32) * 32 * 32, 0);
+    for (size_t i = size_t(15) * 32 * 32; i < size_t(17) * 32 * 32; ++i)
+        mask[i] = 1;
+    v.setInsideMask(mask);
+    EXPECT_TRUE(anyCoarseCellInside(v, 16, 0.5f));
+    EXPECT_FALSE(anyCoarseCellInside(v, 8, 0.5f));
+    EXPECT_THROW((void)anyCoarseCellInside(v, 33, 0.5f), ValueError);
 }

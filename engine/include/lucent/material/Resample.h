@@ -28,6 +28,13 @@ struct CoarseMaterial {
 /// @throw ValueError if resolution is outside [1, volume.resolution()].
 CoarseMaterial resampleForPropagation(const MaterialVolume& volume, int resolution);
 
+/// Whether any cell of resampleForPropagation(volume, resolution) has an insideFraction of at
+/// least `fraction` (the same fractions, to the bit), without resampling the material: the
+/// inside mask alone is read, cell by cell until the first such cell. For the planner, which
+/// asks whether SSLPV's grid holds a cell to read (docs/planner.md).
+/// @throw ValueError if resolution is outside [1, volume.resolution()].
+bool anyCoarseCellInside(const MaterialVolume& volume, int resolution, float fraction);
+
 /// Incremental resampling for the live preview: recomputes only the coarse cells of `coarse`
 /// that overlap the fine bricks `dirtyBricks` (e.g. volume.takeDirtyBricks() after a stroke)
 /// and refreshes `coarse.homogeneous`. The result is bit-identical to
