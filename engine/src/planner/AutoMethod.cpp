@@ -66,7 +66,8 @@ private:
         const int resolution = std::min(grid, volume.resolution());
         const double cellMm =
             double(volume.spec().voxelSize) * volume.resolution() / double(resolution);
-        // A ball of radius √3 cells holds a whole cell of any grid: no resample needed.
+        // A ball of radius √3 cells holds a whole cell of any grid, so a deep enough object is
+        // readable without reading the mask (a depth read too deep only leaves a grid unskipped).
         if (m_features.maxDepthMm >= std::sqrt(3.0) * cellMm)
             return {};
         if (anyCoarseCellInside(volume, resolution, 0.5f))
