@@ -543,7 +543,6 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
         s.thinPixelsCapacity = pixelCount;
     }
     const GLuint emptyList[LUCENT_SSLPV_THIN_PIXELS_HEADER_UINTS] = {0, 1, 1, 0};
-    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // after the last frame's shader writes
     glNamedBufferSubData(s.thinPixels.id(), 0, sizeof(emptyList), emptyList);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, LUCENT_SSLPV_BINDING_THIN_PIXELS, s.thinPixels.id());
 
@@ -603,8 +602,11 @@ void SslpvSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g, unsign
     setUniforms(passes.thinParts);
     glUseProgram(passes.pixels.id());
     glDispatchCompute(unsigned(g.width + 7) / 8, unsigned(g.height + 7) / 8, 1);
-    // The thin pass reads the list the first wrote, and its group count as its arguments.
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    // The thin pass reads the list the first wrote, and its group count as its arguments; the
+    // next frame empties it with glNamedBufferSubData (the thin pass only reads it). One barrier
+    // for the three: llvmpipe makes each a full finish.
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT |
+                    GL_BUFFER_UPDATE_BARRIER_BIT);
     glUseProgram(passes.thinParts.id());
     glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, s.thinPixels.id());
     glDispatchComputeIndirect(0);

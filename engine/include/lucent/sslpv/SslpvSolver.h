@@ -439,7 +439,8 @@ private:
                                  float (&c)[3][SSLPV_MAX_COEFFS]) const;
     /// interpolateCoefficients' read of a part thinner than half a cell, which has no inside
     /// cell of its own: the nearest readable cells' coefficients scaled by the part's
-    /// thickness (see the definition); false where no readable cell is within a cell.
+    /// thickness (see the definition); false where no readable cell is within
+    /// LUCENT_SSLPV_THIN_PART_REACH cells.
     bool thinPartCoefficients(const Point3f& p, const Normal3f& n,
                               float (&c)[3][SSLPV_MAX_COEFFS]) const;
     /// Eq. 7's L_i from interpolated coefficients (radiance()).
