@@ -30,6 +30,30 @@ int64_t blockCount(size_t n) {
     return (int64_t(n) + BLOCK - 1) / BLOCK;
 }
 
+/// Where a plane source on the 1-D path from a cell's centre to the extrapolated boundary sends
+/// its power, the part of φ it adds being 0 at both ends (GridDiffusion::solve): `fromBoundary`
+/// and `fromCentre` its distances (mm) from the two ends, κ² = σa/D (mm⁻²). With φ″ = κ²φ away
+/// from the source, each end receives sinh(κ·(the source's distance from the other end))/
+/// sinh(κ·length) of it and the rest is absorbed in between; κ → 0 gives the linear shares.
+/// The ratios are taken as e^(κ(x−L))(1 − e^(−2κx))/(1 − e^(−2κL)) so that no sinh overflows.
+struct SegmentShares {
+    float centre, boundary;
+};
+SegmentShares segmentShares(float fromBoundary, float fromCentre, float kappa2) {
+    const double a = double(fromBoundary), b = double(fromCentre), len = a + b;
+    const double k = std::sqrt(std::max(0.0, double(kappa2)));
+    if (!(len > 0.0))
+        return {1.f, 0.f};
+    if (k * len < 1e-6)
+        return {float(a / len), float(b / len)};
+    const auto sinhRatio = [&](double x) {  // sinh(kx)/sinh(k·len), x ≤ len
+        return x <= 0.0 ? 0.0
+                        : std::exp(k * (x - len)) * std::expm1(-2.0 * k * x) /
+                              std::expm1(-2.0 * k * len);
+    };
+    return {float(sinhRatio(a)), float(sinhRatio(b))};
+}
+
 }  // namespace
 
 double diffuseFresnelReflectance(double eta) {
@@ -201,6 +225,8 @@ void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {
     m_normal.assign(unknowns, Vector3f(0.f));
     std::vector<int> boundaryFaces(unknowns, 0);
     std::vector<float> depthSum(unknowns, 0.f);
+    m_boundaryArea.assign(unknowns, 0.f);
+    m_boundaryFaces.assign(unknowns, 0);
     for (size_t u = 0; u < unknowns; ++u) {
         const size_t k = cells[u];
         const int x = int(k % size_t(n)), y = int((k / size_t(n)) % size_t(n)),
@@ -241,6 +267,8 @@ void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {
                     if (c == 0) {
                         ++boundaryFaces[u];
                         depthSum[u] += delta;
+                        m_boundaryArea[u] += areaScale * dx * dx;
+                        m_boundaryFaces[u] |= uint8_t(1u << f);
                     }
                 }
                 m_diagonal[c][u] += g;
@@ -256,6 +284,8 @@ void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {
             m_boundary[cells[u]] = 1;
         }
 
+    for (auto& direct : m_directExitance)
+        direct.clear();  // the next solve's
     m_phiValid = m_phiValid && sameMedium;
     if (!m_phiValid)
         for (int c = 0; c < 3; ++c)
@@ -269,15 +299,26 @@ void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {
 
 const GridDiffusionStats& GridDiffusion::solve(const std::array<std::vector<float>, 3>& source,
                                                const GridDiffusionOptions& o) {
+    return solve(GridDiffusionSource{source, {}, {}}, o);
+}
+
+const GridDiffusionStats& GridDiffusion::solve(const GridDiffusionSource& source,
+                                               const GridDiffusionOptions& o) {
     LUCENT_CHECK(m_hasMaterial, "grid diffusion: solve() before setMaterial()");
     LUCENT_CHECK(o.maxIterations >= 0 && o.maxIterations <= 1000000,
                  "grid diffusion: maxIterations must be in [0, 1000000], got ", o.maxIterations);
     LUCENT_CHECK(std::isfinite(o.tolerance) && o.tolerance >= 0.0 && o.tolerance <= 1.0,
                  "grid diffusion: tolerance must be in [0, 1], got ", o.tolerance);
     const size_t count = m_spec.voxelCount();
-    for (int c = 0; c < 3; ++c)
-        LUCENT_CHECK(source[c].size() == count, "grid diffusion: source of channel ", c, " has ",
-                     source[c].size(), " values, expected ", count);
+    for (int c = 0; c < 3; ++c) {
+        LUCENT_CHECK(source.power[c].size() == count, "grid diffusion: source of channel ", c,
+                     " has ", source.power[c].size(), " values, expected ", count);
+        const bool noEntry = source.entry[c].empty() && source.entryDepth[c].empty();
+        LUCENT_CHECK(
+            noEntry || (source.entry[c].size() == count && source.entryDepth[c].size() == count),
+            "grid diffusion: entry source of channel ", c, " has ", source.entry[c].size(),
+            " values and depths ", source.entryDepth[c].size(), ", expected none or ", count);
+    }
     const Timer timer;
     const size_t nu = m_cells.size();
     const int64_t blocks = blockCount(nu);
@@ -319,19 +360,52 @@ const GridDiffusionStats& GridDiffusion::solve(const std::array<std::vector<floa
             return sum;
         };
 
-        double sourceSum = 0.0;
+        double sourceSum = 0.0, directSum = 0.0, segmentAbsorbed = 0.0;
+        m_directExitance[c].assign(nu, 0.f);
+        const bool withEntry = !source.entry[c].empty();
+        const float twoA = float(2.0 * m_boundaryA);
         for (size_t u = 0; u < nu; ++u) {
-            const float q = source[c][m_cells[u]];
+            const float q = source.power[c][m_cells[u]];
             LUCENT_CHECK(std::isfinite(q) && q >= 0.f, "grid diffusion: source at cell ",
                          m_cells[u], " channel ", c, " is ", q, " (need finite, >= 0 W)");
             b[u] = q;
             sourceSum += q;
+            if (!withEntry || m_boundaryFaces[u] == 0)
+                continue;
+            const float entry = source.entry[c][m_cells[u]],
+                        moment = source.entryDepth[c][m_cells[u]];
+            LUCENT_CHECK(
+                std::isfinite(entry) && entry >= 0.f && std::isfinite(moment) && moment >= 0.f,
+                "grid diffusion: entry source at cell ", m_cells[u], " channel ", c, " is ", entry,
+                " W at ", moment, " W·mm (need finite, >= 0)");
+            // Faces on both sides of an axis: a layer one cell thick (see solve's comment).
+            const uint8_t faces = m_boundaryFaces[u];
+            const bool opposed = (faces & 3u) == 3u || (faces & 12u) == 12u || (faces & 48u) == 48u;
+            if (opposed || !(entry > 0.f))
+                continue;
+            // The source's place on the path from the centre to the extrapolated boundary
+            // (solve's comment): the shares that reach the centre and the boundary, the rest
+            // absorbed on the way.
+            const float reach = twoA * m_diffusivity[c][u];
+            const float depth = std::min(moment / entry, m_depth[u]);
+            const SegmentShares shares = segmentShares(depth + reach, m_depth[u] - depth,
+                                                       m_sigmaA[c][u] / m_diffusivity[c][u]);
+            const float placed = std::min(entry, q);
+            const float direct = placed * shares.boundary;
+            const float absorbedOnTheWay = placed * (1.f - shares.boundary - shares.centre);
+            b[u] = q - direct - absorbedOnTheWay;
+            m_directExitance[c][u] = direct / m_boundaryArea[u];
+            directSum += direct;
+            segmentAbsorbed += absorbedOnTheWay;
         }
         m_stats.source[c] = sourceSum;
+        m_stats.directExit[c] = directSum;
         if (nu == 0)
             continue;
-        if (!(sourceSum > 0.0)) {
+        if (!(sourceSum - directSum - segmentAbsorbed > 0.0)) {
             std::fill(m_phi[c].begin(), m_phi[c].end(), 0.f);
+            m_stats.exitant[size_t(c)] = directSum;
+            m_stats.absorbed[size_t(c)] = segmentAbsorbed;
             continue;
         }
         // Conjugate gradients with residual replacement: the recurrence r ← r − αAp drifts from
@@ -395,7 +469,7 @@ const GridDiffusionStats& GridDiffusion::solve(const std::array<std::vector<floa
             x[u] = std::max(0.f, x[u]);
         m_stats.iterations[size_t(c)] = it;
         m_stats.residual[size_t(c)] = rAbs / sourceSum;
-        double absorbed = 0.0, exitant = 0.0;
+        double absorbed = segmentAbsorbed, exitant = directSum;
         for (size_t u = 0; u < nu; ++u) {
             absorbed += double(m_sigmaA[c][u]) * dx3 * double(x[u]);
             exitant += double(m_boundaryConductance[c][u]) * double(x[u]);
@@ -419,7 +493,9 @@ float GridDiffusion::exitance(size_t cell, int channel) const {
         return 0.f;
     const size_t u = size_t(m_compact[cell]);
     const float d = m_diffusivity[size_t(channel)][u];
-    return m_phi[size_t(channel)][u] * d / (float(2.0 * m_boundaryA) * d + m_depth[u]);
+    const std::vector<float>& direct = m_directExitance[size_t(channel)];
+    return m_phi[size_t(channel)][u] * d / (float(2.0 * m_boundaryA) * d + m_depth[u]) +
+           (u < direct.size() ? direct[u] : 0.f);
 }
 
 std::array<Vector3f, 3> GridDiffusion::surfaceFlux(size_t cell) const {

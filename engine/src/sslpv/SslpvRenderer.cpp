@@ -144,6 +144,7 @@ void SslpvRenderer::setOptions(const SslpvRenderOptions& o) {
         a.mode != b.mode || a.diffusionExactTotal != b.diffusionExactTotal ||
         a.diffusionExitTable != b.diffusionExitTable ||
         a.diffusionSurfaceFlux != b.diffusionSurfaceFlux ||
+        a.diffusionEntryDepth != b.diffusionEntryDepth ||
         a.calibration.linear != b.calibration.linear ||
         a.calibration.transport != b.calibration.transport ||
         a.calibration.diffusion != b.calibration.diffusion ||

@@ -1531,10 +1531,14 @@ Rgb SslpvSolver::exitantRadiance(const Point3f& p, const Normal3f& n, float cosO
 
 namespace {
 
-/// One cell's share of a beam's first-scattering source (W per channel).
+/// One cell's share of a beam's first-scattering source (W per channel); in the cell where the
+/// beam entered the medium also the mean depth of that first scattering under the surface (mm
+/// per channel; GridDiffusion::solve places it there), 0 elsewhere.
 struct BeamDeposit {
     uint32_t cell;
+    bool entry;
     float q[3];
+    float depth[3];
 };
 
 /// What walking one beam gave: whether it met the medium, its power bookkeeping (W, in double)
@@ -1552,7 +1556,10 @@ struct BeamWalk {
 /// α′·T·(1 − e^(−σt′ℓ)), T the transmittance so far. The chord in cells before the medium (the
 /// voxel staircase around x_p: cells the surface cuts with less than half inside, up to two
 /// cells) is medium too: it joins the first inside cell's chord, whose control volume reaches
-/// the surface (the Robin condition's δ counts it). After the medium, the beam is out.
+/// the surface (the Robin condition's δ counts it). After the medium, the beam is out. The entry
+/// cell's deposit also carries the mean depth of its first scattering: along the chord [0, ℓ]
+/// from the surface, density ∝ e^(−σt′s), s̄ = ℓ(1/τ − 1/(e^τ − 1)), τ = σt′ℓ, times the
+/// refracted direction's cosine to the normal.
 template <class Deposit>
 BeamWalk walkDiffusionBeam(const SslpvInjectionSample& smp, float eta, const CoarseMaterial& m,
                            float sign, Deposit&& deposit) {
@@ -1563,6 +1570,7 @@ BeamWalk walkDiffusionBeam(const SslpvInjectionSample& smp, float eta, const Coa
     const float cosI = -glm::dot(smp.direction, smp.normal);
     const Rgb beam = (1.f - fresnelDielectric(cosI, eta)) * smp.flux;
     const Vector3f wt = refractInto(smp.direction, smp.normal, eta);
+    const float cosT = std::max(0.f, -glm::dot(wt, smp.normal));
     const Vector3f u = (smp.position - s.origin) / h;  // grid units
     Coord c(glm::floor(u));
     Vector3f tMax, tDelta;
@@ -1593,13 +1601,19 @@ BeamWalk walkDiffusionBeam(const SslpvInjectionSample& smp, float eta, const Coa
         const float len = tNext - t + pending;
         if (inside(c)) {
             pending = 0.f;
-            w.entered = true;
             const size_t i = s.linearIndex(c);
-            BeamDeposit d{uint32_t(i), {}};
+            BeamDeposit d{uint32_t(i), !w.entered, {}, {}};
+            w.entered = true;
             for (int ch = 0; ch < 3; ++ch) {
                 const float st = m.sigma_t[ch][i];
-                const float interacting =
-                    transmitted[ch] * -std::expm1(-st * len);  // one exp per cell
+                const float tau = st * len;
+                const float interacting = transmitted[ch] * -std::expm1(-tau);  // one exp per cell
+                if (d.entry) {
+                    // s̄/ℓ = 1/τ − 1/(e^τ − 1) = ½ − τ/12 + O(τ³) near 0.
+                    const float meanOverChord =
+                        tau > 1e-3f ? 1.f / tau - 1.f / std::expm1(tau) : 0.5f - tau / 12.f;
+                    d.depth[ch] = meanOverChord * len * cosT;
+                }
                 transmitted[ch] -= interacting;
                 const float albedo = st > 0.f ? std::min(1.f, m.sigma_s[ch][i] / st) : 0.f;
                 const float power = beam[ch] * interacting;
@@ -1661,13 +1675,19 @@ std::vector<BeamPart> walkInParts(int64_t count, int64_t perPart, Walk&& walk) {
 /// Adds the parts' deposits to `source` and their power to the totals, in part order. Taking a
 /// beam's share away (an incremental update) can leave a rounding residue below 0: clamped
 /// (a no-op for a full walk, whose deposits are all ≥ 0).
-void applyBeamParts(const std::vector<BeamPart>& parts, std::array<std::vector<float>, 3>& source,
+void applyBeamParts(const std::vector<BeamPart>& parts, GridDiffusionSource& source,
                     std::array<double, 3>& injected, std::array<double, 3>& firstAbsorbed) {
     for (const BeamPart& part : parts) {
         for (const BeamDeposit& d : part.deposits)
-            for (int ch = 0; ch < 3; ++ch) {
-                float& q = source[size_t(ch)][d.cell];
+            for (size_t ch = 0; ch < 3; ++ch) {
+                float& q = source.power[ch][d.cell];
                 q = std::max(0.f, q + d.q[ch]);
+                if (d.entry) {
+                    float& entry = source.entry[ch][d.cell];
+                    float& moment = source.entryDepth[ch][d.cell];
+                    entry = std::max(0.f, entry + d.q[ch]);
+                    moment = std::max(0.f, moment + d.q[ch] * d.depth[ch]);
+                }
             }
         for (int ch = 0; ch < 3; ++ch) {
             injected[size_t(ch)] += part.injected[ch];
@@ -1734,8 +1754,11 @@ void SslpvSolver::injectDiffusionSources() {
     const Timer timer;
     const GridSpec& s = m_material.spec;
     const size_t count = s.voxelCount();
-    for (auto& q : m_diffusionSource)
-        q.assign(count, 0.f);
+    for (int ch = 0; ch < 3; ++ch) {
+        m_diffusionSource.power[ch].assign(count, 0.f);
+        m_diffusionSource.entry[ch].assign(count, 0.f);
+        m_diffusionSource.entryDepth[ch].assign(count, 0.f);
+    }
     m_beamSegments.assign(m_samples.size(), {});
     m_beamEntered.assign(m_samples.size(), 0);
 
@@ -1842,7 +1865,9 @@ void SslpvSolver::diffuse() {
     GridDiffusionOptions o;
     o.maxIterations = m_opt.maxSteps;
     o.tolerance = m_opt.stopEpsilon;
-    const GridDiffusionStats& ds = m_diffusion.solve(m_diffusionSource, o);
+    const GridDiffusionStats& ds = m_opt.diffusionEntryDepth
+                                       ? m_diffusion.solve(m_diffusionSource, o)
+                                       : m_diffusion.solve(m_diffusionSource.power, o);
     // The read-out (radiance(), the GL shader) returns L_i = 2/(Δx²)·Y00·c00 and multiplies it
     // by T(ω_o)/η² (exitScale). A Fresnel-weighted diffuse exit of the exitance J,
     // L_o = T(ω_o)·J/(π(1 − F_dr(η))), has ∫ L_o cos θ_o dω_o = J, so c00 = η²·J·Δx²/(2·Y00·π(1 −

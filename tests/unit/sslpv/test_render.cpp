@@ -255,11 +255,18 @@ double tiltedSlabColumnSpread(SslpvMode mode, float tiltDeg, int grid = 64) {
 }  // namespace
 
 // In mode Diffusion the bands are discretisation error of the boundary (the staircase's faces
-// and the one-point extrapolation of φ to the surface, both first order in Δx): they must fade
-// at least at first order as the grid is refined, a factor 4 over two halvings of the cell
-// (measured 2026-12-04: 8.3 % → 3.9 % → 1.35 % at 20°, 6.7 % → 3.5 % → 1.5 % at 30°, for grids
-// 32 → 64 → 128). Paper mode does not (12.4 % → 12.5 % → 5.9 % at 20°; 32 fixed steps).
-TEST(SslpvRender, DiffusionModeContourBandsFadeAtFirstOrderAsTheGridIsRefined) {
+// and the one-point extrapolation of φ to the surface, both first order in Δx). Where a cell
+// spans several mean free paths they were mostly the light scattered first near the surface
+// being put at the cell's centre, half a cell deep, at a depth that follows the stair steps:
+// with that light placed at its own depth (GridDiffusion::solve's entry sources) the 32³
+// spread fell from 8.3 % to 3.3 % at 20° and from 6.7 % to 3.4 % at 30° (measured 2026-12-07;
+// 64³ 3.9 → 2.6 % and 3.5 → 1.6 %, 128³ 1.35 → 1.45 % and 1.5 → 1.7 %). What is left does not
+// fall at first order to 128³: about 1.5 % there is the injection's sampling (256² texels; with
+// 1024² the 128³ spread reads 1.0 % and 0.8 %). So: at 32³ under 4.5 % (between the two
+// measurements: a source back at the centre fails it), no finer grid above the coarsest, and
+// 128³ under 2 %. Paper mode's bands do not fade (12.4 % → 12.5 % → 5.9 % at 20°; 32 fixed
+// steps).
+TEST(SslpvRender, DiffusionModeContourBandsStaySmallAndFadeAsTheGridIsRefined) {
     for (float tilt : {20.f, 30.f}) {
         double spread[3];
         const int grids[3] = {32, 64, 128};
@@ -268,7 +275,10 @@ TEST(SslpvRender, DiffusionModeContourBandsFadeAtFirstOrderAsTheGridIsRefined) {
             std::printf("diffusion, tilt %.0f°, grid %d: column spread %.4f\n", double(tilt),
                         grids[i], spread[i]);
         }
-        EXPECT_LT(spread[2], 0.25 * spread[0]) << "tilt " << tilt << "°";
+        EXPECT_LT(spread[0], 0.045) << "tilt " << tilt << "°";
+        EXPECT_LT(spread[1], spread[0]) << "tilt " << tilt << "°";
+        EXPECT_LT(spread[2], spread[0]) << "tilt " << tilt << "°";
+        EXPECT_LT(spread[2], 0.02) << "tilt " << tilt << "°";
     }
 }
 

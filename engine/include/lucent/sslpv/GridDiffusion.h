@@ -99,16 +99,29 @@ struct GridDiffusionOptions {
     double tolerance = 1e-3;
 };
 
+/// The source of one solve, W per cell and channel in spec layout (x fastest). `entry` and
+/// `entryDepth` may be left empty (no entry parts); given, each has spec.voxelCount() values per
+/// channel.
+struct GridDiffusionSource {
+    std::array<std::vector<float>, 3> power;  ///< every deposit, W
+    /// The part of `power` deposited in the cell where its beam entered the medium, W, and that
+    /// part's power-weighted depth under the surface, W·mm (Σ Q_k z_k over the beams, z_k the
+    /// mean depth of beam k's first scattering in the cell). solve() places it at its depth.
+    std::array<std::vector<float>, 3> entry, entryDepth;
+};
+
 /// Energy bookkeeping and cost of the last solve (per channel, W).
 struct GridDiffusionStats {
     std::array<int, 3> iterations{};   ///< CG iterations used
     std::array<double, 3> residual{};  ///< final Σ|r| / Σ Q (0 when there is no source)
     std::array<double, 3> source{};    ///< Σ Q, W
     std::array<double, 3> absorbed{};  ///< Σ σa f φ Δx³ (f: the cell's inside fraction), W
-    std::array<double, 3> exitant{};   ///< Σ over boundary faces of the flux out, W
-    size_t cells = 0;                  ///< medium cells (unknowns per channel)
-    bool warmStart = false;            ///< started from the previous solution
-    double ms = 0.0;                   ///< the solve, wall time
+    /// Σ over boundary faces of the flux out, W (the entry sources' direct exit included)
+    std::array<double, 3> exitant{};
+    std::array<double, 3> directExit{};  ///< of which entry sources sent out directly, W
+    size_t cells = 0;                    ///< medium cells (unknowns per channel)
+    bool warmStart = false;              ///< started from the previous solution
+    double ms = 0.0;                     ///< the solve, wall time
 };
 
 /// The discretised operator and its solution (see file comment). The medium is the cells with
@@ -129,9 +142,27 @@ public:
     /// @throw ValueError for array sizes that do not match spec, non-finite values or eta ∉ [1, 3].
     void setMaterial(const CoarseMaterial& material, float eta);
 
-    /// Solves A φ = Q per channel. @param source W per cell, spec.voxelCount() values per channel
-    /// (x fastest); values at non-medium cells are ignored.
+    /// Solves A φ = Q per channel. Values at non-medium cells are ignored.
+    ///
+    /// An entry source at mean depth z̄ in a boundary cell whose centre is δ under the surface,
+    /// z̄ < δ, lies on the path from the centre to the extrapolated boundary (2AD outside the
+    /// surface), which the discretisation treats as one conductance. In one dimension, and
+    /// exactly for a linear φ, a source there is the fraction (2AD + z̄)/(2AD + δ) of it at the
+    /// centre and the rest leaving through the boundary; with absorption on the way (κ² = σa/D)
+    /// the two ends get sinh(κ(z̄ + 2AD))/sinh(κ(δ + 2AD)) and sinh(κ(δ − z̄))/sinh(κ(δ + 2AD))
+    /// and the rest is absorbed (that form measured better against the exact transport:
+    /// docs/methods/sslpv.md, "The light that enters a cell, at its depth"). So where cells are
+    /// coarser than the mean free path the light scattered first near the surface is not pushed
+    /// half a cell deep, which sent too much of it through thin layers. The direct part is
+    /// spread over the cell's boundary faces and read out with exitance(); stats() counts it as
+    /// exitant (directExit) and what the way absorbs as absorbed. A cell with boundary faces on
+    /// opposite sides (a layer one cell thick) keeps its entry sources at the centre: its one
+    /// read-out value stands for both faces.
     /// @throw ValueError before setMaterial, for a wrong size or a negative/non-finite source.
+    const GridDiffusionStats& solve(const GridDiffusionSource& source,
+                                    const GridDiffusionOptions& options);
+    /// solve() with every deposit at its cell's centre (no entry parts). @param source W per
+    /// cell, spec.voxelCount() values per channel (x fastest).
     const GridDiffusionStats& solve(const std::array<std::vector<float>, 3>& source,
                                     const GridDiffusionOptions& options);
 
@@ -152,7 +183,8 @@ public:
     [[nodiscard]] float fluence(size_t cell, int channel) const;
     /// Net flux J = φ D/(2AD + δ) (W/mm²) leaving through the surface δ from the cell's centre
     /// (δ: the mean over its boundary faces, ½Δx for an interior cell): the Robin condition
-    /// J = φ_b/(2A) with φ_b extrapolated along the flux. 0 outside the medium.
+    /// J = φ_b/(2A) with φ_b extrapolated along the flux; plus, at a boundary cell, the entry
+    /// sources' direct exit per unit of its boundary area (see solve). 0 outside the medium.
     [[nodiscard]] float exitance(size_t cell, int channel) const;
     /// The flux along the surface at a boundary cell, per channel (W/mm², vectors in the
     /// surface's tangent plane): Fick's law J_t = −D ∇_t φ_b on the boundary, where the Robin
@@ -183,6 +215,12 @@ private:
     std::array<std::vector<float>, 3> m_diffusivity;
     std::array<std::vector<float>, 3> m_phi;  ///< solution per unknown (+ sentinel)
     std::vector<float> m_depth;  ///< per unknown: its centre's depth under the surface, mm
+    /// Per unknown: its boundary faces' area (mm², staircase-corrected as their conductance) and
+    /// which faces they are (bit f for face f of ±x, ±y, ±z).
+    std::vector<float> m_boundaryArea;
+    std::vector<uint8_t> m_boundaryFaces;
+    /// Per channel and unknown: the entry sources' direct exit of the last solve, W/mm².
+    std::array<std::vector<float>, 3> m_directExitance;
     /// Per unknown: the outward unit normal (−∇ of the inside fraction), zero where that
     /// gradient vanishes; used by surfaceFlux().
     std::vector<Vector3f> m_normal;

@@ -165,6 +165,12 @@ struct SslpvOptions {
     /// light that has travelled along the surface leaves brighter along its way (back-lit rims);
     /// false: the exitance only. Read-out only: no re-solve.
     bool diffusionSurfaceFlux = true;
+    /// Mode Diffusion: the light a beam scatters first in the cell where it enters the medium is
+    /// placed at its mean depth under the surface (GridDiffusion::solve's entry sources): where
+    /// a cell spans several mean free paths that light is not pushed half a cell deep; false:
+    /// at the cell's centre, as every other deposit. Combined turns it off (its near field is
+    /// the dipole's; docs/methods/combined.md).
+    bool diffusionEntryDepth = true;
     /// After a material change that keeps the shape, inject again only the beams through the
     /// changed cells (the same injection to float rounding; a full injection every 64 updates);
     /// false: every beam on every change. Mode Diffusion walks each beam's first scatterings;
@@ -446,7 +452,7 @@ private:
     /// Eq. 7's L_i from interpolated coefficients (radiance()).
     [[nodiscard]] Rgb radianceFromCoefficients(const float (&c)[3][SSLPV_MAX_COEFFS],
                                                const Normal3f& n) const;
-    std::array<std::vector<float>, 3> m_diffusionSource;  ///< W per cell (spec layout)
+    GridDiffusionSource m_diffusionSource;  ///< mode Diffusion's first-scattering source
     /// Mode Diffusion's incremental re-injection: the material the sources were walked through,
     /// each texel's walked segment (grid units) and whether it met the medium, the sources'
     /// power bookkeeping (W, double) and the incremental updates since the last full walk.

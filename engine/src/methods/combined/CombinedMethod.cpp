@@ -157,6 +157,10 @@ private:
                          "combined: sslpv-mode diffusion needs split kernel (the steps split "
                          "skips propagation steps, which diffusion does not have)");
             detail::useDiffusionMode(s.sslpv, p, "combined: sslpv-mode diffusion", gl);
+            // Within the split radius the light is the dipole's: measured with the entry
+            // sources at their depth, the front-lit and painted cases read 1–6 % brighter
+            // (docs/methods/combined.md, "The diffusion part's entry sources").
+            s.sslpv.render.solver.diffusionEntryDepth = false;
         }
         if (backend() == Backend::Gl) {
             s.sslpv.backend = p.getChoice("propagation") == "gl" ? sslpv::SslpvBackend::Gl

@@ -142,6 +142,7 @@ private:
             o.render.solver.diffusionExactTotal = p.getBool("diffusion-normalise");
             o.render.solver.diffusionExitTable = p.getChoice("diffusion-exit") == "exact";
             o.render.solver.diffusionSurfaceFlux = p.getBool("diffusion-flux");
+            o.render.solver.diffusionEntryDepth = p.getBool("diffusion-entry");
             LUCENT_CHECK(!p.isGiven("attenuation"),
                          "sslpv: attenuation applies to mode paper only");
             detail::useDiffusionMode(
@@ -261,6 +262,16 @@ MethodEntry sslpvMethod() {
          "mode diffusion: the light leaving each surface point also follows the flux along the "
          "surface there (P1's J.w term: back-lit rims); off: the exitance only; the other modes "
          "ignore it",
+         0,
+         0,
+         {},
+         "on"},
+        {"diffusion-entry",
+         ParamType::Bool,
+         "mode diffusion: the light scattered first in the cell where a beam enters is placed at "
+         "its depth under the surface (off: at the cell's centre, half a cell deep, which sends "
+         "too much light through thin layers of cells coarser than a mean free path); the other "
+         "modes ignore it",
          0,
          0,
          {},
