@@ -139,7 +139,7 @@ TEST(GridDiffusion, ASourceAboveTheCellCentreIsPlacedAtItsDepth) {
     // (2AD outside each face), and the discretisation is exact for a linear φ once the source
     // sits at its depth: the centre column transmits T = (z̄ + 2AD)/(L + 4AD) of it and
     // reflects 1 − T (16 cells from the slab's edges, which leak e^(−16π/L)-small). With the
-    // source at the cell centre, ½Δx deep, T would be 53 % higher.
+    // source at the cell centre, ½Δx deep, T would be 55 % higher.
     constexpr int N = 32;
     constexpr float H = 1.f, SIGMA_T = 5.f, ETA = 1.3f, DEPTH = 0.2f;
     CoarseMaterial m = test::centredMaterial(N, H, SIGMA_T, SIGMA_T, 0.f);
