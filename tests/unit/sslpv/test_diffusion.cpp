@@ -167,8 +167,8 @@ TEST(GridDiffusion, ASourceAboveTheCellCentreIsPlacedAtItsDepth) {
     const GridDiffusionStats& stats = d.solve(q, {.maxIterations = 4096, .tolerance = 1e-7});
     EXPECT_NEAR(d.exitance(back, 1) * H * H / transmitted, 1.0, 1e-4);
     EXPECT_NEAR(d.exitance(front, 1) * H * H / (1.0 - transmitted), 1.0, 1e-4);
-    // Power: the direct part counts as exitant; nothing is absorbed.
-    // (δ − z̄)/(δ + 2AD) = 0.35 of it.
+    // Power: the direct part, (δ − z̄)/(δ + 2AD) = 0.35 of it, counts as exitant; nothing is
+    // absorbed.
     EXPECT_GT(stats.directExit[1], 0.3 * stats.source[1]);
     EXPECT_NEAR(stats.exitant[1] / stats.source[1], 1.0, 1e-5);
 
@@ -204,10 +204,11 @@ TEST(GridDiffusion, ASourceAboveTheCellCentreIsPlacedAtItsDepth) {
 }
 
 TEST(GridDiffusion, CoarseCellsReadTheLitHalfSpaceWithTheSourceAtItsDepth) {
-    // Cells of 2 mean free paths (σt′ = 2 mm⁻¹, Δx = 1 mm), η = 1.3: the first scattering lies
-    // about 0.5 mm under the surface, the top cells' centres 0.5 mm deeper. Placed at its depth
-    // (with what the way to the surface absorbs) the light reads 8.3 % and 2.4 % under the
-    // closed form at α′ = 0.95 and 0.99 (measured 2026-12-07); at the cell centre 16 % and 6.7 %.
+    // Cells of 2 mean free paths (σt′ = 2 mm⁻¹, Δx = 1 mm), η = 1.3: the light scattered first in
+    // a top cell lies 0.34 mm under the surface on average, the cells' centres 0.5 mm. Placed at
+    // its depth (with what the way to the surface absorbs) the light reads 8.3 % and 2.4 % under
+    // the closed form at α′ = 0.95 and 0.99 (measured 2026-12-07); at the cell centre 16 % and
+    // 6.7 %.
     // The rest is the coarse cells' own discretisation (cells of ½ mfp: 0.9 % and 0.4 %).
     const float limits[2][2] = {{0.95f, 0.9f}, {0.99f, 0.96f}};
     for (const auto& [albedo, lowest] : limits) {
@@ -569,6 +570,17 @@ TEST(GridDiffusion, ExtremeMaterialStaysFiniteAndBadInputIsRefused) {
     EXPECT_THROW(d.solve(q, {}), ValueError);
     q[1][5] = std::nanf("");
     EXPECT_THROW(d.solve(q, {}), ValueError);
+    // Entry parts: given, both arrays must be whole; their values finite and >= 0.
+    q[1][5] = 0.f;
+    GridDiffusionSource entry{q, q, {}};
+    EXPECT_THROW(d.solve(entry, {}), ValueError);
+    entry.entryDepth = q;
+    EXPECT_NO_THROW(d.solve(entry, {}));
+    entry.entry[1][5] = -1.f;  // cell 5 is a boundary cell (its −z face is the grid's edge)
+    EXPECT_THROW(d.solve(entry, {}), ValueError);
+    entry.entry[1][5] = 0.f;
+    entry.entryDepth[1][5] = std::nanf("");
+    EXPECT_THROW(d.solve(entry, {}), ValueError);
     box.material.sigma_t[2][3] = std::numeric_limits<float>::infinity();
     EXPECT_THROW(d.setMaterial(box.material, 1.3f), ValueError);
 }
