@@ -14,6 +14,7 @@
 #include <shared/SslpvShared.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace lucent::sslpv {
@@ -223,7 +224,6 @@ void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {
     // overestimated J by up to 25 % in the lit half-space test.)
     m_depth.assign(unknowns, 0.5f * dx);
     m_normal.assign(unknowns, Vector3f(0.f));
-    std::vector<int> boundaryFaces(unknowns, 0);
     std::vector<float> depthSum(unknowns, 0.f);
     m_boundaryArea.assign(unknowns, 0.f);
     m_boundaryFaces.assign(unknowns, 0);
@@ -265,7 +265,6 @@ void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {
                     g = areaScale * dx * dx / (twoA + delta / di);
                     m_boundaryConductance[c][u] += g;
                     if (c == 0) {
-                        ++boundaryFaces[u];
                         depthSum[u] += delta;
                         m_boundaryArea[u] += areaScale * dx * dx;
                         m_boundaryFaces[u] |= uint8_t(1u << f);
@@ -279,8 +278,8 @@ void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {
     }
     m_boundary.assign(count, 0);
     for (size_t u = 0; u < unknowns; ++u)
-        if (boundaryFaces[u] > 0) {
-            m_depth[u] = depthSum[u] / float(boundaryFaces[u]);
+        if (m_boundaryFaces[u] != 0) {
+            m_depth[u] = depthSum[u] / float(std::popcount(m_boundaryFaces[u]));
             m_boundary[cells[u]] = 1;
         }
 
@@ -361,8 +360,11 @@ const GridDiffusionStats& GridDiffusion::solve(const GridDiffusionSource& source
         };
 
         double sourceSum = 0.0, directSum = 0.0, segmentAbsorbed = 0.0;
-        m_directExitance[c].assign(nu, 0.f);
         const bool withEntry = !source.entry[c].empty();
+        if (withEntry)
+            m_directExitance[c].assign(nu, 0.f);
+        else
+            m_directExitance[c].clear();  // exitance() reads none
         const float twoA = float(2.0 * m_boundaryA);
         for (size_t u = 0; u < nu; ++u) {
             const float q = source.power[c][m_cells[u]];

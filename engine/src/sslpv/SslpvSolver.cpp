@@ -459,8 +459,10 @@ void SslpvSolver::setOptions(const SslpvOptions& o) {
     LUCENT_CHECK(
         std::isfinite(o.brickStopEpsilon) && o.brickStopEpsilon >= 0.f && o.brickStopEpsilon <= 1.f,
         "SSLPV option 'brickStopEpsilon' must be in [0, 1], got ", o.brickStopEpsilon);
-    // Order and sinks change where light is injected; everything changes propagation.
-    if (o.order != m_opt.order || o.removeExitant != m_opt.removeExitant || o.mode != m_opt.mode)
+    // Order and sinks change where light is injected, the entry depths what mode Diffusion's
+    // walk keeps; everything changes propagation.
+    if (o.order != m_opt.order || o.removeExitant != m_opt.removeExitant || o.mode != m_opt.mode ||
+        o.diffusionEntryDepth != m_opt.diffusionEntryDepth)
         m_injectionDirty = true;
     m_opt = o;
     m_materialDirty = true;
@@ -1672,7 +1674,8 @@ std::vector<BeamPart> walkInParts(int64_t count, int64_t perPart, Walk&& walk) {
     return parts;
 }
 
-/// Adds the parts' deposits to `source` and their power to the totals, in part order. Taking a
+/// Adds the parts' deposits to `source` (the entry cells' also to its entry parts, where it has
+/// them) and their power to the totals, in part order. Taking a
 /// beam's share away (an incremental update) can leave a rounding residue below 0: clamped
 /// (a no-op for a full walk, whose deposits are all ≥ 0).
 void applyBeamParts(const std::vector<BeamPart>& parts, GridDiffusionSource& source,
@@ -1682,7 +1685,7 @@ void applyBeamParts(const std::vector<BeamPart>& parts, GridDiffusionSource& sou
             for (size_t ch = 0; ch < 3; ++ch) {
                 float& q = source.power[ch][d.cell];
                 q = std::max(0.f, q + d.q[ch]);
-                if (d.entry) {
+                if (d.entry && !source.entry[ch].empty()) {
                     float& entry = source.entry[ch][d.cell];
                     float& moment = source.entryDepth[ch][d.cell];
                     entry = std::max(0.f, entry + d.q[ch]);
@@ -1754,10 +1757,13 @@ void SslpvSolver::injectDiffusionSources() {
     const Timer timer;
     const GridSpec& s = m_material.spec;
     const size_t count = s.voxelCount();
+    // The entry parts only when the solve places them (diffusionEntryDepth; applyBeamParts
+    // skips empty ones): otherwise two grids per channel written for nothing.
+    const size_t entryCount = m_opt.diffusionEntryDepth ? count : 0;
     for (int ch = 0; ch < 3; ++ch) {
         m_diffusionSource.power[ch].assign(count, 0.f);
-        m_diffusionSource.entry[ch].assign(count, 0.f);
-        m_diffusionSource.entryDepth[ch].assign(count, 0.f);
+        m_diffusionSource.entry[ch].assign(entryCount, 0.f);
+        m_diffusionSource.entryDepth[ch].assign(entryCount, 0.f);
     }
     m_beamSegments.assign(m_samples.size(), {});
     m_beamEntered.assign(m_samples.size(), 0);
@@ -1865,9 +1871,7 @@ void SslpvSolver::diffuse() {
     GridDiffusionOptions o;
     o.maxIterations = m_opt.maxSteps;
     o.tolerance = m_opt.stopEpsilon;
-    const GridDiffusionStats& ds = m_opt.diffusionEntryDepth
-                                       ? m_diffusion.solve(m_diffusionSource, o)
-                                       : m_diffusion.solve(m_diffusionSource.power, o);
+    const GridDiffusionStats& ds = m_diffusion.solve(m_diffusionSource, o);
     // The read-out (radiance(), the GL shader) returns L_i = 2/(Δx²)·Y00·c00 and multiplies it
     // by T(ω_o)/η² (exitScale). A Fresnel-weighted diffuse exit of the exitance J,
     // L_o = T(ω_o)·J/(π(1 − F_dr(η))), has ∫ L_o cos θ_o dω_o = J, so c00 = η²·J·Δx²/(2·Y00·π(1 −
