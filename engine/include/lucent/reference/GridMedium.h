@@ -58,8 +58,10 @@ public:
     ///        σs > σt (beyond rounding) / |g| ≥ 1.
     GridMedium(const GridSpec& spec, const std::vector<MediumCoefficients>& voxels,
                const Options& options);
-    /// The painted volume through the shared mapping toMedium() (Medium.h); voxels outside
-    /// the inside mask are empty.
+    /// The painted volume through the shared mapping toMedium() (Medium.h). Masked-out voxels
+    /// next to the inside carry the material of their inside neighbours (boundarySkin,
+    /// BoundarySkin.h), since the mesh that bounds the medium partly fills them; the others
+    /// are empty.
     static GridMedium fromMaterial(const MaterialVolume& volume, const Options& options);
     /// One value everywhere inside `spec`'s box.
     static GridMedium uniform(const GridSpec& spec, const MediumCoefficients& value,

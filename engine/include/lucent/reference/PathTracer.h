@@ -22,9 +22,11 @@
 namespace lucent::reference {
 
 /// Version of the reference estimator: part of every cached reference's key, so a cache made
-/// by an older estimator is never reused. 2: exact refracted next-event estimation at the
+/// by an older estimator is never reused. 3: the medium fills the mesh up to its surface (the
+/// masked-out voxels the mesh partly fills read their inside neighbours' material,
+/// BoundarySkin.h; 2 read vacuum there). 2: exact refracted next-event estimation at the
 /// dielectric boundary (1: straight shadow connections).
-constexpr int REFERENCE_ESTIMATOR_VERSION = 2;
+constexpr int REFERENCE_ESTIMATOR_VERSION = 3;
 
 /// Progress of a running render (called from the rendering thread between passes).
 struct ReferenceProgress {
