@@ -10,8 +10,10 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/FileIO.h>
+#include <lucent/material/BoundarySkin.h>
 #include <lucent/material/Medium.h>
 
+#include <algorithm>
 #include <bit>
 #include <cinttypes>
 #include <cstdio>
@@ -201,11 +203,29 @@ MitsubaExportResult exportMitsubaVol(const MaterialVolume& volume, const std::st
     result.meanG = options.hgMeanG ? float(gSum / (3.0 * double(result.insideVoxels))) : 0.f;
     const float meanG = result.meanG;
 
+    // Mitsuba bounds the medium by the mesh, whose interior reaches past the inside mask into
+    // the voxels its faces cut: those carry the material too, as the reference path tracer
+    // reads it (BoundarySkin.h), not the zero of the voxels further out.
+    const std::vector<SkinVoxel> skin = boundarySkin(volume);
+    std::vector<MaterialSample> slice(size_t(res) * res);
+    const auto sliceOf = [&](int z) -> const std::vector<MaterialSample>& {
+        for (int y = 0; y < res; ++y)
+            for (int x = 0; x < res; ++x)
+                slice[size_t(y) * res + x] = volume.at({x, y, z});
+        const size_t first = size_t(z) * res * res;
+        auto it = std::lower_bound(skin.begin(), skin.end(), first,
+                                   [](const SkinVoxel& v, size_t i) { return v.index < i; });
+        for (; it != skin.end() && it->index < first + slice.size(); ++it)
+            slice[it->index - first] = it->value;
+        return slice;
+    };
+
     const int sigmaChannels = options.rgbSigmaT ? 3 : 1;
     writeVol(result.sigmaTPath, spec, sigmaChannels, [&](int z, float* out) {
+        const std::vector<MaterialSample>& values = sliceOf(z);
         for (int y = 0; y < res; ++y)
             for (int x = 0; x < res; ++x) {
-                const Rgb st = mitsubaValues(volume.at({x, y, z}), meanG).sigmaT;
+                const Rgb st = mitsubaValues(values[size_t(y) * res + x], meanG).sigmaT;
                 if (options.rgbSigmaT) {
                     *out++ = st.r;
                     *out++ = st.g;
@@ -216,9 +236,10 @@ MitsubaExportResult exportMitsubaVol(const MaterialVolume& volume, const std::st
             }
     });
     writeVol(result.albedoPath, spec, 3, [&](int z, float* out) {
+        const std::vector<MaterialSample>& values = sliceOf(z);
         for (int y = 0; y < res; ++y)
             for (int x = 0; x < res; ++x) {
-                const Rgb a = mitsubaValues(volume.at({x, y, z}), meanG).albedo;
+                const Rgb a = mitsubaValues(values[size_t(y) * res + x], meanG).albedo;
                 *out++ = a.r;
                 *out++ = a.g;
                 *out++ = a.b;

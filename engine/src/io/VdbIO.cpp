@@ -10,6 +10,7 @@
 #include <lucent/core/Error.h>
 #include <lucent/core/FileIO.h>
 #include <lucent/core/Parallel.h>
+#include <lucent/material/BoundarySkin.h>
 
 #include <openvdb/io/File.h>
 #include <openvdb/io/GridDescriptor.h>
@@ -89,10 +90,12 @@ vdb::math::Transform::Ptr makeTransform(const GridSpec& spec) {
 }
 
 /// Builds a sparse grid from the volume leaf by leaf: one 8³ OpenVDB leaf per 8³ block that
-/// holds an inside voxel, active exactly on inside voxels; then merges constant leaves into
-/// tiles (lossless: tools::prune with tolerance 0 only merges identical values and states).
+/// holds an inside voxel, active exactly on inside voxels, and also on the `skin` voxels when
+/// given (the renderer grids: BoundarySkin.h); then merges constant leaves into tiles
+/// (lossless: tools::prune with tolerance 0 only merges identical values and states).
 template <typename GridT, typename ValueFn>
-typename GridT::Ptr buildGrid(const MaterialVolume& volume, const char* name, ValueFn value) {
+typename GridT::Ptr buildGrid(const MaterialVolume& volume, const char* name, ValueFn value,
+                              const std::vector<SkinVoxel>* skin = nullptr) {
     using TreeT = typename GridT::TreeType;
     using LeafT = typename TreeT::LeafNodeType;
     const GridSpec& spec = volume.spec();
@@ -120,6 +123,18 @@ typename GridT::Ptr buildGrid(const MaterialVolume& volume, const char* name, Va
                 leaves[size_t(b)] = std::move(leaf);
         }
     });
+    if (skin != nullptr)
+        for (const SkinVoxel& v : *skin) {
+            const size_t n = size_t(res);
+            const int x = int(v.index % n), y = int((v.index / n) % n), z = int(v.index / (n * n));
+            auto& leaf = leaves[(size_t(z / BLOCK) * blocks + size_t(y / BLOCK)) * blocks +
+                                size_t(x / BLOCK)];
+            if (!leaf)
+                leaf = std::make_unique<LeafT>(
+                    vdb::Coord(x / BLOCK * BLOCK, y / BLOCK * BLOCK, z / BLOCK * BLOCK),
+                    typename GridT::ValueType(0), false);
+            leaf->setValueOn(LeafT::coordToOffset(vdb::Coord(x, y, z)), value(v.value));
+        }
     auto grid = GridT::create(typename GridT::ValueType(0));
     for (auto& leaf : leaves)
         if (leaf)
@@ -511,7 +526,12 @@ std::string encodeVdb(const MaterialVolume& volume, const VdbExportOptions& opti
     vdb::GridCPtrVec grids{sigmaT, sigmaS, g};
 
     if (options.rendererGrids) {
-        auto density = buildGrid<vdb::FloatGrid>(volume, GRID_DENSITY, densityOf);
+        // A renderer bounds the medium by the mesh, whose interior reaches past the inside
+        // mask into the voxels its faces cut: the renderer grids carry the material there too,
+        // as the reference path tracer reads it (BoundarySkin.h); without it they would render
+        // a vacuum layer under the surface. The Lucent grids stay active exactly inside.
+        const std::vector<SkinVoxel> skin = boundarySkin(volume);
+        auto density = buildGrid<vdb::FloatGrid>(volume, GRID_DENSITY, densityOf, &skin);
         density->setGridClass(vdb::GRID_FOG_VOLUME);
         density->insertMeta("units", vdb::StringMetadata("1/mm"));
         density->insertMeta(
@@ -519,7 +539,8 @@ std::string encodeVdb(const MaterialVolume& volume, const VdbExportOptions& opti
             vdb::StringMetadata("grey extinction of the reduced (isotropic-phase) medium: "
                                 "Rec.709 luminance of sigma_t'"));
         auto albedo = buildGrid<vdb::Vec3SGrid>(
-            volume, GRID_ALBEDO, [](const MaterialSample& s) { return toVdb(reducedAlbedo(s)); });
+            volume, GRID_ALBEDO, [](const MaterialSample& s) { return toVdb(reducedAlbedo(s)); },
+            &skin);
         albedo->insertMeta("units", vdb::StringMetadata("1"));
         albedo->insertMeta(
             "description",

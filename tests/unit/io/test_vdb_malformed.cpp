@@ -106,14 +106,34 @@ TEST(VdbMalformed, ForeignFileIsSummarisedButNotImported) {
 TEST(VdbMalformed, CorruptedBytesFailTheChecksum) {
     const std::string src = outputPath("flip-source.vdb");
     exportVdb(randomPaintedVolume(16, /*seed=*/6), src);
-    std::vector<char> bytes = readBytes(src);
-    // One flipped bit anywhere after the file metadata (here: in the middle of the grid data)
-    // changes FNV-1a 64; OpenVDB alone would often decode the damaged block silently.
-    bytes[bytes.size() / 2] ^= 0x10;
+    const std::vector<char> source = readBytes(src);
+    // One flipped bit anywhere after the file metadata changes FNV-1a 64; OpenVDB alone would
+    // often decode the damaged block silently. The integrity walk sees some flips first (a
+    // compressed block's header, a node mask): every flip must be reported as corruption, and
+    // the ones the walk cannot see by the checksum. Sixteen places over the grid data, so the
+    // test does not hang on where one byte of the layout happens to fall.
     const std::string path = outputPath("flipped.vdb");
-    writeBytes(path, bytes.data(), bytes.size());
-    expectIoError([&] { importVdb(path); }, path, "checksum mismatch");
-    expectIoError([&] { summarizeVdb(path); }, path, "checksum mismatch");
+    int byChecksum = 0;
+    for (int k = 0; k < 16; ++k) {
+        std::vector<char> bytes = source;
+        bytes[bytes.size() / 4 + size_t(k) * (bytes.size() / 2) / 16] ^= 0x10;
+        writeBytes(path, bytes.data(), bytes.size());
+        for (const bool summary : {false, true}) {
+            try {
+                if (summary)
+                    summarizeVdb(path);
+                else
+                    importVdb(path);
+                ADD_FAILURE() << "flip " << k << " was not detected";
+            } catch (const IoError& e) {
+                const std::string msg = e.what();
+                EXPECT_NE(msg.find(path), std::string::npos) << msg;
+                EXPECT_NE(msg.find("corrupt"), std::string::npos) << msg;
+                byChecksum += !summary && msg.find("checksum mismatch") != std::string::npos;
+            }
+        }
+    }
+    EXPECT_GE(byChecksum, 4) << "the checksum caught too few of the 16 flips";
 }
 
 TEST(VdbMalformed, FileRewrittenByAnotherToolStillImports) {
