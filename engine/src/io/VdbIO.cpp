@@ -123,9 +123,9 @@ typename GridT::Ptr buildGrid(const MaterialVolume& volume, const char* name, Va
                 leaves[size_t(b)] = std::move(leaf);
         }
     });
+    const size_t n = size_t(res);
     if (skin != nullptr)
         for (const SkinVoxel& v : *skin) {
-            const size_t n = size_t(res);
             const int x = int(v.index % n), y = int((v.index / n) % n), z = int(v.index / (n * n));
             auto& leaf = leaves[(size_t(z / BLOCK) * blocks + size_t(y / BLOCK)) * blocks +
                                 size_t(x / BLOCK)];

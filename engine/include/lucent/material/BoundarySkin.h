@@ -31,8 +31,9 @@ struct SkinVoxel {
 
 /// Every voxel outside the inside mask that shares a face, an edge or a corner with an inside
 /// voxel, valued as the mixture of its nearest inside neighbours: the face neighbours if it has
-/// any, else the edge neighbours, else the corner ones. The mixture of media in equal volumes:
-/// σt and σs′ are the means, g the σs-weighted mean (σs = σs′/(1−g) unreduced), so the
+/// any, else the edge neighbours, else the corner ones. The mixture of media in equal volumes
+/// (σ in mm⁻¹): σt and σs′ are the means, g the σs-weighted mean (the mixed phase function's
+/// mean cosine; σs = σs′/(1−g) unreduced, the similarity relation of Wyman et al. 1989), so the
 /// mixture's σs′ = mean σs(1−g) is again the mean σs′. Sorted by index; empty when every voxel
 /// is inside or none is.
 std::vector<SkinVoxel> boundarySkin(const MaterialVolume& volume);
