@@ -165,6 +165,41 @@ void BM_Resample128To32(benchmark::State& state) {
     state.SetItemsProcessed(int64_t(state.iterations()) * N * N * N);
 }
 
+/// A ball (radius 0.42 of the grid) inside the 128³ grid: the mask has a surface, so the
+/// resample also reads the boundary skin around it (BoundarySkin.h) — the case an object is in.
+MaterialVolume ballVolume() {
+    MaterialVolume vol(grid(), findPreset("marble").sample());
+    std::vector<uint8_t> mask(size_t(N) * N * N, 0);
+    const float c = 0.5f * N, r = 0.42f * N;
+    for (int z = 0; z < N; ++z)
+        for (int y = 0; y < N; ++y)
+            for (int x = 0; x < N; ++x) {
+                const float dx = x + 0.5f - c, dy = y + 0.5f - c, dz = z + 0.5f - c;
+                mask[(size_t(z) * N + size_t(y)) * N + size_t(x)] =
+                    dx * dx + dy * dy + dz * dz < r * r ? 1 : 0;
+            }
+    vol.setInsideMask(mask);
+    return vol;
+}
+
+void BM_Resample128BallTo(benchmark::State& state) {
+    const MaterialVolume vol = ballVolume();
+    for (auto _ : state)
+        benchmark::DoNotOptimize(resampleForPropagation(vol, int(state.range(0))));
+    state.SetItemsProcessed(int64_t(state.iterations()) * N * N * N);
+}
+
+/// One 8³ brick on the ball's surface dirty, as after a stamp there: the cells it and its
+/// neighbours' skin overlap are recomputed.
+void BM_ResampleUpdateSurfaceBrick(benchmark::State& state) {
+    MaterialVolume vol = ballVolume();
+    const int res = int(state.range(0));
+    CoarseMaterial coarse = resampleForPropagation(vol, res);
+    const int b = vol.brickIndexOf(Coord(N / 2, N / 2, int(0.5f * N + 0.42f * N) - 1));
+    for (auto _ : state)
+        benchmark::DoNotOptimize(updateCoarseMaterial(coarse, vol, {b}));
+}
+
 BENCHMARK(BM_MemcpyBaseline);
 BENCHMARK(BM_StampSet);
 BENCHMARK(BM_StampAdd);
@@ -175,6 +210,8 @@ BENCHMARK(BM_StrokeWithHistory);
 BENCHMARK(BM_UndoRedoStroke);
 BENCHMARK(BM_FillProceduralMarble)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Resample128To32)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Resample128BallTo)->Arg(32)->Arg(64)->Arg(128)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ResampleUpdateSurfaceBrick)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
 
 /// Console output plus a record of items/s per benchmark for the ratio table.
 class RatioReporter : public benchmark::ConsoleReporter {

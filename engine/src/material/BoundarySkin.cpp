@@ -18,9 +18,8 @@ namespace {
 
 constexpr int B = MaterialVolume::BRICK;
 
-/// Per brick: whether it or a brick next to it holds an inside voxel. A voxel's neighbours lie
-/// in its brick or the bricks next to it, so a voxel whose brick is not flagged has no inside
-/// neighbour: the cheap test that skips most of the empty space around an object.
+}  // namespace
+
 std::vector<uint8_t> bricksNearInside(const MaterialVolume& volume) {
     const int nb = volume.bricksPerAxis();
     std::vector<uint8_t> near(size_t(volume.brickCount()), 0);
@@ -37,13 +36,19 @@ std::vector<uint8_t> bricksNearInside(const MaterialVolume& volume) {
     return near;
 }
 
-/// The mixture of c's nearest inside neighbours — its face neighbours if it has any, else its
-/// edge neighbours, else its corner ones (BoundarySkin.h) — or nothing when none is inside.
-std::optional<MaterialSample> nearestInsideMixture(const MaterialVolume& volume, const Coord& c) {
+std::optional<MaterialSample> skinValue(const MaterialVolume& volume, const Coord& c) {
     const GridSpec& spec = volume.spec();
+    if (volume.isInside(c))
+        return std::nullopt;
+    // The mixture of c's nearest inside neighbours: its face neighbours if it has any, else its
+    // edge neighbours, else its corner ones.
     // Sums by ring: 1 face, 2 edge, 3 corner (the number of non-zero offsets).
     std::array<Rgb, 4> sigmaT{}, sigmaSReduced{}, sigmaS{}, sigmaSG{}, gSum{};
     std::array<int, 4> count{};
+    // A ring whose voxels all hold one value gives that value exactly (an averaged one can
+    // differ in the last bit): a homogeneous material stays homogeneous with its skin.
+    std::array<MaterialSample, 4> first{};
+    std::array<bool, 4> uniform{true, true, true, true};
     for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
@@ -52,6 +57,10 @@ std::optional<MaterialSample> nearestInsideMixture(const MaterialVolume& volume,
                 if (ring == 0 || !spec.contains(q) || !volume.isInside(q))
                     continue;
                 const MaterialSample m = volume.at(q);
+                if (count[ring] == 0)
+                    first[ring] = m;
+                else if (!(m == first[ring]))
+                    uniform[ring] = false;
                 sigmaT[ring] += m.sigma_t;
                 sigmaSReduced[ring] += m.sigma_s;
                 gSum[ring] += m.g;
@@ -68,6 +77,8 @@ std::optional<MaterialSample> nearestInsideMixture(const MaterialVolume& volume,
         ++ring;
     if (ring > 3)
         return std::nullopt;
+    if (uniform[ring])
+        return first[ring];
     const float inv = 1.f / float(count[ring]);
     MaterialSample mix;
     mix.sigma_t = sigmaT[ring] * inv;
@@ -77,8 +88,6 @@ std::optional<MaterialSample> nearestInsideMixture(const MaterialVolume& volume,
             sigmaS[ring][ch] > 0.f ? sigmaSG[ring][ch] / sigmaS[ring][ch] : gSum[ring][ch] * inv;
     return mix;
 }
-
-}  // namespace
 
 std::vector<SkinVoxel> boundarySkin(const MaterialVolume& volume) {
     const GridSpec& spec = volume.spec();
@@ -91,9 +100,9 @@ std::vector<SkinVoxel> boundarySkin(const MaterialVolume& volume) {
             for (int y = 0; y < n; ++y)
                 for (int x = 0; x < n; ++x) {
                     const Coord c(x, y, z);
-                    if (volume.isInside(c) || !nearInside[size_t(volume.brickIndexOf(c))])
+                    if (!nearInside[size_t(volume.brickIndexOf(c))])
                         continue;
-                    if (const std::optional<MaterialSample> mix = nearestInsideMixture(volume, c))
+                    if (const std::optional<MaterialSample> mix = skinValue(volume, c))
                         planes[size_t(z)].push_back({spec.linearIndex(c), *mix});
                 }
     });

@@ -7,10 +7,12 @@
 
 #include <lucent/core/Error.h>
 #include <lucent/core/Parallel.h>
+#include <lucent/material/BoundarySkin.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace lucent {
 
@@ -88,22 +90,75 @@ public:
         }
         m_data = volume.brickData(0);
         m_inside = volume.insideMask().data();
+        m_volume = &volume;
+        m_nearInside = bricksNearInside(volume);
+    }
+
+    /// The boundary skin's value at masked-out voxel (x,y,z) (BoundarySkin.h), if it has one:
+    /// the material continues into the voxels the mesh only partly fills, as the reference's
+    /// medium does (GridMedium::fromMaterial), and the renderers bound it by the mesh.
+    [[nodiscard]] std::optional<MaterialSample> skin(int x, int y, int z) const {
+        const Coord c(x, y, z);
+        if (!m_nearInside[size_t(m_volume->brickIndexOf(c))] || !hasInsideNeighbour(x, y, z))
+            return std::nullopt;
+        return skinValue(*m_volume, c);
+    }
+
+    /// Whether a voxel of the 3³ block around (x,y,z) is inside: the cheap test most masked-out
+    /// voxels near an object fail, before skinValue's own.
+    [[nodiscard]] bool hasInsideNeighbour(int x, int y, int z) const {
+        const int x0 = std::max(x - 1, 0), x1 = std::min(x + 1, m_n - 1);
+        const int y0 = std::max(y - 1, 0), y1 = std::min(y + 1, m_n - 1);
+        const int z0 = std::max(z - 1, 0), z1 = std::min(z + 1, m_n - 1);
+        for (int zz = z0; zz <= z1; ++zz)
+            for (int yy = y0; yy <= y1; ++yy) {
+                const uint8_t* row = m_inside + (size_t(zz) * m_n + size_t(yy)) * m_n;
+                for (int xx = x0; xx <= x1; ++xx)
+                    if (row[xx])
+                        return true;
+            }
+        return false;
+    }
+
+    /// Whether brick b holds an inside voxel and a masked-out voxel lies in it or next to it:
+    /// only then can a stroke in it change a skin value (BoundarySkin.h), which may sit one voxel
+    /// outside the brick.
+    [[nodiscard]] bool brickTouchesSkin(const Coord& o) const {
+        const int B = MaterialVolume::BRICK;
+        bool inside = false, outside = false;
+        for (int z = std::max(o.z - 1, 0); z <= std::min(o.z + B, m_n - 1); ++z)
+            for (int y = std::max(o.y - 1, 0); y <= std::min(o.y + B, m_n - 1); ++y)
+                for (int x = std::max(o.x - 1, 0); x <= std::min(o.x + B, m_n - 1); ++x) {
+                    const bool in = m_inside[(size_t(z) * m_n + size_t(y)) * m_n + size_t(x)] != 0;
+                    const bool ownVoxel = x >= o.x && y >= o.y && z >= o.z && x < o.x + B &&
+                                          y < o.y + B && z < o.z + B;
+                    inside = inside || (in && ownVoxel);
+                    outside = outside || !in;
+                    if (inside && outside)
+                        return true;
+                }
+        return false;
     }
 
     [[nodiscard]] int coarseLo(int fine) const { return m_coarseLo[size_t(fine)]; }
     [[nodiscard]] int coarseHi(int fine) const { return m_coarseHi[size_t(fine)]; }
 
-    /// Fine value of component `comp` at (x,y,z); zero outside the mask.
+    /// Fine value of component `comp` at (x,y,z): the painted value inside the mask, the skin's
+    /// next to it, zero elsewhere.
     [[nodiscard]] float fine(int comp, int x, int y, int z) const {
-        if (!m_inside[(size_t(z) * m_n + size_t(y)) * m_n + size_t(x)])
-            return 0.f;
+        if (!m_inside[(size_t(z) * m_n + size_t(y)) * m_n + size_t(x)]) {
+            const std::optional<MaterialSample> s = skin(x, y, z);
+            if (!s)
+                return 0.f;
+            const int c = comp % 3;
+            return comp < 3 ? s->sigma_t[c] : comp < 6 ? s->sigma_s[c] : s->g[c];
+        }
         return m_data[m_addr[0][size_t(x)] + m_addr[1][size_t(y)] + m_addr[2][size_t(z)] +
                       size_t(comp) * MaterialVolume::BRICK_VOXELS];
     }
 
-    /// insideFraction of coarse cell (I,J,K) as evaluate() computes it (the same sum, in the
-    /// same order), from the mask alone.
-    [[nodiscard]] float insideFraction(int I, int J, int K) const {
+    /// The fraction of coarse cell (I,J,K) in inside voxels (the skin left out).
+    [[nodiscard]] float maskFraction(int I, int J, int K) const {
         double insideVol = 0.0;
         for (const Overlap& z : m_lists[size_t(K)])
             for (const Overlap& y : m_lists[size_t(J)]) {
@@ -144,15 +199,27 @@ public:
                 const size_t rowAddr = m_addr[1][size_t(y.fine)] + m_addr[2][size_t(z.fine)];
                 for (const Overlap& x : LX) {
                     const size_t wk = k++;
-                    if (!m_inside[row + size_t(x.fine)])
+                    float value[MaterialVolume::COMPONENTS];
+                    if (m_inside[row + size_t(x.fine)]) {
+                        const float* v = m_data + rowAddr + m_addr[0][size_t(x.fine)];
+                        for (int comp = 0; comp < MaterialVolume::COMPONENTS; ++comp)
+                            value[comp] = v[size_t(comp) * MaterialVolume::BRICK_VOXELS];
+                    } else if (const std::optional<MaterialSample> s =
+                                   skin(x.fine, y.fine, z.fine)) {
+                        for (int c = 0; c < 3; ++c) {
+                            value[cST + c] = s->sigma_t[c];
+                            value[cSS + c] = s->sigma_s[c];
+                            value[cG + c] = s->g[c];
+                        }
+                    } else {
                         continue;
-                    const float* v = m_data + rowAddr + m_addr[0][size_t(x.fine)];
+                    }
                     const double wv = x.length * y.length * z.length;
                     insideVol += wv;
                     for (int c = 0; c < 3; ++c) {
-                        const float st = v[size_t(cST + c) * MaterialVolume::BRICK_VOXELS];
-                        const float ss = v[size_t(cSS + c) * MaterialVolume::BRICK_VOXELS];
-                        const float gg = v[size_t(cG + c) * MaterialVolume::BRICK_VOXELS];
+                        const float st = value[cST + c];
+                        const float ss = value[cSS + c];
+                        const float gg = value[cG + c];
                         if (gathered)
                             win[size_t(c) * windowVoxels + wk] = st;
                         sumSt[c] += wv * st;
@@ -230,6 +297,8 @@ private:
     std::vector<size_t> m_addr[3];
     const float* m_data = nullptr;
     const uint8_t* m_inside = nullptr;
+    const MaterialVolume* m_volume = nullptr;
+    std::vector<uint8_t> m_nearInside;  ///< bricksNearInside: per brick, whether skin may be in it
 };
 
 /// Homogeneous when every cell holding material is identical.
@@ -309,7 +378,7 @@ bool anyCoarseCellInside(const MaterialVolume& volume, int resolution, float fra
     for (int K = 0; K < resolution; ++K)
         for (int J = 0; J < resolution; ++J)
             for (int I = 0; I < resolution; ++I)
-                if (eval.insideFraction(I, J, K) >= fraction)
+                if (eval.maskFraction(I, J, K) >= fraction)
                     return true;
     return false;
 }
@@ -334,7 +403,8 @@ size_t updateCoarseMaterial(CoarseMaterial& coarse, const MaterialVolume& volume
         return 0;
 
     const CellEvaluator eval(volume, res);
-    // Coarse cells overlapping any dirty brick (each brick covers an 8³ fine box).
+    // Coarse cells overlapping any dirty brick (each brick covers an 8³ fine box) and, where the
+    // brick meets the skin, the voxels next to it, whose skin values read the brick's voxels.
     std::vector<uint8_t> mark(cells, 0);
     const int B = MaterialVolume::BRICK;
     const int n = volume.resolution();
@@ -342,9 +412,10 @@ size_t updateCoarseMaterial(CoarseMaterial& coarse, const MaterialVolume& volume
         LUCENT_CHECK(b >= 0 && b < volume.brickCount(), "updateCoarseMaterial: dirty brick index ",
                      b, " is outside [0, ", volume.brickCount(), ")");
         const Coord o = volume.brickOrigin(b);
+        const int margin = eval.brickTouchesSkin(o) ? 1 : 0;
         Coord lo, hi;
         for (int a = 0; a < 3; ++a) {
-            const int f0 = o[a], f1 = std::min(o[a] + B, n) - 1;
+            const int f0 = std::max(o[a] - margin, 0), f1 = std::min(o[a] + B + margin, n) - 1;
             lo[a] = eval.coarseLo(f0);
             hi[a] = eval.coarseHi(f1);
         }

@@ -241,6 +241,25 @@ void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {
             glen > 1e-3f ? glen / (std::abs(gx) + std::abs(gy) + std::abs(gz)) : 1.f;
         if (glen > 1e-3f)
             m_normal[u] = Vector3f(-gx, -gy, -gz) / glen;
+        // The distance from the centre to the surface along its normal n, for every boundary face
+        // of the cell: along n's dominant axis a the surface lies (f_i − ½ + f_j)Δx from the
+        // centre, j the neighbour across it (exact for a plane that crosses the two cells' edges
+        // parallel to a: a prism's volume is its height at the centroid), so along n it lies
+        // |n_a| times that. The staircase's faces across the other axes (its steps) take the same
+        // δ: the light leaves through the surface, not through the step's own face. Where the
+        // gradient vanishes (a shell thinner than the stencil) each face keeps its own axis's.
+        float normalDelta = 0.f;
+        if (glen > 1e-3f) {
+            const Vector3f& nrm = m_normal[u];
+            const int a = std::abs(nrm.x) >= std::abs(nrm.y)
+                              ? (std::abs(nrm.x) >= std::abs(nrm.z) ? 0 : 2)
+                              : (std::abs(nrm.y) >= std::abs(nrm.z) ? 1 : 2);
+            Coord across(x, y, z);
+            across[a] += nrm[a] > 0.f ? 1 : -1;
+            const float along = std::clamp(
+                fraction(x, y, z) - 0.5f + fraction(across.x, across.y, across.z), 0.05f, 1.5f);
+            normalDelta = std::max(along * std::abs(nrm[a]), 0.05f) * dx;
+        }
         for (int f = 0; f < 6; ++f) {
             const int nx = x + dirs[f][0], ny = y + dirs[f][1], nz = z + dirs[f][2];
             const bool interior = inside(nx, ny, nz);
@@ -255,13 +274,16 @@ void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {
                     m_conductance[c][f][u] = g;
                 } else {
                     // Robin: J = φ_b/(2A) and J = D (φ − φ_b)/δ → J = φ/(2A + δ/D), δ the
-                    // distance from the centre to the surface along the face's axis: the
-                    // inside length in this cell beyond its centre, (f_i − ½)Δx, plus the
-                    // neighbour's, f_j Δx (exact for a surface perpendicular to the axis; ½Δx,
-                    // the cell face, when f_i = 1 and f_j = 0).
+                    // distance from the centre to the surface (normalDelta above). Without a
+                    // normal, along the face's axis: the inside length in this cell beyond its
+                    // centre, (f_i − ½)Δx, plus the neighbour's, f_j Δx (½Δx, the cell face,
+                    // when f_i = 1 and f_j = 0).
                     const float delta =
-                        std::clamp(fraction(x, y, z) - 0.5f + fraction(nx, ny, nz), 0.05f, 1.5f) *
-                        dx;
+                        normalDelta > 0.f
+                            ? normalDelta
+                            : std::clamp(fraction(x, y, z) - 0.5f + fraction(nx, ny, nz), 0.05f,
+                                         1.5f) *
+                                  dx;
                     g = areaScale * dx * dx / (twoA + delta / di);
                     m_boundaryConductance[c][u] += g;
                     if (c == 0) {

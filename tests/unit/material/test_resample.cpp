@@ -42,10 +42,12 @@ TEST(Resample, HalfEmptyCellPreservesMeanTransmittance) {
     const float sigma = 0.05f;  // mm⁻¹; τ across a 32 mm cell = 1.6 (neither thin nor opaque)
     MaterialVolume v(unitGrid(n),
                      {Rgb(sigma, 2.f * sigma, 4.f * sigma), Rgb(0.5f * sigma), Rgb(0.f)});
+    // 15 inside layers and the skin layer next to them (BoundarySkin.h): material in half the
+    // cell, x < 16.
     std::vector<uint8_t> mask(v.spec().voxelCount(), 0);
     for (int z = 0; z < n; ++z)
         for (int y = 0; y < n; ++y)
-            for (int x = 0; x < n / 2; ++x)
+            for (int x = 0; x < n / 2 - 1; ++x)
                 mask[v.spec().linearIndex({x, y, z})] = 1;
     v.setInsideMask(mask);
     const CoarseMaterial c = resampleForPropagation(v, 1);
@@ -98,10 +100,38 @@ TEST(Resample, InvalidResolutionThrows) {
     EXPECT_THROW(resampleForPropagation(MaterialVolume(), 4), ValueError);
 }
 
-TEST(Resample, AnyCoarseCellInsideReadsTheResamplesFractions) {
-    // anyCoarseCellInside answers from the mask what resampleForPropagation's insideFraction
-    // says, at every threshold: a slab whose thickness (2 of 32 fine voxels) is under half a
-    // cell of the coarser grids, and one thick enough, at divisible and fractional ratios.
+namespace {
+
+/// The fraction of each coarse cell of a res³ grid over v's box in inside voxels, by exact
+/// 1-D overlaps (fractional ratios included), x fastest.
+std::vector<double> maskFractions(const MaterialVolume& v, int res) {
+    const int n = v.resolution();
+    const double r = double(n) / double(res);
+    const auto overlap = [&](int I, int i) {
+        return std::max(0.0, std::min(double(i + 1), (I + 1) * r) - std::max(double(i), I * r));
+    };
+    std::vector<double> out(size_t(res) * res * res, 0.0);
+    for (int K = 0; K < res; ++K)
+        for (int J = 0; J < res; ++J)
+            for (int I = 0; I < res; ++I) {
+                double sum = 0.0;
+                for (int z = 0; z < n; ++z)
+                    for (int y = 0; y < n; ++y)
+                        for (int x = 0; x < n; ++x)
+                            if (v.isInside({x, y, z}))
+                                sum += overlap(I, x) * overlap(J, y) * overlap(K, z);
+                out[(size_t(K) * res + size_t(J)) * res + size_t(I)] = sum / (r * r * r);
+            }
+    return out;
+}
+
+}  // namespace
+
+TEST(Resample, AnyCoarseCellInsideReadsTheMasksFractions) {
+    // anyCoarseCellInside answers from the inside mask alone (not its skin: the mask samples the
+    // mesh's own fraction, which SSLPV's cells keep), at every threshold: a slab whose thickness
+    // (2 of 32 fine voxels) is under half a cell of the coarser grids, and one thick enough, at
+    // divisible and fractional ratios.
     for (int thickness : {2, 5}) {
         MaterialVolume v(unitGrid(32), UNIFORM);
         std::vector<uint8_t> mask(size_t(32) * 32 * 32, 0);
@@ -111,15 +141,17 @@ TEST(Resample, AnyCoarseCellInsideReadsTheResamplesFractions) {
                     mask[(size_t(z) * 32 + size_t(y)) * 32 + size_t(x)] = 1;
         v.setInsideMask(mask);
         for (int res : {32, 16, 8, 5, 3}) {
-            const CoarseMaterial c = resampleForPropagation(v, res);
-            const float largest =
-                *std::max_element(c.insideFraction.begin(), c.insideFraction.end());
-            for (float fraction : {0.1f, 0.25f, 0.5f, 0.75f, 1.f, largest}) {
+            const std::vector<double> f = maskFractions(v, res);
+            const float largest = float(*std::max_element(f.begin(), f.end()));
+            for (float fraction : {0.1f, 0.25f, 0.5f, 0.75f, 1.f}) {
                 SCOPED_TRACE(testing::Message() << "thickness " << thickness << ", grid " << res
                                                 << ", fraction " << fraction);
-                EXPECT_EQ(anyCoarseCellInside(v, res, fraction), largest >= fraction);
+                // Exact sums of dyadic or short overlaps: away from the threshold by > 1e-6.
+                if (std::abs(largest - fraction) > 1e-6f) {
+                    EXPECT_EQ(anyCoarseCellInside(v, res, fraction), largest >= fraction);
+                }
             }
-            EXPECT_FALSE(anyCoarseCellInside(v, res, std::nextafter(largest, 2.f)));
+            EXPECT_FALSE(anyCoarseCellInside(v, res, largest + 1e-5f));
         }
     }
     // A slab of fine layers 15–16: half of grid 16's cells 14–15 and 16–17, but a quarter of
@@ -132,4 +164,40 @@ TEST(Resample, AnyCoarseCellInsideReadsTheResamplesFractions) {
     EXPECT_TRUE(anyCoarseCellInside(v, 16, 0.5f));
     EXPECT_FALSE(anyCoarseCellInside(v, 8, 0.5f));
     EXPECT_THROW((void)anyCoarseCellInside(v, 33, 0.5f), ValueError);
+}
+
+TEST(Resample, TheSkinCarriesTheMaterialPastTheMask) {
+    // The mesh reaches up to half a voxel past the inside mask (voxel centres decide it): the
+    // voxels next to the mask hold the boundary skin's value (BoundarySkin.h), the medium the
+    // reference renders there, so a renderer bounding cells by the mesh finds material in them.
+    const MaterialSample dense{Rgb(2.f, 3.f, 4.f), Rgb(1.5f, 2.f, 1.f), Rgb(0.5f, 0.f, -0.3f)};
+    MaterialVolume v(unitGrid(16), UNIFORM);
+    std::vector<uint8_t> mask(v.spec().voxelCount(), 0);
+    for (int z = 4; z < 12; ++z)
+        for (int y = 4; y < 12; ++y)
+            for (int x = 4; x < 12; ++x)
+                mask[v.spec().linearIndex({x, y, z})] = 1;
+    v.setInsideMask(mask);
+    for (int z = 4; z < 12; ++z)
+        for (int y = 4; y < 12; ++y)
+            v.set({4, y, z}, dense);  // the face x = 4 painted dense
+    const CoarseMaterial c = resampleForPropagation(v, 16);
+    const auto expectSample = [&](const Coord& q, const MaterialSample& m, float fraction) {
+        SCOPED_TRACE(testing::Message() << "cell " << q.x << "," << q.y << "," << q.z);
+        const size_t k = c.spec.linearIndex(q);
+        EXPECT_EQ(c.insideFraction[k], fraction);
+        for (int ch = 0; ch < 3; ++ch) {
+            EXPECT_NEAR(c.sigma_t[ch][k], m.sigma_t[ch], 1e-6f * m.sigma_t[ch]);
+            EXPECT_NEAR(c.sigma_s[ch][k], m.sigma_s[ch], 1e-6f * m.sigma_t[ch]);
+            EXPECT_NEAR(c.g[ch][k], m.g[ch], 1e-6f);
+        }
+    };
+    expectSample({3, 6, 6}, dense, 1.f);     // beside the dense face: its value
+    expectSample({12, 6, 6}, UNIFORM, 1.f);  // beside the far face
+    expectSample({2, 6, 6}, {}, 0.f);        // two voxels out: no material
+    // Homogeneous material stays homogeneous with its skin (each ring of equal values gives that
+    // value exactly).
+    MaterialVolume u(unitGrid(16), UNIFORM);
+    u.setInsideMask(mask);
+    EXPECT_TRUE(resampleForPropagation(u, 16).homogeneous);
 }

@@ -3,6 +3,7 @@
 /// @brief Incremental resampling (updateCoarseMaterial) against full resampling, and the fast
 /// full resample against the original dense implementation, both bit for bit.
 #include <lucent/core/Error.h>
+#include <lucent/material/BoundarySkin.h>
 #include <lucent/material/Brush.h>
 #include <lucent/material/Resample.h>
 
@@ -82,7 +83,9 @@ CoarseMaterial denseReference(const MaterialVolume& volume, int resolution) {
                 lists[size_t(I)].push_back({i, len});
         }
     }
-    const auto& inside = volume.insideMask();
+    // The material: the painted values inside the mask, the boundary skin's next to it
+    // (boundarySkin, written independently of the resampler's per-voxel reads).
+    std::vector<uint8_t> inside = volume.insideMask();
     std::vector<float> st[3], ss[3], gg[3];
     for (int c = 0; c < 3; ++c) {
         st[c] = volume.denseComponent(MaterialVolume::component(Channel::SigmaT, c));
@@ -91,6 +94,14 @@ CoarseMaterial denseReference(const MaterialVolume& volume, int resolution) {
         for (size_t i = 0; i < inside.size(); ++i)
             if (!inside[i])
                 st[c][i] = ss[c][i] = gg[c][i] = 0.f;
+    }
+    for (const SkinVoxel& s : boundarySkin(volume)) {
+        inside[s.index] = 1;
+        for (int c = 0; c < 3; ++c) {
+            st[c][s.index] = s.value.sigma_t[c];
+            ss[c][s.index] = s.value.sigma_s[c];
+            gg[c][s.index] = s.value.g[c];
+        }
     }
     const double h = fs.voxelSize, H = ratio * h, cellVolume = ratio * ratio * ratio;
     std::vector<double> tau, w;
@@ -252,8 +263,15 @@ TEST(ResampleIncremental, MaskChangeAndNoOpUpdates) {
     v.setInsideMask(mask);
     updateCoarseMaterial(coarse, v, v.takeDirtyBricks());
     expectBitEqual(coarse, resampleForPropagation(v, 8));
-    // A single dirty brick updates only the coarse cells overlapping its 8³ voxels: 2³ here.
+    // A single dirty brick updates only the coarse cells overlapping its 8³ voxels: 2³ here
+    // (brick 0, in the grid's corner, holds no inside voxel, so no skin value reads it).
     EXPECT_EQ(updateCoarseMaterial(coarse, v, {0}), 8u);
+    // A brick holding inside voxels next to masked-out ones (the mask's holes) also updates the
+    // cells over the voxels around it, whose skin values read its voxels: voxels 7–16 per axis,
+    // cells 1–4, 4³.
+    ASSERT_TRUE(v.isInside({12, 12, 13}));
+    ASSERT_FALSE(v.isInside({12, 12, 12}));
+    EXPECT_EQ(updateCoarseMaterial(coarse, v, {v.brickIndexOf({8, 8, 8})}), 64u);
 }
 
 TEST(ResampleIncremental, RejectsMismatchedInput) {

@@ -17,6 +17,8 @@
 #include <lucent/material/Medium.h>
 
 #include <cstddef>
+#include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace lucent {
@@ -37,5 +39,15 @@ struct SkinVoxel {
 /// mixture's σs′ = mean σs(1−g) is again the mean σs′. Sorted by index; empty when every voxel
 /// is inside or none is.
 std::vector<SkinVoxel> boundarySkin(const MaterialVolume& volume);
+
+/// The value boundarySkin gives voxel c (inside the grid): the mixture of its nearest inside
+/// neighbours, or nothing when c is inside or has no inside neighbour. For readers that need the
+/// skin of a few voxels (resampleForPropagation reads it cell by cell).
+std::optional<MaterialSample> skinValue(const MaterialVolume& volume, const Coord& c);
+
+/// Per brick (MaterialVolume's brick order): 1 when it or a brick next to it holds an inside
+/// voxel. A voxel's neighbours lie in its brick or the bricks next to it, so no voxel of an
+/// unflagged brick is in the skin: the cheap test that skips the empty space around an object.
+std::vector<uint8_t> bricksNearInside(const MaterialVolume& volume);
 
 }  // namespace lucent
