@@ -39,6 +39,15 @@ double logMeanTransmittance(const double* tau, const double* w, size_t count) {
     return -tmin + std::log(num / den);
 }
 
+/// A sample's nine values in the bricks' component order (MaterialVolume::component).
+void componentsOf(const MaterialSample& s, float (&out)[MaterialVolume::COMPONENTS]) {
+    for (int c = 0; c < 3; ++c) {
+        out[MaterialVolume::component(Channel::SigmaT, c)] = s.sigma_t[c];
+        out[MaterialVolume::component(Channel::SigmaS, c)] = s.sigma_s[c];
+        out[MaterialVolume::component(Channel::G, c)] = s.g[c];
+    }
+}
+
 /// Per-thread buffers of CellEvaluator::evaluate.
 struct Scratch {
     std::vector<double> tau, w;
@@ -150,8 +159,9 @@ public:
             const std::optional<MaterialSample> s = skin(x, y, z);
             if (!s)
                 return 0.f;
-            const int c = comp % 3;
-            return comp < 3 ? s->sigma_t[c] : comp < 6 ? s->sigma_s[c] : s->g[c];
+            float value[MaterialVolume::COMPONENTS];
+            componentsOf(*s, value);
+            return value[comp];
         }
         return m_data[m_addr[0][size_t(x)] + m_addr[1][size_t(y)] + m_addr[2][size_t(z)] +
                       size_t(comp) * MaterialVolume::BRICK_VOXELS];
@@ -206,11 +216,7 @@ public:
                             value[comp] = v[size_t(comp) * MaterialVolume::BRICK_VOXELS];
                     } else if (const std::optional<MaterialSample> s =
                                    skin(x.fine, y.fine, z.fine)) {
-                        for (int c = 0; c < 3; ++c) {
-                            value[cST + c] = s->sigma_t[c];
-                            value[cSS + c] = s->sigma_s[c];
-                            value[cG + c] = s->g[c];
-                        }
+                        componentsOf(*s, value);
                     } else {
                         continue;
                     }
