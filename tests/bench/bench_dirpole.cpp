@@ -15,6 +15,7 @@
 /// docs/methods/combined.md.
 ///
 ///     build/ci/tests/bench/bench_dirpole [--benchmark_filter=Dirpole]
+#include <lucent/combined/Combined.h>
 #include <lucent/combined/CombinedProvider.h>
 #include <lucent/dipole/DipoleProvider.h>
 #include <lucent/dipole/DirpoleProvider.h>
@@ -196,6 +197,26 @@ void BM_DirpoleFrame(benchmark::State& state) {
     renderer.destroy();
 }
 
+/// The default scene in `renderer` with `provider` attached and one frame rendered: the app's
+/// settings (default split, 16 dipole samples per frame) after `adjust`.
+template <class Adjust>
+void startCombined(Scene& scene, gpu::SceneRenderer& renderer,
+                   combined::CombinedSubsurfaceProvider& provider, Adjust&& adjust) {
+    const int meshId = loadDefaultScene(scene, renderer);
+    provider.create();
+    combined::CombinedProviderSettings cs;
+    cs.eta = scene.eta;
+    cs.meshId = meshId;
+    cs.dipole.samplesPerFrame = 16;
+    adjust(cs);
+    provider.setSettings(cs);
+    provider.setMesh(scene.objects[0].mesh);
+    provider.setLights(scene.lights);
+    provider.setMaterial(*scene.objects[0].material, scene.eta);
+    renderer.setSubsurfaceProvider(&provider);
+    renderer.render();
+}
+
 /// Arg 0: 1 = stroke frames, 0 = idle (progressive) frames.
 void BM_CombinedFrame(benchmark::State& state) {
     if (!context()) {
@@ -205,24 +226,14 @@ void BM_CombinedFrame(benchmark::State& state) {
     const bool stroke = state.range(0) != 0;
     Scene scene;
     gpu::SceneRenderer renderer;
-    const int meshId = loadDefaultScene(scene, renderer);
     combined::CombinedSubsurfaceProvider provider;
-    provider.create();
-    combined::CombinedProviderSettings cs;  // the app's: default split, 16 spp per frame
-    cs.eta = scene.eta;
-    cs.meshId = meshId;
-    cs.dipole.samplesPerFrame = 16;
-    if (stroke)
-        cs.dipole.maxFrames = 8;
-    else
-        cs.dipole.convergenceThreshold = 0.f, cs.dipole.maxFrames = 1 << 16;
-    provider.setSettings(cs);
-    provider.setMesh(scene.objects[0].mesh);
-    provider.setLights(scene.lights);
+    startCombined(scene, renderer, provider, [&](combined::CombinedProviderSettings& cs) {
+        if (stroke)
+            cs.dipole.maxFrames = 8;
+        else
+            cs.dipole.convergenceThreshold = 0.f, cs.dipole.maxFrames = 1 << 16;
+    });
     MaterialVolume& vol = *scene.objects[0].material;
-    provider.setMaterial(vol, scene.eta);
-    renderer.setSubsurfaceProvider(&provider);
-    renderer.render();
     PassTotals passes;
     int i = 0;
     for (auto _ : state) {
@@ -246,6 +257,63 @@ void BM_CombinedFrame(benchmark::State& state) {
     renderer.destroy();
 }
 
+/// A frame after the lights change: arg 0 scales both lights' intensity (the L̂ image is
+/// recomputed, the kernel is not: the mean incidence is unchanged), arg 1 swings the first light
+/// between two places whose mean incidence differs by at least one KERNEL_INCIDENCE_STEP, so the
+/// kernel is solved again as well (docs/methods/combined.md, "The kernel lit at the scene's
+/// incidence"). The difference of the two is the cost of the re-solve.
+void BM_CombinedLightChange(benchmark::State& state) {
+    if (!context()) {
+        state.SkipWithError("no headless OpenGL");
+        return;
+    }
+    const bool moveIncidence = state.range(0) != 0;
+    Scene scene;
+    gpu::SceneRenderer renderer;
+    combined::CombinedSubsurfaceProvider provider;
+    startCombined(scene, renderer, provider,
+                  [](combined::CombinedProviderSettings& cs) { cs.dipole.maxFrames = 8; });
+    std::vector<Light> lights[2] = {scene.lights, scene.lights};
+    if (moveIncidence) {
+        // The first light brought close to the object's centre: a cap met at grazing angles.
+        const Bounds3f b = scene.objects[0].mesh.bounds();
+        const Point3f c = b.center();
+        Light& l = lights[1].front();
+        l.position =
+            c + 0.6f * (l.position - c) * (glm::length(b.extent()) / glm::length(l.position - c));
+    } else {
+        for (Light& l : lights[1])
+            l.intensity *= 0.9f;
+    }
+    const float mu[2] = {
+        combined::meanIncidenceCosine(scene.objects[0].mesh, lights[0], scene.eta),
+        combined::meanIncidenceCosine(scene.objects[0].mesh, lights[1], scene.eta)};
+    if ((mu[0] != mu[1]) != moveIncidence) {
+        state.SkipWithError("the two light sets' mean incidence is not as the case needs");
+        return;
+    }
+    PassTotals passes;
+    int i = 0;
+    for (auto _ : state) {
+        for (int f = 0; f < 200 && !provider.stats().converged; ++f)
+            renderer.render();
+        const std::vector<Light>& next = lights[(i + 1) % 2];
+        const double ms = timedStroke(renderer, [&] {
+            renderer.setLights(next);
+            provider.setLights(next);
+        });
+        state.SetIterationTime(ms / 1e3);
+        passes.add(provider.passTimes());
+        ++i;
+    }
+    passes.report(state, i);
+    state.counters["incidence_a"] = mu[0];
+    state.counters["incidence_b"] = mu[1];
+    renderer.setSubsurfaceProvider(nullptr);
+    provider.destroy();
+    renderer.destroy();
+}
+
 }  // namespace
 
 // Baseline first: a full reset without budgets is what every restart cost before.
@@ -264,6 +332,14 @@ BENCHMARK(BM_CombinedFrame)
     ->ArgNames({"stroke"})
     ->Arg(1)
     ->Arg(0)
+    ->UseManualTime()
+    ->Iterations(6)
+    ->Unit(benchmark::kMillisecond);
+
+BENCHMARK(BM_CombinedLightChange)
+    ->ArgNames({"incidence_moves"})
+    ->Arg(0)
+    ->Arg(1)
     ->UseManualTime()
     ->Iterations(6)
     ->Unit(benchmark::kMillisecond);

@@ -178,12 +178,15 @@ Rgb SslpvSurfaceKernel::integral(float R) const {
 
 std::vector<Rgb> sslpvHalfSpaceResponse(const MaterialSample& material, float eta,
                                         const sslpv::SslpvOptions& options, float cellSize, int n,
-                                        int half) {
+                                        int half, float incidenceCos) {
     LUCENT_CHECK(std::isfinite(cellSize) && cellSize > 0.f,
                  "combined kernel: cell size must be finite and > 0 mm");
     LUCENT_CHECK(n >= 8 && n <= 128 && half >= 0 && half <= (n - 3) / 2,
                  "combined kernel: need 8 <= n <= 128 and 0 <= half <= (n - 3)/2 (got n ", n,
                  ", half ", half, ")");
+    LUCENT_CHECK(incidenceCos > 0.f && incidenceCos <= 1.f,
+                 "combined kernel: the incidence cosine must lie in (0, 1] (got ", incidenceCos,
+                 ")");
     for (int c = 0; c < 3; ++c)
         LUCENT_CHECK(std::isfinite(material.sigma_t[c]) && material.sigma_s[c] >= 0.f &&
                          material.sigma_s[c] <= material.sigma_t[c],
@@ -206,13 +209,16 @@ std::vector<Rgb> sslpvHalfSpaceResponse(const MaterialSample& material, float et
     m.homogeneous = true;
     const int c0 = n / 2;
     const float zTop = float(n - 1) * cellSize;
-    // 2×2 texels of ¼ W each at normal incidence into the top cell (c0, c0), as the RSM would.
+    // 2×2 texels of ¼ W each into the top cell (c0, c0), as the RSM would, arriving at the
+    // given incidence (the walk refracts them and finds where they scatter first).
+    const Vector3f arriving(std::sqrt(std::max(0.f, 1.f - incidenceCos * incidenceCos)), 0.f,
+                            -incidenceCos);
     std::vector<sslpv::SslpvInjectionSample> texels;
     for (int j = 0; j < 2; ++j)
         for (int i = 0; i < 2; ++i)
             texels.push_back({Point3f((float(c0) + 0.25f + 0.5f * float(i)) * cellSize,
                                       (float(c0) + 0.25f + 0.5f * float(j)) * cellSize, zTop),
-                              Normal3f(0.f, 0.f, 1.f), Vector3f(0.f, 0.f, -1.f), Rgb(0.25f)});
+                              Normal3f(0.f, 0.f, 1.f), arriving, Rgb(0.25f)});
     sslpv::SslpvSolver solver(options);
     solver.setMaterial(m, eta);
     solver.setInjectionSamples(std::move(texels));
@@ -231,7 +237,7 @@ std::vector<Rgb> sslpvHalfSpaceResponse(const MaterialSample& material, float et
 
 SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, float eta,
                                              const sslpv::SslpvOptions& options, float cellSize,
-                                             float radius) {
+                                             float radius, float incidenceCos) {
     LUCENT_CHECK(std::isfinite(cellSize) && cellSize > 0.f,
                  "combined kernel: cell size must be finite and > 0 mm");
     LUCENT_CHECK(std::isfinite(radius) && radius >= 0.f,
@@ -241,7 +247,8 @@ SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, flo
     const int reach = int(std::ceil(radius / cellSize)) + 6;
     const int n = std::clamp(2 * reach + 3, 16, 2 * int(MAX_KERNEL_SPLIT_CELLS) + 15);
     const int half = std::min(reach, (n - 3) / 2);
-    const std::vector<Rgb> g = sslpvHalfSpaceResponse(material, eta, options, cellSize, n, half);
+    const std::vector<Rgb> g =
+        sslpvHalfSpaceResponse(material, eta, options, cellSize, n, half, incidenceCos);
     // Rings by distance from the source cell, in cells: ring 0 = {0}, ring b = [b − ½, b + ½).
     const int rings = half + 1, side = 2 * half + 1;
     std::vector<glm::dvec3> ringSum(size_t(rings), glm::dvec3(0.0));
@@ -254,8 +261,8 @@ SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, flo
             ringSum[size_t(b)] += glm::dvec3(g[size_t(j + half) * size_t(side) + size_t(i + half)]);
             ++ringCells[size_t(b)];
         }
-    // Per unit *transmitted* irradiance (the dipole's E): divide by T(0); R-units: × π.
-    const double t0 = 1.0 - double(fresnelDielectric(1.f, eta));
+    // Per unit *transmitted* irradiance (the dipole's E): divide by T(θ_i); R-units: × π.
+    const double t0 = 1.0 - double(fresnelDielectric(incidenceCos, eta));
     SslpvSurfaceKernel k;
     k.cellSize = cellSize;
     double inner = 0.0;
@@ -270,6 +277,35 @@ SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, flo
         inner = outer;
     }
     return k;
+}
+
+float meanIncidenceCosine(const TriangleMesh& mesh, const std::vector<Light>& lights, float eta) {
+    double weighted = 0.0, weight = 0.0;
+    for (const auto& tri : mesh.triangles) {
+        const Point3f& a = mesh.positions[tri[0]];
+        const Point3f& b = mesh.positions[tri[1]];
+        const Point3f& c = mesh.positions[tri[2]];
+        const Vector3f cross = glm::cross(b - a, c - a);
+        const float twiceArea = glm::length(cross);
+        if (!(twiceArea > 0.f))
+            continue;                          // degenerate: no area, no normal
+        const Normal3f n = cross / twiceArea;  // outward (computeVertexNormals' convention)
+        const Point3f centroid = (a + b + c) / 3.f;
+        for (const Light& light : lights) {
+            const double e = double(luminance(dipole::lightIrradiance(light, centroid, n, eta)));
+            if (!(e > 0.0))
+                continue;
+            const Vector3f toLight = light.type == Light::Type::Directional
+                                         ? -glm::normalize(light.direction)
+                                         : glm::normalize(light.position - centroid);
+            weighted += double(twiceArea) * e * double(glm::dot(n, toLight));
+            weight += double(twiceArea) * e;
+        }
+    }
+    if (!(weight > 0.0))
+        return 1.f;
+    const double step = double(KERNEL_INCIDENCE_STEP);
+    return float(std::clamp(std::round(weighted / weight / step) * step, step, 1.0));
 }
 
 namespace {
@@ -625,9 +661,10 @@ CombinedResult renderCombined(const Scene& scene, const CombinedSettings& settin
     if (out.plan.mode == SplitMode::Kernel && out.plan.dipoleOn && out.plan.sslpvOn) {
         const MaterialSample kernelMaterial =
             surfaceMaterial(volume, surfaceShell(volume, out.plan.cellSize));
-        const SslpvSurfaceKernel kernel =
-            computeSslpvSurfaceKernel(kernelMaterial, scene.eta, settings.sslpv.solver,
-                                      out.plan.cellSize, out.plan.splitRadius);
+        const SslpvSurfaceKernel kernel = computeSslpvSurfaceKernel(
+            kernelMaterial, scene.eta, settings.sslpv.solver, out.plan.cellSize,
+            out.plan.splitRadius,
+            meanIncidenceCosine(scene.objects[0].mesh, scene.lights, scene.eta));
         // SSLPV's local part: the kernel's estimate L̂, at most the kernel's near share f of
         // SSLPV's own radiance (docs/methods/combined.md, "The split's fix").
         const dipole::SurfaceBuffers buf = dipole::buildSurfaceBuffers(scene);

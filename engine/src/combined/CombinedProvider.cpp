@@ -10,6 +10,7 @@
 #include <lucent/gpu/GlResources.h>
 #include <lucent/material/MaterialVolume.h>
 #include <lucent/material/Medium.h>
+#include <lucent/mesh/TriangleMesh.h>
 #include <lucent/sslpv/GridDiffusion.h>
 
 #include <epoxy/gl.h>
@@ -48,6 +49,17 @@ struct CombinedSubsurfaceProvider::Impl {
     /// kept when the mean material is still close to `kernelMaterial` (kernelMaterialClose).
     bool kernelMaterialOnly = false;
     MaterialSample kernelMaterial;  ///< the surface material the kernel was computed for
+    /// What meanIncidenceCosine reads: the mesh's positions and triangles (rest space), the
+    /// lights (world space) and the transform between them.
+    TriangleMesh incidenceMesh;
+    std::vector<Light> lights;
+    Mat4f objectFromWorld{1.f};
+    /// meanIncidenceCosine of the mesh and lights: the kernel is lit at it, and solved again
+    /// when it moves by a KERNEL_INCIDENCE_STEP.
+    float incidence = 1.f;
+    float kernelIncidence = 1.f;  ///< the incidence the kernel was solved at
+    /// Recomputes `incidence`; marks the kernel dirty (not a material-only change) if it moved.
+    void updateIncidence();
     /// The volume's surface shell one SSLPV cell deep (surfaceShell), whose mean material the
     /// kernel is solved for; the inside mask does not change under paint, so it is found once
     /// per volume and cell size (11.7 ms at 128³; the mean over it, per stroke, 1.5 ms).
@@ -71,6 +83,20 @@ struct CombinedSubsurfaceProvider::Impl {
     CombinedProviderStats stats;
     mutable gpu::GpuProfiler profiler;  ///< per-part GPU/CPU times (passTimes())
 };
+
+void CombinedSubsurfaceProvider::Impl::updateIncidence() {
+    // The lights in the mesh's rest space (a rigid map: the cosines are those of world space).
+    std::vector<Light> local = lights;
+    for (Light& l : local) {
+        l.position = Point3f(objectFromWorld * glm::vec4(l.position, 1.f));
+        l.direction = Mat3f(objectFromWorld) * l.direction;
+    }
+    incidence = meanIncidenceCosine(incidenceMesh, local, settings.eta);
+    if (incidence != kernelIncidence) {
+        kernelDirty = true;
+        kernelMaterialOnly = false;
+    }
+}
 
 bool kernelMaterialClose(const MaterialSample& now, const MaterialSample& was) {
     const float tol = KERNEL_MATERIAL_TOLERANCE;
@@ -181,6 +207,9 @@ void CombinedSubsurfaceProvider::applySplit() {
 void CombinedSubsurfaceProvider::setMesh(const TriangleMesh& mesh) {
     m->sslpv.setMesh(mesh);
     m->dipole.reset();  // the G-buffer changes in ways camera/lights/material do not reveal
+    m->incidenceMesh.positions = mesh.positions;
+    m->incidenceMesh.triangles = mesh.triangles;
+    m->updateIncidence();
     const float extent = objectExtent(mesh);
     if (extent != m->extent) {
         m->extent = extent;
@@ -191,10 +220,14 @@ void CombinedSubsurfaceProvider::setMesh(const TriangleMesh& mesh) {
 
 void CombinedSubsurfaceProvider::setLights(const std::vector<Light>& lights) {
     m->sslpv.setLights(lights);
+    m->lights = lights;
+    m->updateIncidence();
 }
 
 void CombinedSubsurfaceProvider::setObjectFromWorld(const Mat4f& objectFromWorld) {
     m->sslpv.setObjectFromWorld(objectFromWorld);
+    m->objectFromWorld = objectFromWorld;
+    m->updateIncidence();
 }
 
 void CombinedSubsurfaceProvider::setMaterial(const MaterialVolume& volume, float eta) {
@@ -206,6 +239,7 @@ void CombinedSubsurfaceProvider::setMaterial(const MaterialVolume& volume, float
     m->cellSize = sslpvCellSize(volume, m->settings.sslpv.render.gridResolution);
     m->settings.eta = eta;
     applySplit();
+    m->updateIncidence();  // its weights are the irradiance transmitted at η
 }
 
 size_t CombinedSubsurfaceProvider::syncMaterial(MaterialVolume& volume) {
@@ -318,8 +352,9 @@ void CombinedSubsurfaceProvider::renderSubsurface(const gpu::GBufferView& g,
             } else {
                 m->kernel = computeSslpvSurfaceKernel(
                     surface, m->settings.eta, sslpv::refinedSolverOptions(m->sslpv.options()),
-                    plan.cellSize, plan.splitRadius);
+                    plan.cellSize, plan.splitRadius, m->incidence);
                 m->kernelMaterial = surface;
+                m->kernelIncidence = m->incidence;
                 std::vector<glm::vec4> rings;
                 for (size_t b = 0; b < m->kernel.ringOuter.size(); ++b)
                     rings.emplace_back(m->kernel.ringOuter[b], m->kernel.ringValue[b]);
@@ -489,6 +524,10 @@ const SslpvSurfaceKernel& CombinedSubsurfaceProvider::kernel() const {
 
 const MaterialSample& CombinedSubsurfaceProvider::kernelMaterial() const {
     return m->kernelMaterial;
+}
+
+float CombinedSubsurfaceProvider::kernelIncidence() const {
+    return m->kernelIncidence;
 }
 
 }  // namespace lucent::combined

@@ -148,22 +148,44 @@ struct SslpvSurfaceKernel {
 
 /// SSLPV's response to a point injection on a homogeneous half-space: a thick slab of
 /// `material` (cells [1, n−2]³ of an n³ grid of edge Δx, sinks around it), 2×2 texels of ¼ W
-/// each at normal incidence into the top cell (n/2, n/2), solved with `options` at index η.
+/// each into the top cell (n/2, n/2), arriving from outside at cosine `incidenceCos` to the
+/// normal (1: normal incidence; the beam tilts towards +x), solved with `options` at index η.
 /// Returns G(i, j) for |i|, |j| ≤ half, row-major (j slowest): the exitant radiance of the top
 /// cell (n/2 + i, n/2 + j), read at its face centre along +z (calibrated exit scale, without
 /// T(ω_o)), times Δx², per watt injected (before Fresnel). By superposition Σ_ij G is L_o/E of a
-/// laterally infinite slab under uniform normal irradiance E. @param n grid cells per axis,
-/// [8, 128]; @param half ≤ (n − 3)/2. @throw ValueError for invalid arguments.
+/// laterally infinite slab under uniform irradiance E at that incidence. @param n grid cells per
+/// axis, [8, 128]; @param half ≤ (n − 3)/2; @param incidenceCos ∈ (0, 1].
+/// @throw ValueError for invalid arguments.
 std::vector<Rgb> sslpvHalfSpaceResponse(const MaterialSample& material, float eta,
                                         const sslpv::SslpvOptions& options, float cellSize, int n,
-                                        int half);
+                                        int half, float incidenceCos = 1.f);
 
 /// Solves the half-space for `material` (reduced σt, σs′, g, mm⁻¹) with `options` (mode,
 /// order, steps, skip, attenuation as the renderer uses them) at cell size Δx and index η,
-/// covering radii up to `radius` (mm). @throw ValueError for an invalid material, Δx ≤ 0.
+/// lit at the outside cosine `incidenceCos` (meanIncidenceCosine), covering radii up to
+/// `radius` (mm); R_lpv is per unit of the irradiance transmitted at that incidence
+/// (T(incidenceCos)). The rings average the response over azimuth, so an oblique beam's lean
+/// along its direction is not kept, only how much of its light leaves at each distance.
+/// @throw ValueError for an invalid material, Δx ≤ 0 or incidenceCos ∉ (0, 1].
 SslpvSurfaceKernel computeSslpvSurfaceKernel(const MaterialSample& material, float eta,
                                              const sslpv::SslpvOptions& options, float cellSize,
-                                             float radius);
+                                             float radius, float incidenceCos = 1.f);
+
+/// Step of meanIncidenceCosine's answer: the kernel is solved again only when the mean moves
+/// by a step (a light dragged in the app re-solves it a few times, not every frame).
+constexpr float KERNEL_INCIDENCE_STEP = 0.05f;
+
+/// The cosine at which the object's surface receives its light, on average: over the mesh's
+/// triangles facing each light (unshadowed, at the centroid), Σ A·E_t·cos θ_i / Σ A·E_t, E_t
+/// the Fresnel-transmitted irradiance (luminance, dipole::lightIrradiance) and θ_i the angle
+/// between the face's normal (its winding's, outward as the vertex normals every method reads
+/// are computed) and the direction to the light; rounded to KERNEL_INCIDENCE_STEP,
+/// within [KERNEL_INCIDENCE_STEP, 1]. The Kernel split solves SSLPV's local kernel lit at this
+/// cosine, because SSLPV's own light is injected at the true incidence and an oblique beam
+/// scatters first nearer the surface (more of it leaves near where it entered: a high-albedo
+/// half-space reflects more at oblique incidence). 1 (normal incidence) when no face is lit.
+/// Positions and normals in the lights' space (mm).
+float meanIncidenceCosine(const TriangleMesh& mesh, const std::vector<Light>& lights, float eta);
 
 /// Mean reduced material over the inside voxels of `volume`. @throw ValueError if no voxel is
 /// inside.

@@ -139,6 +139,9 @@ public:
     [[nodiscard]] const SslpvSurfaceKernel& kernel() const;
     /// The mean material of the volume's surface cells the kernel was solved for (surfaceMaterial).
     [[nodiscard]] const MaterialSample& kernelMaterial() const;
+    /// The outside cosine the kernel was lit at: meanIncidenceCosine of the mesh and lights
+    /// when it was solved (a light that moves it by a step has the next frame solve it again).
+    [[nodiscard]] float kernelIncidence() const;
     //! @}
 
 private:
