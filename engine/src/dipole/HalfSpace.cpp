@@ -166,15 +166,22 @@ LayerOperators stackOver(const LayerOperators& top, const LayerOperators& bottom
     return out;
 }
 
+/// The exact internal Fresnel reflectance at each node (total internal reflection below the
+/// critical cosine).
+Eigen::VectorXd internalFresnel(const BoundaryQuadrature& q, double eta) {
+    Eigen::VectorXd fresnel(q.mu.size());
+    for (Eigen::Index i = 0; i < q.mu.size(); ++i)
+        fresnel(i) = fresnelDielectric(q.mu(i), 1.0 / eta);
+    return fresnel;
+}
+
 /// What leaves through the boundary: the exact internal Fresnel reflection returns the
 /// upgoing radiance u = (I − R F)⁻¹ r_c; (reflectance, outside radiance along the exit
 /// directions).
 HalfSpaceExitance throughBoundary(const LayerOperators& L, const BoundaryQuadrature& q, double eta,
                                   size_t exitCount) {
     const Eigen::Index n = q.mu.size();
-    Eigen::VectorXd fresnel(n);
-    for (Eigen::Index i = 0; i < n; ++i)
-        fresnel(i) = fresnelDielectric(q.mu(i), 1.0 / eta);
+    const Eigen::VectorXd fresnel = internalFresnel(q, eta);
     const Eigen::VectorXd up =
         (Eigen::MatrixXd::Identity(n, n) - L.R * fresnel.asDiagonal()).partialPivLu().solve(L.rc);
     const Eigen::VectorXd leaving = (Eigen::VectorXd::Ones(n) - fresnel).cwiseProduct(up);
@@ -194,6 +201,12 @@ void checkCommon(const char* what, double eta, double mu0, int nodes) {
     LUCENT_CHECK(nodes >= 2 && nodes <= 256, what, ": nodes must be in [2, 256] (got ", nodes, ")");
 }
 
+void checkExitCosines(const char* what, const std::vector<double>& exitCosines) {
+    for (double t : exitCosines)
+        LUCENT_CHECK(std::isfinite(t) && t > 0.0 && t <= 1.0, what,
+                     ": exit cosines must be in (0, 1] (got ", t, ")");
+}
+
 void checkAlbedo(const char* what, double albedo) {
     LUCENT_CHECK(std::isfinite(albedo) && albedo >= 0.0 && albedo <= 1.0, what,
                  ": albedo must be in [0, 1] (got ", albedo, ")");
@@ -205,9 +218,7 @@ HalfSpaceExitance halfSpaceExitance(double albedo, double eta, double mu0,
                                     const std::vector<double>& exitCosines, int nodes) {
     checkAlbedo("halfSpaceExitance", albedo);
     checkCommon("halfSpaceExitance", eta, mu0, nodes);
-    for (double t : exitCosines)
-        LUCENT_CHECK(std::isfinite(t) && t > 0.0 && t <= 1.0,
-                     "halfSpaceExitance: exit cosines must be in (0, 1] (got ", t, ")");
+    checkExitCosines("halfSpaceExitance", exitCosines);
     HalfSpaceExitance out;
     out.radiance.assign(exitCosines.size(), 0.0);
     if (albedo == 0.0)
@@ -252,6 +263,58 @@ double layeredHalfSpaceReflectance(const std::vector<HalfSpaceLayer>& layers, do
             doubledLayer(solvable(layers[i].albedo), layers[i].opticalThickness, q, mu0), stack);
     }
     return throughBoundary(stack, q, eta, 0).reflectance;
+}
+
+SlabExitance slabExitance(double albedo, double eta, double opticalThickness, double mu0,
+                          const std::vector<double>& exitCosines, int nodes) {
+    checkAlbedo("slabExitance", albedo);
+    checkCommon("slabExitance", eta, mu0, nodes);
+    checkExitCosines("slabExitance", exitCosines);
+    LUCENT_CHECK(std::isfinite(opticalThickness) && opticalThickness >= 0.0,
+                 "slabExitance: optical thickness must be finite and >= 0 (got ", opticalThickness,
+                 ")");
+    // The unscattered beam bounces between the faces with the internal Fresnel reflectance at
+    // its own cosine: the flux going down at the top is 1 + (F d)² + (F d)⁴ + … and going up at
+    // the bottom F d times that.
+    const double beamFresnel = fresnelDielectric(mu0, 1.0 / eta);
+    const double direct = std::exp(-opticalThickness / mu0);
+    const double down = 1.0 / (1.0 - beamFresnel * beamFresnel * direct * direct);
+    const double up = beamFresnel * direct * down;
+    SlabExitance out;
+    out.reflectedRadiance.assign(exitCosines.size(), 0.0);
+    out.transmittedRadiance.assign(exitCosines.size(), 0.0);
+    out.directTransmittance = (1.0 - beamFresnel) * direct * down;
+    out.directReflectance = (1.0 - beamFresnel) * direct * up;
+    if (albedo == 0.0 || opticalThickness == 0.0)
+        return out;
+    const BoundaryQuadrature q = boundaryQuadrature(eta, nodes, exitCosines);
+    const LayerOperators L = doubledLayer(std::min(albedo, 1.0 - 1e-10), opticalThickness, q, mu0);
+    // The diffuse radiance leaving the layer upward at the top (u) and downward at the bottom
+    // (v); each face sends F u (F v) back in. The layer is symmetric, so the beam going up
+    // scatters as the one going down with the faces swapped (r_c down, t_c up):
+    //     u = R F u + T F v + r_c·down + t_c·up,   v = T F u + R F v + t_c·down + r_c·up.
+    const Eigen::Index n = q.mu.size();
+    const Eigen::VectorXd fresnel = internalFresnel(q, eta);
+    const Eigen::MatrixXd RF = L.R * fresnel.asDiagonal(), TF = L.T * fresnel.asDiagonal();
+    Eigen::MatrixXd system = Eigen::MatrixXd::Identity(2 * n, 2 * n);
+    system.topLeftCorner(n, n) -= RF;
+    system.topRightCorner(n, n) -= TF;
+    system.bottomLeftCorner(n, n) -= TF;
+    system.bottomRightCorner(n, n) -= RF;
+    Eigen::VectorXd source(2 * n);
+    source.head(n) = L.rc * down + L.tc * up;
+    source.tail(n) = L.tc * down + L.rc * up;
+    const Eigen::VectorXd radiance = system.partialPivLu().solve(source);
+    const Eigen::VectorXd leaving = Eigen::VectorXd::Ones(n) - fresnel;
+    const Eigen::VectorXd leavingFlux = q.mu.cwiseProduct(q.w).cwiseProduct(leaving);
+    out.reflectance = 2.0 * M_PI * leavingFlux.dot(radiance.head(n));
+    out.transmittance = 2.0 * M_PI * leavingFlux.dot(radiance.tail(n));
+    for (size_t k = 0; k < exitCosines.size(); ++k) {
+        const Eigen::Index i = q.weighted + Eigen::Index(k);
+        out.reflectedRadiance[k] = leaving(i) * radiance(i) / (eta * eta);
+        out.transmittedRadiance[k] = leaving(i) * radiance(n + i) / (eta * eta);
+    }
+    return out;
 }
 
 }  // namespace lucent::dipole

@@ -82,6 +82,35 @@ double diffusionHalfSpaceReflectance(double albedo, double eta) {
     return albedo / ((1.0 + str) * (1.0 + 2.0 * A * str / 3.0));
 }
 
+DiffusionSlabExitance diffusionSlabExitance(double albedo, double eta, double opticalThickness) {
+    LUCENT_CHECK(std::isfinite(albedo) && albedo >= 0.0 && albedo <= 1.0,
+                 "diffusion slab exitance: albedo must be in [0, 1], got ", albedo);
+    LUCENT_CHECK(std::isfinite(opticalThickness) && opticalThickness >= 0.0,
+                 "diffusion slab exitance: optical thickness must be finite and >= 0, got ",
+                 opticalThickness);
+    DiffusionSlabExitance out;
+    if (albedo == 0.0 || opticalThickness == 0.0)
+        return out;
+    // φ = C₁e^(−κz) + C₂e^(−κ(τ−z)) + K e^(−z) (σt′ = 1, D = 1/3, κ = √(3σa)), K = α′/(σa − D),
+    // with φ = 2AD φ′ at z = 0 and φ = −2AD φ′ at z = τ: two linear equations in C₁, C₂. At
+    // σa = D (α′ = 2/3) K is singular; its removable singularity is stepped over by moving α′ by
+    // 10⁻⁷ (J is smooth in α′, so the error is of that order).
+    const double A = diffusionBoundaryConstant(eta), D = 1.0 / 3.0, tau = opticalThickness;
+    double a = albedo;
+    if (std::abs((1.0 - a) - D) < 1e-7)
+        a -= 2e-7;
+    const double sa = std::max(1.0 - a, 1e-12), kappa = std::sqrt(sa / D);
+    const double K = a / (sa - D), ek = std::exp(-kappa * tau), e1 = std::exp(-tau);
+    const double p = 1.0 + 2.0 * A * D * kappa, m = 1.0 - 2.0 * A * D * kappa;
+    // [p, m·ek; m·ek, p] [C₁; C₂] = [−K(1 + 2AD); −K e^(−τ)(1 − 2AD)]
+    const double r0 = -K * (1.0 + 2.0 * A * D), r1 = -K * e1 * (1.0 - 2.0 * A * D);
+    const double det = p * p - m * m * ek * ek;
+    const double c1 = (r0 * p - m * ek * r1) / det, c2 = (p * r1 - m * ek * r0) / det;
+    out.reflectance = (c1 + c2 * ek + K) / (2.0 * A);
+    out.transmittance = (c1 * ek + c2 + K * e1) / (2.0 * A);
+    return out;
+}
+
 double surfaceFluxExitLean(double albedo, double eta) {
     LUCENT_CHECK(std::isfinite(albedo) && albedo >= 0.0 && albedo <= 1.0,
                  "surface flux exit lean: albedo must be in [0, 1], got ", albedo);

@@ -51,6 +51,31 @@ HalfSpaceExitance halfSpaceExitance(double albedo, double eta, double mu0,
 double halfSpaceReflectance(double albedo, double eta, double mu0 = 1.0,
                             int nodes = HALF_SPACE_NODES);
 
+/// What a homogeneous slab between two smooth dielectric boundaries sends out of each face for
+/// a collimated beam entering its top (slabExitance), per unit entering flux.
+struct SlabExitance {
+    double reflectance = 0.0;    ///< diffuse exitance out of the lit face
+    double transmittance = 0.0;  ///< diffuse exitance out of the far face
+    /// The unscattered beam out of the far face, and out of the lit face after reflecting off
+    /// the far one (both specular: a back-lit slab's transmittance leaves this out).
+    double directTransmittance = 0.0, directReflectance = 0.0;
+    /// Diffuse radiance leaving each face along the requested outside cosines, per unit
+    /// entering flux, sr⁻¹ (as HalfSpaceExitance::radiance).
+    std::vector<double> reflectedRadiance, transmittedRadiance;
+};
+
+/// The exact answer for a slab of optical thickness `opticalThickness` (τ = σt′ · thickness),
+/// albedo `albedo` and the same index η on both faces: the transport of halfSpaceExitance with
+/// a second boundary, whose exact Fresnel reflection (total internal reflection included)
+/// returns light from below as the first boundary does from above; the unscattered beam is
+/// reflected at the faces too (its cosine μ₀ is kept). At albedo 1 the four parts sum to 1. The
+/// measuring stick for the diffusion solve's thin layers (docs/methods/sslpv.md); `exitCosines`
+/// as in halfSpaceExitance. @throw ValueError as halfSpaceExitance, or for a thickness that is
+/// negative or not finite.
+SlabExitance slabExitance(double albedo, double eta, double opticalThickness, double mu0 = 1.0,
+                          const std::vector<double>& exitCosines = {},
+                          int nodes = HALF_SPACE_NODES);
+
 /// One homogeneous layer of a layered half-space: its reduced albedo α′ and its optical
 /// thickness τ = σt′ · thickness (dimensionless).
 struct HalfSpaceLayer {

@@ -49,6 +49,19 @@ double diffusionBoundaryConstant(double eta);
 /// @param albedo reduced albedo α′ ∈ [0, 1]. @param eta ∈ [1, 3].
 double diffusionHalfSpaceReflectance(double albedo, double eta);
 
+/// What this model's slab of optical thickness τ = σt′·thickness sends out of each face, per
+/// unit transmitted irradiance at normal incidence: the closed form of GridDiffusion's equation
+/// with the collimated source α′e^(−z) on 0 < z < τ (σt′ = 1) and the partial-current condition
+/// on both faces, J = φ/(2A) out of each. The beam is not reflected at the far face (the
+/// solver's beam walk does not reflect it). As τ → ∞ the reflectance is
+/// diffusionHalfSpaceReflectance's. dipole::slabExitance is the exact transport to compare it
+/// with (docs/methods/sslpv.md, "The model's own error on thin layers").
+/// @param albedo reduced albedo α′ ∈ [0, 1]. @param eta ∈ [1, 3]. @param opticalThickness ≥ 0.
+struct DiffusionSlabExitance {
+    double reflectance = 0.0, transmittance = 0.0;
+};
+DiffusionSlabExitance diffusionSlabExitance(double albedo, double eta, double opticalThickness);
+
 /// The exact half-space's total reflectance over this model's, R_exact(α′, η)/R_diffusion(α′, η)
 /// (R_exact: adding–doubling, lucent/dipole/HalfSpace.h), tabulated once per η on 65 nodes
 /// uniform in √(1 − α′) and interpolated linearly: the factor mode Diffusion scales each
