@@ -6,6 +6,7 @@
 /// (SslpvBenchScene), grid, steps, SH order, heterogeneous (0/1), dense (0/1). Paper anchor:
 /// cube, 32³, 8 steps, heterogeneous, 1.67 ms (GTX 580).
 
+#include <lucent/sslpv/GridDiffusion.h>
 #include <lucent/sslpv/SslpvBench.h>
 #include <lucent/sslpv/SslpvSolver.h>
 
@@ -50,7 +51,54 @@ void BM_SslpvPropagate(benchmark::State& state) {
     state.counters["bricks"] = solver.stats().brickCount;
 }
 
+/// Mode diffusion's solve of a stroke (the material marked dirty, the shape kept: a warm start)
+/// with the surface cells scaled to the half-space (0) or to the exact slab of their part (1,
+/// SslpvOptions::diffusionSlabTotal): what the slab costs a stroke. The sphere at 64³.
+void BM_DiffusionStrokeSolve(benchmark::State& state) {
+    SslpvBenchSetup setup = makeSslpvBenchSetup(SslpvBenchScene::Sphere, 64, true);
+    SslpvOptions o;
+    o.mode = SslpvMode::Diffusion;
+    o.diffusionSlabTotal = state.range(0) != 0;
+    SslpvSolver solver(o);
+    solver.setMaterial(setup.material, setup.eta);
+    solver.setInjectionSamples(std::move(setup.texels));
+    solver.solve();
+    for (auto _ : state) {
+        solver.markMaterialDirty();
+        solver.solve();
+    }
+    state.SetLabel(state.range(0) ? "slab" : "half-space");
+}
+
+/// The chord march of a new shape (GridDiffusion::chordLength's first call after setMaterial
+/// changed the inside fractions), the sphere at 64³, and the slab table's one-time build per η.
+void BM_DiffusionChordMarch(benchmark::State& state) {
+    SslpvBenchSetup setup = makeSslpvBenchSetup(SslpvBenchScene::Sphere, 64, true);
+    CoarseMaterial& m = setup.material;
+    size_t probe = 0;
+    GridDiffusion d;
+    d.setMaterial(m, setup.eta);
+    while (!d.isBoundary(probe))
+        ++probe;
+    for (auto _ : state) {
+        state.PauseTiming();
+        m.insideFraction[0] = m.insideFraction[0] > 0.f ? 0.f : 0.1f;  // a new shape
+        d.setMaterial(m, setup.eta);
+        state.ResumeTiming();
+        benchmark::DoNotOptimize(d.chordLength(probe));
+    }
+}
+
+void BM_ExactSlabRatioTable(benchmark::State& state) {
+    for (auto _ : state)
+        benchmark::DoNotOptimize(ExactSlabRatio(1.3));
+}
+
 }  // namespace
+
+BENCHMARK(BM_DiffusionStrokeSolve)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DiffusionChordMarch)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ExactSlabRatioTable)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 BENCHMARK(BM_SslpvPropagate)
     ->ArgsProduct({{int(SslpvBenchScene::Cube), int(SslpvBenchScene::Sphere),

@@ -157,6 +157,51 @@ std::shared_ptr<const ExactReflectanceRatio> exactReflectanceRatio(double eta) {
     return sharedTable<ExactReflectanceRatio>(eta, [&] { return ExactReflectanceRatio(eta); });
 }
 
+ExactSlabRatio::ExactSlabRatio(double eta) : m_eta(eta) {
+    LUCENT_CHECK(std::isfinite(eta) && eta >= 1.0 && eta <= 3.0,
+                 "exact slab ratio: eta must be in [1, 3], got ", eta);
+    constexpr int NA = ALBEDO_NODES + 1, NT = THICKNESS_NODES + 1;
+    m_ratio.assign(size_t(NA * NT), 1.f);
+    const double logSpan = std::log(double(MAX_THICKNESS) / double(MIN_THICKNESS));
+    parallelFor(
+        0, NA * NT,
+        [&](int64_t begin, int64_t end) {
+            for (int64_t index = begin; index < end; ++index) {
+                const int i = int(index / NT), j = int(index % NT);
+                const double u = double(i) / ALBEDO_NODES, albedo = 1.0 - u * u;
+                const double tau = double(MIN_THICKNESS) * std::exp(logSpan * j / THICKNESS_NODES);
+                const dipole::SlabExitance exact = dipole::slabExitance(albedo, eta, tau);
+                const DiffusionSlabExitance model = diffusionSlabExitance(albedo, eta, tau);
+                const double m = model.reflectance + model.transmittance;
+                if (m > 1e-9)
+                    m_ratio[size_t(index)] = float((exact.reflectance + exact.transmittance) / m);
+            }
+        },
+        1);
+    // α′ = 0: both vanish; take the limit from the last node inside.
+    for (int j = 0; j < NT; ++j)
+        m_ratio[size_t(ALBEDO_NODES * NT + j)] = m_ratio[size_t((ALBEDO_NODES - 1) * NT + j)];
+}
+
+float ExactSlabRatio::operator()(float albedo, float opticalThickness) const {
+    constexpr int NT = THICKNESS_NODES + 1;
+    const float u = std::sqrt(1.f - std::clamp(albedo, 0.f, 1.f)) * float(ALBEDO_NODES);
+    const float tau = std::isnan(opticalThickness)
+                          ? MAX_THICKNESS
+                          : std::clamp(opticalThickness, MIN_THICKNESS, MAX_THICKNESS);
+    const float v = std::log(tau / MIN_THICKNESS) / std::log(MAX_THICKNESS / MIN_THICKNESS) *
+                    float(THICKNESS_NODES);
+    const int i = std::min(int(u), ALBEDO_NODES - 1), j = std::min(int(v), THICKNESS_NODES - 1);
+    const float fu = u - float(i), fv = v - float(j);
+    const auto at = [&](int a, int t) { return m_ratio[size_t(a * NT + t)]; };
+    return (1.f - fu) * ((1.f - fv) * at(i, j) + fv * at(i, j + 1)) +
+           fu * ((1.f - fv) * at(i + 1, j) + fv * at(i + 1, j + 1));
+}
+
+std::shared_ptr<const ExactSlabRatio> exactSlabRatio(double eta) {
+    return sharedTable<ExactSlabRatio>(eta, [&] { return ExactSlabRatio(eta); });
+}
+
 namespace {
 
 /// Linear interpolation of a table at u_i = i/(size − 1) in u = √(1 − α′).
@@ -336,6 +381,10 @@ void GridDiffusion::setMaterial(const CoarseMaterial& m, float eta) {
 
     for (auto& direct : m_directExitance)
         direct.clear();  // the next solve's
+    if (!sameMedium || m_fraction != m.insideFraction) {
+        m_fraction = m.insideFraction;
+        m_chord.clear();  // chordLength() marches again
+    }
     m_phiValid = m_phiValid && sameMedium;
     if (!m_phiValid)
         for (int c = 0; c < 3; ++c)
@@ -604,6 +653,60 @@ std::array<Vector3f, 3> GridDiffusion::surfaceFlux(size_t cell) const {
         flux[size_t(ch)] = scale * (float(g1) * t1 + float(g2) * t2);
     }
     return flux;
+}
+
+float GridDiffusion::chordLength(size_t cell) const {
+    if (!isBoundary(cell))
+        return 0.f;
+    const int n = m_spec.resolution;
+    const float dx = m_spec.voxelSize;
+    if (m_chord.empty()) {
+        const auto fraction = [&](int x, int y, int z) {
+            if (x < 0 || y < 0 || z < 0 || x >= n || y >= n || z >= n)
+                return 0.f;
+            return m_fraction[m_spec.linearIndex({x, y, z})];
+        };
+        const auto trilinear = [&](const Vector3f& p) {
+            const int x = int(std::floor(p.x)), y = int(std::floor(p.y)), z = int(std::floor(p.z));
+            const float fx = p.x - float(x), fy = p.y - float(y), fz = p.z - float(z);
+            float f = 0.f;
+            for (int c = 0; c < 8; ++c) {
+                const int ox = c & 1, oy = (c >> 1) & 1, oz = (c >> 2) & 1;
+                f += (ox ? fx : 1.f - fx) * (oy ? fy : 1.f - fy) * (oz ? fz : 1.f - fz) *
+                     fraction(x + ox, y + oy, z + oz);
+            }
+            return f;
+        };
+        m_chord.assign(m_cells.size(), 0.f);
+        constexpr float STEP = 0.5f;  // cells
+        const float longest = std::sqrt(3.f) * float(n) + 1.f;
+        parallelFor(0, int64_t(m_cells.size()), [&](int64_t begin, int64_t end) {
+            for (int64_t index = begin; index < end; ++index) {
+                const size_t u = size_t(index), k = m_cells[u];
+                if (m_boundaryFaces[u] == 0)
+                    continue;
+                const Vector3f centre(float(k % size_t(n)), float((k / size_t(n)) % size_t(n)),
+                                      float(k / (size_t(n) * size_t(n))));
+                const Vector3f& nrm = m_normal[u];
+                if (nrm == Vector3f(0.f)) {
+                    m_chord[u] = std::max(m_fraction[k], 0.5f) * dx;
+                    continue;
+                }
+                float before = std::max(m_fraction[k], 0.5f), d = 0.f, crossing = longest;
+                while (d < longest) {
+                    d += STEP;
+                    const float f = trilinear(centre - d * nrm);
+                    if (f < 0.5f) {
+                        crossing = d - STEP * (1.f - (before - 0.5f) / std::max(before - f, 1e-6f));
+                        break;
+                    }
+                    before = f;
+                }
+                m_chord[u] = m_depth[u] + crossing * dx;
+            }
+        });
+    }
+    return m_chord[size_t(m_compact[cell])];
 }
 
 }  // namespace lucent::sslpv

@@ -142,6 +142,7 @@ void SslpvRenderer::setOptions(const SslpvRenderOptions& o) {
         a.attenuation != b.attenuation || a.stopEpsilon != b.stopEpsilon ||
         a.brickStopEpsilon != b.brickStopEpsilon || a.skipEmptySlices != b.skipEmptySlices ||
         a.mode != b.mode || a.diffusionExactTotal != b.diffusionExactTotal ||
+        a.diffusionSlabTotal != b.diffusionSlabTotal ||
         a.diffusionExitTable != b.diffusionExitTable ||
         a.diffusionSurfaceFlux != b.diffusionSurfaceFlux ||
         a.diffusionEntryDepth != b.diffusionEntryDepth ||

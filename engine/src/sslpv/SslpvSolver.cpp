@@ -1888,6 +1888,9 @@ void SslpvSolver::diffuse() {
     const float toC00 = exitNorm * s.voxelSize * s.voxelSize / (2.f * Y00);
     if (m_opt.diffusionExactTotal && (!m_exactRatio || m_exactRatio->eta() != double(m_eta)))
         m_exactRatio = exactReflectanceRatio(double(m_eta));
+    const bool slab = m_opt.diffusionExactTotal && m_opt.diffusionSlabTotal;
+    if (slab && (!m_slabRatio || m_slabRatio->eta() != double(m_eta)))
+        m_slabRatio = exactSlabRatio(double(m_eta));
     m_exitTable =
         m_opt.diffusionExitTable ? dipole::DirpoleExitTable::shared(double(m_eta)) : nullptr;
     m_surfaceFluxReadout = m_opt.diffusionSurfaceFlux;
@@ -1904,7 +1907,9 @@ void SslpvSolver::diffuse() {
                     const float albedo =
                         st > 0.f ? std::clamp(m_material.sigma_s[ch][k] / st, 0.f, 1.f) : 0.f;
                     float scale = toC00;
-                    if (m_opt.diffusionExactTotal)
+                    if (slab)
+                        scale *= (*m_slabRatio)(albedo, st * m_diffusion.chordLength(k));
+                    else if (m_opt.diffusionExactTotal)
                         scale *= (*m_exactRatio)(albedo);
                     const size_t at = m_accum.index(c);
                     m_accum.plane(ch, 0)[at] = scale * m_diffusion.exitance(k, ch);

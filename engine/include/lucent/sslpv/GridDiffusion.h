@@ -93,6 +93,36 @@ private:
 /// @throw ValueError for eta ∉ [1, 3].
 std::shared_ptr<const ExactReflectanceRatio> exactReflectanceRatio(double eta);
 
+/// The exact slab's diffuse exitance over this model's, both faces together:
+/// (R + T)_exact(α′, η, τ)/(R + T)_diffusion(α′, η, τ) for a slab of optical thickness τ lit at
+/// normal incidence (dipole::slabExitance over diffusionSlabExitance), tabulated once per η on
+/// 33 nodes uniform in √(1 − α′) and 32 in log τ over [1/32, 32] and interpolated bilinearly (τ
+/// clamped to that range: at 32 reduced mean free paths the slab is the half-space for α′ ≤ 0.99,
+/// and both ratios are near 1 above). The factor that replaces ExactReflectanceRatio where a
+/// boundary cell's part of the object is τ thick (SslpvOptions::diffusionSlabTotal): a layer under
+/// about 1.5 mean free paths sends out too much in this model, on whichever side it is lit, by
+/// the same factor for its reflected and transmitted light to a few per cent (docs/methods/
+/// sslpv.md, "The model's own error on thin layers").
+class ExactSlabRatio {
+public:
+    /// @throw ValueError for eta ∉ [1, 3].
+    explicit ExactSlabRatio(double eta);
+    [[nodiscard]] double eta() const { return m_eta; }
+    /// The ratio at reduced albedo `albedo` (clamped to [0, 1]) and optical thickness
+    /// `opticalThickness` (clamped to the table's range; NaN reads the thickest).
+    [[nodiscard]] float operator()(float albedo, float opticalThickness) const;
+    static constexpr int ALBEDO_NODES = 32, THICKNESS_NODES = 32;
+    static constexpr float MIN_THICKNESS = 1.f / 32.f, MAX_THICKNESS = 32.f;
+
+private:
+    double m_eta;
+    std::vector<float> m_ratio;  ///< [i][j]: α′ = 1 − (i/ALBEDO_NODES)², τ_j log-uniform
+};
+
+/// The table for `eta`, built once per process and η (1089 slab solves on the worker threads)
+/// and shared. Thread-safe. @throw ValueError for eta ∉ [1, 3].
+std::shared_ptr<const ExactSlabRatio> exactSlabRatio(double eta);
+
 /// The lean of the light the read-out sends out where the surface carries a flux J_t along it
 /// (SslpvSolver::exitantRadiance with the exact exit-angle table and the P1 term): the
 /// flux-weighted mean of ω_o·t̂ over the exit hemisphere (t̂ the direction of J_t), per unit
@@ -208,6 +238,14 @@ public:
     /// Zero outside the boundary, where the normal is undefined (a shell thinner than the stencil)
     /// and where the neighbours do not span the plane.
     [[nodiscard]] std::array<Vector3f, 3> surfaceFlux(size_t cell) const;
+    /// The length of the chord through the medium from a boundary cell's surface point inward
+    /// along its normal (mm): the local thickness of the part the cell lies on — its depth δ
+    /// plus the march from its centre along −n until the inside fraction, interpolated
+    /// trilinearly, falls below ½ (steps of ½ cell, the crossing interpolated). Where the normal
+    /// is undefined (a shell thinner than the stencil) the cell's own medium, f·Δx. Computed on
+    /// the first call after a change of shape (≈ 26 ms at 64³, on the worker threads; that call
+    /// must not race another), 0 outside the boundary.
+    [[nodiscard]] float chordLength(size_t cell) const;
 
 private:
     GridSpec m_spec;
@@ -237,7 +275,9 @@ private:
     /// Per unknown: the outward unit normal (−∇ of the inside fraction), zero where that
     /// gradient vanishes; used by surfaceFlux().
     std::vector<Vector3f> m_normal;
-    std::vector<uint8_t> m_boundary;  ///< per spec cell: 1 for a boundary cell
+    std::vector<float> m_fraction;  ///< per spec cell: the inside fraction (chordLength's march)
+    mutable std::vector<float> m_chord;  ///< per unknown; empty until chordLength() asks
+    std::vector<uint8_t> m_boundary;     ///< per spec cell: 1 for a boundary cell
     bool m_hasMaterial = false;
     bool m_phiValid = false;
     GridDiffusionStats m_stats;

@@ -156,6 +156,13 @@ struct SslpvOptions {
     /// Mode Diffusion: scale each boundary cell's exitance by the exact half-space's total over
     /// the diffusion model's at the cell's albedo (ExactReflectanceRatio); false: the model's.
     bool diffusionExactTotal = true;
+    /// Mode Diffusion, with diffusionExactTotal: normalise each boundary cell's exitance to the
+    /// exact slab as thick as the part it lies on (ExactSlabRatio at τ = σt′ × the cell's chord
+    /// along its normal, GridDiffusion::chordLength) instead of the half-space: the model sends
+    /// too much out of a layer under about 1.5 mean free paths (docs/methods/sslpv.md, "Thin
+    /// parts normalised to the exact slab"). The sslpv method turns it on (parameter
+    /// `diffusion-slab`); combined's diffusion part leaves it off (not measured there yet).
+    bool diffusionSlabTotal = false;
     /// Mode Diffusion: send each surface point's light out with the exact half-space's
     /// distribution over exit angles at its albedo (dipole::DirpoleExitTable, as the directional
     /// dipole does); false: a Fresnel-weighted diffuse exit. Read-out only: no re-solve.
@@ -434,6 +441,7 @@ private:
     std::vector<uint8_t> m_exitBrickLit;  ///< m_exitant's brick may hold non-zero values
     SslpvStats m_stats;
     GridDiffusion m_diffusion;                                    ///< mode Diffusion's solver
+    std::shared_ptr<const ExactSlabRatio> m_slabRatio;            ///< the process's table for η
     std::shared_ptr<const ExactReflectanceRatio> m_exactRatio;    ///< the process's table for η
     std::shared_ptr<const dipole::DirpoleExitTable> m_exitTable;  ///< see exitTable()
     /// Mode Diffusion: the accumulation grid holds the surface flux (slots

@@ -143,6 +143,7 @@ private:
             o.render.solver.diffusionExitTable = p.getChoice("diffusion-exit") == "exact";
             o.render.solver.diffusionSurfaceFlux = p.getBool("diffusion-flux");
             o.render.solver.diffusionEntryDepth = p.getBool("diffusion-entry");
+            o.render.solver.diffusionSlabTotal = p.getBool("diffusion-slab");
             LUCENT_CHECK(!p.isGiven("attenuation"),
                          "sslpv: attenuation applies to mode paper only");
             detail::useDiffusionMode(
@@ -262,6 +263,16 @@ MethodEntry sslpvMethod() {
          "mode diffusion: the light leaving each surface point also follows the flux along the "
          "surface there (P1's J.w term: back-lit rims); off: the exitance only; the other modes "
          "ignore it",
+         0,
+         0,
+         {},
+         "on"},
+        {"diffusion-slab",
+         ParamType::Bool,
+         "mode diffusion, with diffusion-normalise: scale each surface cell's exitance to the "
+         "exact slab as thick as the part it lies on (measured along its normal) instead of the "
+         "half-space, so thin parts do not send out too much (off: the half-space's scale "
+         "everywhere); the other modes ignore it",
          0,
          0,
          {},
